@@ -1,0 +1,1 @@
+"""One module per ``symloc`` sub-command; each defines ``register(subparsers)``."""

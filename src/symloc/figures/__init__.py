@@ -1,0 +1,1 @@
+"""Figures (matplotlib). The only package that imports matplotlib."""

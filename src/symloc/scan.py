@@ -1,0 +1,236 @@
+"""``LaserScan``, a mirror of sensor_msgs/LaserScan, and its conversion to points (eq. 1-2).
+
+Semantics of one reading ``r``, as REP 117 and sensor_msgs define them:
+
+- ``NaN``, ``-inf`` or ``r < range_min``: **invalid** (the sensor measured nothing usable);
+- ``+inf`` or ``r >= range_max``: **no return** (nothing within range along that beam);
+- otherwise **valid**: a point at distance ``r`` along the beam.
+
+Beam ``i`` points at ``angle_min + i * angle_increment`` [rad] in the sensor frame, counter-
+clockwise from the sensor's +x axis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import DataFormatError
+
+__all__ = ["LaserScan", "ScanPoints"]
+
+FloatArray = NDArray[np.float64]
+
+
+def _finite_field(value: object, name: str) -> float:
+    try:
+        out = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as err:
+        raise DataFormatError(f"LaserScan.{name}: expected a number, got {value!r}") from err
+    if not math.isfinite(out):
+        raise DataFormatError(f"LaserScan.{name}: expected a finite number, got {out}")
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class ScanPoints:
+    """The valid readings of a scan as Cartesian points in the sensor frame.
+
+    Attributes
+    ----------
+    points : ndarray of shape (M, 2)
+        x, y [m] of each valid reading (eq. 1-2 of the paper).
+    angles : ndarray of shape (M,)
+        Beam angle [rad] of each point.
+    ranges : ndarray of shape (M,)
+        Range [m] of each point.
+    indices : ndarray of shape (M,)
+        Index of each point's beam in the original scan.
+    n_invalid : int
+        Readings dropped as invalid (NaN, -inf, below range_min).
+    n_no_return : int
+        Readings dropped as no return (+inf or at/above range_max).
+    """
+
+    points: FloatArray
+    angles: FloatArray
+    ranges: FloatArray
+    indices: NDArray[np.intp]
+    n_invalid: int
+    n_no_return: int
+
+    @property
+    def n_dropped(self) -> int:
+        """Total readings that did not become points."""
+        return self.n_invalid + self.n_no_return
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class LaserScan:
+    """One laser scan, field for field as sensor_msgs/LaserScan.
+
+    Parameters
+    ----------
+    angle_min : float
+        Angle of the first beam [rad].
+    angle_increment : float
+        Angle between beams [rad], > 0 (counter-clockwise scanners; reverse a clockwise
+        scan's ranges and negate its angles before building it).
+    range_min, range_max : float
+        Valid range interval [m], ``0 <= range_min < range_max``.
+    ranges : array of shape (N,)
+        Measured ranges [m]; see the module docstring for NaN / inf semantics.
+    intensities : array of shape (N,), optional
+        Device-specific intensities; empty or of the same length as ``ranges``.
+    stamp : float
+        Acquisition time of the first beam [s].
+    time_increment, scan_time : float
+        Time between beams and between scans [s], as in the ROS message.
+    frame_id : str
+        Name of the sensor frame.
+    """
+
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    ranges: FloatArray
+    intensities: FloatArray | None = None
+    stamp: float = 0.0
+    time_increment: float = 0.0
+    scan_time: float = 0.0
+    frame_id: str = "laser"
+    _angles: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
+            set_(self, name, _finite_field(getattr(self, name), name))
+        for name in ("time_increment", "scan_time"):
+            set_(self, name, _finite_field(getattr(self, name), name))
+        if self.angle_increment <= 0.0:
+            raise DataFormatError(
+                f"LaserScan.angle_increment: expected > 0 rad, got {self.angle_increment}"
+                " (reverse the ranges of a clockwise scanner)"
+            )
+        if self.range_min < 0.0:
+            raise DataFormatError(f"LaserScan.range_min: expected >= 0 m, got {self.range_min}")
+        if self.range_max <= self.range_min:
+            raise DataFormatError(
+                f"LaserScan.range_max: expected > range_min ({self.range_min} m),"
+                f" got {self.range_max}"
+            )
+        try:
+            ranges = np.array(self.ranges, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise DataFormatError("LaserScan.ranges: expected an array of numbers") from err
+        if ranges.ndim != 1:
+            raise DataFormatError(f"LaserScan.ranges: expected a 1-D array, got {ranges.shape}")
+        if ranges.size == 0:
+            raise DataFormatError("LaserScan.ranges: expected at least one reading, got none")
+        if self.angle_increment * (ranges.size - 1) > 2.0 * math.pi + 1e-6:
+            raise DataFormatError(
+                f"LaserScan.angle_increment: {ranges.size} beams x {self.angle_increment} rad"
+                " span more than one revolution"
+            )
+        ranges.setflags(write=False)
+        set_(self, "ranges", ranges)
+        if self.intensities is not None:
+            inten = np.array(self.intensities, dtype=np.float64)
+            if inten.size == 0:
+                inten = None
+            elif inten.shape != ranges.shape:
+                raise DataFormatError(
+                    f"LaserScan.intensities: expected {ranges.size} values like ranges,"
+                    f" got shape {inten.shape}"
+                )
+            else:
+                inten.setflags(write=False)
+            set_(self, "intensities", inten)
+        angles = self.angle_min + self.angle_increment * np.arange(ranges.size)
+        angles.setflags(write=False)
+        set_(self, "_angles", angles)
+
+    @classmethod
+    def from_angle_range(
+        cls,
+        angle_min: float,
+        angle_max: float,
+        ranges: ArrayLike,
+        *,
+        range_min: float,
+        range_max: float,
+        **kwargs: object,
+    ) -> LaserScan:
+        """Build a scan whose beams span [angle_min, angle_max] evenly, as a ROS driver does."""
+        r = np.asarray(ranges, dtype=np.float64)
+        if r.ndim != 1 or r.size < 2:
+            raise DataFormatError("LaserScan.ranges: expected a 1-D array of at least 2 values")
+        inc = (float(angle_max) - float(angle_min)) / (r.size - 1)
+        return cls(float(angle_min), inc, range_min, range_max, r, **kwargs)  # type: ignore[arg-type]
+
+    def __len__(self) -> int:
+        return int(self.ranges.size)
+
+    @property
+    def angle_max(self) -> float:
+        """Angle of the last beam [rad]."""
+        return self.angle_min + self.angle_increment * (self.ranges.size - 1)
+
+    @property
+    def angles(self) -> FloatArray:
+        """Beam angles ``(N,)`` [rad] in the sensor frame (read-only)."""
+        return self._angles
+
+    @property
+    def invalid_mask(self) -> NDArray[np.bool_]:
+        """``(N,)`` True where the reading is NaN, -inf or below range_min."""
+        r = self.ranges
+        with np.errstate(invalid="ignore"):
+            return np.isnan(r) | (r < self.range_min)
+
+    @property
+    def no_return_mask(self) -> NDArray[np.bool_]:
+        """``(N,)`` True where the reading is +inf or at/above range_max."""
+        with np.errstate(invalid="ignore"):
+            return self.ranges >= self.range_max
+
+    @property
+    def valid_mask(self) -> NDArray[np.bool_]:
+        """``(N,)`` True where the reading is a point within [range_min, range_max)."""
+        r = self.ranges
+        with np.errstate(invalid="ignore"):
+            return (r >= self.range_min) & (r < self.range_max)
+
+    def to_points(self) -> ScanPoints:
+        """Convert the valid readings to Cartesian points (the paper's eq. 1-2).
+
+        ``x_i = r_i cos(phi_i)``, ``y_i = r_i sin(phi_i)``; invalid and no-return readings are
+        dropped and counted in the result.
+        """
+        valid = self.valid_mask
+        idx = np.flatnonzero(valid)
+        r = self.ranges[idx]
+        a = self._angles[idx]
+        pts = np.column_stack([r * np.cos(a), r * np.sin(a)])
+        n_no_return = int(np.count_nonzero(self.no_return_mask))
+        n_invalid = int(self.ranges.size - idx.size - n_no_return)
+        return ScanPoints(pts, a, r, idx, n_invalid, n_no_return)
+
+    def with_ranges(self, ranges: ArrayLike, *, stamp: float | None = None) -> LaserScan:
+        """A copy of this scan's geometry with new ranges (and optionally a new stamp)."""
+        return LaserScan(
+            self.angle_min,
+            self.angle_increment,
+            self.range_min,
+            self.range_max,
+            np.asarray(ranges, dtype=np.float64),
+            None,
+            self.stamp if stamp is None else stamp,
+            self.time_increment,
+            self.scan_time,
+            self.frame_id,
+        )

@@ -1,0 +1,1 @@
+"""The embedded simulated world: rooms, lidar, odometry, camera."""

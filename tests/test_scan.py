@@ -1,0 +1,95 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from symloc.errors import DataFormatError
+from symloc.scan import LaserScan
+
+
+def make_scan(ranges: list[float] | np.ndarray, **kw: float) -> LaserScan:
+    return LaserScan(
+        angle_min=kw.get("angle_min", 0.0),
+        angle_increment=kw.get("angle_increment", np.pi / 2),
+        range_min=kw.get("range_min", 0.1),
+        range_max=kw.get("range_max", 10.0),
+        ranges=np.asarray(ranges, dtype=float),
+    )
+
+
+def test_to_points_eq_1_2_and_counts() -> None:
+    scan = make_scan([1.0, 2.0, np.nan, np.inf, 0.05, 10.0, 3.0, -np.inf], angle_increment=0.5)
+    p = scan.to_points()
+    np.testing.assert_allclose(p.points[0], [1.0, 0.0])
+    np.testing.assert_allclose(p.points[1], [2 * np.cos(0.5), 2 * np.sin(0.5)])
+    np.testing.assert_array_equal(p.indices, [0, 1, 6])
+    assert p.n_invalid == 3  # NaN, below range_min, -inf
+    assert p.n_no_return == 2  # +inf, == range_max
+    assert p.n_dropped == 5
+
+
+def test_masks_partition_readings() -> None:
+    scan = make_scan([1.0, np.nan, np.inf, 0.0, 12.0, 5.0], angle_increment=0.1)
+    total = (
+        scan.valid_mask.astype(int) + scan.invalid_mask.astype(int) + scan.no_return_mask
+    )
+    np.testing.assert_array_equal(total, 1)
+
+
+def test_angles_and_angle_max() -> None:
+    scan = LaserScan.from_angle_range(-np.pi, np.pi - 2 * np.pi / 360, np.ones(360),
+                                      range_min=0.12, range_max=3.5)
+    assert scan.angle_increment == pytest.approx(np.deg2rad(1.0))
+    assert scan.angle_max == pytest.approx(np.pi - np.deg2rad(1.0))
+    assert scan.angles.shape == (360,)
+    assert not scan.angles.flags.writeable
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"angle_increment": -0.1}, "angle_increment: expected > 0"),
+        ({"angle_increment": 0.0}, "angle_increment: expected > 0"),
+        ({"angle_min": float("nan")}, "angle_min: expected a finite number"),
+        ({"angle_increment": float("inf")}, "angle_increment: expected a finite number"),
+        ({"range_min": -1.0}, "range_min: expected >= 0"),
+        ({"range_max": 0.05}, "range_max: expected > range_min"),
+    ],
+)
+def test_validation_errors_name_the_field(kwargs: dict[str, float], match: str) -> None:
+    with pytest.raises(DataFormatError, match=match):
+        make_scan([1.0, 2.0], **kwargs)
+
+
+def test_intensity_length_mismatch() -> None:
+    with pytest.raises(DataFormatError, match=r"intensities: expected 3 values"):
+        LaserScan(0.0, 0.1, 0.1, 10.0, np.ones(3), intensities=np.ones(2))
+
+
+def test_empty_and_2d_ranges_rejected() -> None:
+    with pytest.raises(DataFormatError, match="at least one reading"):
+        make_scan([])
+    with pytest.raises(DataFormatError, match="1-D"):
+        LaserScan(0.0, 0.1, 0.1, 10.0, np.ones((2, 2)))
+
+
+def test_more_than_one_revolution_rejected() -> None:
+    with pytest.raises(DataFormatError, match="more than one revolution"):
+        LaserScan(0.0, np.deg2rad(2.0), 0.1, 10.0, np.ones(360))
+
+
+def test_scan_is_immutable() -> None:
+    scan = make_scan([1.0, 2.0])
+    with pytest.raises(ValueError, match="read-only"):
+        scan.ranges[0] = 3.0
+
+
+@given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True)), min_size=1,
+                max_size=64))
+def test_to_points_never_emits_non_finite(values: list[float]) -> None:
+    scan = make_scan(values, angle_increment=0.05)
+    p = scan.to_points()
+    assert np.all(np.isfinite(p.points))
+    assert len(p.points) + p.n_dropped == len(values)
