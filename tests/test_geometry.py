@@ -37,7 +37,8 @@ def test_wrap_angle_interval_is_half_open() -> None:
     assert wrap_angle(3 * np.pi / 2) == pytest.approx(-np.pi / 2)
     assert isinstance(wrap_angle(1.0), float)
     out = wrap_angle(np.linspace(-50, 50, 1001))
-    assert np.all(out > -np.pi) and np.all(out <= np.pi)
+    assert np.all(out > -np.pi)
+    assert np.all(out <= np.pi)
 
 
 @given(angle)

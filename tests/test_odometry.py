@@ -9,9 +9,7 @@ from symloc.errors import DataFormatError
 from symloc.geometry import angle_diff
 from symloc.odometry import OdometryIncrement, OdometryReading, rot_trans_rot, rot_trans_rot_to_pose
 
-pose_st = st.tuples(
-    st.floats(-50, 50), st.floats(-50, 50), st.floats(-np.pi, np.pi)
-).map(np.array)
+pose_st = st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-np.pi, np.pi)).map(np.array)
 
 
 def test_increment_hand_computed() -> None:

@@ -32,15 +32,14 @@ def test_to_points_eq_1_2_and_counts() -> None:
 
 def test_masks_partition_readings() -> None:
     scan = make_scan([1.0, np.nan, np.inf, 0.0, 12.0, 5.0], angle_increment=0.1)
-    total = (
-        scan.valid_mask.astype(int) + scan.invalid_mask.astype(int) + scan.no_return_mask
-    )
+    total = scan.valid_mask.astype(int) + scan.invalid_mask.astype(int) + scan.no_return_mask
     np.testing.assert_array_equal(total, 1)
 
 
 def test_angles_and_angle_max() -> None:
-    scan = LaserScan.from_angle_range(-np.pi, np.pi - 2 * np.pi / 360, np.ones(360),
-                                      range_min=0.12, range_max=3.5)
+    scan = LaserScan.from_angle_range(
+        -np.pi, np.pi - 2 * np.pi / 360, np.ones(360), range_min=0.12, range_max=3.5
+    )
     assert scan.angle_increment == pytest.approx(np.deg2rad(1.0))
     assert scan.angle_max == pytest.approx(np.pi - np.deg2rad(1.0))
     assert scan.angles.shape == (360,)
@@ -86,8 +85,7 @@ def test_scan_is_immutable() -> None:
         scan.ranges[0] = 3.0
 
 
-@given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True)), min_size=1,
-                max_size=64))
+@given(st.lists(st.one_of(st.floats(allow_nan=True, allow_infinity=True)), min_size=1, max_size=64))
 def test_to_points_never_emits_non_finite(values: list[float]) -> None:
     scan = make_scan(values, angle_increment=0.05)
     p = scan.to_points()

@@ -42,7 +42,9 @@ class OdometryReading:
         if not np.all(np.isfinite(p)):
             raise DataFormatError(f"OdometryReading.pose: expected finite values, got {p}")
         if not math.isfinite(float(self.stamp)):
-            raise DataFormatError(f"OdometryReading.stamp: expected a finite time, got {self.stamp}")
+            raise DataFormatError(
+                f"OdometryReading.stamp: expected a finite time, got {self.stamp}"
+            )
         p[2] = wrap_angle(p[2])
         p.setflags(write=False)
         object.__setattr__(self, "pose", p)
