@@ -72,7 +72,7 @@ def check_array(
     ``shape`` uses ``None`` for a free dimension, e.g. ``(None, 3)`` for N poses.
     """
     try:
-        arr = np.asarray(value, dtype=dtype)
+        arr: NDArray[Any] = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError) as err:
         raise ConfigurationError(f"{name}: cannot convert to an array of {dtype.__name__}") from err
     if arr.ndim != len(shape) or any(

@@ -140,16 +140,13 @@ class LaserScan:
         set_(self, "ranges", ranges)
         if self.intensities is not None:
             inten = np.array(self.intensities, dtype=np.float64)
-            if inten.size == 0:
-                inten = None
-            elif inten.shape != ranges.shape:
+            if inten.size and inten.shape != ranges.shape:
                 raise DataFormatError(
                     f"LaserScan.intensities: expected {ranges.size} values like ranges,"
                     f" got shape {inten.shape}"
                 )
-            else:
-                inten.setflags(write=False)
-            set_(self, "intensities", inten)
+            inten.setflags(write=False)
+            set_(self, "intensities", inten if inten.size else None)
         angles = self.angle_min + self.angle_increment * np.arange(ranges.size)
         angles.setflags(write=False)
         set_(self, "_angles", angles)
