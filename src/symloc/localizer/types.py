@@ -1,0 +1,265 @@
+"""Typed outputs of the localizer and the small Protocols its collaborators satisfy.
+
+The :class:`~symloc.localizer.localizer.Localizer` is passive: every call returns an
+:class:`Estimate` whose ``status`` says how far the pose can be trusted, and an optional
+:class:`Request` that whoever drives the robot carries out (go to the centre, face a direction,
+capture an image, rotate). The collaborators (AMCL, the symmetry judgement, the visual map) are
+described here as ``typing.Protocol`` s so the state machine can be tested with scripted
+stand-ins and run with the real parts through the adapters in
+:mod:`symloc.localizer.adapters`.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import ConfigurationError
+
+__all__ = [
+    "Decision",
+    "Estimate",
+    "Hypothesis",
+    "Place",
+    "PlaceStore",
+    "Request",
+    "RequestKind",
+    "Status",
+    "SymmetryJudge",
+    "SymmetryVerdict",
+    "Tracker",
+    "TrackerResult",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+class Status(enum.Enum):
+    """How far a caller can trust an :class:`Estimate`.
+
+    ``TRACKING``: the pose is earned (AMCL converged where the map is not symmetric, or after a
+    visual decision). ``AMBIGUOUS``: the pose is known only up to a symmetry of order ``k``; the
+    ``k`` candidate poses are listed. ``GOING_TO_CENTRE``: ambiguous, and the robot has been asked
+    to drive to the place's centre (Algorithm 2). ``DECIDING``: at the centre, images are being
+    compared with the visual map (Algorithm 3). ``LOST``: no pose worth reporting.
+    """
+
+    TRACKING = "tracking"
+    AMBIGUOUS = "ambiguous"
+    GOING_TO_CENTRE = "going_to_centre"
+    DECIDING = "deciding"
+    LOST = "lost"
+
+
+class RequestKind(enum.Enum):
+    """What the localizer asks the driver to do next."""
+
+    GO_TO_CENTRE = "go_to_centre"
+    FACE_DIRECTION = "face_direction"
+    CAPTURE_IMAGE = "capture_image"
+    ROTATE = "rotate"
+
+
+@dataclass(frozen=True, slots=True)
+class Request:
+    """A request to the driver, expressed in the robot's own (base) frame.
+
+    Attributes
+    ----------
+    kind : RequestKind
+    target : ndarray of shape (2,) or None
+        For ``GO_TO_CENTRE``: the centre in the base frame [m], re-estimated from every scan.
+    angle : float or None
+        For ``FACE_DIRECTION``: the bearing to face in the base frame [rad] (turn by this much).
+        For ``ROTATE``: the rotation still to do [rad], counter-clockwise positive (the visual
+        search turns clockwise, so it is negative).
+    """
+
+    kind: RequestKind
+    target: FloatArray | None = None
+    angle: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind is RequestKind.GO_TO_CENTRE:
+            if self.target is None:
+                raise ConfigurationError("Request.target: GO_TO_CENTRE needs a (2,) target")
+            t = np.array(self.target, dtype=np.float64)
+            if t.shape != (2,) or not np.all(np.isfinite(t)):
+                raise ConfigurationError(
+                    f"Request.target: expected a finite (2,) point, got {self.target!r}"
+                )
+            t.setflags(write=False)
+            object.__setattr__(self, "target", t)
+        if self.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
+            if self.angle is None or not np.isfinite(self.angle):
+                raise ConfigurationError(
+                    f"Request.angle: {self.kind.value} needs a finite angle, got {self.angle!r}"
+                )
+            object.__setattr__(self, "angle", float(self.angle))
+
+
+@dataclass(frozen=True, slots=True)
+class Hypothesis:
+    """One candidate pose ``(3,)`` [m, m, rad] with its weight (sums to <= 1 over a set)."""
+
+    pose: FloatArray
+    weight: float
+
+
+@dataclass(frozen=True, slots=True)
+class Estimate:
+    """One output of the localizer.
+
+    Attributes
+    ----------
+    status : Status
+    pose : ndarray of shape (3,) or None
+        Set only when ``status`` is ``TRACKING``: a pose the localizer has earned.
+    covariance : ndarray of shape (3, 3) or None
+        The covariance of ``pose`` (x, y, theta) when ``pose`` is set.
+    hypotheses : tuple of Hypothesis
+        When ambiguous: the ``order`` candidate poses related by the place's rotation.
+        When tracking: the AMCL clusters (for display).
+    order : int or None
+        The symmetry order ``k`` when ambiguous (``None`` otherwise; 0 means infinite, a circle).
+    request : Request or None
+        What the driver should do next; ``None`` means carry on.
+    reason : str
+        One line saying why the status is what it is (for logs and users).
+    """
+
+    status: Status
+    pose: FloatArray | None = None
+    covariance: FloatArray | None = None
+    hypotheses: tuple[Hypothesis, ...] = ()
+    order: int | None = None
+    request: Request | None = None
+    reason: str = ""
+
+    def __post_init__(self) -> None:
+        if self.status is Status.TRACKING:
+            if self.pose is None or self.covariance is None:
+                raise ConfigurationError("Estimate: status tracking needs a pose and a covariance")
+        elif self.pose is not None:
+            raise ConfigurationError(
+                f"Estimate.pose: only a tracking estimate carries a pose, not {self.status.value}"
+            )
+
+
+# --------------------------------------------------------------------------- collaborators
+
+
+@dataclass(frozen=True, slots=True)
+class TrackerResult:
+    """What the localizer needs from one AMCL update.
+
+    ``estimate`` (3,), ``covariance`` (3, 3) of the heaviest cluster, ``hypotheses`` (every
+    cluster, heaviest first), ``particles`` (N, 3) and ``weights`` (N,) for display.
+    """
+
+    estimate: FloatArray
+    covariance: FloatArray
+    hypotheses: tuple[Hypothesis, ...]
+    covariances: tuple[FloatArray, ...] = ()
+    particles: FloatArray | None = None
+    weights: FloatArray | None = None
+    updated: bool = True
+
+
+@runtime_checkable
+class Tracker(Protocol):
+    """The laser tracker (AMCL) as the localizer uses it."""
+
+    def initialize_global(self) -> None:
+        """Spread the particles over the free space."""
+
+    def initialize_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
+        """Reseed the particles around ``pose`` (3,) with ``covariance`` (3, 3)."""
+
+    def update(self, odom: object, scan: object) -> TrackerResult:
+        """One filter step with an odometry reading and a scan."""
+
+
+@dataclass(frozen=True, slots=True)
+class SymmetryVerdict:
+    """The part of a symmetry report the localizer uses.
+
+    ``order`` k: 0 means a circle (infinite order); ``center`` (2,) and ``corners`` (K, 2) are in
+    the sensor (base) frame [m]; ``facing`` is the bearing [rad] in the base frame of the middle
+    between two adjacent corners (None when there are no corners).
+    """
+
+    symmetric: bool
+    order: int
+    kind: str
+    center: FloatArray | None
+    gv_distance: float
+    facing: float | None = None
+    corners: FloatArray | None = None
+    reason: str = ""
+
+
+class SymmetryJudge(Protocol):
+    """Algorithm 1: judge one scan."""
+
+    def __call__(self, scan: object) -> SymmetryVerdict: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Place:
+    """A symmetric place known to the visual map.
+
+    ``center`` (2,) map frame [m]; ``heading0`` [rad] map-frame heading of stored image 0; the
+    ``m`` images were taken clockwise, image ``j`` at ``heading0 - j * 2 pi / m``.
+    """
+
+    place_id: int
+    center: FloatArray
+    heading0: float
+    m: int
+    order: int
+    gv_distance: float
+    kind: str = "polygon"
+
+
+@dataclass(frozen=True, slots=True)
+class Decision:
+    """The outcome of comparing one query image with one place's stored images.
+
+    ``status`` is ``"decided"``, ``"undetermined"`` (no clear winner: try another direction),
+    ``"no_match"`` (the image resembles none of the place's images) or ``"refused"`` (too few
+    features: the image cannot decide anything). ``direction`` is the stored image
+    index, ``offset`` [rad] the query's heading minus that image's heading (CCW positive).
+    """
+
+    status: str
+    direction: int | None = None
+    offset: float = 0.0
+    score: float = 0.0
+    reason: str = ""
+
+
+class PlaceStore(Protocol):
+    """The visual map with its G-V index, as the localizer uses it."""
+
+    def candidates(self, gv_distance: float, order: int) -> Sequence[Place]:
+        """Places whose G-V distance matches within the index's tolerance."""
+
+    def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
+        """Decide the direction of ``image`` against ``place``'s stored images."""
+
+    def add_place(
+        self,
+        center: FloatArray,
+        heading0: float,
+        order: int,
+        gv_distance: float,
+        kind: str,
+        images: Sequence[NDArray[np.uint8]],
+    ) -> Place:
+        """Store a new place with its ``m`` images taken clockwise from ``heading0``."""
