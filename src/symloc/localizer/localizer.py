@@ -29,7 +29,9 @@ from numpy.typing import NDArray
 from symloc._checks import check_in_range, check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, inverse, wrap_angle
+from symloc.odometry import OdometryReading
 
+from .centering import CentreFilter
 from .types import (
     Decision,
     Estimate,
@@ -70,6 +72,7 @@ class LocalizerConfig:
     copy_score_ratio : with a pose scorer, a rotated copy whose score is at least this fraction
         of the estimate's own score explains the scan as well (the ambiguity is real).
     place_radius_factor : a known place covers the disc of radius factor x its G-V distance.
+    centre_smoothing : weight of a new per-scan centre estimate (:class:`CentreFilter`).
     centre_tolerance : the robot has reached the centre when the scan's centre is this close [m].
     facing_tolerance : facing done when the bearing to the corner-middle is below this [rad].
     rotate_tolerance : a ROTATE request is done when odometry turned within this [rad].
@@ -96,6 +99,7 @@ class LocalizerConfig:
     allow_mapping: bool = False
     reseed_xy_std: float = 0.03
     reseed_theta_std: float = math.radians(2.0)
+    centre_smoothing: float = 0.5
 
     def __post_init__(self) -> None:
         for name in (
@@ -113,6 +117,7 @@ class LocalizerConfig:
             check_positive(getattr(self, name), f"LocalizerConfig.{name}")
         check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
         check_in_range(self.converged_weight, "LocalizerConfig.converged_weight", 0.0, 1.0)
+        check_in_range(self.centre_smoothing, "LocalizerConfig.centre_smoothing", 1e-6, 1.0)
         check_in_range(self.copy_score_ratio, "LocalizerConfig.copy_score_ratio", 0.0, 1.0)
         for name in ("converged_updates", "flip_patience", "max_centering_updates"):
             value = getattr(self, name)
@@ -259,7 +264,7 @@ class Localizer:
         self._note("pose set by the operator")
 
     def update(
-        self, odom: object, scan: object, image: NDArray[np.uint8] | None = None
+        self, odom: OdometryReading, scan: object, image: NDArray[np.uint8] | None = None
     ) -> Estimate:
         """One step: odometry reading, laser scan and, if one was requested, an image.
 
@@ -291,7 +296,7 @@ class Localizer:
         self._asym_count = 0
         self._centering_updates = 0
         self._order = 0
-        self._target_odom: FloatArray | None = None
+        self._centre_filter = CentreFilter(alpha=self.config.centre_smoothing)
         self._centre_map: FloatArray | None = None
         self._gv = float("nan")
         self._kind = ""
@@ -460,11 +465,12 @@ class Localizer:
         )
 
     def _set_target(self, centre_base: FloatArray) -> None:
-        self._target_odom = compose(self._odom_pose, np.array([*centre_base[:2], 0.0]))
+        self._centre_filter.update(self._odom_pose, centre_base[:2])
 
     def _target_base(self) -> FloatArray:
-        assert self._target_odom is not None
-        return np.asarray(compose(inverse(self._odom_pose), self._target_odom)[:2])
+        target = self._centre_filter.update(self._odom_pose, None)
+        assert target is not None
+        return target
 
     def _track_verdict(self, verdict: SymmetryVerdict) -> bool:
         """Update the target from a symmetric verdict; False when the verdict flipped for good."""
