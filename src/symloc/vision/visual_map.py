@@ -1,0 +1,474 @@
+"""The visual map: an SQLite database of symmetric places and their M images (Algorithm 3, step 5).
+
+Each place ("node" in the paper) is a symmetric room: its kind, symmetry order and G-V distance
+(this table is the persistent G-V index), the map pose of its centre with the heading of
+direction 0, and M images taken at the centre in clockwise order (direction j looks along
+``heading - j * 2 pi / M``), each with its BoW vector, ORB keypoints and descriptors, and
+optionally the image itself (PNG).
+
+Every write is one transaction; the journal is WAL with ``synchronous=FULL``, so a process that
+dies mid-write loses only the place it was writing. The file carries ``PRAGMA application_id``
+(``'SYML'``) and the schema version in ``PRAGMA user_version``.
+"""
+
+from __future__ import annotations
+
+import math
+import sqlite3
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import ConfigurationError, DatabaseError
+from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
+from symloc.vision.orb import OrbFeatures
+
+__all__ = [
+    "APPLICATION_ID",
+    "SCHEMA_VERSION",
+    "Place",
+    "PlaceImage",
+    "QueryResult",
+    "VisualMap",
+    "direction_headings",
+]
+
+APPLICATION_ID = 0x53594D4C  # 'SYML'
+SCHEMA_VERSION = 1
+
+_SCHEMA = """
+CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE places (
+    id INTEGER PRIMARY KEY,
+    kind TEXT NOT NULL,
+    symmetry_order INTEGER NOT NULL CHECK (symmetry_order >= 1),
+    gv_distance REAL NOT NULL,
+    x REAL NOT NULL, y REAL NOT NULL, heading REAL NOT NULL,
+    n_directions INTEGER NOT NULL CHECK (n_directions >= 1),
+    label TEXT,
+    created REAL NOT NULL
+);
+CREATE INDEX places_gv ON places (gv_distance);
+CREATE TABLE images (
+    place_id INTEGER NOT NULL REFERENCES places (id) ON DELETE CASCADE,
+    direction INTEGER NOT NULL,
+    heading REAL NOT NULL,
+    width INTEGER NOT NULL, height INTEGER NOT NULL,
+    n_features INTEGER NOT NULL,
+    bow_words BLOB NOT NULL, bow_values BLOB NOT NULL,
+    keypoints BLOB NOT NULL, descriptors BLOB NOT NULL,
+    image_png BLOB,
+    PRIMARY KEY (place_id, direction)
+);
+"""
+
+
+def direction_headings(heading0: float, m: int) -> NDArray[np.float64]:
+    """Headings [rad] of the M clockwise directions: ``heading0 - j * 2 pi / M``, wrapped."""
+    from symloc.geometry import wrap_angle
+
+    return np.asarray(wrap_angle(heading0 - np.arange(m) * (2.0 * math.pi / m)), np.float64)
+
+
+@dataclass(frozen=True)
+class PlaceImage:
+    """One stored view of a place.
+
+    Attributes
+    ----------
+    direction : int
+        Clockwise index j in 0..M-1.
+    heading : float
+        Map heading [rad] the camera looked along.
+    features : OrbFeatures
+    bow : BowVector
+    image : (H, W) or (H, W, 3) uint8 array or None
+        Kept only when asked (it dominates the storage).
+    """
+
+    direction: int
+    heading: float
+    features: OrbFeatures
+    bow: BowVector
+    image: NDArray[np.uint8] | None = None
+
+
+@dataclass(frozen=True)
+class Place:
+    """A symmetric place with its M images in clockwise order.
+
+    Attributes
+    ----------
+    id : int
+    kind : str
+        e.g. ``"square"``, ``"polygon"``, ``"circle"``, ``"rectangle"``.
+    order : int
+        Symmetry order.
+    gv_distance : float
+        G-V distance [m] (the G-V index key).
+    pose : (3,) float64
+        Map pose of the centre, heading of direction 0.
+    images : tuple of PlaceImage
+    label : str or None
+    """
+
+    id: int
+    kind: str
+    order: int
+    gv_distance: float
+    pose: NDArray[np.float64]
+    images: tuple[PlaceImage, ...]
+    label: str | None = None
+
+    @property
+    def n_directions(self) -> int:
+        """M, the number of stored directions."""
+        return len(self.images)
+
+
+@dataclass(frozen=True)
+class QueryResult:
+    """One scored stored image."""
+
+    place_id: int
+    direction: int
+    score: float
+
+
+def _encode_png(image: NDArray[np.uint8]) -> bytes:
+    import cv2
+
+    arr = np.ascontiguousarray(image)
+    if arr.ndim == 3:
+        arr = cv2.cvtColor(arr, cv2.COLOR_RGB2BGR)
+    ok, buf = cv2.imencode(".png", arr)
+    if not ok:  # pragma: no cover - OpenCV failure
+        raise DatabaseError("image: PNG encoding failed")
+    return bytes(buf.tobytes())
+
+
+def _decode_png(blob: bytes) -> NDArray[np.uint8]:
+    import cv2
+
+    arr = cv2.imdecode(np.frombuffer(blob, np.uint8), cv2.IMREAD_UNCHANGED)
+    if arr is None:
+        raise DatabaseError("images.image_png: cannot decode the stored PNG")
+    if arr.ndim == 3:
+        arr = cv2.cvtColor(arr, cv2.COLOR_BGR2RGB)
+    return np.asarray(arr, np.uint8)
+
+
+class VisualMap:
+    """The visual map database (SQLite).
+
+    Parameters
+    ----------
+    path : str or Path
+        Database file (``":memory:"`` for a throw-away map).
+    create : bool
+        Create the file when it does not exist (else raise :class:`DatabaseError`).
+    journal : {"wal", "delete"}
+        SQLite journal mode: write-ahead log (default) or rollback journal.
+
+    Raises
+    ------
+    DatabaseError
+        The file is not a symloc visual map, has a newer schema, or cannot be opened.
+    """
+
+    def __init__(self, path: str | Path, *, create: bool = True, journal: str = "wal") -> None:
+        if journal not in ("wal", "delete"):
+            raise ConfigurationError(f"journal: expected 'wal' or 'delete', got {journal!r}")
+        self.path = str(path)
+        if self.path != ":memory:":
+            p = Path(self.path)
+            if not p.exists() and not create:
+                raise DatabaseError(f"{p}: no visual map there (create=False)")
+            if not p.parent.is_dir():
+                raise DatabaseError(f"{p}: folder {p.parent} does not exist")
+        try:
+            self._con = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
+        except sqlite3.Error as err:
+            raise DatabaseError(f"{self.path}: cannot open: {err}") from err
+        self._cache: tuple[BowMatrix, NDArray[np.int64], NDArray[np.int64]] | None = None
+        try:
+            self._init_schema(journal)
+        except sqlite3.DatabaseError as err:
+            self._con.close()
+            raise DatabaseError(
+                f"{self.path}: not a symloc visual map (SQLite says: {err})"
+            ) from err
+        except DatabaseError:
+            self._con.close()
+            raise
+
+    # ------------------------------------------------------------------ lifecycle
+    def _init_schema(self, journal: str) -> None:
+        con = self._con
+        app_id = con.execute("PRAGMA application_id").fetchone()[0]
+        version = con.execute("PRAGMA user_version").fetchone()[0]
+        n_tables = con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
+        if app_id == 0 and version == 0 and n_tables == 0:
+            con.execute("BEGIN IMMEDIATE")
+            for stmt in _SCHEMA.split(";"):
+                if stmt.strip():
+                    con.execute(stmt)
+            con.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+            con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            con.execute("INSERT INTO meta VALUES ('created_by', 'symloc')")
+            con.execute("COMMIT")
+        elif app_id != APPLICATION_ID:
+            raise DatabaseError(
+                f"{self.path}: not a symloc visual map (SQLite application_id {app_id:#x}, "
+                f"expected {APPLICATION_ID:#x})"
+            )
+        elif version > SCHEMA_VERSION:
+            raise DatabaseError(
+                f"{self.path}: schema version {version} is newer than this symloc reads "
+                f"({SCHEMA_VERSION}); upgrade symloc"
+            )
+        elif version < 1:
+            raise DatabaseError(f"{self.path}: schema version {version} is not a valid version")
+        if self.path != ":memory:":
+            con.execute(f"PRAGMA journal_mode = {journal}")
+        con.execute("PRAGMA synchronous = FULL")
+        con.execute("PRAGMA foreign_keys = ON")
+
+    def close(self) -> None:
+        """Close the connection (checkpointing the WAL)."""
+        self._con.close()
+
+    def __enter__(self) -> VisualMap:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __len__(self) -> int:
+        return int(self._con.execute("SELECT count(*) FROM places").fetchone()[0])
+
+    # ------------------------------------------------------------------ meta
+    def set_meta(self, key: str, value: str) -> None:
+        """Store a metadata string (e.g. the vocabulary that made the BoW vectors)."""
+        with self._transaction():
+            self._con.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, str(value)))
+
+    def get_meta(self, key: str) -> str | None:
+        """Return a metadata string or None."""
+        row = self._con.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
+        return None if row is None else str(row[0])
+
+    # ------------------------------------------------------------------ writes
+    class _Tx:
+        def __init__(self, con: sqlite3.Connection) -> None:
+            self.con = con
+
+        def __enter__(self) -> sqlite3.Connection:
+            self.con.execute("BEGIN IMMEDIATE")
+            return self.con
+
+        def __exit__(self, exc_type: Any, *rest: object) -> None:
+            if exc_type is None:
+                self.con.execute("COMMIT")
+            else:
+                self.con.execute("ROLLBACK")
+
+    def _transaction(self) -> VisualMap._Tx:
+        self._cache = None
+        return VisualMap._Tx(self._con)
+
+    def add_place(
+        self,
+        *,
+        kind: str,
+        order: int,
+        gv_distance: float,
+        pose: ArrayLike,
+        images: Sequence[PlaceImage],
+        label: str | None = None,
+    ) -> int:
+        """Store a place and its M images in one transaction; return its id.
+
+        Parameters
+        ----------
+        kind : str
+        order : int
+            Symmetry order (>= 1).
+        gv_distance : float
+            G-V distance [m].
+        pose : (3,) array
+            Map pose of the centre; theta is the heading of direction 0.
+        images : sequence of PlaceImage
+            M >= 1 images whose directions are exactly 0..M-1 (clockwise).
+        label : str, optional
+        """
+        if not kind:
+            raise ConfigurationError("kind: expected a non-empty string")
+        if int(order) != order or order < 1:
+            raise ConfigurationError(f"order: expected an integer >= 1, got {order}")
+        gv = float(gv_distance)
+        if not math.isfinite(gv) or gv < 0:
+            raise ConfigurationError(
+                f"gv_distance: expected a finite value >= 0, got {gv_distance}"
+            )
+        p = np.asarray(pose, np.float64).reshape(-1)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ConfigurationError(f"pose: expected 3 finite values (x, y, theta), got {pose!r}")
+        if not images:
+            raise ConfigurationError("images: expected at least one image")
+        dirs = sorted(int(im.direction) for im in images)
+        if dirs != list(range(len(images))):
+            raise ConfigurationError(
+                f"images: directions must be 0..{len(images) - 1} (clockwise), got {dirs}"
+            )
+        rows = []
+        for im in images:
+            feat = im.features
+            rows.append(
+                (
+                    int(im.direction),
+                    float(im.heading),
+                    int(feat.image_size[0]),
+                    int(feat.image_size[1]),
+                    len(feat),
+                    im.bow.words.astype("<i4").tobytes(),
+                    im.bow.values.astype("<f8").tobytes(),
+                    feat.keypoint_array().astype("<f4").tobytes(),
+                    np.ascontiguousarray(feat.descriptors, np.uint8).tobytes(),
+                    None if im.image is None else _encode_png(im.image),
+                )
+            )
+        with self._transaction() as con:
+            cur = con.execute(
+                "INSERT INTO places (kind, symmetry_order, gv_distance, x, y, heading, "
+                "n_directions, label, created) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (kind, int(order), gv, *map(float, p), len(images), label, time.time()),
+            )
+            pid = int(cur.lastrowid or 0)
+            con.executemany(
+                "INSERT INTO images VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                [(pid, *r) for r in rows],
+            )
+        return pid
+
+    def delete_place(self, place_id: int) -> None:
+        """Remove a place and its images."""
+        with self._transaction() as con:
+            con.execute("DELETE FROM places WHERE id = ?", (int(place_id),))
+
+    # ------------------------------------------------------------------ reads
+    def place_ids(self) -> list[int]:
+        """Ids of all places, ascending."""
+        return [int(r[0]) for r in self._con.execute("SELECT id FROM places ORDER BY id")]
+
+    def place(self, place_id: int, *, with_images: bool = True) -> Place:
+        """Load one place with its images in clockwise order."""
+        row = self._con.execute(
+            "SELECT kind, symmetry_order, gv_distance, x, y, heading, label FROM places "
+            "WHERE id = ?",
+            (int(place_id),),
+        ).fetchone()
+        if row is None:
+            raise DatabaseError(f"{self.path}: no place with id {place_id}")
+        imgs = []
+        for r in self._con.execute(
+            "SELECT direction, heading, width, height, n_features, bow_words, bow_values, "
+            "keypoints, descriptors, image_png FROM images WHERE place_id = ? ORDER BY direction",
+            (int(place_id),),
+        ):
+            n = int(r[4])
+            try:
+                kp = np.frombuffer(r[7], "<f4").reshape(n, 6)
+                desc = np.frombuffer(r[8], np.uint8).reshape(n, 32)
+                bow = BowVector(np.frombuffer(r[5], "<i4"), np.frombuffer(r[6], "<f8"))
+            except ValueError as err:
+                raise DatabaseError(
+                    f"{self.path}: place {place_id} direction {r[0]}: damaged image record: {err}"
+                ) from err
+            feats = OrbFeatures.from_arrays(kp, desc, (int(r[2]), int(r[3])))
+            image = _decode_png(r[9]) if (with_images and r[9] is not None) else None
+            imgs.append(PlaceImage(int(r[0]), float(r[1]), feats, bow, image))
+        return Place(
+            id=int(place_id),
+            kind=str(row[0]),
+            order=int(row[1]),
+            gv_distance=float(row[2]),
+            pose=np.array(row[3:6], np.float64),
+            images=tuple(imgs),
+            label=row[6],
+        )
+
+    def find_places(
+        self,
+        gv_distance: float,
+        tolerance: float,
+        *,
+        kind: str | None = None,
+        order: int | None = None,
+    ) -> list[tuple[int, float]]:
+        """The G-V index: places whose G-V distance is within ``tolerance`` [m], nearest first.
+
+        Returns
+        -------
+        list of (place_id, gv_distance)
+        """
+        sql = "SELECT id, gv_distance FROM places WHERE gv_distance BETWEEN ? AND ?"
+        args: list[Any] = [float(gv_distance) - tolerance, float(gv_distance) + tolerance]
+        if kind is not None:
+            sql += " AND kind = ?"
+            args.append(kind)
+        if order is not None:
+            sql += " AND symmetry_order = ?"
+            args.append(int(order))
+        rows = [(int(a), float(b)) for a, b in self._con.execute(sql, args)]
+        return sorted(rows, key=lambda r: abs(r[1] - gv_distance))
+
+    def _bow_cache(self) -> tuple[BowMatrix, NDArray[np.int64], NDArray[np.int64]]:
+        if self._cache is None:
+            rows = self._con.execute(
+                "SELECT place_id, direction, bow_words, bow_values FROM images "
+                "ORDER BY place_id, direction"
+            ).fetchall()
+            vecs = [BowVector(np.frombuffer(r[2], "<i4"), np.frombuffer(r[3], "<f8")) for r in rows]
+            self._cache = (
+                BowMatrix.stack(vecs),
+                np.array([r[0] for r in rows], np.int64),
+                np.array([r[1] for r in rows], np.int64),
+            )
+        return self._cache
+
+    def query(
+        self,
+        bow: BowVector,
+        scoring: Scoring | int | str = Scoring.L1_NORM,
+        *,
+        place_id: int | None = None,
+        max_results: int | None = None,
+    ) -> list[QueryResult]:
+        """Score ``bow`` against stored images (all, or one place's), best first.
+
+        The BoW vectors are cached in memory after the first query (invalidated by writes).
+        """
+        sc = parse_scoring(scoring)
+        matrix, pids, dirs = self._bow_cache()
+        scores = score_many(bow, matrix, sc)
+        idx = np.arange(scores.size)
+        if place_id is not None:
+            idx = idx[pids == int(place_id)]
+        order = idx[np.argsort(-scores[idx], kind="stable")]
+        if max_results is not None:
+            order = order[:max_results]
+        return [QueryResult(int(pids[i]), int(dirs[i]), float(scores[i])) for i in order]
+
+    def integrity_check(self) -> str:
+        """SQLite's ``PRAGMA integrity_check`` result (``"ok"`` when sound)."""
+        return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
+
+    def checkpoint(self) -> None:
+        """Fold the WAL into the main file (so the file size is the map's size)."""
+        self._con.execute("PRAGMA wal_checkpoint(TRUNCATE)")

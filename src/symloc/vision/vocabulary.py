@@ -1,0 +1,419 @@
+"""A DBoW2-compatible visual vocabulary: a tree of binary words, weights, transform and score.
+
+The tree is held as flat NumPy arrays (no per-node Python objects): ``parent``, the node
+descriptors and weights, and a children index built from ``parent``. :meth:`Vocabulary.transform`
+quantises all features of an image level by level at once (XOR + ``np.bitwise_count``), and
+builds the BoW vector and the direct index exactly as DBoW2's ``TemplatedVocabulary::transform``
+does, including its quirks (TF divides by the number of distinct words when the scoring does
+not normalise; words with weight 0 are stop words and are dropped).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc._checks import as_rng
+from symloc.errors import ConfigurationError, DataFormatError
+from symloc.vision.bow import (
+    BowMatrix,
+    BowVector,
+    FeatureVector,
+    Scoring,
+    Weighting,
+    normalization_of,
+    normalize_values,
+    parse_scoring,
+    parse_weighting,
+    score_many,
+)
+from symloc.vision.hkmeans import as_u64, hierarchical_kmeans
+
+if TYPE_CHECKING:
+    from symloc.vision.orb import OrbExtractor
+
+__all__ = ["Vocabulary", "check_descriptors"]
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".ppm")
+
+
+def check_descriptors(descriptors: ArrayLike, name: str = "descriptors") -> NDArray[np.uint8]:
+    """Return ``(N, 32)`` contiguous uint8 ORB descriptors or raise naming ``name``."""
+    d = np.asarray(descriptors)
+    if d.dtype != np.uint8:
+        raise DataFormatError(f"{name}: expected uint8 binary descriptors, got dtype {d.dtype}")
+    if d.ndim == 1 and d.size == 0:
+        d = d.reshape(0, 32)
+    if d.ndim != 2 or d.shape[1] != 32:
+        raise DataFormatError(f"{name}: expected shape (N, 32), got {d.shape}")
+    return np.ascontiguousarray(d)
+
+
+class Vocabulary:
+    """A hierarchical vocabulary of binary words (DBoW2's ``TemplatedVocabulary<FORB>``).
+
+    Parameters
+    ----------
+    k : int
+        Branching factor (DBoW2 allows 2..20 in its files).
+    L : int
+        Depth levels (1..10).
+    weighting, scoring : Weighting, Scoring (or their names / DBoW2 codes)
+    parent : (N,) int array
+        Parent of each node; node 0 is the root (its parent is ignored).
+    descriptors : (N, 32) uint8
+        Node descriptors (the root's is ignored).
+    weights : (N,) float
+        Node weights (meaningful for leaves, i.e. words).
+
+    Notes
+    -----
+    Words are the leaves, numbered in node order (DBoW2's ``createWords``).
+    """
+
+    def __init__(
+        self,
+        k: int,
+        L: int,
+        weighting: Weighting | int | str,
+        scoring: Scoring | int | str,
+        parent: ArrayLike,
+        descriptors: ArrayLike,
+        weights: ArrayLike,
+    ) -> None:
+        if int(k) != k or not 2 <= k <= 255:
+            raise ConfigurationError(f"k: expected an integer branching factor >= 2, got {k}")
+        if int(L) != L or not 1 <= L <= 32:
+            raise ConfigurationError(f"L: expected an integer depth >= 1, got {L}")
+        self.k = int(k)
+        self.L = int(L)
+        self.weighting = parse_weighting(weighting)
+        self.scoring = parse_scoring(scoring)
+        par = np.ascontiguousarray(parent, dtype=np.int32).reshape(-1)
+        desc = check_descriptors(descriptors, "descriptors")
+        w = np.ascontiguousarray(weights, dtype=np.float64).reshape(-1)
+        n = par.size
+        if n < 1 or desc.shape[0] != n or w.size != n:
+            raise DataFormatError(
+                f"vocabulary: parent ({n}), descriptors ({desc.shape[0]}) and weights ({w.size}) "
+                "must have the same number (>= 1) of nodes"
+            )
+        par = par.copy()
+        par[0] = -1
+        bad = np.flatnonzero((par[1:] < 0) | (par[1:] >= np.arange(1, n)))
+        if bad.size:
+            i = int(bad[0]) + 1
+            raise DataFormatError(
+                f"vocabulary: node {i} has parent {int(par[i])}; expected an earlier node"
+            )
+        if not np.all(np.isfinite(w)):
+            raise DataFormatError("vocabulary: weights contain NaN or infinite values")
+        self.parent = par
+        self.descriptors = desc
+        self.weights = w
+        self._build_index()
+
+    # ------------------------------------------------------------------ structure
+    def _build_index(self) -> None:
+        n = self.parent.size
+        child_count = np.bincount(self.parent[1:], minlength=n).astype(np.int32)
+        if child_count.max(initial=0) > self.k:
+            node = int(np.argmax(child_count))
+            raise DataFormatError(
+                f"vocabulary: node {node} has {int(child_count[node])} children, more than k={self.k}"
+            )
+        self.child_ids = (np.argsort(self.parent[1:], kind="stable") + 1).astype(np.int32)
+        self.child_start = np.concatenate([[0], np.cumsum(child_count)[:-1]]).astype(np.int64)
+        self.child_count = child_count
+        is_leaf = child_count == 0
+        is_leaf[0] = False
+        self.is_leaf = is_leaf
+        self.word_nodes = np.flatnonzero(is_leaf).astype(np.int32)
+        self.word_of_node = np.full(n, -1, np.int32)
+        self.word_of_node[self.word_nodes] = np.arange(self.word_nodes.size, dtype=np.int32)
+        self._desc64 = as_u64(self.descriptors)
+        depth = np.zeros(n, np.int32)
+        # parents precede children, so one vectorised pass per level fixes the depths
+        for _ in range(self.L + 1):
+            depth[1:] = depth[self.parent[1:]] + 1
+        self.depth = depth
+        if n > 1 and int(depth.max()) > self.L:
+            node = int(np.argmax(depth))
+            raise DataFormatError(
+                f"vocabulary: node {node} is at depth {int(depth[node])}, deeper than L={self.L}"
+            )
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes including the root."""
+        return int(self.parent.size)
+
+    @property
+    def n_words(self) -> int:
+        """Number of words (leaves)."""
+        return int(self.word_nodes.size)
+
+    def __len__(self) -> int:
+        return self.n_words
+
+    def __repr__(self) -> str:
+        return (
+            f"Vocabulary(k={self.k}, L={self.L}, weighting={self.weighting.name}, "
+            f"scoring={self.scoring.name}, words={self.n_words})"
+        )
+
+    def word_weights(self) -> NDArray[np.float64]:
+        """``(W,)`` weight of each word (idf for TF_IDF/IDF, 1 for TF/BINARY)."""
+        return self.weights[self.word_nodes]
+
+    # ------------------------------------------------------------------ quantisation
+    def quantize(
+        self, descriptors: ArrayLike, levelsup: int = 0
+    ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32]]:
+        """Descend the tree with every descriptor (DBoW2's per-feature ``transform``).
+
+        Parameters
+        ----------
+        descriptors : (N, 32) uint8
+        levelsup : int
+            The direct-index node is the ancestor at level ``L - levelsup`` (0: the word's node).
+
+        Returns
+        -------
+        word_ids : (N,) int32
+        weights : (N,) float64
+        direct_nodes : (N,) int32
+            Node at level ``L - levelsup`` (the root when that level is <= 0; the leaf when the
+            leaf is shallower than that level).
+        """
+        desc = check_descriptors(descriptors)
+        n = desc.shape[0]
+        cur = np.zeros(n, np.int32)
+        nid = np.zeros(n, np.int32)
+        nid_level = self.L - int(levelsup)
+        if self.n_nodes == 1 or n == 0:
+            return np.full(n, -1, np.int32), np.zeros(n), nid
+        q64 = as_u64(desc)
+        active = np.arange(n)
+        arange_k = np.arange(self.k)
+        level = 0
+        while active.size:
+            level += 1
+            c = cur[active]
+            cnt = self.child_count[c]
+            slots = self.child_start[c][:, None] + arange_k[None, :]
+            valid = arange_k[None, :] < cnt[:, None]
+            kids = self.child_ids[np.minimum(slots, self.child_ids.size - 1)]
+            dist = np.bitwise_count(self._desc64[kids] ^ q64[active][:, None, :]).sum(
+                axis=2, dtype=np.int32
+            )
+            dist[~valid] = np.iinfo(np.int32).max
+            best = kids[np.arange(active.size), dist.argmin(axis=1)]
+            cur[active] = best
+            if level <= nid_level:
+                nid[active] = best
+            active = active[self.child_count[best] > 0]
+        word_ids = self.word_of_node[cur]
+        return word_ids, self.weights[cur], nid
+
+    def transform(
+        self, descriptors: ArrayLike, levelsup: int = 0
+    ) -> tuple[BowVector, FeatureVector]:
+        """Convert an image's descriptors to a BoW vector and a direct index (DBoW2 semantics).
+
+        Parameters
+        ----------
+        descriptors : (N, 32) uint8
+            ORB descriptors of one image.
+        levelsup : int
+            Levels up from the leaves for the direct index (ORB-SLAM uses 4).
+
+        Returns
+        -------
+        bow : BowVector
+            Normalised as :attr:`scoring` requires.
+        direct : FeatureVector
+            Node -> indices of the features that passed through it.
+        """
+        words, w, nid = self.quantize(descriptors, levelsup)
+        keep = w > 0
+        kw = words[keep]
+        uniq, inv = np.unique(kw, return_inverse=True)
+        if self.weighting in (Weighting.TF, Weighting.TF_IDF):
+            values = np.bincount(inv, weights=w[keep], minlength=uniq.size).astype(np.float64)
+        else:
+            first = np.zeros(uniq.size, np.int64)
+            first[inv[::-1]] = np.arange(kw.size)[::-1]
+            values = w[keep][first] if uniq.size else np.zeros(0)
+        norm = normalization_of(self.scoring)
+        if norm is None:
+            if self.weighting in (Weighting.TF, Weighting.TF_IDF) and uniq.size:
+                values = values / float(uniq.size)
+        else:
+            values = normalize_values(values, norm)
+        return BowVector(uniq.astype(np.int32), values), FeatureVector.from_assignment(nid, keep)
+
+    def bow(self, descriptors: ArrayLike) -> BowVector:
+        """Only the BoW vector of :meth:`transform`."""
+        return self.transform(descriptors)[0]
+
+    def score(self, a: BowVector, b: BowVector) -> float:
+        """DBoW2 score of two BoW vectors with this vocabulary's scoring."""
+        return float(score_many(a, BowMatrix.stack([b]), self.scoring)[0])
+
+    def score_many(
+        self, query: BowVector, database: BowMatrix | Sequence[BowVector]
+    ) -> NDArray[np.float64]:
+        """Scores ``(n,)`` of ``query`` against each database vector."""
+        return score_many(query, database, self.scoring)
+
+    # ------------------------------------------------------------------ training
+    @classmethod
+    def train(
+        cls,
+        training: Sequence[ArrayLike],
+        *,
+        k: int = 10,
+        L: int = 5,
+        weighting: Weighting | int | str = Weighting.TF_IDF,
+        scoring: Scoring | int | str = Scoring.L1_NORM,
+        rng: np.random.Generator | int | None = None,
+        max_iterations: int | None = 100,
+        progress: bool = True,
+    ) -> Vocabulary:
+        """Build a vocabulary with DBoW2's ``create`` (hierarchical k-means, then weights).
+
+        Parameters
+        ----------
+        training : sequence of (n_i, 32) uint8
+            Descriptors of each training image (the images count as documents for the idf).
+        k, L : int
+            Branching factor and depth levels.
+        weighting, scoring : DBoW2 types or names
+        rng : Generator, int or None
+        max_iterations : int or None
+            Lloyd iterations per node (None: until convergence, as DBoW2).
+        progress : bool
+            Show a tqdm bar (stderr) of descriptors clustered.
+
+        Returns
+        -------
+        Vocabulary
+        """
+        if int(k) != k or k < 2:
+            raise ConfigurationError(f"k: expected an integer >= 2, got {k}")
+        if int(L) != L or L < 1:
+            raise ConfigurationError(f"L: expected an integer >= 1, got {L}")
+        docs = [check_descriptors(d, f"training[{i}]") for i, d in enumerate(training)]
+        if not docs or sum(d.shape[0] for d in docs) == 0:
+            raise ConfigurationError("training: expected at least one image with descriptors")
+        gen = as_rng(rng)
+        allc = np.concatenate(docs)
+        from tqdm import tqdm
+
+        with tqdm(
+            total=allc.shape[0] * L, desc="hierarchical k-means", unit="desc", disable=not progress
+        ) as bar:
+            tree = hierarchical_kmeans(
+                allc, int(k), int(L), gen, max_iterations=max_iterations, on_node=bar.update
+            )
+        voc = cls(
+            k, L, weighting, scoring, tree.parent, tree.descriptors, np.zeros(tree.parent.size)
+        )
+        voc._set_node_weights(docs)
+        return voc
+
+    def _set_node_weights(self, docs: Sequence[NDArray[np.uint8]]) -> None:
+        """DBoW2's ``setNodeWeights``: 1 for TF/BINARY, ``ln(N / N_i)`` for IDF/TF_IDF."""
+        weights = np.zeros(self.n_nodes)
+        if self.weighting in (Weighting.TF, Weighting.BINARY):
+            weights[self.word_nodes] = 1.0
+        else:
+            ni = np.zeros(self.n_words, np.int64)
+            for d in docs:
+                words = self.quantize(d)[0]
+                ni[np.unique(words[words >= 0])] += 1
+            ok = ni > 0
+            weights[self.word_nodes[ok]] = np.log(len(docs) / ni[ok])
+        self.weights = weights
+
+    @classmethod
+    def train_from_folder(
+        cls,
+        folder: str | Path,
+        *,
+        extractor: OrbExtractor | None = None,
+        recursive: bool = True,
+        progress: bool = True,
+        **kwargs: Any,
+    ) -> Vocabulary:
+        """Extract ORB features from every image in ``folder`` and :meth:`train` on them.
+
+        ``kwargs`` go to :meth:`train` (k, L, weighting, scoring, rng, max_iterations).
+        """
+        import cv2
+        from tqdm import tqdm
+
+        from symloc.vision.orb import OrbExtractor
+
+        root = Path(folder)
+        if not root.is_dir():
+            raise ConfigurationError(f"folder: {root} is not a directory")
+        files = sorted(
+            p
+            for p in (root.rglob("*") if recursive else root.iterdir())
+            if p.suffix.lower() in IMAGE_SUFFIXES
+        )
+        if not files:
+            raise ConfigurationError(f"folder: no images ({', '.join(IMAGE_SUFFIXES)}) in {root}")
+        ext = extractor or OrbExtractor()
+        docs = []
+        for p in tqdm(files, desc="ORB features", unit="img", disable=not progress):
+            img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+            if img is None:
+                raise DataFormatError(f"folder: cannot read image {p}")
+            docs.append(ext.extract(img).descriptors)
+        return cls.train(docs, progress=progress, **kwargs)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> None:
+        """Write the native binary format (see :mod:`symloc.vision.vocabulary_io`)."""
+        from symloc.vision.vocabulary_io import save_vocabulary
+
+        save_vocabulary(self, path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> Vocabulary:
+        """Read the native binary format (or a DBoW2 text file, by its content)."""
+        from symloc.vision.vocabulary_io import load_vocabulary
+
+        return load_vocabulary(path)
+
+    @classmethod
+    def load_dbow2_text(cls, path: str | Path) -> Vocabulary:
+        """Read a DBoW2 text vocabulary (ORB-SLAM's ORBvoc.txt layout)."""
+        from symloc.vision.vocabulary_io import load_dbow2_text
+
+        return load_dbow2_text(path)
+
+    def save_dbow2_text(self, path: str | Path) -> None:
+        """Write a DBoW2 text vocabulary (readable by DBoW2 ``loadFromTextFile``)."""
+        from symloc.vision.vocabulary_io import save_dbow2_text
+
+        save_dbow2_text(self, path)
+
+    def equals(self, other: Vocabulary, *, weight_rtol: float = 0.0) -> bool:
+        """True if both vocabularies have the same structure, words and (close) weights."""
+        return (
+            self.k == other.k
+            and self.L == other.L
+            and self.weighting == other.weighting
+            and self.scoring == other.scoring
+            and np.array_equal(self.parent, other.parent)
+            and np.array_equal(self.descriptors[1:], other.descriptors[1:])
+            and np.allclose(self.weights, other.weights, rtol=weight_rtol, atol=0.0)
+        )
