@@ -1,1 +1,28 @@
-"""The embedded simulated world: rooms, lidar, odometry, camera."""
+"""The embedded simulated world: rooms, lidar, odometry, camera.
+
+Submodules: :mod:`~symloc.sim.world` (``World``), :mod:`~symloc.sim.rooms` (builders, ``Room``,
+``build_room``), :mod:`~symloc.sim.raycast`, :mod:`~symloc.sim.lidar` (presets,
+``simulate_scan``), :mod:`~symloc.sim.rasterize` (``world_to_grid``), :mod:`~symloc.sim.robot`
+(differential drive and odometry noise), :mod:`~symloc.sim.camera` (``Camera``).
+"""
+
+from __future__ import annotations
+
+from symloc.sim.lidar import LDS01, PAPER_15M, PRESETS, RPLIDAR_A2, LidarPreset, simulate_scan
+from symloc.sim.raycast import raycast
+from symloc.sim.rooms import ROOM_NAMES, Room, build_room
+from symloc.sim.world import World
+
+__all__ = [
+    "LDS01",
+    "PAPER_15M",
+    "PRESETS",
+    "RPLIDAR_A2",
+    "ROOM_NAMES",
+    "LidarPreset",
+    "Room",
+    "World",
+    "build_room",
+    "raycast",
+    "simulate_scan",
+]
