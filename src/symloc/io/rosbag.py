@@ -1,0 +1,439 @@
+"""Read ROS 1 and ROS 2 bags into symloc types, and write ROS 2 (or ROS 1) bags.
+
+Reading uses ``rosbags.highlevel.AnyReader``, so a ROS 1 ``.bag`` file, a ROS 2 bag directory
+(sqlite3 ``.db3`` or ``.mcap`` storage) or the ``.db3`` / ``.mcap`` file inside one all work,
+without ROS installed. Messages come out as :class:`BagMessage` records in log-time order whose
+``value`` is a symloc type:
+
+============  ==============================  ============================================
+kind          ROS message type                value
+============  ==============================  ============================================
+``scan``      sensor_msgs/LaserScan           :class:`symloc.scan.LaserScan`
+``odom``      nav_msgs/Odometry               :class:`symloc.odometry.OdometryReading`
+``image``     sensor_msgs/Image or            ``(H, W, 3)`` uint8 RGB
+              sensor_msgs/CompressedImage
+``map``       nav_msgs/OccupancyGrid          :class:`symloc.grid.OccupancyGrid`
+``truth``     nav_msgs/Odometry (map frame)   :class:`symloc.odometry.OdometryReading`
+``initialpose``  PoseWithCovarianceStamped    ``(pose (3,), covariance (3, 3))``
+============  ==============================  ============================================
+
+Topics are found by message type unless named in :class:`BagTopics`; the ground truth is only
+read from a topic named explicitly or called ``ground_truth`` (it is an Odometry too).
+
+Writing (:class:`BagWriter`) produces a ROS 2 bag (sqlite3 or MCAP storage) or a ROS 1 bag
+with the same topics, serialised by a rosbags typestore; the map topic is offered with
+transient-local durability, as map_server publishes it.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import Counter
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import TracebackType
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from symloc.errors import DataFormatError
+from symloc.grid import OccupancyGrid
+from symloc.odometry import OdometryReading
+from symloc.ros.build import build_rosbags
+from symloc.ros.grid_msg import grid_from_msg, grid_to_fields
+from symloc.ros.header import header_stamp
+from symloc.ros.image_msg import (
+    compressed_image_from_msg,
+    compressed_image_to_fields,
+    image_from_msg,
+    image_to_fields,
+)
+from symloc.ros.odometry_msg import odometry_from_msg, odometry_to_fields
+from symloc.ros.pose_msg import pose_with_covariance_from_msg, pose_with_covariance_to_fields
+from symloc.ros.scan_msg import scan_from_msg, scan_to_fields
+from symloc.scan import LaserScan
+
+__all__ = [
+    "BagFormat",
+    "BagMessage",
+    "BagTopics",
+    "BagWriter",
+    "bag_topics",
+    "read_bag",
+    "resolve_bag_path",
+]
+
+BagFormat = Literal["ros2", "mcap", "ros1"]
+
+_TYPES = {
+    "scan": ("sensor_msgs/msg/LaserScan",),
+    "odom": ("nav_msgs/msg/Odometry",),
+    "image": ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"),
+    "map": ("nav_msgs/msg/OccupancyGrid",),
+    "truth": ("nav_msgs/msg/Odometry",),
+    "initialpose": ("geometry_msgs/msg/PoseWithCovarianceStamped",),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class BagTopics:
+    """Topic names to read; ``None`` picks the first topic of the right type (see module doc)."""
+
+    scan: str | None = None
+    odom: str | None = None
+    image: str | None = None
+    map: str | None = None
+    truth: str | None = "ground_truth"
+    initialpose: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class BagMessage:
+    """One message of a bag, converted.
+
+    Attributes
+    ----------
+    kind : str
+        ``scan``, ``odom``, ``image``, ``map``, ``truth`` or ``initialpose``.
+    topic : str
+    stamp : float
+        The message's header stamp [s].
+    log_time : int
+        When the message was recorded [ns].
+    value : object
+        The symloc value (see the module docstring).
+    """
+
+    kind: str
+    topic: str
+    stamp: float
+    log_time: int
+    value: Any
+
+
+def resolve_bag_path(path: str | Path) -> Path:
+    """The path AnyReader takes: a ROS 1 ``.bag`` file or a ROS 2 bag directory.
+
+    A ``.db3`` or ``.mcap`` file is accepted when its folder holds the bag's ``metadata.yaml``.
+
+    Raises
+    ------
+    DataFormatError
+        The path does not exist or is not a bag.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise DataFormatError(f"bag: {p} does not exist")
+    if p.is_dir():
+        if not (p / "metadata.yaml").is_file():
+            raise DataFormatError(f"bag: {p} is a folder without metadata.yaml (not a ROS 2 bag)")
+        return p
+    if p.suffix in (".db3", ".mcap"):
+        if (p.parent / "metadata.yaml").is_file():
+            return p.parent
+        raise DataFormatError(
+            f"bag: {p.name} has no metadata.yaml beside it; pass the ROS 2 bag folder"
+        )
+    if p.suffix == ".bag":
+        return p
+    raise DataFormatError(f"bag: {p} is neither a ROS 1 .bag file nor a ROS 2 bag folder")
+
+
+def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
+    """topic -> kind for the connections to read (named topics first, then by type)."""
+    by_topic: dict[str, str] = {}
+    for c in connections:
+        by_topic.setdefault(c.topic, c.msgtype)
+    chosen: dict[str, str] = {}
+    for kind, types in _TYPES.items():
+        wanted = getattr(topics, kind)
+        if wanted is None:
+            continue
+        names = [wanted, "/" + wanted.lstrip("/"), wanted.lstrip("/")]
+        name = next((n for n in names if n in by_topic), None)
+        if name is None:
+            if kind == "truth":
+                continue  # optional: only simulated or motion-captured runs have it
+            raise DataFormatError(
+                f"bag topic {wanted!r} for {kind} not found; topics: {sorted(by_topic)}"
+            )
+        if by_topic[name] not in types:
+            raise DataFormatError(
+                f"bag topic {name}: expected {' or '.join(types)}, got {by_topic[name]}"
+            )
+        chosen[name] = kind
+    for kind, types in _TYPES.items():
+        if getattr(topics, kind) is not None or kind == "truth":
+            continue
+        for name, msgtype in sorted(by_topic.items()):
+            if msgtype in types and name not in chosen:
+                chosen[name] = kind
+                break
+    return chosen
+
+
+def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
+    """Every topic of a bag with its message type and message count."""
+    from rosbags.highlevel import AnyReader
+
+    out: dict[str, tuple[str, int]] = {}
+    with AnyReader([resolve_bag_path(path)]) as reader:
+        for c in reader.connections:
+            prev = out.get(c.topic, (c.msgtype, 0))
+            out[c.topic] = (c.msgtype, prev[1] + c.msgcount)
+    return out
+
+
+def _convert(kind: str, msgtype: str, msg: Any) -> tuple[float, Any]:
+    if kind == "scan":
+        scan = scan_from_msg(msg)
+        return scan.stamp, scan
+    if kind in ("odom", "truth"):
+        reading = odometry_from_msg(msg)
+        return reading.stamp, reading
+    if kind == "image":
+        where = msgtype.rsplit("/", 1)[-1]
+        img = (
+            compressed_image_from_msg(msg)
+            if msgtype.endswith("CompressedImage")
+            else image_from_msg(msg)
+        )
+        return header_stamp(msg, where), img
+    if kind == "map":
+        return header_stamp(msg, "OccupancyGrid"), grid_from_msg(msg)
+    pose_cov = pose_with_covariance_from_msg(msg)
+    return header_stamp(msg, "PoseWithCovarianceStamped"), pose_cov
+
+
+def read_bag(
+    path: str | Path,
+    *,
+    topics: BagTopics | None = None,
+    on_error: Literal["raise", "skip"] = "raise",
+    dropped: Counter[str] | None = None,
+) -> Iterator[BagMessage]:
+    """Yield the bag's scans, odometry, images, maps, ground truth and initial poses in order.
+
+    Parameters
+    ----------
+    path : str or Path
+        ROS 1 ``.bag``, ROS 2 bag folder, or the ``.db3`` / ``.mcap`` inside one.
+    topics : BagTopics, optional
+        Which topics to read; by default the first topic of each message type.
+    on_error : {"raise", "skip"}
+        A malformed message raises :class:`DataFormatError` (naming the topic, the log time and
+        the field), or is skipped with a warning and counted in ``dropped[topic]``.
+    dropped : Counter, optional
+        Receives the number of skipped messages per topic.
+
+    Raises
+    ------
+    DataFormatError
+        Not a bag, a named topic is missing or of the wrong type, or a malformed message
+        (with ``on_error="raise"``).
+    """
+    from rosbags.highlevel import AnyReader
+
+    if on_error not in ("raise", "skip"):
+        raise DataFormatError(f"on_error: expected 'raise' or 'skip', got {on_error!r}")
+    bag = resolve_bag_path(path)
+    try:
+        reader = AnyReader([bag])
+        reader.open()
+    except Exception as err:  # rosbags raises its own family; present one
+        raise DataFormatError(f"bag: cannot open {bag}: {err}") from err
+    try:
+        chosen = _pick_topics(reader.connections, topics or BagTopics())
+        conns = [c for c in reader.connections if c.topic in chosen]
+        for conn, log_time, raw in reader.messages(connections=conns):
+            kind = chosen[conn.topic]
+            try:
+                msg = reader.deserialize(raw, conn.msgtype)
+                stamp, value = _convert(kind, conn.msgtype, msg)
+            except Exception as err:  # wrapped into one error family
+                text = f"bag topic {conn.topic} at log time {log_time} ns: {err}"
+                if on_error == "raise":
+                    raise DataFormatError(text) from err
+                warnings.warn(f"skipped: {text}", stacklevel=2)
+                if dropped is not None:
+                    dropped[conn.topic] += 1
+                continue
+            yield BagMessage(kind, conn.topic, stamp, int(log_time), value)
+    finally:
+        reader.close()
+
+
+# ------------------------------------------------------------------------------------ writing
+
+
+@dataclass
+class BagWriter:
+    """Write symloc data as a ROS 2 bag (``ros2``: sqlite3, ``mcap``) or a ROS 1 bag.
+
+    Use as a context manager. Topic names default to the usual ones (``scan``, ``odom``,
+    ``camera/image_raw``, ``map``, ``ground_truth``); each ``write_*`` stamps the log time
+    with the message's own stamp.
+
+    Parameters
+    ----------
+    path : str or Path
+        The bag folder (ROS 2) or ``.bag`` file (ROS 1); must not exist yet.
+    fmt : {"ros2", "mcap", "ros1"}
+    compressed_images : bool
+        Store images as sensor_msgs/CompressedImage (PNG, lossless) instead of raw rgb8.
+    """
+
+    path: str | Path
+    fmt: BagFormat = "ros2"
+    compressed_images: bool = False
+    scan_topic: str = "/scan"
+    odom_topic: str = "/odom"
+    image_topic: str = "/camera/image_raw"
+    map_topic: str = "/map"
+    truth_topic: str = "/ground_truth"
+    initialpose_topic: str = "/initialpose"
+    counts: Counter[str] = field(default_factory=Counter)
+    _writer: Any = field(default=None, init=False, repr=False)
+    _typestore: Any = field(default=None, init=False, repr=False)
+    _conns: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    _serialize: Callable[[Any, str], bytes] | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.fmt not in ("ros2", "mcap", "ros1"):
+            raise DataFormatError(f"fmt: expected 'ros2', 'mcap' or 'ros1', got {self.fmt!r}")
+        if self.compressed_images and self.image_topic == "/camera/image_raw":
+            self.image_topic = "/camera/image_raw/compressed"
+
+    def __enter__(self) -> BagWriter:
+        self.open()
+        return self
+
+    def __exit__(
+        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+    def open(self) -> None:
+        """Create the bag (the path must not exist)."""
+        from rosbags.typesys import Stores, get_typestore
+
+        p = Path(self.path)
+        if p.exists():
+            raise DataFormatError(f"bag: {p} exists already; choose a new path")
+        if self.fmt == "ros1":
+            from rosbags.rosbag1 import Writer as Writer1
+
+            self._typestore = get_typestore(Stores.ROS1_NOETIC)
+            self._writer = Writer1(p)
+            self._serialize = self._typestore.serialize_ros1
+        else:
+            from rosbags.rosbag2 import StoragePlugin, Writer
+
+            self._typestore = get_typestore(Stores.ROS2_HUMBLE)
+            plugin = StoragePlugin.MCAP if self.fmt == "mcap" else StoragePlugin.SQLITE3
+            self._writer = Writer(p, version=9, storage_plugin=plugin)
+            self._serialize = self._typestore.serialize_cdr
+        self._writer.open()
+
+    def close(self) -> None:
+        """Finish the bag (writes the ROS 2 metadata.yaml)."""
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+
+    def _connection(self, topic: str, msgtype: str, *, latched: bool = False) -> Any:
+        conn = self._conns.get(topic)
+        if conn is not None:
+            return conn
+        if self._writer is None:
+            raise DataFormatError("BagWriter: open() it (or use it as a context manager) first")
+        if self.fmt == "ros1":
+            conn = self._writer.add_connection(
+                topic, msgtype, typestore=self._typestore, latching=1 if latched else None
+            )
+        else:
+            qos = [_transient_local_qos()] if latched else []
+            conn = self._writer.add_connection(
+                topic, msgtype, typestore=self._typestore, offered_qos_profiles=qos
+            )
+        self._conns[topic] = conn
+        return conn
+
+    def write_fields(
+        self,
+        topic: str,
+        msgtype: str,
+        fields: dict[str, Any],
+        stamp: float,
+        *,
+        latched: bool = False,
+    ) -> None:
+        """Write one message given as a field dict at log time ``stamp`` [s]."""
+        conn = self._connection(topic, msgtype, latched=latched)
+        msg = build_rosbags(self._typestore, msgtype, fields)
+        assert self._serialize is not None
+        self._writer.write(conn, round(stamp * 1e9), self._serialize(msg, msgtype))
+        self.counts[topic] += 1
+
+    def write_scan(self, scan: LaserScan) -> None:
+        """A sensor_msgs/LaserScan."""
+        self.write_fields(
+            self.scan_topic, "sensor_msgs/msg/LaserScan", scan_to_fields(scan), scan.stamp
+        )
+
+    def write_odometry(self, reading: OdometryReading, *, frame_id: str = "odom") -> None:
+        """A nav_msgs/Odometry on the odometry topic."""
+        fields = odometry_to_fields(reading, frame_id=frame_id)
+        self.write_fields(self.odom_topic, "nav_msgs/msg/Odometry", fields, reading.stamp)
+
+    def write_truth(self, pose: ArrayLike, stamp: float) -> None:
+        """The true pose (3,) as nav_msgs/Odometry in the map frame on the ground-truth topic."""
+        fields = odometry_to_fields(OdometryReading(np.asarray(pose, float), stamp), frame_id="map")
+        self.write_fields(self.truth_topic, "nav_msgs/msg/Odometry", fields, stamp)
+
+    def write_image(self, image: ArrayLike, stamp: float, *, frame_id: str = "camera") -> None:
+        """An ``(H, W, 3)`` uint8 RGB image (raw rgb8, or PNG when ``compressed_images``)."""
+        if self.compressed_images:
+            fields = compressed_image_to_fields(image, stamp=stamp, frame_id=frame_id)
+            self.write_fields(self.image_topic, "sensor_msgs/msg/CompressedImage", fields, stamp)
+        else:
+            fields = image_to_fields(image, stamp=stamp, frame_id=frame_id)
+            self.write_fields(self.image_topic, "sensor_msgs/msg/Image", fields, stamp)
+
+    def write_map(self, grid: OccupancyGrid, stamp: float) -> None:
+        """A nav_msgs/OccupancyGrid, offered transient-local (latched) like map_server's."""
+        fields = grid_to_fields(grid, stamp=stamp)
+        self.write_fields(self.map_topic, "nav_msgs/msg/OccupancyGrid", fields, stamp, latched=True)
+
+    def write_initialpose(self, pose: ArrayLike, covariance: ArrayLike, stamp: float) -> None:
+        """A geometry_msgs/PoseWithCovarianceStamped (as RViz's 2D Pose Estimate sends)."""
+        fields = pose_with_covariance_to_fields(pose, covariance, stamp=stamp)
+        self.write_fields(
+            self.initialpose_topic, "geometry_msgs/msg/PoseWithCovarianceStamped", fields, stamp
+        )
+
+
+def _transient_local_qos() -> Any:
+    from rosbags.interfaces import (
+        Qos,
+        QosDurability,
+        QosHistory,
+        QosLiveliness,
+        QosReliability,
+        QosTime,
+    )
+
+    zero = QosTime(0, 0)
+    return Qos(
+        QosHistory.KEEP_LAST,
+        1,
+        QosReliability.RELIABLE,
+        QosDurability.TRANSIENT_LOCAL,
+        zero,
+        zero,
+        QosLiveliness.AUTOMATIC,
+        zero,
+        False,
+    )

@@ -1,0 +1,128 @@
+"""Writing and reading ROS 1 / ROS 2 (sqlite3, MCAP) bags through symloc types."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symloc.errors import DataFormatError
+from symloc.grid import OccupancyGrid
+from symloc.io.rosbag import BagTopics, BagWriter, bag_topics, read_bag, resolve_bag_path
+from symloc.odometry import OdometryReading
+from symloc.scan import LaserScan
+
+
+def _write_run(path: Path, fmt: str, *, compressed: bool = False, n: int = 5) -> dict:
+    rng = np.random.default_rng(3)
+    grid = OccupancyGrid(rng.choice(np.array([-1, 0, 100], np.int8), (20, 30)), 0.05)
+    scans, odoms, images = [], [], []
+    with BagWriter(path, fmt, compressed_images=compressed) as w:
+        w.write_map(grid, 0.0)
+        for i in range(n):
+            t = 1.0 + 0.1 * i
+            odo = OdometryReading(np.array([0.1 * i, 0.0, 0.05 * i]), t)
+            scan = LaserScan(-math.pi, 2 * math.pi / 100, 0.1, 8.0, rng.uniform(1, 5, 100), stamp=t)
+            img = rng.integers(0, 256, (12, 16, 3), dtype=np.uint8)
+            w.write_odometry(odo)
+            w.write_scan(scan)
+            w.write_truth([0.1 * i, 0.02, 0.05 * i], t)
+            w.write_image(img, t)
+            scans.append(scan)
+            odoms.append(odo)
+            images.append(img)
+        w.write_initialpose([1.0, 2.0, 0.5], np.diag([0.25, 0.25, 0.07]), 2.0)
+    return {"grid": grid, "scans": scans, "odoms": odoms, "images": images, "counts": w.counts}
+
+
+@pytest.mark.parametrize(("fmt", "name"), [("ros2", "run"), ("mcap", "run"), ("ros1", "run.bag")])
+def test_bag_round_trip(tmp_path: Path, fmt: str, name: str) -> None:
+    path = tmp_path / name
+    ref = _write_run(path, fmt)
+    msgs = list(read_bag(path))
+    kinds = Counter(m.kind for m in msgs)
+    assert kinds == {"scan": 5, "odom": 5, "image": 5, "truth": 5, "map": 1, "initialpose": 1}
+    scans = [m.value for m in msgs if m.kind == "scan"]
+    for got, want in zip(scans, ref["scans"], strict=True):
+        np.testing.assert_array_equal(got.ranges, want.ranges.astype(np.float32))
+        assert got.stamp == pytest.approx(want.stamp)
+    odoms = [m.value for m in msgs if m.kind == "odom"]
+    np.testing.assert_allclose([o.pose for o in odoms], [o.pose for o in ref["odoms"]], atol=1e-12)
+    imgs = [m.value for m in msgs if m.kind == "image"]
+    for got, want in zip(imgs, ref["images"], strict=True):
+        np.testing.assert_array_equal(got, want)
+    (grid,) = [m.value for m in msgs if m.kind == "map"]
+    np.testing.assert_array_equal(grid.data, ref["grid"].data)
+    (pc,) = [m.value for m in msgs if m.kind == "initialpose"]
+    np.testing.assert_allclose(pc[0], [1.0, 2.0, 0.5], atol=1e-12)
+    assert [m.log_time for m in msgs] == sorted(m.log_time for m in msgs)
+    topics = bag_topics(path)
+    assert topics["/scan"] == ("sensor_msgs/msg/LaserScan", 5)
+
+
+def test_compressed_images_and_db3_file_path(tmp_path: Path) -> None:
+    path = tmp_path / "run"
+    ref = _write_run(path, "ros2", compressed=True, n=2)
+    db3 = next(path.glob("*.db3"))
+    imgs = [m.value for m in read_bag(db3) if m.kind == "image"]
+    np.testing.assert_array_equal(imgs[1], ref["images"][1])
+    assert "/camera/image_raw/compressed" in bag_topics(path)
+
+
+def test_malformed_message_names_topic_and_field(tmp_path: Path) -> None:
+    path = tmp_path / "bad"
+    with BagWriter(path) as w:
+        w.write_fields(
+            "/scan",
+            "sensor_msgs/msg/LaserScan",
+            {"angle_increment": float("nan"), "range_max": 5.0, "ranges": np.ones(4, np.float32)},
+            1.0,
+        )
+        scan = LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=2.0)
+        w.write_scan(scan)
+    with pytest.raises(
+        DataFormatError, match=r"/scan at log time 1000000000 ns: LaserScan\.angle_increment"
+    ):
+        list(read_bag(path))
+    dropped: Counter[str] = Counter()
+    with pytest.warns(UserWarning, match="skipped"):
+        got = list(read_bag(path, on_error="skip", dropped=dropped))
+    assert len(got) == 1
+    assert got[0].stamp == pytest.approx(2.0)
+    assert dropped["/scan"] == 1
+
+
+def test_topic_selection_errors(tmp_path: Path) -> None:
+    path = tmp_path / "run"
+    _write_run(path, "ros2", n=1)
+    with pytest.raises(DataFormatError, match=r"'/laser' for scan not found"):
+        list(read_bag(path, topics=BagTopics(scan="/laser")))
+    with pytest.raises(DataFormatError, match=r"expected sensor_msgs/msg/LaserScan"):
+        list(read_bag(path, topics=BagTopics(scan="odom")))
+    msgs = list(read_bag(path, topics=BagTopics(truth=None)))
+    assert not any(m.kind == "truth" for m in msgs)
+
+
+def test_bad_paths(tmp_path: Path) -> None:
+    with pytest.raises(DataFormatError, match="does not exist"):
+        resolve_bag_path(tmp_path / "nope.bag")
+    with pytest.raises(DataFormatError, match=r"without metadata\.yaml"):
+        resolve_bag_path(tmp_path)
+    (tmp_path / "x.txt").write_text("hi")
+    with pytest.raises(DataFormatError, match="neither a ROS 1"):
+        resolve_bag_path(tmp_path / "x.txt")
+    (tmp_path / "x.mcap").write_text("hi")
+    with pytest.raises(DataFormatError, match=r"no metadata\.yaml beside it"):
+        resolve_bag_path(tmp_path / "x.mcap")
+    (tmp_path / "junk.bag").write_bytes(b"garbage")
+    with pytest.raises(DataFormatError, match="cannot open"):
+        list(read_bag(tmp_path / "junk.bag"))
+    with pytest.raises(DataFormatError, match="exists already"):
+        BagWriter(tmp_path / "junk.bag").open()
+    with pytest.raises(DataFormatError, match="fmt: expected"):
+        BagWriter(tmp_path / "a", "ros3")  # type: ignore[arg-type]
+    with pytest.raises(DataFormatError, match="on_error"):
+        list(read_bag(tmp_path / "junk.bag", on_error="ignore"))  # type: ignore[arg-type]
