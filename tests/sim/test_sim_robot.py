@@ -104,7 +104,7 @@ def test_collision_stops_robot() -> None:
 def test_bad_inputs_raise() -> None:
     with pytest.raises(ConfigurationError, match="alpha2: expected a value >= 0"):
         OdometryNoise(alpha2=-0.1)
-    with pytest.raises(ConfigurationError, match="RobotConfig.radius"):
+    with pytest.raises(ConfigurationError, match=r"RobotConfig\.radius"):
         RobotConfig(radius=0.0)
     robot = DiffDriveRobot([0, 0, 0], rng=0)
     with pytest.raises(ConfigurationError, match=r"v: \|v\| must be <= max_v"):

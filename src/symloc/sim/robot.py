@@ -248,7 +248,4 @@ class DiffDriveRobot:
         """Repeat :meth:`step` for ``duration`` [s]; stops early (returns False) on collision."""
         duration = check_positive(duration, "duration")
         n = max(1, round(duration / dt))
-        for _ in range(n):
-            if not self.step(v, w, duration / n):
-                return False
-        return True
+        return all(self.step(v, w, duration / n) for _ in range(n))
