@@ -1,0 +1,167 @@
+"""Adapters from the real parts (AMCL, Algorithm 1, the occupancy grid) to the localizer's Protocols.
+
+- :class:`AmclTracker` wraps :class:`symloc.mcl.Amcl` and returns a
+  :class:`~symloc.localizer.types.TrackerResult`.
+- :class:`ReportJudge` wraps :func:`symloc.symmetry.judge_symmetry` (or any function returning a
+  report with ``symmetric, order, kind, center, corners, gv_distance, reason``) and adds the
+  bearing of the middle between two adjacent corners that Algorithm 2 faces.
+- :class:`GridScorer` scores poses against an occupancy grid with a likelihood field (the
+  test whether rotated copies of AMCL's estimate explain the scan as well).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import distance_transform_edt
+
+from symloc._checks import check_positive
+from symloc.geometry import wrap_angle
+from symloc.grid import OccupancyGrid
+from symloc.scan import LaserScan
+
+from .types import Hypothesis, SymmetryVerdict, TrackerResult
+
+__all__ = ["AmclTracker", "GridScorer", "ReportJudge", "corner_middle_bearing", "verdict_from"]
+
+FloatArray = NDArray[np.float64]
+
+
+class AmclTracker:
+    """:class:`symloc.mcl.Amcl` as a :class:`~symloc.localizer.types.Tracker`."""
+
+    def __init__(self, amcl: Any) -> None:
+        self.amcl = amcl
+        self.last: Any = None
+
+    def initialize_global(self) -> None:
+        self.amcl.initialize_global()
+
+    def initialize_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
+        self.amcl.initialize_pose(pose, covariance)
+
+    def update(self, odom: Any, scan: Any) -> TrackerResult:
+        r = self.amcl.update(odom, scan)
+        self.last = r
+        hyps = tuple(
+            Hypothesis(pose=np.asarray(h.mean, dtype=np.float64), weight=float(h.weight))
+            for h in r.hypotheses
+        )
+        covs = tuple(np.asarray(h.covariance, dtype=np.float64) for h in r.hypotheses)
+        return TrackerResult(
+            estimate=np.asarray(r.estimate, dtype=np.float64),
+            covariance=np.asarray(r.covariance, dtype=np.float64),
+            hypotheses=hyps,
+            covariances=covs,
+            particles=np.asarray(r.particles),
+            weights=np.asarray(r.weights),
+            updated=bool(r.updated),
+        )
+
+
+def corner_middle_bearing(corners: NDArray[np.float64]) -> float | None:
+    """Bearing [rad] in the sensor frame of the middle between two adjacent corners.
+
+    ``corners`` (K, 2) in scan order; of the K middles the one nearest the robot's heading is
+    returned (the smallest turn). ``None`` with fewer than 2 corners.
+    """
+    c = np.asarray(corners, dtype=np.float64).reshape(-1, 2)
+    if c.shape[0] < 2:
+        return None
+    mids = 0.5 * (c + np.roll(c, -1, axis=0))
+    bearings = np.arctan2(mids[:, 1], mids[:, 0])
+    return float(bearings[int(np.argmin(np.abs(bearings)))])
+
+
+def verdict_from(report: Any) -> SymmetryVerdict:
+    """Translate a :class:`symloc.symmetry.SymmetryReport` into a :class:`SymmetryVerdict`.
+
+    A circle's infinite order becomes 0. A hallway is reported symmetric (order 2) but its
+    centre along the axis is not observable, so it carries ``kind="hallway"``.
+    """
+    order_raw = report.order
+    order = 0 if isinstance(order_raw, float) and math.isinf(order_raw) else int(order_raw)
+    center = np.asarray(report.center, dtype=np.float64).reshape(2)
+    symmetric = bool(report.symmetric) and bool(np.all(np.isfinite(center)))
+    corners = np.asarray(report.corners, dtype=np.float64).reshape(-1, 2)
+    facing = None
+    if (symmetric and order != 0 and report.kind == "polygon") or (
+        symmetric and report.kind == "rectangle" and corners.shape[0] == 4
+    ):
+        facing = corner_middle_bearing(corners)
+    return SymmetryVerdict(
+        symmetric=symmetric,
+        order=order,
+        kind=str(report.kind),
+        center=center if symmetric else None,
+        gv_distance=float(report.gv_distance),
+        facing=facing,
+        corners=corners,
+        reason=str(report.reason),
+    )
+
+
+class ReportJudge:
+    """Algorithm 1 as a :class:`~symloc.localizer.types.SymmetryJudge`.
+
+    Parameters
+    ----------
+    judge : callable
+        ``judge(scan, **kwargs) -> SymmetryReport`` (e.g. :func:`symloc.symmetry.judge_symmetry`).
+    **kwargs
+        Passed to ``judge`` on every call (e.g. ``config=SymmetryConfig(...)``).
+    """
+
+    def __init__(self, judge: Callable[..., Any], **kwargs: Any) -> None:
+        self.judge = judge
+        self.kwargs = kwargs
+        self.last_report: Any = None
+
+    def __call__(self, scan: Any) -> SymmetryVerdict:
+        report = self.judge(scan, **self.kwargs)
+        self.last_report = report
+        return verdict_from(report)
+
+
+class GridScorer:
+    """How well a scan fits an occupancy grid at given poses: mean of exp(-d^2 / 2 sigma^2).
+
+    ``d`` is each beam end point's distance to the nearest occupied cell; points off the map or
+    in unknown space count as far away. Score 1 is a perfect fit.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    sigma : float
+        Standard deviation [m] of the fit (nav2's ``sigma_hit`` is 0.2).
+    max_beams : int
+        Beams used per scan (evenly sub-sampled).
+    """
+
+    def __init__(self, grid: OccupancyGrid, sigma: float = 0.05, max_beams: int = 120) -> None:
+        self.grid = grid
+        self.sigma = check_positive(sigma, "GridScorer.sigma")
+        self.max_beams = int(max_beams)
+        occ = grid.occupied_mask
+        self._dist = distance_transform_edt(~occ) * grid.resolution
+
+    def __call__(self, poses: FloatArray, scan: LaserScan) -> FloatArray:
+        """Scores (K,) in [0, 1] of ``scan`` at ``poses`` (K, 3)."""
+        pts = scan.to_points()
+        step = max(1, len(pts.ranges) // self.max_beams)
+        r = np.asarray(pts.ranges)[::step]
+        a = np.asarray(pts.angles)[::step]
+        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        ang = wrap_angle(p[:, 2:3] + a[None, :])
+        xs = p[:, 0:1] + r[None, :] * np.cos(ang)
+        ys = p[:, 1:2] + r[None, :] * np.sin(ang)
+        cells = self.grid.world_to_cell(np.column_stack([xs.ravel(), ys.ravel()]))
+        inside = self.grid.in_bounds(cells)
+        d = np.full(cells.shape[0], 10.0 * self.sigma)
+        d[inside] = self._dist[cells[inside, 0], cells[inside, 1]]
+        s = np.exp(-0.5 * (d / self.sigma) ** 2).reshape(p.shape[0], -1)
+        return np.asarray(s.mean(axis=1) if s.shape[1] else np.zeros(p.shape[0]))

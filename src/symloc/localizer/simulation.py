@@ -1,0 +1,285 @@
+"""Driving the localizer's requests in the simulator.
+
+Two loops:
+
+- :func:`go_to_centre`: Algorithm 2 alone (the paper's Table 2): scan, judge (Algorithm 1),
+  smooth the centre, command the differential drive, until the controller says ``done``.
+- :func:`run_episode`: the full :class:`~symloc.localizer.localizer.Localizer` with a driver that
+  carries out its requests (go to the centre, face, rotate, capture an image) and turns on the
+  spot when it has nothing to do and the pose is not earned (AMCL integrates a scan only after
+  the robot moved).
+
+The robot is anything with a true ``pose`` and ``drive(v, w, dt) -> OdometryReading``
+(:class:`Body`); :class:`RobotBody` adapts :class:`symloc.sim.robot.DiffDriveRobot`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.geometry import wrap_angle
+from symloc.odometry import OdometryReading
+
+from .centering import CenteringConfig, CentreFilter, centering_command
+from .types import Estimate, RequestKind, Status, SymmetryJudge
+
+__all__ = [
+    "Body",
+    "CenteringRun",
+    "Episode",
+    "RobotBody",
+    "go_to_centre",
+    "run_episode",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+class Body(Protocol):
+    """A simulated differential-drive robot."""
+
+    @property
+    def pose(self) -> FloatArray:
+        """True pose (3,) in the world frame."""
+
+    @property
+    def odom(self) -> OdometryReading:
+        """The current odometry reading (odometry frame)."""
+
+    def drive(self, v: float, w: float, dt: float) -> OdometryReading:
+        """Move with ``v`` [m/s], ``w`` [rad/s] for ``dt`` [s]; return the noisy odometry."""
+
+
+class RobotBody:
+    """:class:`symloc.sim.robot.DiffDriveRobot` as a :class:`Body`; counts refused motions.
+
+    ``collisions`` counts commands the robot refused because they would touch an obstacle
+    (Algorithm 2 must keep it at zero).
+    """
+
+    def __init__(self, robot: Any) -> None:
+        self.robot = robot
+        self.collisions = 0
+
+    @property
+    def pose(self) -> FloatArray:
+        return np.asarray(self.robot.pose, dtype=np.float64)
+
+    @property
+    def odom(self) -> OdometryReading:
+        reading: OdometryReading = self.robot.odometry()
+        return reading
+
+    def teleport(self, pose: FloatArray) -> None:
+        """Kidnap: move the true pose without odometry noticing."""
+        self.robot.teleport(pose)
+
+    def drive(self, v: float, w: float, dt: float) -> OdometryReading:
+        cfg = self.robot.config
+        v = float(np.clip(v, -cfg.max_v, cfg.max_v))
+        w = float(np.clip(w, -cfg.max_w, cfg.max_w))
+        if not self.robot.step(v, w, dt):
+            self.collisions += 1
+        return self.odom
+
+
+ScanFn = Callable[[FloatArray], Any]
+ImageFn = Callable[[FloatArray], NDArray[np.uint8]]
+
+
+@dataclass(frozen=True)
+class CenteringRun:
+    """One run of Algorithm 2.
+
+    ``path`` (T, 3) true poses; ``error`` [m] final distance to the true centre; ``phase`` the
+    controller's last phase (``done`` on success); ``heading_error`` [rad] from the facing
+    direction given by the caller (NaN if none); ``judged`` scans judged symmetric / ``steps``.
+    """
+
+    path: FloatArray
+    error: float
+    phase: str
+    steps: int
+    time: float
+    distance: float
+    judged: int
+    heading_error: float = math.nan
+
+
+def go_to_centre(
+    body: Body,
+    scan_at: ScanFn,
+    judge: SymmetryJudge,
+    *,
+    true_centre: FloatArray,
+    config: CenteringConfig | None = None,
+    dt: float = 0.2,
+    max_time: float = 120.0,
+    smoothing: float = 0.5,
+    odom_start: OdometryReading | None = None,
+    true_facings: FloatArray | None = None,
+) -> CenteringRun:
+    """Run Algorithm 2 in the simulator until the controller reports ``done`` (or time runs out).
+
+    Parameters
+    ----------
+    body : Body
+    scan_at : callable
+        ``scan_at(true_pose) -> LaserScan`` (the simulated lidar with its noise).
+    judge : SymmetryJudge
+    true_centre : ndarray of shape (2,)
+        Ground truth, for the reported error only.
+    true_facings : ndarray of shape (D,), optional
+        World headings [rad] of the true corner middles, for the reported heading error only.
+    """
+    cfg = config if config is not None else CenteringConfig()
+    filt = CentreFilter(alpha=smoothing)
+    odom = odom_start if odom_start is not None else OdometryReading(np.zeros(3))
+    path = [body.pose]
+    phase = "blocked"
+    steps = judged = 0
+    distance = 0.0
+    facing_odom: float | None = None
+    t = 0.0
+    while t < max_time:
+        pose = body.pose
+        scan = scan_at(pose)
+        verdict = judge(scan)
+        if verdict.symmetric and verdict.center is not None:
+            judged += 1
+            target = filt.update(odom.pose, verdict.center)
+        else:
+            target = filt.update(odom.pose, None)
+        if verdict.symmetric and verdict.facing is not None:
+            facing_odom = float(odom.pose[2]) + verdict.facing  # carried along by odometry
+        facing = None if facing_odom is None else float(wrap_angle(facing_odom - odom.pose[2]))
+        cmd = centering_command(target, facing, scan, cfg)
+        phase = cmd.phase
+        steps += 1
+        if phase == "done":
+            break
+        before = body.pose
+        odom = body.drive(cmd.v, cmd.w, dt)
+        distance += float(np.hypot(*(body.pose[:2] - before[:2])))
+        path.append(body.pose)
+        t += dt
+    final = body.pose
+    err = float(np.hypot(*(final[:2] - np.asarray(true_centre)[:2])))
+    heading_error = math.nan
+    if true_facings is not None and len(true_facings):
+        heading_error = float(np.min(np.abs(wrap_angle(np.asarray(true_facings) - final[2]))))
+    return CenteringRun(
+        path=np.array(path),
+        error=err,
+        phase=phase,
+        steps=steps,
+        time=t,
+        distance=distance,
+        judged=judged,
+        heading_error=heading_error,
+    )
+
+
+@dataclass
+class Episode:
+    """The record of one :func:`run_episode`.
+
+    ``estimates`` every output; ``path`` (T, 3) true poses; ``status_path`` the status at each
+    step; ``query_image`` the image of the decision (if any); ``time`` simulated seconds until
+    the final status; ``distance`` [m] travelled; ``wall_time`` [s] of computation.
+    """
+
+    estimates: list[Estimate] = field(default_factory=list)
+    path: list[FloatArray] = field(default_factory=list)
+    images: list[NDArray[np.uint8]] = field(default_factory=list)
+    time: float = 0.0
+    distance: float = 0.0
+    wall_time: float = 0.0
+    time_to_final: float = 0.0
+    distance_to_final: float = 0.0
+
+    @property
+    def final(self) -> Estimate:
+        return self.estimates[-1]
+
+
+def _request_command(
+    est: Estimate, scan: Any, cfg: CenteringConfig, explore_w: float
+) -> tuple[float, float]:
+    req = est.request
+    if req is None:
+        if est.status is Status.LOST:
+            return 0.0, explore_w  # turn on the spot so AMCL sees new scans
+        return 0.0, 0.0
+    if req.kind is RequestKind.GO_TO_CENTRE:
+        cmd = centering_command(req.target, None, scan, cfg)
+        return cmd.v, cmd.w
+    if req.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
+        assert req.angle is not None
+        w = float(
+            np.clip(cfg.angular_gain * req.angle, -cfg.max_angular_speed, cfg.max_angular_speed)
+        )
+        return 0.0, w
+    return 0.0, 0.0  # CAPTURE_IMAGE: stand still
+
+
+def run_episode(
+    localizer: Any,
+    body: Body,
+    scan_at: ScanFn,
+    image_at: ImageFn,
+    *,
+    odom_start: OdometryReading,
+    dt: float = 0.2,
+    max_time: float = 120.0,
+    config: CenteringConfig | None = None,
+    explore_w: float = 0.6,
+    settle_updates: int = 3,
+) -> Episode:
+    """Run the localizer with a driver that carries out its requests.
+
+    Stops when the status has been ``tracking`` for ``settle_updates`` updates with no request,
+    when it is ``ambiguous`` with no request (nothing more to try), or at ``max_time``.
+    """
+    cfg = config if config is not None else CenteringConfig()
+    ep = Episode()
+    odom = odom_start
+    image: NDArray[np.uint8] | None = None
+    t = 0.0
+    calm = 0
+    wall0 = time.perf_counter()
+    ep.path.append(body.pose)
+    while t <= max_time:
+        scan = scan_at(body.pose)
+        est = localizer.update(odom, scan, image)
+        if image is not None:
+            ep.images.append(image)
+        image = None
+        ep.estimates.append(est)
+        if est.request is None and est.status in (Status.TRACKING, Status.AMBIGUOUS):
+            calm += 1
+            if calm == 1:
+                ep.time_to_final, ep.distance_to_final = t, ep.distance
+            if calm >= settle_updates:
+                break
+        else:
+            calm = 0
+        if est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE:
+            image = image_at(body.pose)
+            continue
+        v, w = _request_command(est, scan, cfg, explore_w)
+        before = body.pose
+        odom = body.drive(v, w, dt)
+        ep.distance += float(np.hypot(*(body.pose[:2] - before[:2])))
+        ep.path.append(body.pose)
+        t += dt
+    ep.time = t
+    ep.wall_time = time.perf_counter() - wall0
+    return ep
