@@ -1,0 +1,459 @@
+"""Split-and-merge line extraction with total-least-squares fits, and gap handling.
+
+The reference line extractor of the paper (Section 4.1, [36]; Nguyen et al., "A comparison of
+line extraction algorithms using 2D laser rangefinder", IROS 2005):
+
+1. **Split**: a run of points in scan order is cut recursively at the point farthest from the
+   chord between its end points, as long as that point is farther than its tolerance.
+2. **Fit**: each piece gets a total-least-squares (orthogonal) line fit. The point at a cut
+   is given to whichever neighbouring line it lies closer to, so a sparse far corner does not
+   bend the next wall's fit.
+3. **Merge**: neighbouring pieces are joined while the joined fit still explains every point
+   within its tolerance (over-splits caused by noise disappear here).
+
+Fits come from prefix sums of the point moments, so a fit of any contiguous range costs O(1)
+and only the residual checks touch the points.
+
+Gaps: :func:`contour_runs` cuts a scan into runs of consecutive points where the laser saw a
+continuous surface. A run ends where more than ``max_dropout_beams`` consecutive beams gave no
+point (a door, the end of a hallway beyond range, or a long dropout); a few missing beams are a
+sensor dropout and the run continues across them.
+
+Tolerances are per point [m]: the caller derives them from the sensor's range noise (see
+:class:`symloc.symmetry.SymmetryConfig`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import ConfigurationError
+
+__all__ = ["LineSet", "contour_runs", "fit_line_tls", "split_and_merge"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True, slots=True)
+class LineSet:
+    """Lines fitted to consecutive ranges of a point sequence.
+
+    The ranges refer to the sequence rolled by ``roll``: line ``l`` holds the points
+    ``np.roll(points, -roll, axis=0)[starts[l]:stops[l]]``. Lines are in sequence order.
+
+    Attributes
+    ----------
+    starts, stops : ndarray of shape (L,)
+        Half-open index range of each line's points in the rolled sequence.
+    roll : int
+        Rotation applied to a closed contour so that no line wraps around its end (0 when open).
+    closed : bool
+        Whether the sequence is a closed contour (the last line is adjacent to the first).
+    normals : ndarray of shape (L, 2)
+        Unit normal of each line; the line is ``normal @ p == offset``.
+    offsets : ndarray of shape (L,)
+        Signed distance [m] of the line from the origin along its normal.
+    centers : ndarray of shape (L, 2)
+        Mean of the line's points [m].
+    directions : ndarray of shape (L, 2)
+        Unit direction, pointing from the line's first point toward its last.
+    n_points : ndarray of shape (L,)
+        Number of points of each line.
+    spread : ndarray of shape (L,)
+        Standard deviation [m] of the points' positions along the line.
+    rms : ndarray of shape (L,)
+        Root-mean-square orthogonal residual [m].
+    max_excess : ndarray of shape (L,)
+        Largest ratio ``|residual| / tolerance`` over the line's points (<= 1 when every point
+        is within tolerance).
+    endpoints : ndarray of shape (L, 2, 2)
+        First and last point of each line projected onto it [m].
+    """
+
+    starts: IntArray
+    stops: IntArray
+    roll: int
+    closed: bool
+    normals: FloatArray
+    offsets: FloatArray
+    centers: FloatArray
+    directions: FloatArray
+    n_points: IntArray
+    spread: FloatArray
+    rms: FloatArray
+    max_excess: FloatArray
+    endpoints: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.starts.size)
+
+    @property
+    def lengths(self) -> FloatArray:
+        """Length [m] of each line between its projected end points, shape (L,)."""
+        return np.linalg.norm(self.endpoints[:, 1] - self.endpoints[:, 0], axis=-1)
+
+
+def _tls_from_moments(
+    n: FloatArray, sx: FloatArray, sy: FloatArray, sxx: FloatArray, syy: FloatArray, sxy: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """TLS lines from summed moments; returns centres, directions, normals, offsets, spread^2."""
+    n = np.maximum(n, 1.0)
+    mx, my = sx / n, sy / n
+    cxx = sxx / n - mx * mx
+    cyy = syy / n - my * my
+    cxy = sxy / n - mx * my
+    theta = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
+    d = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+    nrm = np.stack([-d[..., 1], d[..., 0]], axis=-1)
+    c = np.stack([mx, my], axis=-1)
+    off = np.sum(nrm * c, axis=-1)
+    # variance along the major axis (the larger eigenvalue)
+    half_tr = 0.5 * (cxx + cyy)
+    disc = np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy * cxy, 0.0))
+    return c, d, nrm, off, np.maximum(half_tr + disc, 0.0)
+
+
+def fit_line_tls(points: ArrayLike) -> tuple[FloatArray, float, FloatArray, float]:
+    """Total-least-squares (orthogonal) line through points.
+
+    Parameters
+    ----------
+    points : array of shape (M, 2), M >= 2
+        x, y [m].
+
+    Returns
+    -------
+    normal : ndarray of shape (2,)
+        Unit normal; the line is ``normal @ p == offset``.
+    offset : float
+        [m].
+    center : ndarray of shape (2,)
+        Mean of the points [m].
+    rms : float
+        Root-mean-square orthogonal residual [m].
+
+    Raises
+    ------
+    ConfigurationError
+        If fewer than 2 points are given.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if p.shape[0] < 2:
+        raise ConfigurationError(f"points: expected at least 2 points for a line, got {p.shape[0]}")
+    x, y = p[:, 0], p[:, 1]
+    m = np.float64(p.shape[0])
+    c, _d, nrm, off, _s = _tls_from_moments(
+        m, x.sum(), y.sum(), (x * x).sum(), (y * y).sum(), (x * y).sum()
+    )
+    res = p @ nrm - off
+    return nrm, float(off), c, float(np.sqrt(np.mean(res * res)))
+
+
+def contour_runs(
+    indices: ArrayLike, n_beams: int, *, max_dropout_beams: int, wrap: bool
+) -> IntArray:
+    """Cut a scan's valid points into runs at gaps of more than ``max_dropout_beams`` beams.
+
+    Parameters
+    ----------
+    indices : array of shape (M,)
+        Beam index of each valid point, increasing (``ScanPoints.indices``).
+    n_beams : int
+        Number of beams in the scan.
+    max_dropout_beams : int
+        Longest run of missing beams (no return, invalid) that still counts as a dropout on a
+        continuous wall.
+    wrap : bool
+        Whether the last beam is adjacent to the first (a full 360-degree scan).
+
+    Returns
+    -------
+    ndarray of shape (R, 2)
+        Half-open ``[start, stop)`` ranges into the points, one per run. When ``wrap`` is true
+        and the scan has no gap at all, there is a single run ``[0, M)`` that is a closed
+        contour; when the wrap joins the last and the first run, the first run is returned
+        with ``stop > M`` meaning it continues from the start (indices modulo M).
+    """
+    idx = np.asarray(indices, dtype=np.intp)
+    m = idx.size
+    if m == 0:
+        return np.zeros((0, 2), dtype=np.intp)
+    step = np.diff(idx)
+    cut = np.flatnonzero(step - 1 > max_dropout_beams) + 1  # a run starts at each cut
+    wrap_gap = int(idx[0] + n_beams - idx[-1] - 1)
+    starts = np.concatenate([[0], cut])
+    stops = np.concatenate([cut, [m]])
+    if wrap and wrap_gap <= max_dropout_beams and starts.size > 1:
+        # the last run continues into the first one
+        first_stop = int(stops[0])
+        starts = starts[1:].copy()
+        stops = stops[1:].copy()
+        stops[-1] = m + first_stop
+    return np.stack([starts, stops], axis=-1).astype(np.intp)
+
+
+class _Moments:
+    """Prefix sums of point moments for O(1) fits of contiguous ranges."""
+
+    def __init__(self, p: FloatArray) -> None:
+        x, y = p[:, 0], p[:, 1]
+        cols = np.stack([np.ones_like(x), x, y, x * x, y * y, x * y], axis=0)
+        self.cs = np.concatenate([np.zeros((6, 1)), np.cumsum(cols, axis=1)], axis=1)
+
+    def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
+        s = self.cs[:, np.asarray(b)] - self.cs[:, np.asarray(a)]
+        return _tls_from_moments(s[0], s[1], s[2], s[3], s[4], s[5])
+
+
+def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
+    """Recursive split at the farthest point from the chord; returns sorted cut indices."""
+    m = p.shape[0]
+    cuts = [0, m - 1]
+    stack: list[tuple[int, int]] = []
+    if first_cut is not None and 0 < first_cut < m - 1:
+        cuts.append(first_cut)
+        stack += [(0, first_cut), (first_cut, m - 1)]
+    else:
+        stack.append((0, m - 1))
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        a, b = p[i], p[j]
+        d = b - a
+        length = float(np.hypot(d[0], d[1]))
+        seg = p[i + 1 : j]
+        if length < 1e-12:
+            dist = np.hypot(seg[:, 0] - a[0], seg[:, 1] - a[1])
+        else:
+            dist = np.abs(d[0] * (seg[:, 1] - a[1]) - d[1] * (seg[:, 0] - a[0])) / length
+        ratio = dist / tol[i + 1 : j]
+        k = int(np.argmax(ratio))
+        if ratio[k] > 1.0:
+            cut = i + 1 + k
+            cuts.append(cut)
+            stack += [(i, cut), (cut, j)]
+    return sorted(cuts)
+
+
+def _absorb_short(
+    p: FloatArray,
+    tol: FloatArray,
+    mom: _Moments,
+    st: IntArray,
+    sp: IntArray,
+    *,
+    closed: bool,
+    max_points: int,
+) -> tuple[IntArray, IntArray]:
+    """Hand the points of short pieces to the neighbouring lines when they fit there.
+
+    A piece of at most ``max_points`` points between two lines (typically the few points at a
+    sparse far corner) disappears when a prefix of it fits the previous line and the rest the
+    next line, each point within its tolerance. Repeats until nothing changes.
+    """
+    for _ in range(4):
+        n_l = st.size
+        if n_l < 3 if closed else n_l < 2:
+            break
+        _c, _d, nrm, off, _s = mom.fit(st, sp)
+        changed = False
+        for t in range(n_l):
+            n_t = int(sp[t] - st[t])
+            if n_t > max_points:
+                continue
+            prev = t - 1 if t > 0 else (n_l - 1 if closed else -1)
+            nxt = t + 1 if t < n_l - 1 else (0 if closed else -1)
+            # interior pieces only (a piece at the roll boundary stays as it is)
+            if prev != t - 1 or nxt != t + 1:
+                continue
+            q = p[st[t] : sp[t]]
+            tq = tol[st[t] : sp[t]]
+            fit_prev = np.abs(q @ nrm[prev] - off[prev]) <= tq
+            fit_next = np.abs(q @ nrm[nxt] - off[nxt]) <= tq
+            # s points go to prev (prefix), the rest to next (suffix)
+            pre = np.concatenate([[True], np.cumprod(fit_prev).astype(bool)])
+            suf = np.concatenate([np.cumprod(fit_next[::-1])[::-1].astype(bool), [True]])
+            ok = np.flatnonzero(pre & suf)
+            if ok.size == 0:
+                continue
+            cut = int(st[t] + ok[0])
+            sp[prev] = cut
+            st[nxt] = cut
+            st = np.delete(st, t)
+            sp = np.delete(sp, t)
+            changed = True
+            break
+        if not changed:
+            break
+    return st, sp
+
+
+def split_and_merge(
+    points: ArrayLike,
+    tolerance: ArrayLike,
+    *,
+    closed: bool = False,
+    min_points: int = 2,
+) -> LineSet:
+    """Extract lines from points in scan order by split-and-merge with TLS fits.
+
+    Parameters
+    ----------
+    points : array of shape (M, 2)
+        Points of one continuous run [m], in scan order.
+    tolerance : float or array of shape (M,)
+        Largest orthogonal distance [m] a point may have from its line (> 0); derive it from
+        the range noise, e.g. ``k_sigma * sigma(r)``.
+    closed : bool
+        Treat the sequence as a closed contour (a full scan with no gap): the last point is
+        adjacent to the first, and the last line may merge with the first.
+    min_points : int
+        Pieces with fewer points are kept as their own (short) lines; they are never forced
+        into a neighbour they do not fit.
+
+    Returns
+    -------
+    LineSet
+
+    Raises
+    ------
+    ConfigurationError
+        If the points are not (M, 2) with M >= 2, or a tolerance is not positive.
+    """
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 2:
+        raise ConfigurationError(f"points: expected shape (M, 2) with M >= 2, got {p.shape}")
+    m = p.shape[0]
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (m,))
+    if not np.all(tol > 0):
+        raise ConfigurationError("tolerance: expected values > 0 m")
+    if min_points < 1:
+        raise ConfigurationError(f"min_points: expected >= 1, got {min_points}")
+
+    roll = 0
+    first_cut: int | None = None
+    if closed and m >= 4:
+        # start at the point nearest the sensor (from inside a convex room, the foot of the
+        # perpendicular on a wall, never a corner), and cut first at the point farthest from it
+        roll = int(np.argmin(np.sum(p * p, axis=1)))
+        p = np.roll(p, -roll, axis=0)
+        tol = np.roll(tol, -roll)
+        first_cut = int(np.argmax(np.sum((p - p[0]) ** 2, axis=1)))
+    cuts = _split(p, tol, first_cut)
+
+    # pieces [cuts[t], cuts[t+1]) ; the last piece takes the final point
+    bounds = np.asarray(cuts, dtype=np.intp)
+    starts = bounds[:-1].copy()
+    stops = bounds[1:].copy()
+    stops[-1] = m
+    mom = _Moments(p)
+    # hand each interior cut point to the neighbouring line it lies closer to
+    if starts.size > 1:
+        inner = starts[1:]
+        _c, _d, nl, ol, _s = mom.fit(starts[:-1], np.maximum(inner, starts[:-1] + 1))
+        _c, _d, nr, orr, _s = mom.fit(np.minimum(inner + 1, stops[1:]), stops[1:])
+        q = p[inner]
+        dl = np.abs(np.sum(nl * q, axis=1) - ol)
+        dr = np.abs(np.sum(nr * q, axis=1) - orr)
+        left_small = (inner - starts[:-1]) < 2
+        right_small = (stops[1:] - inner - 1) < 2
+        to_left = (dl < dr) & ~left_small & ~right_small
+        moved = inner + to_left.astype(np.intp)
+        starts[1:] = moved
+        stops[:-1] = moved
+        keep = stops > starts
+        starts, stops = starts[keep], stops[keep]
+
+    starts_l = [int(s) for s in starts]
+    stops_l = [int(s) for s in stops]
+
+    def excess(a: int, b: int) -> float:
+        # max |residual| / tol over the (possibly wrapping) range [a, b) in rolled indices
+        if b <= m:
+            idx = slice(a, b)
+            seg, t = p[idx], tol[idx]
+        else:
+            seg = np.concatenate([p[a:], p[: b - m]])
+            t = np.concatenate([tol[a:], tol[: b - m]])
+        if seg.shape[0] <= 2:
+            return 0.0
+        x, y = seg[:, 0], seg[:, 1]
+        n = float(seg.shape[0])
+        _c, _d, nrm, off, _s = _tls_from_moments(
+            np.float64(n), x.sum(), y.sum(), (x * x).sum(), (y * y).sum(), (x * y).sum()
+        )
+        return float(np.max(np.abs(seg @ nrm - off) / t))
+
+    # merge: repeatedly join the adjacent pair whose joint fit is best, while it is within tol
+    def pair_score(t: int) -> float:
+        u = (t + 1) % len(starts_l)
+        if u == 0:  # across the wrap of a closed contour
+            return excess(starts_l[t], stops_l[u] + m)
+        return excess(starts_l[t], stops_l[u])
+
+    n_pairs = len(starts_l) if closed and len(starts_l) > 2 else len(starts_l) - 1
+    scores = [pair_score(t) for t in range(n_pairs)]
+    while scores:
+        t = int(np.argmin(scores))
+        if scores[t] > 1.0:
+            break
+        u = (t + 1) % len(starts_l)
+        if u == 0:
+            # last line joins the first: re-roll so the joined line starts at index 0
+            shift = starts_l[t]
+            new_first_stop = stops_l[0] + (m - shift)
+            starts_l = [0] + [s - shift + m for s in starts_l[1:t]]
+            stops_l = [new_first_stop] + [s - shift + m for s in stops_l[1:t]]
+            p = np.roll(p, -shift, axis=0)
+            tol = np.roll(tol, -shift)
+            roll = (roll + shift) % m
+            mom = _Moments(p)
+        else:
+            stops_l[t] = stops_l[u]
+            del starts_l[u]
+            del stops_l[u]
+        n_pairs = len(starts_l) if closed and len(starts_l) > 2 else len(starts_l) - 1
+        scores = [pair_score(k) for k in range(n_pairs)]
+
+    st = np.asarray(starts_l, dtype=np.intp)
+    sp = np.asarray(stops_l, dtype=np.intp)
+    st, sp = _absorb_short(p, tol, mom, st, sp, closed=closed, max_points=2 * min_points)
+    centers, dirs, normals, offsets, var_along = mom.fit(st, sp)
+    # orient each direction from the line's first point toward its last
+    first = p[st]
+    last = p[sp - 1]
+    flip = np.sum((last - first) * dirs, axis=1) < 0
+    dirs = np.where(flip[:, None], -dirs, dirs)
+    normals = np.stack([-dirs[:, 1], dirs[:, 0]], axis=1)
+    offsets = np.sum(normals * centers, axis=1)
+    # residuals per line (one pass over all points)
+    owner = np.repeat(np.arange(st.size), sp - st)
+    res = np.sum(p * normals[owner], axis=1) - offsets[owner]
+    n_pts = (sp - st).astype(np.intp)
+    rms = np.sqrt(np.bincount(owner, res * res, minlength=st.size) / np.maximum(n_pts, 1))
+    ratio = np.abs(res) / tol
+    max_excess = np.zeros(st.size)
+    np.maximum.at(max_excess, owner, ratio)
+    t0 = np.sum((first - centers) * dirs, axis=1)
+    t1 = np.sum((last - centers) * dirs, axis=1)
+    endpoints = np.stack([centers + t0[:, None] * dirs, centers + t1[:, None] * dirs], axis=1)
+    return LineSet(
+        starts=st,
+        stops=sp,
+        roll=int(roll),
+        closed=bool(closed),
+        normals=normals,
+        offsets=offsets,
+        centers=centers,
+        directions=dirs,
+        n_points=n_pts,
+        spread=np.sqrt(var_along),
+        rms=rms,
+        max_excess=max_excess,
+        endpoints=endpoints,
+    )

@@ -1,0 +1,475 @@
+"""The generalised symmetry judgement: regular n-gons, circles, rectangles, hallways.
+
+This goes past the paper's Algorithm 1 (square only, see :mod:`symloc.symmetry.algorithm1`)
+while keeping its idea: the distances from a centroid to the room's vertices must be equal.
+
+1. Points from the scan (eq. 1-2); fewer than ``min_points`` -> ``unknown``.
+2. The contour is cut at gaps longer than a dropout (:func:`symloc.features.contour_runs`).
+3. Closed contour (a full 360-degree scan without gap):
+
+   a. **Circle** if every point lies within its tolerance of the least-squares circle and
+      every point is equally far from the chosen centroid (the paper's "num_max = num_min =
+      N"). Order infinite; centre = the circle's centre.
+   b. Otherwise **split-and-merge** lines and their corners. A corner that is not seen
+      (occlusion by furniture, a re-entrant room) or clutter off every wall -> ``asymmetric``.
+   c. **Rotational symmetry** of the n corners about the chosen centroid: the largest
+      k dividing n for which the rotation by 2 pi / k maps every corner onto the corner n/k
+      places further (the paper's "equal G-V distances", "equal adjacent vertex distances",
+      generalised). k == n is a regular n-gon; k == 2 with four right angles a rectangle.
+      Tolerances are propagated from the range noise through the line fits to the corners.
+      The centre is then refined to the mean of the corners (exact for a symmetric corner
+      set), which is what a robot should drive to.
+
+4. Open contour: two parallel walls on either side with both ends unseen is a **hallway**;
+   a narrow opening in a straight wall is a door (``asymmetric``); walls beyond range or a
+   partial field of view -> ``unknown``.
+
+The centroid method matters in step 3: the paper's mean of points (``centroid="mean"``) is
+pulled toward the near walls, so the equal-distance test fails for a robot away from the
+centre; the area centroid of the scan polygon (default) is the room's centroid.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.features.centroid import CENTROID_METHODS, area_centroid, mean_centroid
+from symloc.features.corners import adjacent_corners
+from symloc.features.split_and_merge import LineSet, contour_runs, split_and_merge
+from symloc.scan import LaserScan
+from symloc.symmetry.config import SymmetryConfig
+from symloc.symmetry.report import SymmetryReport
+
+__all__ = ["fit_circle", "judge_symmetry", "rotational_order"]
+
+FloatArray = NDArray[np.float64]
+
+_NAN2 = np.full(2, np.nan)
+_NO_CORNERS = np.zeros((0, 2))
+
+
+def fit_circle(points: FloatArray) -> tuple[FloatArray, float]:
+    """Least-squares circle through points: algebraic (Kasa) fit and two Gauss-Newton steps.
+
+    Parameters
+    ----------
+    points : ndarray of shape (M, 2), M >= 3
+        [m].
+
+    Returns
+    -------
+    center : ndarray of shape (2,)
+        [m] (NaN if the points are collinear).
+    radius : float
+        [m].
+    """
+    x, y = points[:, 0], points[:, 1]
+    a = np.column_stack([x, y, np.ones_like(x)])
+    sol, *_ = np.linalg.lstsq(a, x * x + y * y, rcond=None)
+    c = 0.5 * sol[:2]
+    r2 = sol[2] + c @ c
+    if not np.isfinite(r2) or r2 <= 0:
+        return np.full(2, np.nan), math.nan
+    r = math.sqrt(r2)
+    for _ in range(2):  # geometric refinement (removes the algebraic fit's small bias)
+        d = points - c
+        dist = np.hypot(d[:, 0], d[:, 1])
+        dist = np.maximum(dist, 1e-12)
+        jac = np.column_stack([-d[:, 0] / dist, -d[:, 1] / dist, -np.ones_like(dist)])
+        step, *_ = np.linalg.lstsq(jac, -(dist - r), rcond=None)
+        c = c + step[:2]
+        r = r + float(step[2])
+    return c, float(r)
+
+
+def rotational_order(
+    corners: FloatArray, center: FloatArray, tolerance: FloatArray
+) -> tuple[int, FloatArray]:
+    """Largest k for which rotating the corners by 2 pi / k about ``center`` maps corner i onto
+    corner i + n/k (corners in counter-clockwise order).
+
+    Parameters
+    ----------
+    corners : ndarray of shape (n, 2)
+        [m], counter-clockwise.
+    center : ndarray of shape (2,)
+        [m].
+    tolerance : ndarray of shape (n, n)
+        ``tolerance[k - 1, i]`` [m] is the allowed displacement of corner i for order k
+        (only divisors of n are read).
+
+    Returns
+    -------
+    order : int
+        k >= 1 (1 when no rotation but the identity fits).
+    displacement : ndarray of shape (n,)
+        Corner displacements [m] for the returned order when k > 1, else for the best k > 1
+        tried (the smallest largest-excess), or zeros when n < 2.
+    """
+    n = corners.shape[0]
+    rel = corners - center
+    best: tuple[float, FloatArray] | None = None
+    for k in range(n, 1, -1):
+        if n % k:
+            continue
+        m = n // k
+        ang = 2.0 * math.pi / k
+        cs, sn = math.cos(ang), math.sin(ang)
+        rot = np.column_stack([cs * rel[:, 0] - sn * rel[:, 1], sn * rel[:, 0] + cs * rel[:, 1]])
+        disp = np.hypot(*(rot - np.roll(rel, -m, axis=0)).T)
+        excess = float(np.max(disp / tolerance[k - 1]))
+        if excess <= 1.0:
+            return k, disp
+        if best is None or excess < best[0]:
+            best = (excess, disp)
+    return 1, (best[1] if best is not None else np.zeros(n))
+
+
+def _report(kind: str, reason: str, **kw: object) -> SymmetryReport:
+    base: dict[str, object] = {
+        "symmetric": False,
+        "order": 0 if kind == "unknown" else 1,
+        "regular": False,
+        "center": _NAN2,
+        "corners": _NO_CORNERS,
+        "gv_distance": math.nan,
+        "residual": math.nan,
+    }
+    base.update(kw)
+    return SymmetryReport(kind=kind, reason=reason, **base)  # type: ignore[arg-type]
+
+
+def _bearing_deg(p: FloatArray) -> float:
+    return math.degrees(math.atan2(float(p[1]), float(p[0])))
+
+
+def judge_symmetry(
+    scan: LaserScan,
+    *,
+    config: SymmetryConfig | None = None,
+    centroid: str = "area",
+) -> SymmetryReport:
+    """Judge whether the room around the robot is symmetric, from one laser scan.
+
+    Parameters
+    ----------
+    scan : LaserScan
+        One scan in the sensor frame; a full 360-degree scan is needed for a closed room.
+    config : SymmetryConfig, optional
+        Tolerances, derived from the range noise (default: a 1 cm scanner).
+    centroid : {"area", "mean"}
+        Centroid the equal-distance tests use: the area centroid of the scan polygon
+        (default) or the paper's mean of points (eq. 3-4).
+
+    Returns
+    -------
+    SymmetryReport
+        Never raises on bad scan content: empty, all-invalid or too-small scans give
+        ``kind == "unknown"`` with the reason.
+
+    Raises
+    ------
+    ConfigurationError
+        For an unknown centroid method, or a ``scan`` that is not a LaserScan.
+    """
+    cfg = SymmetryConfig() if config is None else config
+    if not isinstance(cfg, SymmetryConfig):
+        raise ConfigurationError(f"config: expected a SymmetryConfig, got {type(cfg).__name__}")
+    if centroid not in CENTROID_METHODS:
+        raise ConfigurationError(f"centroid: expected one of {CENTROID_METHODS}, got {centroid!r}")
+    if not isinstance(scan, LaserScan):
+        raise ConfigurationError(f"scan: expected a LaserScan, got {type(scan).__name__}")
+
+    sp = scan.to_points()
+    pts = sp.points
+    m = pts.shape[0]
+    n_beams = len(scan)
+    common: dict[str, object] = {"centroid_method": centroid, "n_points": m}
+    if m < cfg.min_points:
+        return _report(
+            "unknown",
+            f"too few points: {m} valid of {n_beams} beams ({sp.n_invalid} invalid,"
+            f" {sp.n_no_return} no return); need at least min_points={cfg.min_points}",
+            **common,
+        )
+    full_circle = scan.angle_increment * n_beams >= 2.0 * math.pi - 1.5 * scan.angle_increment
+    tol = cfg.point_tolerance(sp.ranges)
+    sig = cfg.sigma(sp.ranges)
+    runs = contour_runs(sp.indices, n_beams, max_dropout_beams=cfg.max_dropout_beams, wrap=True)
+    closed = full_circle and runs.shape[0] == 1 and int(runs[0, 0]) == 0 and int(runs[0, 1]) == m
+    if closed:
+        return _judge_closed(pts, tol, sig, cfg, centroid, common)
+    return _judge_open(scan, sp.indices, pts, tol, sig, runs, full_circle, cfg, common)
+
+
+def _centroid_of(pts: FloatArray, method: str) -> FloatArray:
+    return area_centroid(pts)[0] if method == "area" else mean_centroid(pts)
+
+
+def _judge_closed(
+    pts: FloatArray,
+    tol: FloatArray,
+    sig: FloatArray,
+    cfg: SymmetryConfig,
+    method: str,
+    common: dict[str, object],
+) -> SymmetryReport:
+    m = pts.shape[0]
+    cen = _centroid_of(pts, method)
+    # standard deviation of the centroid from the point noise (random part only)
+    sigma_c = 2.0 * float(np.sqrt(np.mean(sig * sig) / m))
+    k = cfg.k_sigma
+    common = {**common, "centroid": cen}
+
+    # --- circle: every point on one circle, and equally far from the centroid ---
+    c_fit, radius = fit_circle(pts)
+    if np.isfinite(radius):
+        d_fit = np.hypot(*(pts - c_fit).T) - radius
+        if float(np.max(np.abs(d_fit) / tol)) <= 1.0:
+            r_c = np.hypot(*(pts - cen).T)
+            spread = np.abs(r_c - float(np.mean(r_c)))
+            tol_c = tol + 2.0 * k * sigma_c + cfg.model_tolerance
+            worst = int(np.argmax(spread / tol_c))
+            if spread[worst] > tol_c[worst]:
+                return _report(
+                    "asymmetric",
+                    f"the points lie on a circle of radius {radius:.3f} m, but their distances"
+                    f" from the {method} centroid are not equal: one differs by"
+                    f" {spread[worst]:.3f} m > tolerance {tol_c[worst]:.3f} m (the centroid is"
+                    f" {np.hypot(*(cen - c_fit)):.3f} m from the circle's centre)",
+                    residual=float(np.max(np.abs(d_fit))),
+                    tolerance=float(tol_c[worst]),
+                    **common,
+                )
+            return SymmetryReport(
+                kind="circle",
+                symmetric=True,
+                order=math.inf,
+                regular=True,
+                center=c_fit,
+                corners=_NO_CORNERS,
+                gv_distance=radius,
+                residual=float(np.max(np.abs(d_fit))),
+                reason=f"round room: {m} points within tolerance of a circle of radius"
+                f" {radius:.3f} m and equally far from the {method} centroid",
+                tolerance=float(np.max(tol)),
+                **common,  # type: ignore[arg-type]
+            )
+
+    # --- polygon: lines, corners ---
+    lines = split_and_merge(pts, tol, closed=True, min_points=cfg.min_line_points)
+    n_lines = len(lines)
+    common = {**common, "n_lines": n_lines}
+    short = lines.n_points < cfg.min_line_points
+    n_clutter = int(lines.n_points[short].sum())
+    if n_clutter > cfg.max_clutter_points:
+        worst = int(np.flatnonzero(short)[0])
+        return _report(
+            "asymmetric",
+            f"{n_clutter} points lie on {int(short.sum())} pieces shorter than"
+            f" min_line_points={cfg.min_line_points} (clutter off every wall, first at bearing"
+            f" {_bearing_deg(lines.centers[worst]):.1f} deg)",
+            **common,
+        )
+    if n_lines < 3:
+        return _report(
+            "unknown",
+            f"a closed contour that is neither a circle nor a polygon ({n_lines} lines)",
+            **common,
+        )
+    if n_lines > cfg.max_polygon_sides:
+        return _report(
+            "asymmetric",
+            f"{n_lines} walls, more than max_polygon_sides={cfg.max_polygon_sides}, and not a"
+            " circle",
+            **common,
+        )
+    rolled_sig = np.roll(sig, -lines.roll)
+    owner = np.repeat(np.arange(n_lines), lines.stops - lines.starts)
+    n_l = lines.n_points.astype(np.float64)
+    sig_l = np.sqrt(np.bincount(owner, rolled_sig * rolled_sig, minlength=n_lines) / n_l)
+    sig_off = sig_l / np.sqrt(n_l)
+    sig_ang = sig_l / (np.sqrt(n_l) * np.maximum(lines.spread, 1e-6))
+    rolled_tol = np.roll(tol, -lines.roll)
+    end_tol = np.maximum(
+        rolled_tol[lines.stops - 1], rolled_tol[lines.starts[(np.arange(n_lines) + 1) % n_lines]]
+    )
+    corners = adjacent_corners(lines, tolerance=end_tol)
+    if not np.all(corners.seen):
+        bad = int(np.flatnonzero(~corners.seen)[0])
+        a, b = (int(v) for v in corners.pairs[bad])
+        return _report(
+            "asymmetric",
+            f"the walls do not close: line {a} ends and line {b} starts"
+            f" {corners.gap[bad]:.2f} m apart at bearing"
+            f" {_bearing_deg(lines.endpoints[a, 1]):.1f} deg without meeting there (an occlusion:"
+            " furniture or a re-entrant corner)",
+            **common,
+        )
+    v = corners.points
+    n = v.shape[0]
+    # corner standard deviation from the two line fits
+    a_idx, b_idx = corners.pairs[:, 0], corners.pairs[:, 1]
+    t_a = np.sum((v - lines.centers[a_idx]) * lines.directions[a_idx], axis=1)
+    t_b = np.sum((v - lines.centers[b_idx]) * lines.directions[b_idx], axis=1)
+    s_a = np.hypot(sig_off[a_idx], t_a * sig_ang[a_idx])
+    s_b = np.hypot(sig_off[b_idx], t_b * sig_ang[b_idx])
+    sig_v = np.hypot(s_a, s_b) / np.maximum(np.abs(np.sin(corners.turn)), 1e-3)
+    tol_k = np.full((n, n), np.inf)
+    for kk in range(2, n + 1):
+        if n % kk == 0:
+            mm = n // kk
+            chord = 2.0 * math.sin(math.pi / kk)
+            tol_k[kk - 1] = (
+                k * np.sqrt(sig_v**2 + np.roll(sig_v, -mm) ** 2 + (chord * sigma_c) ** 2)
+                + cfg.model_tolerance
+            )
+    order, disp = rotational_order(v, cen, tol_k)
+    common = {**common, "corners": v}
+    if order == 1:
+        refined = v.mean(axis=0)
+        order_ref, _ = rotational_order(v, refined, tol_k)
+        hint = ""
+        if order_ref > 1:
+            hint = (
+                f"; about the mean of the corners it would be order {order_ref}: the {method}"
+                f" centroid is {np.hypot(*(cen - refined)):.3f} m off the centre"
+            )
+        return _report(
+            "asymmetric",
+            f"{n} corners, but no rotation about the {method} centroid maps them onto each"
+            f" other (largest corner displacement {float(np.max(disp)):.3f} m for the best"
+            f" order tried){hint}",
+            residual=float(np.max(disp)) if disp.size else math.nan,
+            **common,
+        )
+    center = v.mean(axis=0)
+    _o, disp_ref = rotational_order(v, center, tol_k)
+    dist = np.hypot(*(v - center).T)
+    regular = order == n
+    turns = corners.turn
+    ang_tol = np.maximum(k * np.hypot(sig_ang[a_idx], sig_ang[b_idx]), cfg.min_angle_tolerance)
+    right = bool(np.all(np.abs(np.abs(turns) - math.pi / 2) <= ang_tol))
+    kind = "polygon"
+    if regular:
+        what = {3: "equilateral triangle", 4: "square"}.get(n, f"regular {n}-gon")
+    elif n == 4 and order == 2 and right:
+        kind = "rectangle"
+        what = "rectangle"
+    else:
+        what = f"{n}-sided polygon with {order}-fold rotational symmetry"
+    axis = math.atan2(float(lines.directions[0, 1]), float(lines.directions[0, 0]))
+    return SymmetryReport(
+        kind=kind,
+        symmetric=True,
+        order=order,
+        regular=regular,
+        center=center,
+        gv_distance=float(np.mean(dist)) if regular or kind == "rectangle" else float(dist.max()),
+        residual=float(np.max(disp_ref)),
+        reason=f"{what}: rotating the {n} corners by 360/{order} deg about the {method}"
+        f" centroid maps them onto each other within tolerance",
+        tolerance=float(np.max(tol_k[order - 1])),
+        axis_angle=axis if kind == "rectangle" else math.nan,
+        **common,  # type: ignore[arg-type]
+    )
+
+
+def _judge_open(
+    scan: LaserScan,
+    indices: NDArray[np.intp],
+    pts: FloatArray,
+    tol: FloatArray,
+    sig: FloatArray,
+    runs: NDArray[np.intp],
+    full_circle: bool,
+    cfg: SymmetryConfig,
+    common: dict[str, object],
+) -> SymmetryReport:
+    m = pts.shape[0]
+    n_beams = len(scan)
+    if not full_circle:
+        fov = math.degrees(scan.angle_increment * n_beams)
+        return _report(
+            "unknown",
+            f"field of view {fov:.0f} deg < 360 deg: the room cannot be seen closed",
+            **common,
+        )
+    # fit lines per run
+    all_lines: list[tuple[LineSet, NDArray[np.intp]]] = []
+    for start, stop in runs:
+        idx = np.arange(int(start), int(stop)) % m
+        if idx.size >= 2:
+            all_lines.append((split_and_merge(pts[idx], tol[idx], closed=False), idx))
+    normals = np.concatenate([ls.normals for ls, _ in all_lines]) if all_lines else np.zeros((0, 2))
+    offsets = np.concatenate([ls.offsets for ls, _ in all_lines]) if all_lines else np.zeros(0)
+    npts = np.concatenate([ls.n_points for ls, _ in all_lines]) if all_lines else np.zeros(0, int)
+    spread = np.concatenate([ls.spread for ls, _ in all_lines]) if all_lines else np.zeros(0)
+    sig_mean = float(np.sqrt(np.mean(sig * sig)))
+    common = {**common, "n_lines": int(npts.size)}
+    n_missing = n_beams - m
+    # --- hallway: two walls, parallel, on either side, both ends unseen ---
+    big = np.flatnonzero(npts >= cfg.min_line_points)
+    clutter = int(npts[npts < cfg.min_line_points].sum())
+    if big.size == 2 and clutter <= cfg.max_clutter_points and runs.shape[0] == 2:
+        i, j = big
+        na, nb = normals[i], normals[j]
+        oa, ob = offsets[i], offsets[j]
+        if float(na @ nb) < 0:
+            nb, ob = -nb, -ob
+        cos_ = float(np.clip(abs(na @ nb), -1.0, 1.0))
+        ang = math.acos(cos_)
+        sa = sig_mean / (math.sqrt(npts[i]) * max(spread[i], 1e-6))
+        sb = sig_mean / (math.sqrt(npts[j]) * max(spread[j], 1e-6))
+        ang_tol = max(cfg.k_sigma * math.hypot(sa, sb), cfg.min_angle_tolerance)
+        if ang <= ang_tol and oa * ob < 0:
+            nrm = na + nb
+            nrm /= np.linalg.norm(nrm)
+            mid = 0.5 * (oa + ob)
+            center = nrm * mid  # foot of the perpendicular from the sensor on the mid-line
+            width = abs(oa - ob)
+            axis = math.atan2(float(nrm[0]), float(-nrm[1]))
+            return SymmetryReport(
+                kind="hallway",
+                symmetric=True,
+                order=2,
+                regular=False,
+                center=center,
+                corners=_NO_CORNERS,
+                gv_distance=math.nan,
+                residual=float(np.max(np.minimum(np.abs(pts @ na - oa), np.abs(pts @ nb - ob)))),
+                reason=f"hallway {width:.2f} m wide: two parallel walls"
+                f" ({math.degrees(ang):.2f} deg apart), both ends unseen ({n_missing} beams"
+                " without a point); order 2 about a centre on the mid-line whose position"
+                " along the hallway is undetermined (reported: the mid-line point nearest the"
+                " sensor)",
+                tolerance=ang_tol,
+                axis_angle=axis,
+                **common,  # type: ignore[arg-type]
+            )
+    # --- a narrow opening in a straight wall: a door ---
+    for r in range(runs.shape[0]):
+        end = int(runs[r, 1] - 1) % m
+        nxt = int(runs[(r + 1) % runs.shape[0], 0]) % m
+        width = float(np.hypot(*(pts[nxt] - pts[end])))
+        if width <= cfg.max_door_width:
+            gap_beams = int((indices[nxt] - indices[end]) % n_beams) - 1
+            return _report(
+                "asymmetric",
+                f"an opening {width:.2f} m wide ({gap_beams} beams without a point) at bearing"
+                f" {_bearing_deg(0.5 * (pts[nxt] + pts[end])):.1f} deg: an open door or a gap"
+                " in a wall breaks the symmetry",
+                **common,
+            )
+    no_ret = int(np.count_nonzero(scan.no_return_mask))
+    return _report(
+        "unknown",
+        f"the contour is open in {runs.shape[0]} places ({no_ret} beams with no return within"
+        f" {scan.range_max:g} m, {n_missing - no_ret} invalid): walls beyond the sensor's range"
+        " or a long dropout, so the room cannot be judged",
+        **common,
+    )
