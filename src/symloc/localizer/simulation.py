@@ -90,6 +90,14 @@ class RobotBody:
         return self.odom
 
 
+def _scan_middle(scan: Any) -> FloatArray | None:
+    """Mean of the valid scan points (2,) in the sensor frame, or None."""
+    pts = scan.to_points().points
+    if pts.shape[0] == 0:
+        return None
+    return np.asarray(pts.mean(axis=0), dtype=np.float64)
+
+
 ScanFn = Callable[[FloatArray], Any]
 ImageFn = Callable[[FloatArray], NDArray[np.uint8]]
 
@@ -160,8 +168,14 @@ def go_to_centre(
         if verdict.symmetric and verdict.facing is not None:
             facing_odom = float(odom.pose[2]) + verdict.facing  # carried along by odometry
         facing = None if facing_odom is None else float(wrap_angle(facing_odom - odom.pose[2]))
-        cmd = centering_command(target, facing, scan, cfg)
-        phase = cmd.phase
+        if target is None:
+            # no verdict yet (e.g. the far corners are beyond range): head for the middle of
+            # what the lidar sees, which lies towards the room's centre, until one arrives
+            cmd = centering_command(_scan_middle(scan), None, scan, cfg)
+            phase = "explore" if cmd.phase != "blocked" else "blocked"
+        else:
+            cmd = centering_command(target, facing, scan, cfg)
+            phase = cmd.phase
         steps += 1
         if phase == "done":
             break

@@ -1,0 +1,189 @@
+"""Figures of the localizer: Table 2 (Algorithm 2), the demo story, the localization results."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["demo_figure", "localization_figure", "table2_figure"]
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def table2_figure(results: Sequence[Any], path: Path) -> Path:
+    """Start positions coloured by the final error, paths, and the error distribution."""
+    plt = _plt()
+    n = len(results)
+    fig, axes = plt.subplots(2, n, figsize=(4.2 * n, 8.0), squeeze=False)
+    for i, res in enumerate(results):
+        ax = axes[0, i]
+        half = res.side / 2
+        ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half], "k-")
+        for run in res.runs:
+            ax.plot(run.path[:, 0], run.path[:, 1], "-", color="0.7", lw=0.6)
+        err = res.errors_mm
+        sc = ax.scatter(
+            res.starts[:, 0], res.starts[:, 1], c=err, cmap="viridis", s=25, vmin=0, vmax=15
+        )
+        fig.colorbar(sc, ax=ax, label="final error [mm]")
+        ax.plot(0, 0, "r+", ms=12)
+        ax.set_aspect("equal")
+        ax.set_title(f"{res.preset}: starts and paths")
+        ax2 = axes[1, i]
+        ends = np.array([r.path[-1, :2] for r in res.runs]) * 1000.0
+        for r_mm, style in ((5, "g-"), (10, "b-"), (15, "r-")):
+            t = np.linspace(0, 2 * np.pi, 200)
+            ax2.plot(r_mm * np.cos(t), r_mm * np.sin(t), style, lw=0.8, label=f"{r_mm} mm")
+        ax2.plot(ends[:, 0], ends[:, 1], "k.", ms=4)
+        ax2.set_aspect("equal")
+        ax2.set_xlim(-18, 18)
+        ax2.set_ylim(-18, 18)
+        sh = res.shares()
+        ax2.set_title(
+            f"final positions [mm]: {100 * sh['5']:.0f}/{100 * sh['10']:.0f}/"
+            f"{100 * sh['15']:.0f} % within 5/10/15 mm"
+        )
+        ax2.legend(loc="upper right", fontsize=7)
+    fig.suptitle("Table 2: Algorithm 2 (go to the centre) from many start positions")
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def demo_figure(story: Any, path: Path) -> Path:
+    """The demo's picture: map, particles before/after, path to the centre, query vs stored."""
+    plt = _plt()
+    fig = plt.figure(figsize=(15, 8.5))
+    gs = fig.add_gridspec(2, 4)
+    grid = story.grid
+    ext = grid.extent()
+    img = np.where(grid.data < 0, 0.75, 1.0 - grid.data / 100.0)
+
+    def map_axes(ax: Any, title: str) -> None:
+        ax.imshow(img, cmap="gray", origin="lower", extent=ext, vmin=0, vmax=1)
+        ax.set_title(title, fontsize=10)
+        x0, y0 = story.room_center
+        r = story.room_gv * 1.25
+        ax.set_xlim(x0 - r, x0 + r)
+        ax.set_ylim(y0 - r, y0 + r)
+        ax.set_aspect("equal")
+
+    def arrow(ax: Any, pose: Any, color: str, label: str) -> None:
+        ax.arrow(
+            pose[0],
+            pose[1],
+            0.35 * np.cos(pose[2]),
+            0.35 * np.sin(pose[2]),
+            width=0.03,
+            color=color,
+            length_includes_head=True,
+            label=label,
+        )
+
+    ax = fig.add_subplot(gs[0, 0])
+    map_axes(ax, "map + kidnapped robot (true pose)")
+    arrow(ax, story.kidnap_pose, "g", "true pose")
+    ax.legend(fontsize=7, loc="lower left")
+
+    ax = fig.add_subplot(gs[0, 1])
+    map_axes(ax, f"plain AMCL: {story.amcl_summary}")
+    p = story.amcl_particles
+    ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3)
+    arrow(ax, story.amcl_true_pose, "g", "true pose")
+    if story.amcl_estimate is not None:
+        arrow(ax, story.amcl_estimate, "r", "AMCL estimate")
+    ax.legend(fontsize=7, loc="lower left")
+
+    ax = fig.add_subplot(gs[0, 2])
+    map_axes(ax, "symloc: particles when ambiguity was declared")
+    p = story.particles_before
+    if p is not None:
+        ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3)
+    for h in story.candidates:
+        arrow(ax, h, "m", "")
+    arrow(ax, story.kidnap_pose, "g", "true pose")
+
+    ax = fig.add_subplot(gs[0, 3])
+    map_axes(ax, f"symloc: path to the centre and after ({story.symloc_summary})")
+    path_xy = np.asarray(story.path)
+    ax.plot(path_xy[:, 0], path_xy[:, 1], "g-", lw=1.5, label="true path")
+    p = story.particles_after
+    if p is not None:
+        ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3)
+    if story.final_pose is not None:
+        arrow(ax, story.final_pose, "r", "symloc pose")
+    arrow(ax, path_xy[-1], "g", "true pose")
+    ax.legend(fontsize=7, loc="lower left")
+
+    ax = fig.add_subplot(gs[1, 0:2])
+    if story.query_image is not None:
+        ax.imshow(story.query_image)
+    ax.set_title("query image at the centre", fontsize=10)
+    ax.axis("off")
+    ax = fig.add_subplot(gs[1, 2:4])
+    if story.matched_image is not None:
+        ax.imshow(story.matched_image)
+    ax.set_title(f"matched stored image: {story.match_label}", fontsize=10)
+    ax.axis("off")
+    fig.suptitle(story.title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def localization_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
+    """Bars: correct / confident wrong / undetermined per room, plain AMCL vs symloc."""
+    plt = _plt()
+    labels = sorted(
+        {(r["room"], r["lab"]) for r in rows},
+        key=lambda rl: rows.index(next(r for r in rows if (r["room"], r["lab"]) == rl)),
+    )
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5), sharey=True)
+    x = np.arange(len(labels))
+    for ax, method in zip(axes, ("amcl", "symloc"), strict=True):
+
+        def share(key: str, m: str = method) -> Any:
+            vals = []
+            for room, labk in labels:
+                r = next(
+                    (
+                        r
+                        for r in rows
+                        if r["room"] == room and r["lab"] == labk and r["method"] == m
+                    ),
+                    None,
+                )
+                vals.append(0.0 if r is None else r[key] / max(r["trials"], 1))
+            return np.array(vals)
+
+        c, w, u = share("correct"), share("confident_wrong"), share("undetermined")
+        ax.bar(x, c, color="tab:green", label="correct")
+        ax.bar(x, w, bottom=c, color="tab:red", label="confident wrong")
+        ax.bar(x, u, bottom=c + w, color="tab:gray", label="undetermined")
+        ax.set_xticks(x, [f"{r}\n{lab}" for r, lab in labels], fontsize=8)
+        ax.set_title("plain AMCL" if method == "amcl" else "symloc")
+        ax.set_ylim(0, 1.05)
+    axes[0].set_ylabel("share of kidnapped-robot trials")
+    axes[1].legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
