@@ -1,0 +1,86 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from symloc.errors import ConfigurationError
+from symloc.grid import OccupancyGrid
+from symloc.grid.distance_field import clear_distance_field_cache, distance_field
+
+
+def _grid(occ_cells, shape=(20, 30), res=0.1, origin=(0.0, 0.0, 0.0)):
+    d = np.zeros(shape, np.int8)
+    for r, c in occ_cells:
+        d[r, c] = 100
+    return OccupancyGrid(d, res, np.array(origin))
+
+
+def test_distances_match_brute_force_and_clip():
+    g = _grid([(5, 5), (10, 20)])
+    df = distance_field(g, 0.8)
+    rr, cc = np.mgrid[0:20, 0:30]
+    brute = np.minimum(np.hypot(rr - 5, cc - 5), np.hypot(rr - 10, cc - 20)) * 0.1
+    np.testing.assert_allclose(df.distances, np.minimum(brute, 0.8), atol=1e-9)
+    assert df.distances.max() == pytest.approx(0.8)
+    assert df.padded.shape == (22, 32)
+    assert df.padded[0, 0] == pytest.approx(0.8)
+
+
+def test_cached_per_grid_and_max_dist():
+    g = _grid([(1, 1)])
+    assert distance_field(g, 2.0) is distance_field(g, 2.0)
+    assert distance_field(g, 1.0) is not distance_field(g, 2.0)
+    clear_distance_field_cache()
+    a = distance_field(g, 2.0)
+    assert a is distance_field(g, 2.0)
+
+
+def test_lookup_world_points_and_off_map():
+    g = _grid([(5, 5)], origin=(1.0, 2.0, 0.0))
+    df = distance_field(g, 2.0)
+    centre = g.cell_to_world([[5, 5]])[0]
+    vals = df.lookup([centre, centre + np.array([0.3, 0.0]), [-50.0, 0.0], [1e9, 1e9]])
+    np.testing.assert_allclose(vals, [0.0, 0.3, 2.0, 2.0], atol=1e-6)
+
+
+def test_lookup_with_rotated_origin():
+    g = _grid([(5, 5)], origin=(1.0, 2.0, 0.7))
+    df = distance_field(g, 2.0)
+    centre = g.cell_to_world([[5, 5]])[0]
+    assert df.lookup([centre])[0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_no_occupied_cell_gives_max_everywhere():
+    df = distance_field(_grid([]), 1.5)
+    assert np.all(df.distances == 1.5)
+
+
+def test_tables():
+    df = distance_field(_grid([(5, 5)]), 2.0)
+    pz = df.table("pz", 0.5, 0.5, 0.2, 10.0).reshape(df.padded.shape)
+    assert pz[6, 6] == pytest.approx(0.5 + 0.05)
+    pz3 = df.table("pz3", 0.5, 0.5, 0.2, 10.0).reshape(df.padded.shape)
+    assert pz3[6, 6] == pytest.approx(0.55**3, rel=1e-6)
+    lg = df.table("logpz", 0.5, 0.5, 0.2, 10.0).reshape(df.padded.shape)
+    assert lg[6, 6] == pytest.approx(np.log(0.55), rel=1e-6)
+    assert df.table("pz", 0.5, 0.5, 0.2, 10.0) is df.table("pz", 0.5, 0.5, 0.2, 10.0)
+
+
+def test_errors():
+    g = _grid([(1, 1)])
+    with pytest.raises(ConfigurationError, match="laser_likelihood_max_dist"):
+        distance_field(g, 0.0)
+    with pytest.raises(ConfigurationError, match="OccupancyGrid"):
+        distance_field(np.zeros((3, 3)), 1.0)  # type: ignore[arg-type]
+    with pytest.raises(ConfigurationError, match="kind"):
+        distance_field(g, 1.0).table("bogus", 0.5, 0.5, 0.2, 10.0)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-3.0, 6.0), st.floats(-3.0, 5.0))
+def test_lookup_never_exceeds_max_and_is_finite(x, y):
+    df = distance_field(_grid([(3, 4), (15, 25)]), 1.0)
+    v = df.lookup([[x, y]])[0]
+    assert 0.0 <= v <= 1.0 + 1e-6
