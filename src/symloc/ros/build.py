@@ -107,7 +107,9 @@ def _rclpy_value(msg: Any, key: str, ftype: str, value: Any) -> Any:
         return bool(value)
     if ftype == "string":
         return str(value)
-    if ftype in _RCLPY_TYPECODES or ftype in ("int64", "uint64", "octet"):
+    if ftype == "octet":
+        return value if isinstance(value, bytes) else bytes([int(value)])
+    if ftype in _RCLPY_TYPECODES or ftype in ("int64", "uint64"):
         return int(value)
     return value
 

@@ -1,0 +1,373 @@
+"""The ROS node's logic without rclpy: messages in, messages (field dicts) out.
+
+:class:`NodeCore` receives messages (rclpy, rosbags or look-alikes) or already converted symloc
+values, pairs each scan with the odometry at its stamp (interpolated), hands the localizer the
+image it asked for, and returns what to publish as :class:`Outputs`. It survives bad input: a
+malformed message, a scan of another length than the first, NaN poses, an unknown image
+encoding, a message in the wrong frame, a map that changes size, stamps that go backwards. Each
+is dropped, counted in :attr:`NodeCore.dropped` under a short reason, and reported through the
+``warn`` callback (the first few of each reason, then every 100th); localization carries on.
+
+:mod:`symloc.ros.node` wraps it in rclpy; ``symloc replay`` feeds it a bag.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import SymlocError
+from symloc.geometry import angle_diff, compose, wrap_angle
+from symloc.grid import OccupancyGrid
+from symloc.localizer import Estimate, RequestKind, Status
+from symloc.odometry import OdometryReading
+from symloc.ros.fields import field as msg_field
+from symloc.ros.grid_msg import grid_from_msg
+from symloc.ros.header import header_fields, header_frame, header_stamp
+from symloc.ros.image_msg import compressed_image_from_msg, image_from_msg
+from symloc.ros.odometry_msg import odometry_from_msg
+from symloc.ros.params import NodeParams
+from symloc.ros.pose_msg import (
+    pose_array_to_fields,
+    pose_stamped_to_fields,
+    pose_with_covariance_from_msg,
+    pose_with_covariance_to_fields,
+)
+from symloc.ros.scan_msg import scan_from_msg
+from symloc.ros.status_msg import candidates_to_fields, status_to_fields
+from symloc.scan import LaserScan
+
+__all__ = ["LocalizerFactory", "NodeCore", "Outputs"]
+
+FloatArray = NDArray[np.float64]
+#: ``factory(grid, params) -> Localizer`` (default :func:`symloc.ros.assemble.make_localizer`).
+LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Any]
+
+_WARN_FIRST = 5
+_WARN_EVERY = 100
+
+
+@dataclass
+class Outputs:
+    """What to publish after one scan (field dicts; ``None``: publish nothing on that topic).
+
+    ``amcl_pose`` (PoseWithCovarianceStamped, map frame) only while tracking, as nav2_amcl
+    publishes only poses it has; ``goal`` (PoseStamped, odom frame) for go-to-centre, face and
+    rotate requests; ``capture`` (std_msgs/Header) for a capture request.
+    """
+
+    estimate: Estimate
+    stamp: float
+    status: dict[str, Any]
+    candidates: dict[str, Any]
+    particle_cloud: dict[str, Any] | None = None
+    amcl_pose: dict[str, Any] | None = None
+    goal: dict[str, Any] | None = None
+    capture: dict[str, Any] | None = None
+
+
+@dataclass
+class _OdomBuffer:
+    stamps: list[float] = field(default_factory=list)
+    poses: list[FloatArray] = field(default_factory=list)
+
+    def add(self, reading: OdometryReading, max_age: float) -> bool:
+        if self.stamps and reading.stamp < self.stamps[-1]:
+            return False
+        self.stamps.append(reading.stamp)
+        self.poses.append(np.asarray(reading.pose, dtype=np.float64))
+        cut = bisect.bisect_left(self.stamps, reading.stamp - max_age)
+        if cut > 0:
+            del self.stamps[:cut], self.poses[:cut]
+        return True
+
+    def at(self, t: float, tolerance: float) -> OdometryReading | str:
+        """The reading at ``t`` (exact, interpolated, or the newest within tolerance)."""
+        if not self.stamps:
+            return "no odometry yet"
+        if t > self.stamps[-1]:
+            if t - self.stamps[-1] > tolerance:
+                return "no odometry within transform_tolerance"
+            return OdometryReading(self.poses[-1], self.stamps[-1])
+        i = bisect.bisect_left(self.stamps, t)
+        if self.stamps[i] == t:
+            return OdometryReading(self.poses[i], t)
+        if i == 0:
+            return "older than the odometry history"
+        t0, t1 = self.stamps[i - 1], self.stamps[i]
+        p0, p1 = self.poses[i - 1], self.poses[i]
+        f = (t - t0) / (t1 - t0)
+        xy = p0[:2] + f * (p1[:2] - p0[:2])
+        th = wrap_angle(p0[2] + f * float(angle_diff(p1[2], p0[2])))
+        return OdometryReading(np.array([xy[0], xy[1], th]), t)
+
+
+class NodeCore:
+    """Message handling of the symloc node (pure Python; see the module docstring).
+
+    Parameters
+    ----------
+    params : NodeParams
+    factory : callable, optional
+        ``factory(grid, params) -> Localizer``; called when the first map arrives.
+    warn : callable, optional
+        Receives warning lines (the rclpy node passes its logger).
+    """
+
+    def __init__(
+        self,
+        params: NodeParams,
+        *,
+        factory: LocalizerFactory | None = None,
+        warn: Callable[[str], None] | None = None,
+    ) -> None:
+        if factory is None:
+            from symloc.ros.assemble import make_localizer
+
+            factory = make_localizer
+        self.params = params
+        self.factory = factory
+        self.warn = warn or (lambda text: None)
+        self.dropped: Counter[str] = Counter()
+        self.received: Counter[str] = Counter()
+        self.grid: OccupancyGrid | None = None
+        self.localizer: Any = None
+        self.scans_used = 0
+        self.last: Outputs | None = None
+        self._odom = _OdomBuffer()
+        self._beams: int | None = None
+        self._last_scan_stamp = -math.inf
+        self._image: tuple[float, NDArray[np.uint8]] | None = None
+        self._want_image_after: float | None = None
+
+    # ------------------------------------------------------------------ bookkeeping
+
+    def drop(self, reason: str, detail: str = "") -> None:
+        """Count a dropped message and warn (first few of each reason, then every 100th)."""
+        self.dropped[reason] += 1
+        n = self.dropped[reason]
+        if n <= _WARN_FIRST or n % _WARN_EVERY == 0:
+            extra = f": {detail}" if detail else ""
+            self.warn(f"dropped ({reason}, {n} so far){extra}; still localizing")
+
+    def _frame_ok(self, got: str, want: str, reason: str) -> bool:
+        if want and got != want:
+            self.drop(reason, f"frame {got!r}, expected {want!r}")
+            return False
+        return True
+
+    # ------------------------------------------------------------------ map
+
+    def on_map(self, msg: Any) -> None:
+        """A nav_msgs/OccupancyGrid message."""
+        self.received["map"] += 1
+        try:
+            frame = header_frame(msg, "OccupancyGrid")
+            grid = grid_from_msg(msg)
+        except SymlocError as err:
+            self.drop("map: malformed", str(err))
+            return
+        if not self._frame_ok(frame, self.params.global_frame_id, "map: wrong frame"):
+            return
+        self.set_map(grid)
+
+    def set_map(self, grid: OccupancyGrid) -> None:
+        """Use ``grid``: the first map builds the localizer; a changed one is handled per params."""
+        old = self.grid
+        if old is None:
+            self.grid = grid
+            self.localizer = self.factory(grid, self.params)
+            return
+        same_geometry = (
+            old.data.shape == grid.data.shape
+            and old.resolution == grid.resolution
+            and np.array_equal(old.origin, grid.origin)
+        )
+        if same_geometry and np.array_equal(old.data, grid.data):
+            return  # re-published (transient local): nothing new
+        if not self.params.accept_map_updates:
+            self.drop(
+                "map: changed",
+                f"{old.width}x{old.height} -> {grid.width}x{grid.height} cells; keeping the"
+                " first map (set accept_map_updates to switch)",
+            )
+            return
+        pose, cov = self._tracked_pose()
+        self.grid = grid
+        self.localizer = self.factory(grid, self.params)
+        if pose is not None and cov is not None:
+            self.localizer.set_pose(pose, cov)
+        self.warn(f"map changed to {grid.width}x{grid.height} cells: localizer rebuilt")
+
+    def _tracked_pose(self) -> tuple[FloatArray | None, FloatArray | None]:
+        if self.last is not None and self.last.estimate.status is Status.TRACKING:
+            return self.last.estimate.pose, self.last.estimate.covariance
+        return None, None
+
+    # ------------------------------------------------------------------ odometry, pose, images
+
+    def on_odom(self, msg: Any) -> None:
+        """A nav_msgs/Odometry message."""
+        self.received["odom"] += 1
+        try:
+            reading = odometry_from_msg(msg)
+            frame = header_frame(msg, "Odometry")
+            child = str(msg_field(msg, "child_frame_id", "Odometry")).lstrip("/")
+        except SymlocError as err:
+            self.drop("odom: malformed", str(err))
+            return
+        if not self._frame_ok(frame, self.params.odom_frame_id, "odom: wrong frame"):
+            return
+        if not self._frame_ok(child, self.params.base_frame_id, "odom: wrong child frame"):
+            return
+        self.add_odometry(reading)
+
+    def add_odometry(self, reading: OdometryReading) -> None:
+        """An odometry reading (odom frame); an older stamp than the newest is dropped."""
+        if not self._odom.add(reading, self.params.max_odom_age):
+            self.drop("odom: stamp went backwards", f"{reading.stamp:.3f} s")
+
+    def on_image(self, msg: Any) -> None:
+        """A sensor_msgs/Image message."""
+        self._on_any_image(msg, image_from_msg, "Image")
+
+    def on_compressed_image(self, msg: Any) -> None:
+        """A sensor_msgs/CompressedImage message."""
+        self._on_any_image(msg, compressed_image_from_msg, "CompressedImage")
+
+    def _on_any_image(self, msg: Any, convert: Callable[[Any], Any], where: str) -> None:
+        self.received["image"] += 1
+        try:
+            stamp = header_stamp(msg, where)
+            frame = header_frame(msg, where)
+            img = convert(msg)
+        except SymlocError as err:
+            self.drop("image: malformed", str(err))
+            return
+        if not self._frame_ok(frame, self.params.camera_frame_id, "image: wrong frame"):
+            return
+        self.add_image(img, stamp)
+
+    def add_image(self, image: NDArray[np.uint8], stamp: float) -> None:
+        """Keep the newest ``(H, W, 3)`` RGB image for a pending capture request."""
+        self._image = (float(stamp), image)
+
+    def on_initialpose(self, msg: Any) -> None:
+        """A geometry_msgs/PoseWithCovarianceStamped (RViz's 2D Pose Estimate)."""
+        self.received["initialpose"] += 1
+        try:
+            frame = header_frame(msg, "PoseWithCovarianceStamped")
+            pose, cov = pose_with_covariance_from_msg(msg)
+        except SymlocError as err:
+            self.drop("initialpose: malformed", str(err))
+            return
+        if not self._frame_ok(frame, self.params.global_frame_id, "initialpose: wrong frame"):
+            return
+        if self.localizer is None:
+            self.drop("initialpose: no map yet")
+            return
+        self.localizer.set_pose(pose, cov)
+        self.warn(f"initial pose set to {pose.round(3).tolist()}")
+
+    # ------------------------------------------------------------------ scans
+
+    def on_scan(self, msg: Any) -> Outputs | None:
+        """A sensor_msgs/LaserScan message: one localizer step if everything is in place."""
+        self.received["scan"] += 1
+        try:
+            scan = scan_from_msg(msg)
+        except SymlocError as err:
+            self.drop("scan: malformed", str(err))
+            return None
+        return self.add_scan(scan)
+
+    def add_scan(self, scan: LaserScan) -> Outputs | None:
+        """One localizer step with ``scan`` and the odometry at its stamp."""
+        if not self._frame_ok(scan.frame_id, self.params.laser_frame_id, "scan: wrong frame"):
+            return None
+        if self._beams is not None and len(scan) != self._beams:
+            self.drop("scan: wrong length", f"{len(scan)} beams, expected {self._beams}")
+            return None
+        if scan.stamp < self._last_scan_stamp:
+            self.drop("scan: stamp went backwards", f"{scan.stamp:.3f} s")
+            return None
+        if self.localizer is None:
+            self.drop("scan: no map yet")
+            return None
+        odom = self._odom.at(scan.stamp, self.params.transform_tolerance)
+        if isinstance(odom, str):
+            self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
+            return None
+        image = None
+        want, got = self._want_image_after, self._image
+        if want is not None and got is not None and got[0] >= want - 1e-9:
+            image = got[1]
+        try:
+            est = self.localizer.update(odom, scan, image)
+        except SymlocError as err:
+            self.drop("scan: rejected by the localizer", str(err))
+            return None
+        if self._beams is None:
+            self._beams = len(scan)
+        self._last_scan_stamp = scan.stamp
+        self.scans_used += 1
+        if image is not None:
+            self._want_image_after = None
+            self._image = None
+        out = self._outputs(est, scan.stamp, odom)
+        self.last = out
+        return out
+
+    def _outputs(self, est: Estimate, stamp: float, odom: OdometryReading) -> Outputs:
+        p = self.params
+        out = Outputs(
+            estimate=est,
+            stamp=stamp,
+            status=status_to_fields(
+                est,
+                stamp=stamp,
+                frame_id=p.global_frame_id,
+                scans_used=self.scans_used,
+                dropped=self.dropped,
+            ),
+            candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
+        )
+        particles = self._particles()
+        if particles is not None:
+            out.particle_cloud = pose_array_to_fields(
+                particles, stamp=stamp, frame_id=p.global_frame_id
+            )
+        if est.status is Status.TRACKING and est.pose is not None and est.covariance is not None:
+            out.amcl_pose = pose_with_covariance_to_fields(
+                est.pose, est.covariance, stamp=stamp, frame_id=p.global_frame_id
+            )
+        req = est.request
+        if req is not None:
+            o = np.asarray(odom.pose, dtype=np.float64)
+            if req.kind is RequestKind.GO_TO_CENTRE and req.target is not None:
+                t = np.asarray(req.target, dtype=np.float64)
+                goal = compose(o, np.array([t[0], t[1], math.atan2(t[1], t[0])]))
+                out.goal = pose_stamped_to_fields(goal, stamp=stamp, frame_id=p.odom_frame_id)
+            elif req.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
+                goal = compose(o, np.array([0.0, 0.0, float(req.angle or 0.0)]))
+                out.goal = pose_stamped_to_fields(goal, stamp=stamp, frame_id=p.odom_frame_id)
+            elif req.kind is RequestKind.CAPTURE_IMAGE:
+                self._want_image_after = stamp
+                frame = p.camera_frame_id or p.base_frame_id
+                out.capture = header_fields(stamp, frame)
+        return out
+
+    def _particles(self) -> FloatArray | None:
+        last = getattr(getattr(self.localizer, "tracker", None), "last", None)
+        parts = getattr(last, "particles", None)
+        if parts is None:
+            return None
+        arr = np.asarray(parts, dtype=np.float64).reshape(-1, 3)
+        return arr if arr.size else None

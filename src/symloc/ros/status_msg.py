@@ -1,0 +1,144 @@
+"""The localizer's status and symmetric candidates as ROS messages.
+
+**Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan used): one
+``DiagnosticStatus`` named ``symloc: localization`` whose ``level`` is OK while tracking, WARN
+while ambiguous / going to the centre / deciding, ERROR when lost, and whose ``message`` is
+``"<status>: <reason>"``. Its ``values`` (key / value strings) are:
+
+==================  ==========================================================================
+key                 value
+==================  ==========================================================================
+``status``          tracking, ambiguous, going_to_centre, deciding or lost
+``reason``          one line saying why
+``order``           symmetry order k when ambiguous ("" otherwise; 0 means a circle)
+``pose``            "x y theta" [m m rad] in the map frame when tracking, else ""
+``candidates``      number of candidate poses
+``candidate_<i>``   "x y theta weight" of candidate i (map frame)
+``request``         go_to_centre, face_direction, capture_image, rotate or ""
+``request_target``  "x y" [m] of a go_to_centre target in the robot (base) frame
+``request_angle``   [rad] of a face_direction / rotate request (CCW positive)
+``stamp``           the scan stamp [s] this status answers
+``scans_used``      scans given to the localizer so far
+``dropped``         messages dropped so far (all reasons)
+``dropped/<why>``   messages dropped for that reason
+==================  ==========================================================================
+
+**Candidates** (``visualization_msgs/MarkerArray`` on ``symloc/candidates``): a DELETEALL
+marker, then one ARROW per candidate pose (namespace ``symloc_candidates``, map frame, length
+proportional to weight) and one TEXT_VIEW_FACING with the status, for RViz.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from symloc.localizer import Estimate, Request, RequestKind, Status
+from symloc.ros.header import header_fields
+from symloc.ros.pose_msg import pose_fields
+
+__all__ = ["LEVELS", "candidates_to_fields", "status_to_fields"]
+
+LEVELS = {
+    Status.TRACKING: 0,
+    Status.AMBIGUOUS: 1,
+    Status.GOING_TO_CENTRE: 1,
+    Status.DECIDING: 1,
+    Status.LOST: 2,
+}
+
+_ARROW, _TEXT, _DELETEALL = 0, 9, 3
+
+
+def _fmt(values: Any) -> str:
+    return " ".join(f"{float(v):.6g}" for v in np.asarray(values, dtype=np.float64).reshape(-1))
+
+
+def _request_values(req: Request | None) -> list[tuple[str, str]]:
+    if req is None:
+        return [("request", "")]
+    out = [("request", req.kind.value)]
+    if req.kind is RequestKind.GO_TO_CENTRE and req.target is not None:
+        out.append(("request_target", _fmt(req.target)))
+    if req.angle is not None:
+        out.append(("request_angle", f"{req.angle:.6g}"))
+    return out
+
+
+def status_to_fields(
+    est: Estimate,
+    *,
+    stamp: float,
+    frame_id: str,
+    scans_used: int,
+    dropped: Mapping[str, int],
+) -> dict[str, Any]:
+    """A diagnostic_msgs/DiagnosticArray field dict describing ``est`` (see module doc)."""
+    values: list[tuple[str, str]] = [
+        ("status", est.status.value),
+        ("reason", est.reason),
+        ("order", "" if est.order is None else str(int(est.order))),
+        ("pose", "" if est.pose is None else _fmt(est.pose)),
+        ("candidates", str(len(est.hypotheses))),
+    ]
+    values += [(f"candidate_{i}", _fmt([*h.pose, h.weight])) for i, h in enumerate(est.hypotheses)]
+    values += _request_values(est.request)
+    values += [
+        ("stamp", f"{stamp:.9f}"),
+        ("scans_used", str(scans_used)),
+        ("dropped", str(sum(dropped.values()))),
+    ]
+    values += [(f"dropped/{k}", str(v)) for k, v in sorted(dropped.items())]
+    return {
+        "header": header_fields(stamp, frame_id),
+        "status": [
+            {
+                "level": LEVELS[est.status],
+                "name": "symloc: localization",
+                "message": f"{est.status.value}: {est.reason}",
+                "hardware_id": "symloc",
+                "values": [{"key": k, "value": v} for k, v in values],
+            }
+        ],
+    }
+
+
+def candidates_to_fields(est: Estimate, *, stamp: float, frame_id: str) -> dict[str, Any]:
+    """A visualization_msgs/MarkerArray field dict of the candidate poses (see module doc)."""
+    header = header_fields(stamp, frame_id)
+    markers: list[dict[str, Any]] = [{"header": header, "action": _DELETEALL}]
+    colour = {
+        Status.TRACKING: (0.1, 0.8, 0.1),
+        Status.LOST: (0.8, 0.1, 0.1),
+    }.get(est.status, (1.0, 0.6, 0.0))
+    for i, h in enumerate(est.hypotheses):
+        markers.append(
+            {
+                "header": header,
+                "ns": "symloc_candidates",
+                "id": i,
+                "type": _ARROW,
+                "action": 0,
+                "pose": pose_fields(h.pose),
+                "scale": {"x": 0.2 + 0.6 * float(h.weight), "y": 0.05, "z": 0.05},
+                "color": {"r": colour[0], "g": colour[1], "b": colour[2], "a": 1.0},
+            }
+        )
+    if est.hypotheses:
+        centre = np.mean([h.pose[:2] for h in est.hypotheses], axis=0)
+        markers.append(
+            {
+                "header": header,
+                "ns": "symloc_status",
+                "id": 0,
+                "type": _TEXT,
+                "action": 0,
+                "pose": pose_fields([centre[0], centre[1], 0.0]),
+                "scale": {"x": 0.0, "y": 0.0, "z": 0.25},
+                "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0},
+                "text": est.status.value + ("" if est.order is None else f" (order {est.order})"),
+            }
+        )
+    return {"markers": markers}

@@ -1,0 +1,282 @@
+"""NodeCore: pairing scans with odometry and images, outputs, and surviving bad input."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from rosbags.typesys import Stores, get_typestore
+
+from symloc.grid import OccupancyGrid
+from symloc.localizer import Estimate, Hypothesis, Request, RequestKind, Status
+from symloc.odometry import OdometryReading
+from symloc.ros import (
+    build_rosbags,
+    grid_to_fields,
+    image_to_fields,
+    odometry_to_fields,
+    pose_with_covariance_to_fields,
+    scan_to_fields,
+)
+from symloc.ros.core import NodeCore
+from symloc.ros.params import NodeParams
+from symloc.scan import LaserScan
+
+TS = get_typestore(Stores.ROS2_HUMBLE)
+
+
+class ScriptedLocalizer:
+    """Returns scripted estimates; records what it was given."""
+
+    def __init__(self, script: list[Estimate]) -> None:
+        self.script = list(script)
+        self.calls: list[tuple[OdometryReading, LaserScan, object]] = []
+        self.poses_set: list[np.ndarray] = []
+
+    def update(self, odom, scan, image=None):  # type: ignore[no-untyped-def]
+        self.calls.append((odom, scan, image))
+        i = min(len(self.calls) - 1, len(self.script) - 1)
+        return self.script[i]
+
+    def set_pose(self, pose, cov):  # type: ignore[no-untyped-def]
+        self.poses_set.append(np.asarray(pose))
+
+
+LOST = Estimate(Status.LOST, reason="not converged")
+TRACK = Estimate(
+    Status.TRACKING,
+    pose=np.array([1.0, 2.0, 0.5]),
+    covariance=np.diag([0.01, 0.01, 0.001]),
+    hypotheses=(Hypothesis(np.array([1.0, 2.0, 0.5]), 1.0),),
+    reason="tracking",
+)
+
+
+def _ambiguous(req: Request) -> Estimate:
+    hyps = tuple(Hypothesis(np.array([0.0, 0.0, a]), 0.25) for a in (0, 1.57, 3.14, -1.57))
+    return Estimate(Status.AMBIGUOUS, hypotheses=hyps, order=4, request=req, reason="symmetric")
+
+
+def _core(
+    script: list[Estimate], **params: object
+) -> tuple[NodeCore, ScriptedLocalizer, list[str]]:
+    loc = ScriptedLocalizer(script)
+    warnings: list[str] = []
+    core = NodeCore(NodeParams(**params), factory=lambda g, p: loc, warn=warnings.append)  # type: ignore[arg-type]
+    return core, loc, warnings
+
+
+def _msg(msgtype: str, fields: dict) -> object:
+    return build_rosbags(TS, msgtype, fields)
+
+
+def _map_msg(shape: tuple[int, int] = (20, 20), frame: str = "map") -> object:
+    grid = OccupancyGrid(np.zeros(shape, np.int8), 0.05)
+    return _msg("nav_msgs/msg/OccupancyGrid", grid_to_fields(grid, stamp=0.0, frame_id=frame))
+
+
+def _odom_msg(
+    t: float, pose=(0.0, 0.0, 0.0), frame: str = "odom", child: str = "base_link"
+) -> object:
+    f = odometry_to_fields(
+        OdometryReading(np.asarray(pose, float), t), frame_id=frame, child_frame_id=child
+    )
+    return _msg("nav_msgs/msg/Odometry", f)
+
+
+def _scan_msg(t: float, n: int = 36, frame: str = "laser") -> object:
+    scan = LaserScan(-math.pi, 2 * math.pi / n, 0.1, 8.0, np.full(n, 2.0), stamp=t, frame_id=frame)
+    return _msg("sensor_msgs/msg/LaserScan", scan_to_fields(scan))
+
+
+def test_scans_need_a_map_and_odometry() -> None:
+    core, _loc, warns = _core([LOST])
+    assert core.on_scan(_scan_msg(1.0)) is None
+    assert core.dropped["scan: no map yet"] == 1
+    core.on_map(_map_msg())
+    assert core.on_scan(_scan_msg(1.0)) is None
+    assert core.dropped["scan: no odometry yet"] == 1
+    core.on_odom(_odom_msg(1.0))
+    out = core.on_scan(_scan_msg(1.0))
+    assert out is not None
+    assert out.amcl_pose is None  # lost: no pose published
+    assert out.status["status"][0]["level"] == 2
+    assert any("no map yet" in w for w in warns)
+
+
+def test_odometry_is_interpolated_at_the_scan_stamp() -> None:
+    core, loc, _ = _core([LOST])
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0, (0.0, 0.0, 3.0)))
+    core.on_odom(_odom_msg(2.0, (1.0, 2.0, -3.0)))
+    core.on_scan(_scan_msg(1.5))
+    odom = loc.calls[-1][0]
+    np.testing.assert_allclose(odom.pose[:2], [0.5, 1.0])
+    # heading interpolated the short way across +-pi
+    assert abs(abs(odom.pose[2]) - math.pi) < 0.3
+    core.on_scan(_scan_msg(2.0))
+    np.testing.assert_array_equal(loc.calls[-1][0].pose, [1.0, 2.0, wrap(-3.0)])
+    assert core.on_scan(_scan_msg(5.0)) is None  # > transform_tolerance after the newest
+    assert core.dropped["scan: no odometry within transform_tolerance"] == 1
+
+
+def wrap(a: float) -> float:
+    return math.remainder(a, 2 * math.pi)
+
+
+def test_tracking_publishes_amcl_pose_and_status_values() -> None:
+    core, _, _ = _core([TRACK])
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0))
+    out = core.on_scan(_scan_msg(1.0))
+    assert out is not None
+    assert out.amcl_pose is not None
+    assert out.amcl_pose["header"]["frame_id"] == "map"
+    values = {kv["key"]: kv["value"] for kv in out.status["status"][0]["values"]}
+    assert values["status"] == "tracking"
+    assert values["pose"].split()[0] == "1"
+    # the dicts build real messages
+    _msg("geometry_msgs/msg/PoseWithCovarianceStamped", out.amcl_pose)
+    _msg("diagnostic_msgs/msg/DiagnosticArray", out.status)
+    _msg("visualization_msgs/msg/MarkerArray", out.candidates)
+
+
+def test_requests_become_goal_and_capture_and_image_is_paired() -> None:
+    script = [
+        _ambiguous(Request(RequestKind.GO_TO_CENTRE, target=np.array([1.0, 1.0]))),
+        _ambiguous(Request(RequestKind.CAPTURE_IMAGE)),
+        _ambiguous(Request(RequestKind.ROTATE, angle=-math.pi / 2)),
+    ]
+    core, loc, _ = _core(script)
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0, (2.0, 0.0, math.pi / 2)))
+    out = core.on_scan(_scan_msg(1.0))
+    assert out is not None
+    assert out.goal is not None
+    g = out.goal["pose"]["position"]
+    assert out.goal["header"]["frame_id"] == "odom"
+    np.testing.assert_allclose([g["x"], g["y"]], [1.0, 1.0], atol=1e-12)  # base (1,1) in odom
+    values = {kv["key"]: kv["value"] for kv in out.status["status"][0]["values"]}
+    assert values["request"] == "go_to_centre"
+    assert values["candidate_3"].split()[-1] == "0.25"
+    assert len(out.candidates["markers"]) == 1 + 4 + 1
+    out = core.on_scan(_scan_msg(1.0))
+    assert out is not None
+    assert out.capture is not None
+    img = np.zeros((4, 5, 3), np.uint8)
+    core.on_image(_msg("sensor_msgs/msg/Image", image_to_fields(img, stamp=0.5)))  # too old
+    core.on_odom(_odom_msg(1.2, (2.0, 0.0, math.pi / 2)))
+    core.on_scan(_scan_msg(1.1))
+    assert loc.calls[-1][2] is None
+    core.on_image(_msg("sensor_msgs/msg/Image", image_to_fields(img + 7, stamp=1.05)))
+    core.on_scan(_scan_msg(1.2))
+    assert loc.calls[-1][2] is not None
+    assert int(loc.calls[-1][2][0, 0, 0]) == 7
+    core.on_scan(_scan_msg(1.2))
+    assert loc.calls[-1][2] is None  # an image is given once
+
+
+def test_bad_input_is_dropped_counted_and_survived() -> None:
+    core, loc, warns = _core([TRACK], laser_frame_id="laser", camera_frame_id="camera")
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0))
+    assert core.on_scan(_scan_msg(1.0)) is not None
+    # wrong length, wrong frame
+    assert core.on_scan(_scan_msg(1.0, n=35)) is None
+    assert core.on_scan(_scan_msg(1.0, frame="base_link")) is None
+    # NaN odometry, wrong odom frames, stamps going backwards
+    nan_odom = odometry_to_fields(OdometryReading(np.zeros(3), 1.1))
+    nan_odom["pose"]["pose"]["position"]["y"] = float("nan")
+    core.on_odom(_msg("nav_msgs/msg/Odometry", nan_odom))
+    core.on_odom(_odom_msg(1.2, frame="map"))
+    core.on_odom(_odom_msg(1.2, child="laser"))
+    core.on_odom(_odom_msg(0.5))
+    # unknown image encoding, wrong camera frame
+    bad_img = image_to_fields(np.zeros((2, 2, 3), np.uint8), stamp=1.0)
+    bad_img["encoding"] = "yuv422"
+    core.on_image(_msg("sensor_msgs/msg/Image", bad_img))
+    core.on_image(
+        _msg(
+            "sensor_msgs/msg/Image",
+            image_to_fields(np.zeros((2, 2, 3), np.uint8), stamp=1.0, frame_id="x"),
+        )
+    )
+    # NaN initial pose, wrong frame
+    nan_pose = pose_with_covariance_to_fields([np.nan, 0, 0], np.eye(3), stamp=1.0)
+    core.on_initialpose(_msg("geometry_msgs/msg/PoseWithCovarianceStamped", nan_pose))
+    core.on_initialpose(
+        _msg(
+            "geometry_msgs/msg/PoseWithCovarianceStamped",
+            pose_with_covariance_to_fields([0, 0, 0], np.eye(3), stamp=1.0, frame_id="odom"),
+        )
+    )
+    # a map that changes size, one in the wrong frame
+    core.on_map(_map_msg((30, 10)))
+    core.on_map(_map_msg(frame="odom"))
+    # malformed scan
+    bad_scan = scan_to_fields(
+        LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(36), stamp=1.0, frame_id="laser")
+    )
+    bad_scan["angle_increment"] = float("nan")
+    core.on_scan(_msg("sensor_msgs/msg/LaserScan", bad_scan))
+    expected = {
+        "scan: wrong length": 1,
+        "scan: wrong frame": 1,
+        "odom: malformed": 1,
+        "odom: wrong frame": 1,
+        "odom: wrong child frame": 1,
+        "odom: stamp went backwards": 1,
+        "image: malformed": 1,
+        "image: wrong frame": 1,
+        "initialpose: malformed": 1,
+        "initialpose: wrong frame": 1,
+        "map: changed": 1,
+        "map: wrong frame": 1,
+        "scan: malformed": 1,
+    }
+    assert dict(core.dropped) == expected
+    assert loc.poses_set == []
+    assert any("yuv422" in w for w in warns)
+    assert any("Odometry.pose.pose.position.y" in w for w in warns)
+    # still localizing
+    out = core.on_scan(_scan_msg(1.0))
+    assert out is not None
+    assert out.amcl_pose is not None
+    values = {kv["key"]: kv["value"] for kv in out.status["status"][0]["values"]}
+    assert values["dropped"] == str(len(expected))
+    assert values["dropped/map: changed"] == "1"
+
+
+def test_accepting_map_updates_rebuilds_and_keeps_the_pose() -> None:
+    built: list[OccupancyGrid] = []
+    loc = ScriptedLocalizer([TRACK])
+
+    def factory(grid, params):  # type: ignore[no-untyped-def]
+        built.append(grid)
+        return loc
+
+    core = NodeCore(NodeParams(accept_map_updates=True), factory=factory)
+    core.on_map(_map_msg())
+    core.on_map(_map_msg())  # identical re-publication: ignored
+    core.on_odom(_odom_msg(1.0))
+    core.on_scan(_scan_msg(1.0))
+    core.on_map(_map_msg((25, 20)))
+    assert len(built) == 2
+    np.testing.assert_allclose(loc.poses_set[-1], [1.0, 2.0, 0.5])
+
+
+def test_warnings_are_rate_limited() -> None:
+    core, _, warns = _core([LOST])
+    for _ in range(250):
+        core.on_scan(_scan_msg(1.0))
+    assert core.dropped["scan: no map yet"] == 250
+    assert len(warns) == 5 + 2  # the first five, then the 100th and the 200th
+
+
+@pytest.mark.parametrize("mode", ["localise", ""])
+def test_params_reject_bad_mode(mode: str) -> None:
+    from symloc.errors import ConfigurationError
+
+    with pytest.raises(ConfigurationError, match="mode: expected one of"):
+        NodeParams(mode=mode)
