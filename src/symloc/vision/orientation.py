@@ -1,0 +1,432 @@
+"""Orientation decision at a symmetric place (Algorithm 3 and step 7 of Algorithm 5).
+
+A query image taken at the centre of a known place is scored against the place's M stored
+images (BoW, DBoW2 scoring). A direction is decided only when
+
+1. the query has enough keypoints (an almost empty BoW vector scores well against anything, so
+   images with fewer than ``min_keypoints`` are *refused*);
+2. the best score clearly beats the second: ``best >= min_score`` and
+   ``best >= min_score_ratio * second``. Views of the same wall from the same spot score several
+   times higher than views of different walls (the paper's Table 3: 0.91-0.96 against
+   0.07-0.13, a ratio of about 7), while in a room that looks the same in every direction (the
+   untextured lab) the M scores are nearly equal (ratio about 1). A ratio of 2 sits between the
+   two with a wide margin on both sides, and does not depend on the scoring's scale;
+3. the best direction survives geometric verification: ORB matches that pass Lowe's ratio test
+   fit a homography with RANSAC (a camera turning in place sees a pure rotation
+   ``H = K R K^-1``, for which a fundamental matrix is ill-conditioned) with at least
+   ``min_inliers`` inliers, more than ``min_inlier_ratio`` times the second direction's, and the
+   rotation it implies is a yaw of at most ``max_offset`` with little roll/pitch.
+
+The residual heading offset (query heading minus stored heading, counter-clockwise positive) is
+read from the homography, so the decided heading is ``heading_j + offset``, continuous rather
+than a multiple of 360/M. When the decision is not clear, the caller turns the robot clockwise
+by 360/M and tries again (the paper's protocol), up to M times: see :func:`decide_with_retries`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.geometry import wrap_angle
+from symloc.vision.bow import BowVector
+from symloc.vision.orb import OrbExtractor, OrbFeatures
+from symloc.vision.visual_map import Place
+from symloc.vision.vocabulary import Vocabulary
+
+__all__ = [
+    "OrientationConfig",
+    "OrientationDecision",
+    "decide_orientation",
+    "decide_with_retries",
+    "intrinsics_matrix",
+    "match_homography",
+    "yaw_from_homography",
+]
+
+Status = Literal["decided", "undetermined", "refused"]
+
+
+@dataclass(frozen=True)
+class OrientationConfig:
+    """Thresholds of the orientation decision (see the module docstring for the reasoning).
+
+    Attributes
+    ----------
+    min_keypoints : int
+        Queries with fewer ORB keypoints are refused.
+    min_score : float
+        Lowest acceptable best BoW score (vocabulary scoring units; L1 scores lie in [0, 1]).
+    min_score_ratio : float
+        The best score must be at least this multiple of the second best (> 1).
+    lowe_ratio : float
+        Lowe's ratio test on the two nearest Hamming neighbours, in (0, 1).
+    ransac_threshold : float
+        RANSAC reprojection threshold [px].
+    min_inliers : int
+        Fewest homography inliers for a verified direction (>= 4).
+    min_inlier_ratio : float
+        Best direction's inliers must be at least this multiple of the second's.
+    max_offset : float or None
+        Largest accepted residual yaw [rad]; None means half a sector, pi / M.
+    max_tilt : float
+        Largest accepted roll/pitch [rad] of the homography's rotation.
+    """
+
+    min_keypoints: int = 100
+    min_score: float = 0.05
+    min_score_ratio: float = 2.0
+    lowe_ratio: float = 0.8
+    ransac_threshold: float = 3.0
+    min_inliers: int = 20
+    min_inlier_ratio: float = 2.0
+    max_offset: float | None = None
+    max_tilt: float = math.radians(10.0)
+
+    def __post_init__(self) -> None:
+        if int(self.min_keypoints) != self.min_keypoints or self.min_keypoints < 1:
+            raise ConfigurationError(
+                f"min_keypoints: expected an integer >= 1, got {self.min_keypoints}"
+            )
+        if not (math.isfinite(self.min_score) and self.min_score >= 0):
+            raise ConfigurationError(f"min_score: expected a value >= 0, got {self.min_score}")
+        if not (math.isfinite(self.min_score_ratio) and self.min_score_ratio > 1.0):
+            raise ConfigurationError(
+                f"min_score_ratio: expected a value > 1, got {self.min_score_ratio}"
+            )
+        if not 0.0 < self.lowe_ratio < 1.0:
+            raise ConfigurationError(
+                f"lowe_ratio: expected a value in (0, 1), got {self.lowe_ratio}"
+            )
+        if not (math.isfinite(self.ransac_threshold) and self.ransac_threshold > 0):
+            raise ConfigurationError(
+                f"ransac_threshold: expected a value > 0 [px], got {self.ransac_threshold}"
+            )
+        if int(self.min_inliers) != self.min_inliers or self.min_inliers < 4:
+            raise ConfigurationError(
+                f"min_inliers: expected an integer >= 4, got {self.min_inliers}"
+            )
+        if not (math.isfinite(self.min_inlier_ratio) and self.min_inlier_ratio >= 1.0):
+            raise ConfigurationError(
+                f"min_inlier_ratio: expected a value >= 1, got {self.min_inlier_ratio}"
+            )
+        if self.max_offset is not None and not 0 < self.max_offset <= math.pi:
+            raise ConfigurationError(
+                f"max_offset: expected None or a value in (0, pi] [rad], got {self.max_offset}"
+            )
+        if not 0 < self.max_tilt <= math.pi:
+            raise ConfigurationError(
+                f"max_tilt: expected a value in (0, pi] [rad], got {self.max_tilt}"
+            )
+
+
+@dataclass(frozen=True)
+class OrientationDecision:
+    """The outcome of an orientation decision.
+
+    Attributes
+    ----------
+    status : {"decided", "undetermined", "refused"}
+    direction : int or None
+        Clockwise index j of the stored image the robot faced (at the first attempt).
+    heading_offset : float
+        Query heading minus the stored heading of ``direction`` [rad], CCW positive (NaN when
+        not decided).
+    heading : float
+        Decided map heading [rad] (stored heading + offset); NaN when not decided.
+    scores : tuple of float
+        BoW score against each of the M stored images (last attempt).
+    best_score, second_score : float
+    inliers, second_inliers : int
+        Homography inliers for the best and the second-best direction.
+    n_keypoints : int
+        Keypoints in the (last) query image.
+    attempts : int
+        Images tried (1 without retries).
+    reason : str
+        Why, in words.
+    """
+
+    status: Status
+    direction: int | None
+    heading_offset: float
+    heading: float
+    scores: tuple[float, ...]
+    best_score: float
+    second_score: float
+    inliers: int
+    second_inliers: int
+    n_keypoints: int
+    reason: str
+    attempts: int = 1
+    homography: NDArray[np.float64] | None = field(default=None, repr=False)
+
+    @property
+    def decided(self) -> bool:
+        """True when a direction was decided."""
+        return self.status == "decided"
+
+
+def intrinsics_matrix(intrinsics: ArrayLike | object) -> NDArray[np.float64]:
+    """Return a 3x3 camera matrix from an array or an object with ``K``/``fx, fy, cx, cy``."""
+    for attr in ("K", "matrix", "intrinsics"):
+        if hasattr(intrinsics, attr):
+            val = getattr(intrinsics, attr)
+            intrinsics = val() if callable(val) else val
+            break
+    else:
+        if all(hasattr(intrinsics, a) for a in ("fx", "fy", "cx", "cy")):
+            o = intrinsics
+            intrinsics = [[o.fx, 0, o.cx], [0, o.fy, o.cy], [0, 0, 1]]  # type: ignore[attr-defined]
+    K = np.asarray(intrinsics, np.float64)
+    if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+        raise ConfigurationError(
+            f"intrinsics: expected a 3x3 camera matrix with fx, fy > 0, got {K}"
+        )
+    return K
+
+
+def match_homography(
+    query: OrbFeatures, stored: OrbFeatures, config: OrientationConfig
+) -> tuple[NDArray[np.float64] | None, int, int]:
+    """Match ORB descriptors (Lowe ratio test) and fit ``stored -> query`` homography (RANSAC).
+
+    Returns
+    -------
+    H : (3, 3) float64 or None
+    inliers : int
+    matches : int
+        Matches that passed the ratio test.
+    """
+    if len(query) < 2 or len(stored) < 2:
+        return None, 0, 0
+    matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
+    knn = matcher.knnMatch(stored.descriptors, query.descriptors, k=2)
+    good = [m[0] for m in knn if len(m) == 2 and m[0].distance < config.lowe_ratio * m[1].distance]
+    if len(good) < 4:
+        return None, 0, len(good)
+    src = stored.points[[m.queryIdx for m in good]].astype(np.float64)
+    dst = query.points[[m.trainIdx for m in good]].astype(np.float64)
+    H, mask = cv2.findHomography(src, dst, cv2.RANSAC, config.ransac_threshold)
+    if H is None or mask is None:
+        return None, 0, len(good)
+    return np.asarray(H, np.float64), int(mask.sum()), len(good)
+
+
+def yaw_from_homography(H: ArrayLike, K: ArrayLike) -> tuple[float, float]:
+    """Yaw and tilt of the rotation behind a pure-rotation homography ``H = K R K^-1``.
+
+    Camera frame: x right, y down, z forward. ``H`` maps stored pixels to query pixels.
+
+    Returns
+    -------
+    yaw : float
+        Query heading minus stored heading [rad], counter-clockwise (robot turning left) positive.
+    tilt : float
+        Angle [rad] of the remaining rotation after removing the yaw (roll/pitch; ~0 for a
+        robot turning in place).
+    """
+    Km = np.asarray(K, np.float64)
+    R = np.linalg.inv(Km) @ np.asarray(H, np.float64) @ Km
+    det = np.linalg.det(R)
+    if not np.isfinite(det) or abs(det) < 1e-12:
+        return math.nan, math.nan
+    R = R / np.cbrt(det)
+    U, _, Vt = np.linalg.svd(R)
+    R = U @ Vt
+    if np.linalg.det(R) < 0:
+        R = -R
+    yaw = math.atan2(R[0, 2], R[2, 2])
+    c, s = math.cos(yaw), math.sin(yaw)
+    Ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    resid = Ry.T @ R
+    tilt = math.acos(max(-1.0, min(1.0, (np.trace(resid) - 1.0) / 2.0)))
+    return yaw, tilt
+
+
+def _undecided(
+    status: Status, reason: str, scores: Sequence[float], n_kp: int, **kw: object
+) -> OrientationDecision:
+    s = np.sort(np.asarray(scores, float))[::-1] if len(scores) else np.zeros(0)
+    return OrientationDecision(
+        status=status,
+        direction=None,
+        heading_offset=math.nan,
+        heading=math.nan,
+        scores=tuple(float(x) for x in scores),
+        best_score=float(s[0]) if s.size else math.nan,
+        second_score=float(s[1]) if s.size > 1 else math.nan,
+        inliers=int(kw.get("inliers", 0)),  # type: ignore[call-overload]
+        second_inliers=int(kw.get("second_inliers", 0)),  # type: ignore[call-overload]
+        n_keypoints=n_kp,
+        reason=reason,
+    )
+
+
+def decide_orientation(
+    query: OrbFeatures | ArrayLike,
+    place: Place,
+    vocabulary: Vocabulary,
+    intrinsics: ArrayLike | object,
+    config: OrientationConfig | None = None,
+    *,
+    extractor: OrbExtractor | None = None,
+    query_bow: BowVector | None = None,
+) -> OrientationDecision:
+    """Decide which of the place's M stored directions the query image faces.
+
+    Parameters
+    ----------
+    query : OrbFeatures or (H, W[, 3]) image
+        The image taken at the place's centre (or its features).
+    place : Place
+        The place with its M images in clockwise order (from :class:`VisualMap`).
+    vocabulary : Vocabulary
+        The vocabulary that made the stored BoW vectors.
+    intrinsics : (3, 3) array or camera object
+        Camera matrix, for the heading offset.
+    config : OrientationConfig, optional
+    extractor : OrbExtractor, optional
+        Used when ``query`` is an image (default settings otherwise).
+    query_bow : BowVector, optional
+        Precomputed BoW vector of ``query``.
+
+    Returns
+    -------
+    OrientationDecision
+    """
+    cfg = config or OrientationConfig()
+    K = intrinsics_matrix(intrinsics)
+    feats = (
+        query if isinstance(query, OrbFeatures) else (extractor or OrbExtractor()).extract(query)
+    )
+    n_kp = len(feats)
+    m = place.n_directions
+    if m < 1:
+        raise ConfigurationError(f"place {place.id}: has no stored images")
+    if n_kp < cfg.min_keypoints:
+        return _undecided(
+            "refused",
+            f"only {n_kp} keypoints (< {cfg.min_keypoints}): too little texture to decide",
+            (),
+            n_kp,
+        )
+    bow = query_bow if query_bow is not None else vocabulary.bow(feats.descriptors)
+    scores = vocabulary.score_many(bow, [im.bow for im in place.images])
+    order = np.argsort(-scores, kind="stable")
+    best = int(order[0])
+    s1 = float(scores[best])
+    s2 = float(scores[order[1]]) if m > 1 else 0.0
+    if s1 < cfg.min_score:
+        return _undecided(
+            "undetermined", f"best score {s1:.3f} < min_score {cfg.min_score}", scores, n_kp
+        )
+    if m > 1 and s1 < cfg.min_score_ratio * s2:
+        return _undecided(
+            "undetermined",
+            f"ambiguous: best score {s1:.3f} (direction {best}) is not {cfg.min_score_ratio}x "
+            f"the second {s2:.3f} (direction {int(order[1])})",
+            scores,
+            n_kp,
+        )
+    H, inl, _ = match_homography(feats, place.images[best].features, cfg)
+    inl2 = 0
+    if m > 1:
+        _, inl2, _ = match_homography(feats, place.images[int(order[1])].features, cfg)
+    kw = {"inliers": inl, "second_inliers": inl2}
+    if H is None or inl < cfg.min_inliers:
+        return _undecided(
+            "undetermined",
+            f"geometric check failed: {inl} homography inliers (< {cfg.min_inliers})",
+            scores,
+            n_kp,
+            **kw,
+        )
+    if inl < cfg.min_inlier_ratio * inl2:
+        return _undecided(
+            "undetermined",
+            f"geometric check ambiguous: {inl} inliers against {inl2} for the second direction",
+            scores,
+            n_kp,
+            **kw,
+        )
+    yaw, tilt = yaw_from_homography(H, K)
+    max_off = cfg.max_offset if cfg.max_offset is not None else math.pi / m
+    if not math.isfinite(yaw) or abs(yaw) > max_off or tilt > cfg.max_tilt:
+        return _undecided(
+            "undetermined",
+            f"homography is not a small turn in place (yaw {math.degrees(yaw):.1f} deg, "
+            f"tilt {math.degrees(tilt):.1f} deg)",
+            scores,
+            n_kp,
+            **kw,
+        )
+    stored_heading = place.images[best].heading
+    return OrientationDecision(
+        status="decided",
+        direction=best,
+        heading_offset=yaw,
+        heading=float(wrap_angle(stored_heading + yaw)),
+        scores=tuple(float(x) for x in scores),
+        best_score=s1,
+        second_score=s2,
+        inliers=inl,
+        second_inliers=inl2,
+        n_keypoints=n_kp,
+        reason=f"direction {best}: score {s1:.3f} vs {s2:.3f}, {inl} inliers vs {inl2}",
+        homography=H,
+    )
+
+
+def decide_with_retries(
+    capture: Callable[[int], OrbFeatures | ArrayLike],
+    place: Place,
+    vocabulary: Vocabulary,
+    intrinsics: ArrayLike | object,
+    config: OrientationConfig | None = None,
+    *,
+    extractor: OrbExtractor | None = None,
+) -> OrientationDecision:
+    """The paper's protocol: try, and if undecided turn clockwise by 360/M and try again.
+
+    Parameters
+    ----------
+    capture : callable
+        ``capture(t)`` returns the image (or features) after the robot turned clockwise by
+        ``t * 360/M`` degrees from where it started, t = 0..M-1.
+
+    Returns
+    -------
+    OrientationDecision
+        With ``direction`` referring to the robot's *starting* heading: an image decided as
+        direction j at attempt t means the robot started facing direction ``(j - t) mod M``
+        (stored images are in clockwise order); ``heading`` is the current heading after the
+        t turns; ``attempts`` counts the images tried.
+    """
+    m = place.n_directions
+    last: OrientationDecision | None = None
+    for t in range(m):
+        d = decide_orientation(
+            capture(t), place, vocabulary, intrinsics, config, extractor=extractor
+        )
+        if d.decided and d.direction is not None:
+            return OrientationDecision(
+                **{
+                    **d.__dict__,
+                    "direction": (d.direction - t) % m,
+                    "attempts": t + 1,
+                    "reason": d.reason + f" (attempt {t + 1}, after {t} clockwise turns)",
+                }
+            )
+        last = d
+    assert last is not None
+    return OrientationDecision(
+        **{**last.__dict__, "attempts": m, "reason": f"undecided after {m} attempts: {last.reason}"}
+    )
