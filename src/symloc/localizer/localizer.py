@@ -32,6 +32,7 @@ from symloc.geometry import angle_diff, compose, inverse, wrap_angle
 from symloc.odometry import OdometryReading
 
 from .centering import CentreFilter
+from .directions import directions_for
 from .types import (
     Decision,
     Estimate,
@@ -239,6 +240,10 @@ class Localizer:
         self.scorer = scorer
         self.known_places = list(known_places)
         self.log: list[str] = []
+        #: (place, decision) of the last visual decision that reseeded AMCL.
+        self.last_decision: tuple[Place, Decision] | None = None
+        #: AMCL's particles when the ambiguity was declared (for figures).
+        self.particles_at_ambiguity: FloatArray | None = None
         self._reset_state()
         self._phase = _Phase.LOST
 
@@ -430,6 +435,7 @@ class Localizer:
     # ---- ambiguity: Algorithm 2
 
     def _start_ambiguity(self, result, verdict, scan, why: str) -> Estimate:  # type: ignore[no-untyped-def]
+        self.particles_at_ambiguity = result.particles
         self._order = int(verdict.order)
         self._gv = float(verdict.gv_distance)
         self._kind = verdict.kind
@@ -447,6 +453,7 @@ class Localizer:
         )
 
     def _start_ambiguity_at_place(self, result: TrackerResult, place: Place) -> Estimate:
+        self.particles_at_ambiguity = result.particles
         self._order = place.order
         self._gv = place.gv_distance
         self._kind = place.kind
@@ -526,7 +533,7 @@ class Localizer:
     def _m_for(self, candidates: Sequence[Place]) -> int:
         if candidates:
             return max(p.m for p in candidates)
-        return self._order if self._order >= 2 else 4
+        return directions_for(self._kind, self._order)
 
     def _begin_capture(self) -> Estimate:
         self._phase = _Phase.CAPTURE
@@ -574,7 +581,13 @@ class Localizer:
 
     def _reseed(self, result: TrackerResult, place: Place, dec: Decision) -> Estimate:
         assert dec.direction is not None
-        heading = wrap_angle(place.heading0 - dec.direction * 2.0 * np.pi / place.m + dec.offset)
+        if dec.heading is not None:
+            heading = float(wrap_angle(dec.heading))
+        else:
+            heading = wrap_angle(
+                place.heading0 - dec.direction * 2.0 * np.pi / place.m + dec.offset
+            )
+        self.last_decision = (place, dec)
         pose = np.array([place.center[0], place.center[1], heading])
         cov = _cov(self.config.reseed_xy_std, self.config.reseed_theta_std)
         self.tracker.initialize_pose(pose, cov)

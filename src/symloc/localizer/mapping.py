@@ -17,32 +17,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, wrap_angle
 
 from .centering import CenteringConfig
+from .directions import directions_for
 from .simulation import Body, CenteringRun, ImageFn, ScanFn, go_to_centre
 from .types import Place, SymmetryJudge
 
 __all__ = ["MappedPlace", "directions_for", "known_places", "map_place"]
 
 FloatArray = NDArray[np.float64]
-
-
-def directions_for(kind: str, order: int) -> int:
-    """M, the number of images stored for a place.
-
-    A regular k-gon: k (one per wall middle). A rectangle or hallway: 4 (its wall middles are
-    90 degrees apart seen from the centre). A circle (order 0): 8, so that any query heading is
-    within 22.5 degrees of a stored view and the homography can still measure the offset.
-    """
-    if kind == "circle" or order == 0:
-        return 8
-    if kind in ("rectangle", "hallway"):
-        return 4
-    if order < 2:
-        raise ConfigurationError(f"directions_for: order must be 0 or >= 2, got {order}")
-    return int(order)
 
 
 @dataclass(frozen=True)

@@ -235,6 +235,8 @@ class Decision:
     ``"no_match"`` (the image resembles none of the place's images) or ``"refused"`` (too few
     features: the image cannot decide anything). ``direction`` is the stored image
     index, ``offset`` [rad] the query's heading minus that image's heading (CCW positive).
+    ``heading`` [rad], when given, is the decided map heading (the stored image's own heading
+    plus the offset); otherwise the localizer uses ``heading0 - direction * 2 pi / m + offset``.
     """
 
     status: str
@@ -242,6 +244,7 @@ class Decision:
     offset: float = 0.0
     score: float = 0.0
     reason: str = ""
+    heading: float | None = None
 
 
 class PlaceStore(Protocol):

@@ -1,0 +1,172 @@
+"""The visual map (:class:`symloc.vision.VisualMap`) as the localizer's :class:`PlaceStore`.
+
+G-V lookup (Algorithm 5 step 6) through :meth:`VisualMap.find_places`, the orientation decision
+(step 7) through :func:`symloc.vision.orientation.decide_orientation`, and new places
+(step 11) through :meth:`VisualMap.add_place` with ORB features and BoW vectors made here.
+A decision whose best BoW score is below the decision's ``min_score`` is reported as
+``no_match`` (the image resembles none of the place's views: a different place with the same
+G-V distance, or a new one).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc._checks import check_positive
+
+from .types import Decision, Place
+
+__all__ = ["VisionPlaceStore"]
+
+FloatArray = NDArray[np.float64]
+
+
+class VisionPlaceStore:
+    """A :class:`~symloc.localizer.types.PlaceStore` over a :class:`symloc.vision.VisualMap`.
+
+    Parameters
+    ----------
+    visual_map : VisualMap
+    vocabulary : Vocabulary
+    intrinsics : (3, 3) array or camera object
+        For the heading offset read from the homography.
+    gv_tolerance : float
+        G-V index tolerance [m]: a place matches when its G-V distance is within this.
+    gv_relative_tolerance : float
+        Added tolerance as a fraction of the G-V distance.
+    keep_images : bool
+        Store the images themselves (PNG) with the features (for figures).
+    """
+
+    def __init__(
+        self,
+        visual_map: Any,
+        vocabulary: Any,
+        intrinsics: Any,
+        *,
+        gv_tolerance: float = 0.05,
+        gv_relative_tolerance: float = 0.03,
+        orientation_config: Any = None,
+        extractor: Any = None,
+        keep_images: bool = True,
+    ) -> None:
+        from symloc.vision.orb import OrbExtractor
+
+        self.visual_map = visual_map
+        self.vocabulary = vocabulary
+        self.intrinsics = intrinsics
+        self.gv_tolerance = check_positive(gv_tolerance, "gv_tolerance")
+        self.gv_relative_tolerance = check_positive(
+            gv_relative_tolerance, "gv_relative_tolerance", allow_zero=True
+        )
+        self.orientation_config = orientation_config
+        self.extractor = extractor if extractor is not None else OrbExtractor()
+        self.keep_images = keep_images
+        self._places: dict[int, Any] = {}
+        self.last_decision: Any = None
+
+    def _vplace(self, place_id: int) -> Any:
+        if place_id not in self._places:
+            self._places[place_id] = self.visual_map.place(place_id)
+        return self._places[place_id]
+
+    @staticmethod
+    def _to_place(vp: Any) -> Place:
+        order = 0 if vp.kind == "circle" else int(vp.order)
+        return Place(
+            place_id=int(vp.id),
+            center=np.asarray(vp.pose[:2], dtype=np.float64),
+            heading0=float(vp.pose[2]),
+            m=int(vp.n_directions),
+            order=order,
+            gv_distance=float(vp.gv_distance),
+            kind=str(vp.kind),
+        )
+
+    def all_places(self) -> list[Place]:
+        """Every stored place (the localizer's ``known_places``)."""
+        return [self._to_place(self._vplace(i)) for i in self.visual_map.place_ids()]
+
+    def candidates(self, gv_distance: float, order: int) -> list[Place]:
+        if not math.isfinite(gv_distance):
+            return []
+        tol = self.gv_tolerance + self.gv_relative_tolerance * abs(gv_distance)
+        rows = self.visual_map.find_places(gv_distance, tol)
+        return [self._to_place(self._vplace(pid)) for pid, _gv in rows]
+
+    def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
+        from symloc.vision.orientation import OrientationConfig, decide_orientation
+
+        cfg = self.orientation_config or OrientationConfig()
+        d = decide_orientation(
+            image,
+            self._vplace(place.place_id),
+            self.vocabulary,
+            self.intrinsics,
+            cfg,
+            extractor=self.extractor,
+        )
+        self.last_decision = d
+        status = d.status
+        if (
+            status == "undetermined"
+            and math.isfinite(d.best_score)
+            and d.best_score < cfg.min_score
+        ):
+            status = "no_match"
+        return Decision(
+            status=status,
+            direction=d.direction,
+            offset=0.0 if not math.isfinite(d.heading_offset) else float(d.heading_offset),
+            score=0.0 if not math.isfinite(d.best_score) else float(d.best_score),
+            reason=d.reason,
+            heading=float(d.heading) if d.status == "decided" else None,
+        )
+
+    def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
+        """The stored image of one direction (None if images were not kept)."""
+        vp = self._vplace(place_id)
+        img = vp.images[direction].image
+        return None if img is None else np.asarray(img)
+
+    def add_place(
+        self,
+        center: FloatArray,
+        heading0: float,
+        order: int,
+        gv_distance: float,
+        kind: str,
+        images: Sequence[NDArray[np.uint8]],
+    ) -> Place:
+        from symloc.vision.visual_map import PlaceImage, direction_headings
+
+        m = len(images)
+        headings = direction_headings(float(heading0), m)
+        stored = []
+        for j, image in enumerate(images):
+            feats = self.extractor.extract(image)
+            bow = self.vocabulary.bow(feats.descriptors)
+            stored.append(
+                PlaceImage(
+                    direction=j,
+                    heading=float(headings[j]),
+                    features=feats,
+                    bow=bow,
+                    image=np.asarray(image) if self.keep_images else None,
+                )
+            )
+        stored_order = m if (kind == "circle" or order == 0) else int(order)
+        pid = self.visual_map.add_place(
+            kind=kind,
+            order=stored_order,
+            gv_distance=float(gv_distance),
+            pose=np.array([center[0], center[1], heading0], dtype=np.float64),
+            images=stored,
+        )
+        self._places.pop(pid, None)
+        return self._to_place(self._vplace(pid))
