@@ -240,57 +240,150 @@ def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
     return sorted(cuts)
 
 
+def _reroll(
+    p: FloatArray, tol: FloatArray, st: IntArray, sp: IntArray, first: int
+) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
+    """Roll a closed contour so that piece ``first`` starts at index 0 (pieces stay in order)."""
+    m = p.shape[0]
+    shift = int(st[first])
+    order = np.roll(np.arange(st.size), -first)
+    st2 = (st[order] - shift) % m
+    sp2 = st2 + (sp[order] - st[order])
+    return np.roll(p, -shift, axis=0), np.roll(tol, -shift), st2, sp2, shift
+
+
 def _absorb_short(
     p: FloatArray,
     tol: FloatArray,
-    mom: _Moments,
     st: IntArray,
     sp: IntArray,
     *,
     closed: bool,
     max_points: int,
-) -> tuple[IntArray, IntArray]:
+) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
     """Hand the points of short pieces to the neighbouring lines when they fit there.
 
     A piece of at most ``max_points`` points between two lines (typically the few points at a
     sparse far corner) disappears when a prefix of it fits the previous line and the rest the
-    next line, each point within its tolerance. Repeats until nothing changes.
+    next line, each point within its tolerance. Repeats until nothing changes. Returns the
+    (possibly re-rolled) points, tolerances, pieces and the extra roll applied.
     """
-    for _ in range(4):
+    total_shift = 0
+    m = p.shape[0]
+    for _ in range(8):
         n_l = st.size
-        if n_l < 3 if closed else n_l < 2:
+        if n_l < (3 if closed else 2):
             break
+        short = np.flatnonzero(sp - st <= max_points)
+        if closed:
+            cand = short
+        else:
+            cand = short[(short > 0) & (short < n_l - 1)]
+        if cand.size == 0:
+            break
+        mom = _Moments(p)
         _c, _d, nrm, off, _s = mom.fit(st, sp)
-        changed = False
-        for t in range(n_l):
-            n_t = int(sp[t] - st[t])
-            if n_t > max_points:
-                continue
-            prev = t - 1 if t > 0 else (n_l - 1 if closed else -1)
-            nxt = t + 1 if t < n_l - 1 else (0 if closed else -1)
-            # interior pieces only (a piece at the roll boundary stays as it is)
-            if prev != t - 1 or nxt != t + 1:
-                continue
+        done = False
+        for t in cand:
+            t = int(t)
+            prev, nxt = (t - 1) % n_l, (t + 1) % n_l
             q = p[st[t] : sp[t]]
             tq = tol[st[t] : sp[t]]
             fit_prev = np.abs(q @ nrm[prev] - off[prev]) <= tq
             fit_next = np.abs(q @ nrm[nxt] - off[nxt]) <= tq
-            # s points go to prev (prefix), the rest to next (suffix)
+            # a prefix of s points goes to prev, the rest to next
             pre = np.concatenate([[True], np.cumprod(fit_prev).astype(bool)])
             suf = np.concatenate([np.cumprod(fit_next[::-1])[::-1].astype(bool), [True]])
             ok = np.flatnonzero(pre & suf)
             if ok.size == 0:
                 continue
+            if closed and t in (0, n_l - 1):
+                p, tol, st, sp, shift = _reroll(p, tol, st, sp, prev)
+                total_shift = (total_shift + shift) % m
+                t, prev, nxt = 1, 0, 2 % n_l
             cut = int(st[t] + ok[0])
             sp[prev] = cut
             st[nxt] = cut
             st = np.delete(st, t)
             sp = np.delete(sp, t)
-            changed = True
+            done = True
             break
-        if not changed:
+        if not done:
             break
-    return st, sp
+    return p, tol, st, sp, total_shift
+
+
+def _refine_boundaries(
+    p: FloatArray,
+    tol: FloatArray,
+    st: IntArray,
+    sp: IntArray,
+    *,
+    closed: bool,
+    window: int = 8,
+    iterations: int = 2,
+) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
+    """Move each boundary between two lines to where the points fit them best.
+
+    Within ``window`` points of a boundary, the cut minimises the sum of squared normalised
+    residuals of the points before it to the first line and after it to the second; a chord
+    split can cut a few points away from the true corner, and those points would otherwise bend
+    the next wall's fit. For a closed contour the boundary across the end is refined too, and
+    the contour is re-rolled so that the first line starts at index 0. Returns the rolled
+    points, tolerances, pieces and the roll applied.
+    """
+    m = p.shape[0]
+    st = st.copy()
+    sp = sp.copy()
+    total = 0
+    n_l = st.size
+    if n_l < 2:
+        return p, tol, st, sp, 0
+    offs = np.arange(-window, window)
+    for _ in range(iterations):
+        mom = _Moments(p)
+        _c, _d, nrm, off, _s = mom.fit(st, sp)
+        n_b = n_l if closed else n_l - 1
+        t = np.arange(n_b)
+        u = (t + 1) % n_l
+        b = np.where(u == 0, m, st[u])  # boundary index (m: across the end)
+        len_t = sp[t] - st[t]
+        len_u = sp[u] - st[u]
+        lo = -np.minimum(window, np.maximum(len_t - 2, 0))
+        hi = np.minimum(window, np.maximum(len_u - 2, 0))
+        idx = (b[:, None] + offs[None, :]) % m  # (B, 2w)
+        q = p[idx]
+        tq = tol[idx]
+        e_t = ((np.einsum("bwk,bk->bw", q, nrm[t]) - off[t][:, None]) / tq) ** 2
+        e_u = ((np.einsum("bwk,bk->bw", q, nrm[u]) - off[u][:, None]) / tq) ** 2
+        valid = (offs[None, :] >= lo[:, None]) & (offs[None, :] < hi[:, None])
+        e_t = np.where(valid, e_t, 0.0)
+        e_u = np.where(valid, e_u, 0.0)
+        # cost of cutting before window position j: sum_{<j} e_t + sum_{>=j} e_u
+        ct = np.concatenate([np.zeros((n_b, 1)), np.cumsum(e_t, axis=1)], axis=1)
+        cu = np.concatenate([np.cumsum(e_u[:, ::-1], axis=1)[:, ::-1], np.zeros((n_b, 1))], axis=1)
+        cost = ct + cu
+        pos = np.arange(-window, window + 1)
+        allowed = (pos[None, :] >= lo[:, None]) & (pos[None, :] <= hi[:, None])
+        cost = np.where(allowed, cost, np.inf)
+        new_b = b + pos[np.argmin(cost, axis=1)]
+        if np.array_equal(new_b, b):
+            break
+        if closed:
+            cuts = new_b  # cut t separates line t from line t+1; the last one wraps
+            st = np.concatenate([[cuts[-1] - m], cuts[:-1]])
+            sp = cuts.copy()
+            shift = int(st[0])
+            if shift:
+                st -= shift
+                sp -= shift
+                p = np.roll(p, -shift, axis=0)
+                tol = np.roll(tol, -shift)
+                total = (total + shift) % m
+        else:
+            st[1:] = new_b
+            sp[:-1] = new_b
+    return p, tol, st, sp, total
 
 
 def split_and_merge(
@@ -352,22 +445,9 @@ def split_and_merge(
     stops = bounds[1:].copy()
     stops[-1] = m
     mom = _Moments(p)
-    # hand each interior cut point to the neighbouring line it lies closer to
-    if starts.size > 1:
-        inner = starts[1:]
-        _c, _d, nl, ol, _s = mom.fit(starts[:-1], np.maximum(inner, starts[:-1] + 1))
-        _c, _d, nr, orr, _s = mom.fit(np.minimum(inner + 1, stops[1:]), stops[1:])
-        q = p[inner]
-        dl = np.abs(np.sum(nl * q, axis=1) - ol)
-        dr = np.abs(np.sum(nr * q, axis=1) - orr)
-        left_small = (inner - starts[:-1]) < 2
-        right_small = (stops[1:] - inner - 1) < 2
-        to_left = (dl < dr) & ~left_small & ~right_small
-        moved = inner + to_left.astype(np.intp)
-        starts[1:] = moved
-        stops[:-1] = moved
-        keep = stops > starts
-        starts, stops = starts[keep], stops[keep]
+    p, tol, starts, stops, shift = _refine_boundaries(p, tol, starts, stops, closed=closed)
+    roll = (roll + shift) % m
+    mom = _Moments(p)
 
     starts_l = [int(s) for s in starts]
     stops_l = [int(s) for s in stops]
@@ -422,7 +502,10 @@ def split_and_merge(
 
     st = np.asarray(starts_l, dtype=np.intp)
     sp = np.asarray(stops_l, dtype=np.intp)
-    st, sp = _absorb_short(p, tol, mom, st, sp, closed=closed, max_points=2 * min_points)
+    p, tol, st, sp, extra = _absorb_short(p, tol, st, sp, closed=closed, max_points=2 * min_points)
+    p, tol, st, sp, shift = _refine_boundaries(p, tol, st, sp, closed=closed)
+    roll = (roll + extra + shift) % m
+    mom = _Moments(p)
     centers, dirs, normals, offsets, var_along = mom.fit(st, sp)
     # orient each direction from the line's first point toward its last
     first = p[st]

@@ -200,7 +200,14 @@ def judge_symmetry(
     tol = cfg.point_tolerance(sp.ranges)
     sig = cfg.sigma(sp.ranges)
     runs = contour_runs(sp.indices, n_beams, max_dropout_beams=cfg.max_dropout_beams, wrap=True)
-    closed = full_circle and runs.shape[0] == 1 and int(runs[0, 0]) == 0 and int(runs[0, 1]) == m
+    wrap_gap = int(sp.indices[0]) + n_beams - int(sp.indices[-1]) - 1
+    closed = (
+        full_circle
+        and wrap_gap <= cfg.max_dropout_beams
+        and runs.shape[0] == 1
+        and int(runs[0, 0]) == 0
+        and int(runs[0, 1]) == m
+    )
     if closed:
         return _judge_closed(pts, tol, sig, cfg, centroid, common)
     return _judge_open(scan, sp.indices, pts, tol, sig, runs, full_circle, cfg, common)
