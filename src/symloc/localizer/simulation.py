@@ -213,6 +213,7 @@ class Episode:
     estimates: list[Estimate] = field(default_factory=list)
     path: list[FloatArray] = field(default_factory=list)
     images: list[NDArray[np.uint8]] = field(default_factory=list)
+    commands: list[tuple[float, float]] = field(default_factory=list)
     time: float = 0.0
     distance: float = 0.0
     wall_time: float = 0.0
@@ -291,6 +292,7 @@ def run_episode(
         v, w = _request_command(est, scan, cfg, explore_w)
         before = body.pose
         odom = body.drive(v, w, dt)
+        ep.commands.append((v, w))
         ep.distance += float(np.hypot(*(body.pose[:2] - before[:2])))
         ep.path.append(body.pose)
         t += dt
