@@ -321,7 +321,7 @@ def run_plain_amcl(
     t = 0.0
     result = None
     plan = list(commands or [])
-    n = max(len(plan), int(math.ceil(duration / dt)))
+    n = max(len(plan), math.ceil(duration / dt))
     dist = 0.0
     for i in range(n):
         result = amcl.update(odom, scan_at(robot.pose))
