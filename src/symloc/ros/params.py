@@ -67,6 +67,8 @@ class NodeParams:
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
     capture_topic : str
         Outputs (see :mod:`symloc.ros.node`).
+    sensor_qos : {"best_effort", "reliable"}
+        Reliability of the scan, odometry and image subscriptions (nav2 uses best effort).
     mode : {"localize", "build_visual_map"}
         ``build_visual_map`` lets the localizer map places that match no stored one.
     visual_map : str
@@ -103,6 +105,7 @@ class NodeParams:
     candidates_topic: str = "symloc/candidates"
     goal_topic: str = "goal_pose"
     capture_topic: str = "symloc/capture_request"
+    sensor_qos: str = "best_effort"
     mode: str = "localize"
     visual_map: str = ""
     map_yaml: str = ""
@@ -124,6 +127,10 @@ class NodeParams:
                 if f.name in ("image_topic", "compressed_image_topic") and value == "":
                     continue
                 _topic(value, f.name)
+        if self.sensor_qos not in ("best_effort", "reliable"):
+            raise ConfigurationError(
+                f"sensor_qos: expected 'best_effort' or 'reliable', got {self.sensor_qos!r}"
+            )
         if self.mode not in MODES:
             raise ConfigurationError(f"mode: expected one of {MODES}, got {self.mode!r}")
         for name in ("visual_map", "map_yaml"):
