@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from symloc.sim.lidar import LDS01, PAPER_15M, PRESETS, RPLIDAR_A2, LidarPreset, simulate_scan
 from symloc.sim.raycast import raycast
+from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import ROOM_NAMES, Room, build_room
 from symloc.sim.world import World
 
@@ -17,9 +18,12 @@ __all__ = [
     "LDS01",
     "PAPER_15M",
     "PRESETS",
-    "RPLIDAR_A2",
     "ROOM_NAMES",
+    "RPLIDAR_A2",
+    "DiffDriveRobot",
     "LidarPreset",
+    "OdometryNoise",
+    "RobotConfig",
     "Room",
     "World",
     "build_room",

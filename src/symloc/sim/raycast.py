@@ -41,6 +41,10 @@ class RayHits:
         Material id of each primitive.
     lengths : ndarray of shape (P,)
         Length [m] of each wall, circumference of each circle.
+    cos_incidence : ndarray of shape (..., N, P)
+        ``|cos|`` of the angle between the ray and the surface normal at the hit (1 head-on).
+    is_circle : ndarray of shape (P,)
+        True for circles, False for walls.
     """
 
     t: FloatArray
@@ -48,6 +52,8 @@ class RayHits:
     heights: FloatArray
     materials: NDArray[np.int64]
     lengths: FloatArray
+    cos_incidence: FloatArray
+    is_circle: NDArray[np.bool_]
 
 
 def ray_intersections(
@@ -77,6 +83,7 @@ def ray_intersections(
     circles = world.circles[ck]
     parts_t = []
     parts_s = []
+    parts_c = []
     if walls.shape[0]:
         px, py = walls[:, 0], walls[:, 1]
         ex, ey = walls[:, 2] - px, walls[:, 3] - py
@@ -90,6 +97,7 @@ def ray_intersections(
         length = np.hypot(ex, ey)
         parts_t.append(np.where(ok, t, np.inf))
         parts_s.append(np.where(ok, u * length, 0.0))
+        parts_c.append(np.abs(denom) / length)
     if circles.shape[0]:
         cx, cy, r = circles[:, 0], circles[:, 1], circles[:, 2]
         wx, wy = ox - cx, oy - cy
@@ -108,18 +116,32 @@ def ray_intersections(
             phi = np.mod(np.arctan2(hy, hx), 2 * np.pi)
         parts_t.append(t)
         parts_s.append(np.where(np.isfinite(t), phi * r, 0.0))
+        with np.errstate(invalid="ignore"):
+            parts_c.append(np.where(np.isfinite(t), np.abs(b + t) / r, 0.0))
     shape = np.broadcast_shapes((*ox.shape[:-1], 1), dx.shape)[:-1]
     if not parts_t:
         empty = np.zeros((*shape, 0))
-        return RayHits(empty, empty, np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0))
+        return RayHits(
+            empty,
+            empty,
+            np.zeros(0),
+            np.zeros(0, dtype=np.int64),
+            np.zeros(0),
+            empty,
+            np.zeros(0, dtype=bool),
+        )
     t_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_t], axis=-1)
     s_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_s], axis=-1)
+    c_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_c], axis=-1)
     heights = np.concatenate([world.wall_heights[wk], world.circle_heights[ck]])  # type: ignore[index]
     materials = np.concatenate([world.wall_materials[wk], world.circle_materials[ck]])  # type: ignore[index]
     lengths = np.concatenate(
         [np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]), 2 * np.pi * circles[:, 2]]
     )
-    return RayHits(t_all, s_all, heights, materials, lengths)
+    is_circle = np.concatenate(
+        [np.zeros(walls.shape[0], dtype=bool), np.ones(circles.shape[0], dtype=bool)]
+    )
+    return RayHits(t_all, s_all, heights, materials, lengths, c_all, is_circle)
 
 
 def raycast(

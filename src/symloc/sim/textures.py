@@ -1,0 +1,182 @@
+"""Surface textures for the simulated camera: real photographs and plain materials.
+
+The photographs are the ones scikit-image ships inside its wheel (``skimage.data``; nothing is
+downloaded at run time): astronaut, coffee, chelsea (a cat), rocket, the Hubble deep field, the
+left view of the Middlebury motorcycle stereo pair, an immunohistochemistry slide, the
+cameraman, coins, the moon, a clock, a brick wall, grass, gravel, a retina and a printed page.
+Material ``MATERIAL_PHOTO + k`` shows photo ``k % len(PHOTO_NAMES)``. Plain materials are a
+flat colour with faint (+-3 grey level) noise, like a matte painted surface.
+
+Each texture is a ``TEXTURE_SIZE`` square and comes with a mip-map pyramid (each level half the
+previous one, box-filtered), so that a far wall is sampled like a camera would integrate it,
+not aliased into pixel noise.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.sim.world import MATERIAL_BOARD, MATERIAL_FURNITURE, MATERIAL_PHOTO, MATERIAL_WALL
+
+__all__ = [
+    "PHOTO_NAMES",
+    "PLAIN_COLORS",
+    "TEXTURE_SIZE",
+    "TextureAtlas",
+    "load_photo",
+    "material_texture",
+    "texture_atlas",
+]
+
+TEXTURE_SIZE = 768
+"""Edge [pixels] of every texture (level 0 of its mip-map); photos are resized to it with
+bicubic interpolation, so a near wall is magnified smoothly, not in blocks."""
+
+PHOTO_NAMES = (
+    "astronaut",
+    "coffee",
+    "chelsea",
+    "rocket",
+    "hubble_deep_field",
+    "motorcycle_left",
+    "immunohistochemistry",
+    "camera",
+    "coins",
+    "moon",
+    "clock",
+    "brick",
+    "grass",
+    "gravel",
+    "retina",
+    "page",
+)
+"""The ``skimage.data`` photographs, in material order."""
+
+PLAIN_COLORS: dict[int, tuple[int, int, int]] = {
+    MATERIAL_BOARD: (196, 188, 170),
+    MATERIAL_WALL: (205, 205, 200),
+    MATERIAL_FURNITURE: (130, 95, 60),
+}
+"""RGB of the plain materials (board, painted wall, wood)."""
+
+_N_LEVELS = 7  # 768 .. 12
+
+
+@lru_cache(maxsize=32)
+def load_photo(index: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
+    """Photograph ``index % len(PHOTO_NAMES)`` as a ``(size, size, 3)`` uint8 RGB array."""
+    import skimage.data
+
+    name = PHOTO_NAMES[int(index) % len(PHOTO_NAMES)]
+    if name == "motorcycle_left":
+        img = skimage.data.stereo_motorcycle()[0]
+    else:
+        img = getattr(skimage.data, name)()
+    img = np.asarray(img)
+    if img.dtype == bool:
+        img = img.astype(np.uint8) * 255
+    if img.ndim == 2:
+        img = np.repeat(img[:, :, None], 3, axis=2)
+    img = np.ascontiguousarray(img[:, :, :3]).astype(np.uint8)
+    interp = cv2.INTER_AREA if min(img.shape[:2]) >= size else cv2.INTER_CUBIC
+    out = cv2.resize(img, (size, size), interpolation=interp)
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=32)
+def material_texture(material: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
+    """The ``(size, size, 3)`` uint8 texture of a material id."""
+    m = int(material)
+    if m >= MATERIAL_PHOTO:
+        return load_photo(m - MATERIAL_PHOTO, size)
+    if m not in PLAIN_COLORS:
+        raise ConfigurationError(
+            f"material: unknown material id {m}; expected one of {sorted(PLAIN_COLORS)} or"
+            f" >= {MATERIAL_PHOTO} (a photograph)"
+        )
+    rng = np.random.default_rng(1000 + m)  # fixed: a material always looks the same
+    base = np.array(PLAIN_COLORS[m], dtype=np.int16)
+    tex = base + rng.integers(-3, 4, size=(size, size, 1), dtype=np.int16)
+    out = np.clip(tex, 0, 255).astype(np.uint8)
+    out.setflags(write=False)
+    return out
+
+
+class TextureAtlas:
+    """Mip-mapped textures of a set of materials in one flat array for vectorised lookup.
+
+    Parameters
+    ----------
+    materials : tuple of int
+        Material ids, sorted ascending.
+
+    Attributes
+    ----------
+    texels : ndarray of shape (M, L, 3), uint8
+        For each material, all mip levels concatenated (level l is ``(size >> l)^2`` texels).
+    offsets : ndarray of shape (levels,)
+        Start of each level inside a material's row.
+    """
+
+    def __init__(self, materials: tuple[int, ...], size: int = TEXTURE_SIZE) -> None:
+        self.materials = np.array(materials, dtype=np.int64)
+        self.size = int(size)
+        levels = []
+        s = self.size
+        while s >= 8 and len(levels) < _N_LEVELS:
+            levels.append(s)
+            s //= 2
+        self.level_sizes = np.array(levels, dtype=np.int64)
+        self.offsets = np.concatenate([[0], np.cumsum(self.level_sizes**2)[:-1]]).astype(np.int64)
+        total = int(np.sum(self.level_sizes**2))
+        texels = np.empty((len(materials), total, 3), dtype=np.uint8)
+        for i, m in enumerate(materials):
+            img = material_texture(m, self.size)
+            for lvl, ls in enumerate(levels):
+                if lvl:
+                    img = cv2.resize(img, (int(ls), int(ls)), interpolation=cv2.INTER_AREA)
+                off = self.offsets[lvl]
+                texels[i, off : off + ls * ls] = img.reshape(-1, 3)
+        self.texels = texels.reshape(-1, 3)
+        self.row_length = total
+
+    @property
+    def n_levels(self) -> int:
+        """Number of mip levels."""
+        return int(self.level_sizes.size)
+
+    def index_of(self, materials: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Atlas row of each material id (ids must be in the atlas)."""
+        return np.searchsorted(self.materials, materials)
+
+    def sample(
+        self,
+        rows: NDArray[np.int64],
+        u: NDArray[np.float64],
+        v: NDArray[np.float64],
+        footprint: NDArray[np.float64],
+    ) -> NDArray[np.uint8]:
+        """Nearest-texel colours ``(..., 3)`` at texture coordinates ``u, v`` in [0, 1).
+
+        ``footprint`` is the size of one image pixel in level-0 texels; the mip level is
+        ``floor(log2(footprint))`` (clamped).
+        """
+        lvl = np.clip(np.floor(np.log2(np.maximum(footprint, 1.0))), 0, self.n_levels - 1)
+        lvl = lvl.astype(np.int64)
+        ls = self.level_sizes[lvl]
+        tx = np.clip((u * ls).astype(np.int64), 0, ls - 1)
+        ty = np.clip((v * ls).astype(np.int64), 0, ls - 1)
+        flat = rows * self.row_length + self.offsets[lvl] + ty * ls + tx
+        return self.texels[flat]
+
+
+@lru_cache(maxsize=8)
+def texture_atlas(materials: tuple[int, ...], size: int = TEXTURE_SIZE) -> TextureAtlas:
+    """A cached :class:`TextureAtlas` for the sorted material ids ``materials``."""
+    return TextureAtlas(tuple(sorted(set(materials))), size)
