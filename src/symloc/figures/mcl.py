@@ -1,0 +1,147 @@
+"""Figures for the mcl experiments (the only mcl code that imports matplotlib)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["amcl_carmen_figure", "amcl_symmetric_figure", "draw_amcl_state"]
+
+
+def _arrow(ax: Any, pose: np.ndarray, color: str, label: str, length: float = 0.5) -> None:
+    ax.annotate(
+        "",
+        xy=(pose[0] + length * np.cos(pose[2]), pose[1] + length * np.sin(pose[2])),
+        xytext=(pose[0], pose[1]),
+        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 2.0},
+    )
+    ax.plot(pose[0], pose[1], "o", color=color, ms=6, label=label)
+
+
+def draw_amcl_state(
+    ax: Any,
+    grid: Any,
+    particles: np.ndarray,
+    *,
+    true_pose: np.ndarray | None = None,
+    estimate: np.ndarray | None = None,
+    max_particles: int = 3000,
+) -> None:
+    """Map, particles (with heading ticks), true pose and estimate on one axes."""
+    img = np.where(grid.data < 0, 0.5, 1.0 - grid.data / 100.0)
+    ax.imshow(img, cmap="gray", origin="lower", extent=grid.extent(), vmin=0, vmax=1)
+    p = particles[:: max(1, len(particles) // max_particles)]
+    ax.quiver(
+        p[:, 0],
+        p[:, 1],
+        np.cos(p[:, 2]),
+        np.sin(p[:, 2]),
+        color="tab:red",
+        alpha=0.5,
+        scale=40,
+        width=0.003,
+        headwidth=2,
+    )
+    if true_pose is not None:
+        _arrow(ax, true_pose, "tab:green", "true pose")
+    if estimate is not None:
+        _arrow(ax, estimate, "tab:blue", "AMCL estimate")
+    ax.set_aspect("equal")
+
+
+def amcl_symmetric_figure(
+    summaries: Sequence[Mapping[str, Any]],
+    examples: Mapping[str, tuple[Any, Any]],
+    path: Path,
+) -> Path:
+    """Figure-8-like panels (one example per room) and a bar chart of the outcome rates."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(summaries)
+    fig, axes = plt.subplots(1, n + 1, figsize=(4.2 * (n + 1), 4.4))
+    axes = np.atleast_1d(axes)
+    for ax, s in zip(axes[:n], summaries, strict=True):
+        grid, t = examples[s["room"]]
+        draw_amcl_state(ax, grid, t.particles, true_pose=t.true_pose, estimate=t.estimate)
+        ax.set_title(
+            f"{s['room']} (k={s['order']}): {t.outcome.replace('_', ' ')}\n"
+            f"reported std {t.std_xy:.2f} m / {np.degrees(t.std_theta):.1f} deg",
+            fontsize=9,
+        )
+        ax.legend(loc="lower right", fontsize=7)
+    ax = axes[n]
+    names = [s["room"] for s in summaries]
+    x = np.arange(n)
+    tot = np.array([max(s["trials"], 1) for s in summaries], dtype=float)
+    corr = np.array([s["correct"] for s in summaries]) / tot
+    sym = np.array([s["symmetric_copy"] for s in summaries]) / tot
+    nc = np.array([s["not_converged"] for s in summaries]) / tot
+    cw = np.array([s["confident_wrong"] for s in summaries]) / tot
+    ax.bar(x - 0.3, corr, 0.2, label="correct")
+    ax.bar(x - 0.1, sym, 0.2, label="symmetric copy")
+    ax.bar(x + 0.1, nc, 0.2, label="not converged")
+    ax.bar(x + 0.3, cw, 0.2, label="confident & wrong")
+    ax.plot(
+        x - 0.3, [s["expected_correct_rate"] for s in summaries], "k_", ms=18, mew=2, label="1/k"
+    )
+    ax.set_xticks(x, names)
+    ax.set_ylim(0, 1)
+    ax.set_ylabel("fraction of trials")
+    ax.set_title(f"plain AMCL, uniform start ({int(tot[0])} trials/room)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def amcl_carmen_figure(
+    logs: Sequence[Mapping[str, Any]],
+    path: Path,
+) -> Path:
+    """Per log: the map with corrected and AMCL trajectories, and the tracking error over time.
+
+    Each entry holds ``name``, ``grid``, ``truth (T, 3)``, ``estimate (T, 3)``, ``stamps (T,)``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(logs)
+    fig, axes = plt.subplots(2, n, figsize=(5.0 * n, 8.5), squeeze=False)
+    for i, lg in enumerate(logs):
+        ax = axes[0, i]
+        g = lg["grid"]
+        img = np.where(g.data < 0, 0.5, 1.0 - g.data / 100.0)
+        ax.imshow(img, cmap="gray", origin="lower", extent=g.extent(), vmin=0, vmax=1)
+        ax.plot(lg["truth"][:, 0], lg["truth"][:, 1], "g-", lw=1, label="corrected poses")
+        ax.plot(lg["estimate"][:, 0], lg["estimate"][:, 1], "r-", lw=0.8, label="AMCL")
+        ax.set_title(lg["name"])
+        ax.legend(fontsize=7)
+        ax.set_aspect("equal")
+        ax = axes[1, i]
+        err = np.hypot(*(lg["estimate"][:, :2] - lg["truth"][:, :2]).T)
+        dth = np.abs(np.pi - np.mod(np.pi - (lg["estimate"][:, 2] - lg["truth"][:, 2]), 2 * np.pi))
+        t = lg["stamps"] - lg["stamps"][0]
+        ax.plot(t, err, "b-", lw=0.8, label="position error [m]")
+        ax2 = ax.twinx()
+        ax2.plot(t, np.degrees(dth), "r-", lw=0.5, alpha=0.6)
+        ax2.set_ylabel("heading error [deg]", color="r")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("position error [m]", color="b")
+        ax.set_title(f"tracking: mean {err.mean():.3f} m, {np.degrees(dth).mean():.2f} deg")
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
