@@ -275,10 +275,7 @@ def _absorb_short(
         if n_l < (3 if closed else 2):
             break
         short = np.flatnonzero(sp - st <= max_points)
-        if closed:
-            cand = short
-        else:
-            cand = short[(short > 0) & (short < n_l - 1)]
+        cand = short if closed else short[(short > 0) & (short < n_l - 1)]
         if cand.size == 0:
             break
         mom = _Moments(p)

@@ -408,10 +408,12 @@ def _judge_open(
         )
     # fit lines per run
     all_lines: list[tuple[LineSet, NDArray[np.intp]]] = []
-    for start, stop in runs:
+    run_lines: dict[int, LineSet] = {}
+    for r, (start, stop) in enumerate(runs):
         idx = np.arange(int(start), int(stop)) % m
         if idx.size >= 2:
-            all_lines.append((split_and_merge(pts[idx], tol[idx], closed=False), idx))
+            run_lines[r] = split_and_merge(pts[idx], tol[idx], closed=False)
+            all_lines.append((run_lines[r], idx))
     normals = np.concatenate([ls.normals for ls, _ in all_lines]) if all_lines else np.zeros((0, 2))
     offsets = np.concatenate([ls.offsets for ls, _ in all_lines]) if all_lines else np.zeros(0)
     npts = np.concatenate([ls.n_points for ls, _ in all_lines]) if all_lines else np.zeros(0, int)
@@ -459,17 +461,25 @@ def _judge_open(
                 **common,  # type: ignore[arg-type]
             )
     # --- a narrow opening in a straight wall: a door ---
+    # (the middle of a straight wall is nearer than its ends, so a gap between two collinear
+    # pieces of wall is never the sensor's range limit)
     for r in range(runs.shape[0]):
+        r2 = (r + 1) % runs.shape[0]
+        if r not in run_lines or r2 not in run_lines:
+            continue
         end = int(runs[r, 1] - 1) % m
-        nxt = int(runs[(r + 1) % runs.shape[0], 0]) % m
+        nxt = int(runs[r2, 0]) % m
         width = float(np.hypot(*(pts[nxt] - pts[end])))
-        if width <= cfg.max_door_width:
+        la, lb = run_lines[r], run_lines[r2]
+        on_a = abs(float(pts[nxt] @ la.normals[-1] - la.offsets[-1])) <= tol[nxt]
+        on_b = abs(float(pts[end] @ lb.normals[0] - lb.offsets[0])) <= tol[end]
+        if width <= cfg.max_door_width and on_a and on_b:
             gap_beams = int((indices[nxt] - indices[end]) % n_beams) - 1
             return _report(
                 "asymmetric",
-                f"an opening {width:.2f} m wide ({gap_beams} beams without a point) at bearing"
-                f" {_bearing_deg(0.5 * (pts[nxt] + pts[end])):.1f} deg: an open door or a gap"
-                " in a wall breaks the symmetry",
+                f"an opening {width:.2f} m wide ({gap_beams} beams without a point) in a"
+                f" straight wall at bearing {_bearing_deg(0.5 * (pts[nxt] + pts[end])):.1f} deg:"
+                " an open door or a gap in a wall breaks the symmetry",
                 **common,
             )
     no_ret = int(np.count_nonzero(scan.no_return_mask))
