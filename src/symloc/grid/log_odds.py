@@ -1,0 +1,269 @@
+"""Log-odds occupancy mapping with an inverse sensor model (Thrun et al. 2005, Table 9.1-9.2).
+
+Each scan at a known pose updates every cell its beams touch once: cells a beam passes
+through become more likely free (``log_odds(p_miss)``), the cell of a beam's end point more
+likely occupied (``log_odds(p_hit)``), and the values are clamped to
+``[log_odds(p_min), log_odds(p_max)]`` so the map stays able to change (Cartographer's
+probability grid does the same). Cell traversal samples points along every beam at half a cell
+(vectorised over all beams of a scan); the end-point cell is never also marked free.
+
+- A valid reading beyond ``max_range`` is truncated: free up to ``max_range``, no hit.
+- A no-return reading (``>= range_max`` of the scan) clears free space only up to
+  ``no_return_range`` (0 disables it) and never adds a hit.
+- Invalid readings (NaN, below ``range_min``) do nothing.
+
+:class:`LogOddsGrid` grows as scans reach beyond it and converts to an
+:class:`~symloc.grid.OccupancyGrid`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc._checks import check_positive
+from symloc.errors import ConfigurationError
+from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.scan import LaserScan
+
+__all__ = ["InverseSensorModel", "LogOddsGrid", "beam_cells", "log_odds", "probability"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+def log_odds(p: ArrayLike) -> FloatArray:
+    """``log(p / (1 - p))`` for probabilities in (0, 1)."""
+    q = np.asarray(p, dtype=np.float64)
+    return np.log(q / (1.0 - q))
+
+
+def probability(lo: ArrayLike) -> FloatArray:
+    """Inverse of :func:`log_odds`: ``1 / (1 + exp(-lo))``."""
+    return 1.0 / (1.0 + np.exp(-np.asarray(lo, dtype=np.float64)))
+
+
+@dataclass(frozen=True, slots=True)
+class InverseSensorModel:
+    """Settings of the inverse sensor model.
+
+    Parameters
+    ----------
+    p_hit, p_miss : float
+        Occupancy probability assigned to an end-point cell (> 0.5) and to a traversed cell
+        (< 0.5).
+    p_min, p_max : float
+        Clamping bounds of a cell's probability, ``0 < p_min < p_miss < p_hit < p_max < 1``.
+    max_range : float
+        Readings farther than this [m] are truncated (free up to it, no hit).
+    no_return_range : float
+        Free space cleared along a no-return beam [m]; 0 disables.
+    step : float
+        Sampling step along a beam in cells (<= 1; 0.5 visits every cell a beam crosses
+        except a few corner-clipped ones).
+    """
+
+    p_hit: float = 0.7
+    p_miss: float = 0.4
+    p_min: float = 0.12
+    p_max: float = 0.97
+    max_range: float = 30.0
+    no_return_range: float = 5.0
+    step: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.p_min < self.p_miss < 0.5 < self.p_hit < self.p_max < 1.0:
+            raise ConfigurationError(
+                "InverseSensorModel: expected 0 < p_min < p_miss < 0.5 < p_hit < p_max < 1, got"
+                f" p_min={self.p_min}, p_miss={self.p_miss}, p_hit={self.p_hit},"
+                f" p_max={self.p_max}"
+            )
+        check_positive(self.max_range, "InverseSensorModel.max_range")
+        check_positive(self.no_return_range, "InverseSensorModel.no_return_range", allow_zero=True)
+        step = check_positive(self.step, "InverseSensorModel.step")
+        if step > 1.0:
+            raise ConfigurationError(f"InverseSensorModel.step: expected <= 1 cell, got {step}")
+
+    @property
+    def l_hit(self) -> float:
+        """Log-odds increment of a hit cell."""
+        return float(log_odds(self.p_hit))
+
+    @property
+    def l_miss(self) -> float:
+        """Log-odds increment (negative) of a traversed cell."""
+        return float(log_odds(self.p_miss))
+
+    @property
+    def l_min(self) -> float:
+        """Lower clamp of a cell's log-odds."""
+        return float(log_odds(self.p_min))
+
+    @property
+    def l_max(self) -> float:
+        """Upper clamp of a cell's log-odds."""
+        return float(log_odds(self.p_max))
+
+
+def _beam_geometry(
+    scan: LaserScan, model: InverseSensorModel
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Per-beam angle (B,), free length (B,) [m] and hit flag (B,) of the usable beams."""
+    r = scan.ranges
+    angles = scan.angles
+    valid = scan.valid_mask
+    no_ret = scan.no_return_mask
+    hit = valid & (r <= model.max_range)
+    length = np.where(valid, np.minimum(r, model.max_range), 0.0)
+    if model.no_return_range > 0:
+        length = np.where(no_ret, model.no_return_range, length)
+    use = length > 0
+    return angles[use], np.where(np.isfinite(length[use]), length[use], 0.0), hit[use]
+
+
+def beam_cells(
+    pose: ArrayLike,
+    scan: LaserScan,
+    model: InverseSensorModel,
+    resolution: float,
+    origin_xy: ArrayLike,
+) -> tuple[IntArray, IntArray]:
+    """Cells a scan at ``pose`` marks free and occupied.
+
+    Parameters
+    ----------
+    pose : array of shape (3,)
+        Sensor pose in the grid's world frame.
+    scan : LaserScan
+    model : InverseSensorModel
+    resolution : float
+        Cell edge [m].
+    origin_xy : array of shape (2,)
+        World position of the corner of cell (0, 0) (axis-aligned grid).
+
+    Returns
+    -------
+    free : ndarray of shape (F, 2)
+        Unique (row, col) cells traversed by a beam and not holding any beam's end point.
+    hits : ndarray of shape (K, 2)
+        Unique (row, col) cells holding an end point.
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    o = np.asarray(origin_xy, dtype=np.float64)
+    ang, length, hit = _beam_geometry(scan, model)
+    world_ang = p[2] + ang
+    c, s = np.cos(world_ang), np.sin(world_ang)
+    step = model.step * resolution
+    n = np.ceil(length / step).astype(np.intp)
+    total = int(n.sum())
+    beam = np.repeat(np.arange(ang.size), n)
+    start = np.cumsum(n) - n
+    t = (np.arange(total) - start[beam]) * step
+    fx = (p[0] - o[0] + t * c[beam]) / resolution
+    fy = (p[1] - o[1] + t * s[beam]) / resolution
+    free = np.column_stack([np.floor(fy), np.floor(fx)]).astype(np.intp)
+    hx = (p[0] - o[0] + length[hit] * c[hit]) / resolution
+    hy = (p[1] - o[1] + length[hit] * s[hit]) / resolution
+    hits = np.unique(np.column_stack([np.floor(hy), np.floor(hx)]).astype(np.intp), axis=0)
+    if free.size:
+        free = np.unique(free, axis=0)
+        if hits.size:
+            key_f = free[:, 0] * 1_000_003 + free[:, 1]
+            key_h = hits[:, 0] * 1_000_003 + hits[:, 1]
+            free = free[~np.isin(key_f, key_h)]
+    return free.reshape(-1, 2), hits.reshape(-1, 2)
+
+
+class LogOddsGrid:
+    """An axis-aligned log-odds grid that grows to hold every scan integrated into it.
+
+    Parameters
+    ----------
+    resolution : float
+        Cell edge [m].
+    model : InverseSensorModel, optional
+    origin_xy : array of shape (2,), optional
+        Initial world position of the corner of cell (0, 0); the grid starts empty (1 x 1).
+    chunk : int
+        Cells added per side when the grid grows.
+    """
+
+    def __init__(
+        self,
+        resolution: float,
+        model: InverseSensorModel | None = None,
+        origin_xy: ArrayLike = (0.0, 0.0),
+        *,
+        chunk: int = 64,
+    ) -> None:
+        self.resolution = check_positive(resolution, "resolution")
+        self.model = model if model is not None else InverseSensorModel()
+        self.origin_xy = np.asarray(origin_xy, dtype=np.float64).reshape(2).copy()
+        self.values = np.zeros((1, 1), dtype=np.float32)
+        self.chunk = int(chunk)
+        self.n_scans = 0
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(H, W)`` cells."""
+        return (int(self.values.shape[0]), int(self.values.shape[1]))
+
+    def ensure_contains(self, xy_min: ArrayLike, xy_max: ArrayLike) -> None:
+        """Grow the grid so that the world box ``[xy_min, xy_max]`` lies inside it."""
+        lo = np.floor((np.asarray(xy_min, float) - self.origin_xy) / self.resolution).astype(int)
+        hi = np.floor((np.asarray(xy_max, float) - self.origin_xy) / self.resolution).astype(int)
+        h, w = self.values.shape
+        pad_left = max(0, -lo[0])
+        pad_bottom = max(0, -lo[1])
+        pad_right = max(0, hi[0] - (w - 1))
+        pad_top = max(0, hi[1] - (h - 1))
+        if pad_left or pad_bottom or pad_right or pad_top:
+            ch = self.chunk
+            pl = pad_left + ch if pad_left else 0
+            pb = pad_bottom + ch if pad_bottom else 0
+            pr = pad_right + ch if pad_right else 0
+            pt = pad_top + ch if pad_top else 0
+            self.values = np.pad(self.values, ((pb, pt), (pl, pr)))
+            self.origin_xy = self.origin_xy - np.array([pl, pb]) * self.resolution
+
+    def integrate(self, pose: ArrayLike, scan: LaserScan) -> None:
+        """Update the grid with ``scan`` taken at sensor pose ``pose`` (3,) [m, m, rad]."""
+        p = np.asarray(pose, dtype=np.float64)
+        reach = 0.0
+        r = scan.ranges[scan.valid_mask]
+        if r.size:
+            reach = min(self.model.max_range, float(r.max()))
+        if self.model.no_return_range > 0 and np.any(scan.no_return_mask):
+            reach = max(reach, self.model.no_return_range)
+        reach += 2 * self.resolution
+        self.ensure_contains(p[:2] - reach, p[:2] + reach)
+        free, hits = beam_cells(p, scan, self.model, self.resolution, self.origin_xy)
+        v = self.values
+        v[free[:, 0], free[:, 1]] += np.float32(self.model.l_miss)
+        v[hits[:, 0], hits[:, 1]] += np.float32(self.model.l_hit)
+        np.clip(v, self.model.l_min, self.model.l_max, out=v)
+        self.n_scans += 1
+
+    def probability(self) -> FloatArray:
+        """``(H, W)`` occupancy probability; never-observed cells are 0.5."""
+        return probability(self.values)
+
+    def known_mask(self) -> NDArray[np.bool_]:
+        """``(H, W)`` True where the cell was observed (log-odds not 0)."""
+        return self.values != 0
+
+    def to_occupancy_grid(
+        self, *, occupied_thresh: float = 0.65, free_thresh: float = 0.196
+    ) -> OccupancyGrid:
+        """The grid as an :class:`OccupancyGrid`: unknown -1 where never observed, else 0..100."""
+        occ = np.rint(self.probability() * 100.0).astype(np.int8)
+        occ[~self.known_mask()] = -1
+        return OccupancyGrid(
+            occ,
+            self.resolution,
+            np.array([self.origin_xy[0], self.origin_xy[1], 0.0]),
+            occupied_thresh,
+            free_thresh,
+        )

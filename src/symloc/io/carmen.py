@@ -1,0 +1,266 @@
+"""Reader for CARMEN laser logs (``FLASER`` and ``ODOM`` messages), plain or gzip-compressed.
+
+Line formats (fields separated by white space)::
+
+    FLASER n r1 ... rn x y theta odom_x odom_y odom_theta timestamp hostname logger_timestamp
+    ODOM x y theta tv rv accel timestamp hostname logger_timestamp
+
+``x y theta`` of a ``FLASER`` line is the laser pose in the world frame (in the "corrected" logs
+of the Radish repository it is the pose a SLAM system estimated, used here as the reference
+trajectory); ``odom_*`` is the odometry pose at the scan. The ``n`` ranges [m] span a
+180-degree front field of view starting at -90 degrees; beam ``i`` points at
+``-pi/2 + i * pi / n`` (the convention of GMapping's CARMEN reader: the field of view divided
+by the number of beams). Readings at or above ``range_max`` mean "no return" (the logs use
+50, 80 or 81.91 for that). ``PARAM`` lines are collected; ``#`` comments and blank lines are
+ignored; any other message type is skipped and counted in :attr:`CarmenLog.skipped`.
+"""
+
+from __future__ import annotations
+
+import gzip
+import math
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import DataFormatError
+from symloc.scan import LaserScan
+
+__all__ = [
+    "CARMEN_FOV",
+    "CarmenLog",
+    "CarmenOdometry",
+    "CarmenScan",
+    "iter_carmen",
+    "read_carmen",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Field of view of a CARMEN front laser [rad].
+CARMEN_FOV = math.pi
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class CarmenScan:
+    """One ``FLASER`` message.
+
+    Attributes
+    ----------
+    scan : LaserScan
+        The ranges with their beam geometry; ``scan.stamp`` is the message timestamp [s].
+    laser_pose : ndarray of shape (3,)
+        Laser pose x [m], y [m], theta [rad] in the world frame (the corrected pose).
+    odom_pose : ndarray of shape (3,)
+        Odometry pose at the scan (``odom_x odom_y odom_theta``).
+    stamp : float
+        Message timestamp [s].
+    logger_stamp : float
+        Logger timestamp [s].
+    line : int
+        1-based line number in the file.
+    """
+
+    scan: LaserScan
+    laser_pose: FloatArray
+    odom_pose: FloatArray
+    stamp: float
+    logger_stamp: float
+    line: int
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class CarmenOdometry:
+    """One ``ODOM`` message: pose ``(3,)`` [m, m, rad], velocities tv [m/s], rv [rad/s]."""
+
+    pose: FloatArray
+    tv: float
+    rv: float
+    accel: float
+    stamp: float
+    logger_stamp: float
+    line: int
+
+
+@dataclass(frozen=True, eq=False)
+class CarmenLog:
+    """Everything read from one log.
+
+    Attributes
+    ----------
+    scans : list of CarmenScan
+    odometry : list of CarmenOdometry
+    params : dict of str to str
+        ``PARAM name value`` entries.
+    skipped : Counter
+        Number of lines of each unknown message type that were skipped.
+    """
+
+    scans: list[CarmenScan]
+    odometry: list[CarmenOdometry]
+    params: dict[str, str] = field(default_factory=dict)
+    skipped: Counter[str] = field(default_factory=Counter)
+
+    @property
+    def laser_poses(self) -> FloatArray:
+        """``(N, 3)`` world laser poses of the scans (the corrected reference trajectory)."""
+        return np.array([s.laser_pose for s in self.scans]).reshape(-1, 3)
+
+    @property
+    def odom_poses(self) -> FloatArray:
+        """``(N, 3)`` odometry poses recorded with the scans."""
+        return np.array([s.odom_pose for s in self.scans]).reshape(-1, 3)
+
+    @property
+    def stamps(self) -> FloatArray:
+        """``(N,)`` scan timestamps [s]."""
+        return np.array([s.stamp for s in self.scans], dtype=np.float64)
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last scan [s] (0 for fewer than two scans)."""
+        if len(self.scans) < 2:
+            return 0.0
+        return float(self.scans[-1].stamp - self.scans[0].stamp)
+
+
+def _floats(tokens: list[str], what: str, lineno: int) -> FloatArray:
+    try:
+        out = np.array(tokens, dtype=np.float64)
+    except ValueError as err:
+        raise DataFormatError(f"line {lineno}: {what}: expected numbers, got {tokens!r}") from err
+    if not np.all(np.isfinite(out)):
+        raise DataFormatError(f"line {lineno}: {what}: expected finite numbers")
+    return out
+
+
+def _parse_flaser(tokens: list[str], lineno: int, range_max: float) -> CarmenScan:
+    if len(tokens) < 2:
+        raise DataFormatError(f"line {lineno}: FLASER: missing the number of readings")
+    try:
+        n = int(tokens[1])
+    except ValueError as err:
+        raise DataFormatError(
+            f"line {lineno}: FLASER number of readings: expected an integer, got {tokens[1]!r}"
+        ) from err
+    if n < 2:
+        raise DataFormatError(f"line {lineno}: FLASER number of readings: expected >= 2, got {n}")
+    want = n + 11
+    if len(tokens) != want:
+        raise DataFormatError(
+            f"line {lineno}: FLASER with {n} readings: expected {want} fields, got {len(tokens)}"
+        )
+    ranges = _floats(tokens[2 : 2 + n], "FLASER ranges", lineno)
+    poses = _floats(tokens[2 + n : 8 + n], "FLASER poses", lineno)
+    stamp = _floats([tokens[8 + n]], "FLASER timestamp", lineno)[0]
+    logger = _floats([tokens[10 + n]], "FLASER logger_timestamp", lineno)[0]
+    if np.any(ranges < 0):
+        raise DataFormatError(f"line {lineno}: FLASER ranges: expected values >= 0 m")
+    scan = LaserScan(
+        angle_min=-CARMEN_FOV / 2.0,
+        angle_increment=CARMEN_FOV / n,
+        range_min=0.0,
+        range_max=range_max,
+        ranges=ranges,
+        stamp=float(stamp),
+        frame_id="laser",
+    )
+    return CarmenScan(scan, poses[:3], poses[3:], float(stamp), float(logger), lineno)
+
+
+def _parse_odom(tokens: list[str], lineno: int) -> CarmenOdometry:
+    if len(tokens) != 10:
+        raise DataFormatError(f"line {lineno}: ODOM: expected 10 fields, got {len(tokens)}")
+    v = _floats(tokens[1:7], "ODOM values", lineno)
+    stamp = _floats([tokens[7]], "ODOM timestamp", lineno)[0]
+    logger = _floats([tokens[9]], "ODOM logger_timestamp", lineno)[0]
+    return CarmenOdometry(
+        v[:3], float(v[3]), float(v[4]), float(v[5]), float(stamp), float(logger), lineno
+    )
+
+
+def _open_text(path: Path) -> Iterator[str]:
+    with path.open("rb") as probe:
+        magic = probe.read(2)
+    if magic == b"\x1f\x8b":
+        with gzip.open(path, "rt", encoding="ascii", errors="replace") as fh:
+            yield from fh
+    else:
+        with path.open("r", encoding="ascii", errors="replace") as fh:
+            yield from fh
+
+
+def iter_carmen(
+    path: str | Path,
+    *,
+    range_max: float = 50.0,
+    skipped: Counter[str] | None = None,
+    params: dict[str, str] | None = None,
+) -> Iterator[CarmenScan | CarmenOdometry]:
+    """Yield the ``FLASER`` and ``ODOM`` messages of a CARMEN log in file order.
+
+    Parameters
+    ----------
+    path : str or Path
+        Log file, plain text or gzip (detected from its first bytes).
+    range_max : float
+        Readings at or above this [m] are "no return" (default 50 m, below the 80 and 81.91
+        m markers of SICK logs and equal to the marker of the ACES log).
+    skipped : Counter, optional
+        Incremented per unknown message type.
+    params : dict, optional
+        Filled with ``PARAM name value`` entries.
+
+    Raises
+    ------
+    DataFormatError
+        A ``FLASER``/``ODOM``/``PARAM`` line is malformed (the message gives the line number).
+    FileNotFoundError
+        The file does not exist.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"CARMEN log not found: {p}")
+    if not (math.isfinite(range_max) and range_max > 0):
+        raise DataFormatError(f"range_max: expected > 0 m, got {range_max}")
+    for lineno, raw in enumerate(_open_text(p), start=1):
+        tokens = raw.split()
+        if not tokens or tokens[0].startswith("#"):
+            continue
+        kind = tokens[0]
+        if kind == "FLASER":
+            yield _parse_flaser(tokens, lineno, range_max)
+        elif kind == "ODOM":
+            yield _parse_odom(tokens, lineno)
+        elif kind == "PARAM":
+            if len(tokens) < 3:
+                raise DataFormatError(f"line {lineno}: PARAM: expected a name and a value")
+            if params is not None:
+                params[tokens[1]] = tokens[2]
+        elif skipped is not None:
+            skipped[kind] += 1
+
+
+def read_carmen(path: str | Path, *, range_max: float = 50.0) -> CarmenLog:
+    """Read a whole CARMEN log; see :func:`iter_carmen` for the parameters and errors.
+
+    Examples
+    --------
+    >>> log = read_carmen("intel-corrected.log.gz")  # doctest: +SKIP
+    >>> log.laser_poses.shape, log.skipped["NEFF"]  # doctest: +SKIP
+    ((910, 3), 910)
+    """
+    skipped: Counter[str] = Counter()
+    params: dict[str, str] = {}
+    scans: list[CarmenScan] = []
+    odom: list[CarmenOdometry] = []
+    for msg in iter_carmen(path, range_max=range_max, skipped=skipped, params=params):
+        if isinstance(msg, CarmenScan):
+            scans.append(msg)
+        else:
+            odom.append(msg)
+    return CarmenLog(scans, odom, params, skipped)

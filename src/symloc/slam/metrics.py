@@ -1,0 +1,133 @@
+"""Trajectory error metrics exactly as the ``evo`` package defines them, in SE(2).
+
+- **ATE** (evo ``evo_ape`` with ``--align``, ``translation_part``): the estimate is first
+  aligned to the reference with Umeyama's least-squares rigid alignment (rotation and
+  translation, no scale; Umeyama 1991), then ``E_i = ||t_ref_i - t_aligned_i||`` and the
+  statistics (RMSE, mean, median, std, min, max) are taken over all poses.
+- **RPE** (evo ``evo_rpe``, ``delta=1``, ``delta_unit=frames``, ``all_pairs=False``): for the
+  index pairs ``(i, i + delta)`` with ``i = 0, delta, 2 delta, ...``, the relative error
+  ``E_ij = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (Q reference, P estimate); its translation norm
+  [m] and rotation angle [rad] give the two RMSEs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc._checks import check_array
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose, inverse, relative, wrap_angle
+
+__all__ = ["AteResult", "RpeResult", "ate", "rpe", "umeyama_se2"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class AteResult:
+    """Absolute trajectory error statistics [m] and the alignment used.
+
+    ``alignment`` ``(3,)`` is the SE(2) pose ``ref_from_est`` applied to the estimate;
+    ``errors`` ``(N,)`` the per-pose translation errors [m].
+    """
+
+    rmse: float
+    mean: float
+    median: float
+    std: float
+    min: float
+    max: float
+    errors: FloatArray
+    alignment: FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class RpeResult:
+    """Relative pose error RMSEs: translation [m] and rotation [rad], over ``n_pairs`` pairs."""
+
+    trans_rmse: float
+    rot_rmse: float
+    trans_mean: float
+    rot_mean: float
+    n_pairs: int
+    delta: int
+
+
+def _pair(reference: ArrayLike, estimate: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    ref = check_array(reference, "reference", shape=(None, 3))
+    est = check_array(estimate, "estimate", shape=(None, 3))
+    if ref.shape != est.shape:
+        raise ConfigurationError(
+            f"estimate: expected as many poses as reference ({ref.shape[0]}), got {est.shape[0]}"
+        )
+    return ref, est
+
+
+def umeyama_se2(source: ArrayLike, target: ArrayLike) -> FloatArray:
+    """Least-squares rigid alignment (no scale) of points ``source`` (N, 2) onto ``target``.
+
+    Returns the pose ``(3,)`` ``target_from_source`` minimising
+    ``sum ||target_i - R source_i - t||^2`` (Umeyama 1991, with the reflection guard).
+    """
+    src = check_array(source, "source", shape=(None, 2))
+    dst = check_array(target, "target", shape=(None, 2))
+    if src.shape != dst.shape or src.shape[0] < 2:
+        raise ConfigurationError("source/target: expected the same number (>= 2) of points")
+    mu_s = src.mean(axis=0)
+    mu_d = dst.mean(axis=0)
+    cov = (dst - mu_d).T @ (src - mu_s) / src.shape[0]
+    u, _, vt = np.linalg.svd(cov)
+    s = np.eye(2)
+    if np.linalg.det(u) * np.linalg.det(vt) < 0:
+        s[1, 1] = -1.0
+    rot = u @ s @ vt
+    t = mu_d - rot @ mu_s
+    return np.array([t[0], t[1], np.arctan2(rot[1, 0], rot[0, 0])])
+
+
+def ate(reference: ArrayLike, estimate: ArrayLike, *, align: bool = True) -> AteResult:
+    """Absolute trajectory error of ``estimate`` (N, 3) against ``reference`` (N, 3).
+
+    With ``align`` (evo's ``-a``), the estimate is rigidly aligned to the reference first.
+    """
+    ref, est = _pair(reference, estimate)
+    if ref.shape[0] < 2:
+        raise ConfigurationError("reference: expected at least 2 poses")
+    align_pose = umeyama_se2(est[:, :2], ref[:, :2]) if align else np.zeros(3)
+    aligned = compose(align_pose, est)
+    err = np.linalg.norm(aligned[:, :2] - ref[:, :2], axis=1)
+    return AteResult(
+        rmse=float(np.sqrt(np.mean(err**2))),
+        mean=float(np.mean(err)),
+        median=float(np.median(err)),
+        std=float(np.std(err)),
+        min=float(np.min(err)),
+        max=float(np.max(err)),
+        errors=err,
+        alignment=align_pose,
+    )
+
+
+def rpe(reference: ArrayLike, estimate: ArrayLike, *, delta: int = 1) -> RpeResult:
+    """Relative pose error of ``estimate`` (N, 3) against ``reference`` over ``delta`` frames."""
+    ref, est = _pair(reference, estimate)
+    if not isinstance(delta, (int, np.integer)) or delta < 1:
+        raise ConfigurationError(f"delta: expected an integer >= 1 frame, got {delta!r}")
+    ids = np.arange(0, ref.shape[0], delta)
+    if ids.size < 2:
+        raise ConfigurationError(f"reference: expected more than delta={delta} poses")
+    i, j = ids[:-1], ids[1:]
+    e = compose(inverse(relative(ref[i], ref[j])), relative(est[i], est[j]))
+    trans = np.linalg.norm(e[:, :2], axis=1)
+    rot = np.abs(wrap_angle(e[:, 2]))
+    return RpeResult(
+        trans_rmse=float(np.sqrt(np.mean(trans**2))),
+        rot_rmse=float(np.sqrt(np.mean(rot**2))),
+        trans_mean=float(np.mean(trans)),
+        rot_mean=float(np.mean(rot)),
+        n_pairs=int(i.size),
+        delta=int(delta),
+    )

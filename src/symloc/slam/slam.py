@@ -1,0 +1,316 @@
+"""The laser SLAM pipeline: local scan-to-submap matching, loop closures, GTSAM back end.
+
+For every scan (Hess et al. 2016 structure, with Olson's correlative matcher):
+
+1. **Predict** its local pose from the previous one and the odometry increment.
+2. **Match** it against the oldest active submap (:func:`match_scan`, real-time window) and
+   insert it into the active submaps (:class:`ActiveSubmaps`).
+3. **Graph**: add the node, its intra-submap constraints and the odometry constraint.
+4. **Loop closure** (every ``loop_every`` nodes): match the scan against each finished older
+   submap whose predicted distance is below ``loop_search_distance`` with a wide window; a
+   score >= ``loop_min_score`` adds a robust loop constraint.
+5. **Optimise** with Levenberg-Marquardt every ``optimize_every`` nodes when new loop
+   constraints arrived, and once at the end.
+
+Finally all scans are integrated at their optimised poses into one log-odds grid, returned
+as an :class:`~symloc.grid.OccupancyGrid`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from tqdm import tqdm
+
+from symloc._checks import check_array, check_positive
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose, inverse, relative
+from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
+from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.scan import LaserScan
+from symloc.slam.correlative_scan_matching import CsmParams, match_scan
+from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
+from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
+
+__all__ = ["SlamParams", "SlamResult", "run_slam", "scan_points"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class SlamParams:
+    """Settings of the whole pipeline.
+
+    Parameters
+    ----------
+    submap : SubmapParams
+    local_csm : CsmParams
+        Real-time matching window around the odometry prediction.
+    loop_csm : CsmParams
+        Loop-closure window around the predicted pose in an older submap.
+    graph : PoseGraphParams
+    max_range : float
+        Points farther than this [m] are not used for matching.
+    voxel : float
+        Points are thinned to one per ``voxel`` x ``voxel`` square [m] for matching (0: off).
+    loop_every : int
+        Search loop closures for every ``loop_every``-th node.
+    loop_search_distance : float
+        Largest distance [m] between a node's predicted position and the centre of a submap's
+        nodes for a loop search.
+    loop_min_score : float
+        Minimum match score (mean likelihood, 0..1) to accept a loop closure.
+    loop_skip_submaps : int
+        The newest finished submaps skipped by the loop search (they are local matches).
+    optimize_every : int
+        Nodes between optimisations when new loop closures arrived.
+    map_resolution : float
+        Cell edge of the final map [m].
+    table_cache : int
+        Number of submap likelihood tables kept in memory.
+    """
+
+    submap: SubmapParams = field(default_factory=SubmapParams)
+    local_csm: CsmParams = field(
+        default_factory=lambda: CsmParams(
+            linear_window=0.6,
+            angular_window=math.radians(30),
+            coarse_factor=6,
+            translation_weight=1.0,
+            rotation_weight=1.0,
+        )
+    )
+    loop_csm: CsmParams = field(
+        default_factory=lambda: CsmParams(
+            linear_window=2.0, angular_window=math.radians(15), coarse_factor=8
+        )
+    )
+    graph: PoseGraphParams = field(default_factory=PoseGraphParams)
+    max_range: float = 20.0
+    voxel: float = 0.05
+    loop_every: int = 3
+    loop_search_distance: float = 10.0
+    loop_min_score: float = 0.6
+    loop_skip_submaps: int = 1
+    optimize_every: int = 20
+    map_resolution: float = 0.05
+    table_cache: int = 40
+
+    def __post_init__(self) -> None:
+        check_positive(self.max_range, "SlamParams.max_range")
+        check_positive(self.voxel, "SlamParams.voxel", allow_zero=True)
+        check_positive(self.loop_search_distance, "SlamParams.loop_search_distance")
+        check_positive(self.map_resolution, "SlamParams.map_resolution")
+        if not 0.0 <= self.loop_min_score <= 1.0:
+            raise ConfigurationError(
+                f"SlamParams.loop_min_score: expected a value in [0, 1], got {self.loop_min_score}"
+            )
+        for name in ("loop_every", "optimize_every", "table_cache"):
+            v = getattr(self, name)
+            if int(v) != v or v < 1:
+                raise ConfigurationError(f"SlamParams.{name}: expected an integer >= 1, got {v}")
+        if int(self.loop_skip_submaps) != self.loop_skip_submaps or self.loop_skip_submaps < 0:
+            raise ConfigurationError(
+                f"SlamParams.loop_skip_submaps: expected an integer >= 0, got"
+                f" {self.loop_skip_submaps}"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class SlamResult:
+    """Output of :func:`run_slam`.
+
+    Attributes
+    ----------
+    poses : ndarray of shape (N, 3)
+        Optimised global sensor pose of every scan.
+    local_poses : ndarray of shape (N, 3)
+        Front-end (scan matching only) poses.
+    grid : OccupancyGrid
+        Map from all scans at the optimised poses.
+    loop_closures : list of (submap, node)
+        Accepted loop constraints.
+    n_submaps : int
+    match_scores : ndarray of shape (N,)
+        Local match score per scan (0 for the first).
+    timings : dict of str to float
+        Seconds spent in ``frontend``, ``loop_search``, ``optimize``, ``map`` and ``total``.
+    n_optimizations : int
+    """
+
+    poses: FloatArray
+    local_poses: FloatArray
+    grid: OccupancyGrid
+    loop_closures: list[tuple[int, int]]
+    n_submaps: int
+    match_scores: FloatArray
+    timings: dict[str, float]
+    n_optimizations: int
+
+
+def scan_points(scan: LaserScan, max_range: float, voxel: float) -> FloatArray:
+    """End points ``(M, 2)`` [m] of ``scan`` within ``max_range``, thinned to one per voxel."""
+    sp = scan.to_points()
+    pts = sp.points[sp.ranges <= max_range]
+    if voxel > 0 and pts.shape[0] > 1:
+        keys = np.floor(pts / voxel).astype(np.int64)
+        _, first = np.unique(keys[:, 0] * 2_000_003 + keys[:, 1], return_index=True)
+        pts = pts[np.sort(first)]
+    return pts
+
+
+class _TableCache:
+    """Keeps the likelihood tables of the ``size`` most recently matched submaps."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.order: OrderedDict[int, Submap] = OrderedDict()
+
+    def touch(self, sm: Submap) -> None:
+        self.order.pop(sm.index, None)
+        self.order[sm.index] = sm
+        while len(self.order) > self.size:
+            _, old = self.order.popitem(last=False)
+            old.release_table()
+
+
+def run_slam(
+    scans: Sequence[LaserScan],
+    odometry: ArrayLike,
+    params: SlamParams | None = None,
+    *,
+    progress: bool = True,
+    desc: str = "slam",
+) -> SlamResult:
+    """Run laser SLAM over ``scans`` with odometry poses ``odometry`` (N, 3).
+
+    Parameters
+    ----------
+    scans : sequence of LaserScan
+        In time order; the sensor frame is the robot frame.
+    odometry : array of shape (N, 3)
+        Odometry pose at each scan (only increments are used; the first one fixes the map
+        frame).
+    params : SlamParams, optional
+    progress : bool
+        Show a tqdm bar on stderr.
+
+    Returns
+    -------
+    SlamResult
+    """
+    prm = params if params is not None else SlamParams()
+    odom = check_array(odometry, "odometry", shape=(None, 3))
+    n = len(scans)
+    if n == 0 or odom.shape[0] != n:
+        raise ConfigurationError(f"odometry: expected one pose per scan ({n}), got {odom.shape[0]}")
+    t_start = time.perf_counter()
+    timings = {"frontend": 0.0, "loop_search": 0.0, "optimize": 0.0, "map": 0.0}
+    active = ActiveSubmaps(prm.submap)
+    graph = PoseGraph(prm.graph)
+    cache = _TableCache(prm.table_cache)
+    local = np.zeros((n, 3))
+    scores = np.zeros(n)
+    global_from_local = np.zeros(3)
+    pending_loops = 0
+    n_opt = 0
+    submap_centres: dict[int, FloatArray] = {}
+
+    def _global_submap(sm: Submap) -> FloatArray:
+        return graph.submap_pose(sm.index)
+
+    bar = tqdm(total=n, desc=desc, unit="scan", disable=not progress, leave=False)
+    for i in range(n):
+        t0 = time.perf_counter()
+        pts = scan_points(scans[i], prm.max_range, prm.voxel)
+        if i == 0:
+            local[0] = odom[0]
+        else:
+            pred = compose(local[i - 1], relative(odom[i - 1], odom[i]))
+            target = active.matching_submap
+            if target is not None and pts.shape[0] >= 3:
+                cache.touch(target)
+                init = relative(target.local_pose, pred)
+                res = match_scan(target.table(), pts, init, prm.local_csm)
+                local[i] = compose(target.local_pose, res.pose)
+                scores[i] = res.score
+            else:
+                local[i] = pred
+        n_before = len(active.submaps)
+        touched = active.insert(i, local[i], scans[i])
+        graph.add_node(i, compose(global_from_local, local[i]))
+        for sm in active.submaps[n_before:]:
+            graph.add_submap(sm.index, compose(global_from_local, sm.local_pose))
+        for sm in touched:
+            graph.add_intra(sm.index, i, sm.node_poses[-1])
+        if i > 0:
+            graph.add_odometry(i - 1, i, relative(odom[i - 1], odom[i]))
+        timings["frontend"] += time.perf_counter() - t0
+
+        # loop closures against older finished submaps
+        t1 = time.perf_counter()
+        if i % prm.loop_every == 0 and pts.shape[0] >= 10:
+            finished = [s for s in active.submaps if s.finished and i not in s.nodes]
+            if prm.loop_skip_submaps:
+                finished = finished[: -prm.loop_skip_submaps]
+            node_g = compose(global_from_local, local[i])
+            for sm in finished:
+                if sm.index not in submap_centres:
+                    submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
+                sm_g = _global_submap(sm)
+                init = relative(sm_g, node_g)
+                if np.hypot(*(init[:2] - submap_centres[sm.index])) > prm.loop_search_distance:
+                    continue
+                cache.touch(sm)
+                res = match_scan(sm.table(), pts, init, prm.loop_csm)
+                if res.score >= prm.loop_min_score:
+                    graph.add_loop(sm.index, i, res.pose)
+                    pending_loops += 1
+        timings["loop_search"] += time.perf_counter() - t1
+
+        if pending_loops and (i + 1) % prm.optimize_every == 0:
+            t2 = time.perf_counter()
+            graph.optimize()
+            n_opt += 1
+            pending_loops = 0
+            global_from_local = compose(graph.node_pose(i), inverse(local[i]))
+            timings["optimize"] += time.perf_counter() - t2
+        bar.update(1)
+    bar.close()
+    t2 = time.perf_counter()
+    graph.optimize()
+    n_opt += 1
+    poses = graph.node_poses()
+    timings["optimize"] += time.perf_counter() - t2
+
+    t3 = time.perf_counter()
+    model = InverseSensorModel(
+        p_hit=prm.submap.model.p_hit,
+        p_miss=prm.submap.model.p_miss,
+        p_min=prm.submap.model.p_min,
+        p_max=prm.submap.model.p_max,
+        max_range=prm.max_range,
+        no_return_range=prm.submap.model.no_return_range,
+    )
+    grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2])
+    for i in range(n):
+        grid.integrate(poses[i], scans[i])
+    occ = grid.to_occupancy_grid()
+    timings["map"] = time.perf_counter() - t3
+    timings["total"] = time.perf_counter() - t_start
+    return SlamResult(
+        poses=poses,
+        local_poses=local,
+        grid=occ,
+        loop_closures=list(graph.loops),
+        n_submaps=len(active.submaps),
+        match_scores=scores,
+        timings=timings,
+        n_optimizations=n_opt,
+    )
