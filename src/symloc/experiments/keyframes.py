@@ -1,0 +1,57 @@
+"""``symloc experiment keyframes``: the paper's Figure 14, images stored over one full turn
+(M = 4 per place against a keyframe every 5 degrees) and their bytes on disk."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from symloc.experiments._common import add_common_arguments, print_config, write_json
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers: Any) -> None:
+    """Add ``keyframes`` to ``symloc experiment``."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "keyframes", help="storage of M=4 images per place vs a keyframe every 5 deg (Figure 14)"
+    )
+    add_common_arguments(parser)
+    parser.add_argument("--m", type=int, default=4, help="images per place (default 4)")
+    parser.add_argument("--step-deg", type=float, default=5.0, help="keyframe step [deg]")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symloc.vision.keyframes import run_keyframes
+
+    print_config(
+        "keyframes",
+        {
+            "seed": args.seed,
+            "M": args.m,
+            "keyframe step": f"{args.step_deg:g} deg",
+            "scene": "one full turn at the centre of a 3 m square in the textured lab, 640x480",
+            "stored per image": "ORB keypoints + descriptors + BoW vector (+ PNG image)",
+        },
+    )
+    results = run_keyframes(m=args.m, step_deg=args.step_deg, rng=args.seed)
+    print(
+        f"\n{'policy':<26}{'images':>8}{'features':>10}{'bytes (features)':>18}{'bytes (+PNG)':>14}"
+    )
+    for r in results:
+        print(
+            f"{r.name:<26}{r.count:>8}{r.n_features:>10}{r.bytes_features:>18,}"
+            f"{r.bytes_with_images:>14,}"
+        )
+    a, b = results[0], results[1]
+    print(
+        f"ratio: {b.count / a.count:.1f}x images, {b.bytes_features / a.bytes_features:.1f}x bytes "
+        f"(features), {b.bytes_with_images / a.bytes_with_images:.1f}x bytes (with images)"
+    )
+    from symloc.figures.vision import keyframes_figure
+
+    path = keyframes_figure(results, args.out / "keyframes.png")
+    print(f"wrote {path}")
+    write_json(args.json, {"seed": args.seed, "policies": [r.to_dict() for r in results]})
+    return 0

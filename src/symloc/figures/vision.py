@@ -1,0 +1,116 @@
+"""Figures of the vision part: Table 3 (similarity, heading errors) and Figure 14 (keyframes)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["keyframes_figure", "matches_figure", "table3_figure"]
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def table3_figure(result: Any, path: str | Path) -> Path:
+    """Similarity matrix heat map and the heading-error histogram of a Table 3 run."""
+    plt = _plt()
+    d = result.to_dict()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    s = np.asarray(d["similarity"])
+    im = ax1.imshow(s, cmap="viridis", vmin=0, vmax=max(1e-9, float(s.max())))
+    for (i, j), v in np.ndenumerate(s):
+        ax1.text(j, i, f"{v:.2f}", ha="center", va="center", color="w" if v < s.max() / 2 else "k")
+    ax1.set_xticks(range(4), [f"image {i + 1}" for i in range(4)])
+    ax1.set_yticks(range(4), [f"query {i + 1}" for i in range(4)])
+    ax1.set_title(f"mean BoW similarity (accuracy {100 * d['accuracy']:.0f} %)")
+    fig.colorbar(im, ax=ax1, fraction=0.046)
+    err_out = [np.degrees(abs(t.heading_error_out)) for t in result.trials if t.decision.decided]
+    err_in = [np.degrees(abs(t.heading_error_in)) for t in result.trials if t.decision.decided]
+    bins = np.linspace(0, max([5.0, *err_in]), 26)
+    ax2.hist(err_in, bins=bins, alpha=0.6, label="direction only (k x 90 deg)")
+    ax2.hist(err_out, bins=bins, alpha=0.8, label="with homography offset")
+    ax2.set_xlabel("|heading error| [deg]")
+    ax2.set_ylabel("trials")
+    u = d["untextured"]
+    ax2.set_title(
+        f"untextured lab: {u['undetermined']}/{u['trials']} undetermined, {u['wrong']} wrong"
+    )
+    ax2.legend()
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def keyframes_figure(results: Sequence[Any], path: str | Path) -> Path:
+    """Figure 14: stored images against rotation angle, and bytes on disk per policy."""
+    plt = _plt()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    theta = np.linspace(0, 360, 721)
+    for r in results:
+        counts = np.searchsorted(np.sort(r.angles_deg), theta, side="right")
+        ax1.step(theta, counts, where="post", label=f"{r.name} ({r.count})")
+    ax1.set_xlabel("rotation in place [deg]")
+    ax1.set_ylabel("images stored")
+    ax1.legend()
+    ax1.set_title("one full turn at the centre")
+    names = [r.name for r in results]
+    x = np.arange(len(results))
+    ax2.bar(x - 0.2, [r.bytes_features / 1024 for r in results], 0.4, label="features + BoW")
+    ax2.bar(x + 0.2, [r.bytes_with_images / 1024 for r in results], 0.4, label="+ PNG images")
+    ax2.set_xticks(x, names, fontsize=8)
+    ax2.set_ylabel("database size [KiB]")
+    ax2.set_yscale("log")
+    ax2.legend()
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def matches_figure(
+    img_a: np.ndarray, img_b: np.ndarray, path: str | Path, *, title: str = ""
+) -> Path:
+    """The paper's Figure 13: ORB matches (ratio test, homography inliers) between two images."""
+    import cv2
+
+    from symloc.vision.orb import OrbExtractor
+    from symloc.vision.orientation import OrientationConfig, match_homography
+
+    plt = _plt()
+    ext = OrbExtractor()
+    fa, fb = ext.extract(img_a), ext.extract(img_b)
+    _H, inl, n = match_homography(fb, fa, OrientationConfig())
+    ka = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fa.points]
+    kb = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fb.points]
+    bf = cv2.BFMatcher(cv2.NORM_HAMMING)
+    good = [
+        m[0]
+        for m in bf.knnMatch(fa.descriptors, fb.descriptors, k=2)
+        if len(m) == 2 and m[0].distance < 0.8 * m[1].distance
+    ]
+    vis = cv2.drawMatches(
+        np.ascontiguousarray(img_a), ka, np.ascontiguousarray(img_b), kb, good, None
+    )
+    fig, ax = plt.subplots(figsize=(12, 4.8))
+    ax.imshow(vis)
+    ax.set_axis_off()
+    ax.set_title(f"{title} {n} ratio-test matches, {inl} homography inliers")
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    return out
