@@ -427,3 +427,42 @@ def test_rotated_copies_are_recognised_as_symmetric(x, y, th, k):
     moved = [hyps[0], Hypothesis(copies[1] + np.array([1.0, 1.0, 0.0]), 0.5)]
     if np.hypot(x - 0.3, y + 0.2) > 0.1:
         assert symmetry_consistent(moved, centre, k, **kw) == 1
+
+
+class AxisSquareJudge(SquareJudge):
+    """SquareJudge that also reports the axis (centre to the +x wall middle, base frame)."""
+
+    def __call__(self, scan) -> SymmetryVerdict:
+        v = super().__call__(scan)
+        if not v.symmetric:
+            return v
+        mid = compose(inverse(scan), np.array([CENTRE[0] + HALF, CENTRE[1], 0.0]))[:2]
+        d = mid - v.center
+        return SymmetryVerdict(
+            True,
+            4,
+            "polygon",
+            v.center,
+            v.gv_distance,
+            facing=v.facing,
+            axis=float(np.arctan2(d[1], d[0])),
+        )
+
+
+def test_candidates_from_scan_and_known_place_contain_the_true_pose():
+    true = np.array([2.7, 0.3, 1.1])
+    place = Place(3, CENTRE.copy(), heading0=0.0, m=4, order=4, gv_distance=HALF * math.sqrt(2))
+    # AMCL knows nothing useful: one wide cluster somewhere else
+    tracker = FakeTracker(default=_result([[0.0, 0.0, 0.0]], [1.0], std=2.0))
+    loc = Localizer(tracker, AxisSquareJudge(), FakeStore(places=[place]))
+    est = loc.update(OdometryReading(np.zeros(3)), true)
+    assert est.status is Status.AMBIGUOUS
+    poses = np.array([h.pose for h in est.hypotheses])
+    assert poses.shape == (4, 3)
+    d = np.hypot(poses[:, 0] - true[0], poses[:, 1] - true[1])
+    dth = np.abs(angle_diff(poses[:, 2], true[2]))
+    assert np.min(d + dth) < 1e-9
+    # the other three are the true pose rotated about the centre by multiples of 90 degrees
+    expected = rotated_copies(true, CENTRE, 4)
+    for p in expected:
+        assert np.min(np.hypot(poses[:, 0] - p[0], poses[:, 1] - p[1])) < 1e-9

@@ -94,7 +94,7 @@ def demo_figure(story: Any, path: Path) -> Path:
         )
 
     ax = fig.add_subplot(gs[0, 0])
-    map_axes(ax, "map + kidnapped robot (true pose)")
+    map_axes(ax, "map, kidnapped robot")
     arrow(ax, story.kidnap_pose, "g", "true pose")
     ax.legend(fontsize=7, loc="lower left")
 
@@ -108,7 +108,7 @@ def demo_figure(story: Any, path: Path) -> Path:
     ax.legend(fontsize=7, loc="lower left")
 
     ax = fig.add_subplot(gs[0, 2])
-    map_axes(ax, "symloc: particles when ambiguity was declared")
+    map_axes(ax, "symloc: k candidates + AMCL at the centre")
     p = story.particles_before
     if p is not None:
         ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3)
@@ -117,7 +117,7 @@ def demo_figure(story: Any, path: Path) -> Path:
     arrow(ax, story.kidnap_pose, "g", "true pose")
 
     ax = fig.add_subplot(gs[0, 3])
-    map_axes(ax, f"symloc: path to the centre and after ({story.symloc_summary})")
+    map_axes(ax, f"symloc: path, final ({story.symloc_summary})")
     path_xy = np.asarray(story.path)
     ax.plot(path_xy[:, 0], path_xy[:, 1], "g-", lw=1.5, label="true path")
     p = story.particles_after

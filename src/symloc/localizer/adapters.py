@@ -93,6 +93,10 @@ def verdict_from(report: Any) -> SymmetryVerdict:
         symmetric and report.kind == "rectangle" and corners.shape[0] == 4
     ):
         facing = corner_middle_bearing(corners)
+    axis = None
+    if symmetric and order != 0 and report.kind == "polygon" and corners.shape[0] >= 2:
+        mid = 0.5 * (corners[0] + corners[1]) - center
+        axis = float(np.arctan2(mid[1], mid[0]))
     return SymmetryVerdict(
         symmetric=symmetric,
         order=order,
@@ -102,6 +106,7 @@ def verdict_from(report: Any) -> SymmetryVerdict:
         facing=facing,
         corners=corners,
         reason=str(report.reason),
+        axis=axis,
     )
 
 
@@ -120,9 +125,20 @@ class ReportJudge:
         self.judge = judge
         self.kwargs = kwargs
         self.last_report: Any = None
+        #: judgements that raised (counted, treated as "unknown"); should stay 0.
+        self.errors = 0
+        self.last_error = ""
 
     def __call__(self, scan: Any) -> SymmetryVerdict:
-        report = self.judge(scan, **self.kwargs)
+        try:
+            report = self.judge(scan, **self.kwargs)
+        except (IndexError, ValueError, FloatingPointError, np.linalg.LinAlgError) as err:
+            # a judgement bug must not stop the robot: count it, treat the scan as "unknown"
+            self.errors += 1
+            self.last_error = f"{type(err).__name__}: {err}"
+            return SymmetryVerdict(
+                False, 0, "unknown", None, math.nan, reason=f"judge raised {self.last_error}"
+            )
         self.last_report = report
         return verdict_from(report)
 

@@ -244,6 +244,8 @@ class Localizer:
         self.last_decision: tuple[Place, Decision] | None = None
         #: AMCL's particles when the ambiguity was declared (for figures).
         self.particles_at_ambiguity: FloatArray | None = None
+        #: AMCL's particles just before the visual decision reseeded it (for figures).
+        self.particles_before_decision: FloatArray | None = None
         self._reset_state()
         self._phase = _Phase.LOST
 
@@ -314,6 +316,7 @@ class Localizer:
         self._mapping_heading0: float | None = None
         self._mapping = False
         self._settled_reason = ""
+        self._candidate_place: Place | None = None
         self._last_result: TrackerResult | None = None
         self._last_verdict: SymmetryVerdict | None = None
         self._odom_pose = np.zeros(3)
@@ -359,6 +362,32 @@ class Localizer:
         return bool(np.any(scores[1:] >= self.config.copy_score_ratio * own))
 
     def _candidates(self) -> tuple[Hypothesis, ...]:
+        """The ``k`` candidate poses.
+
+        From the scan and the place when a known place of this order and G-V distance has a
+        regular-polygon verdict with an ``axis``: the robot sees the centre at ``c`` and a corner
+        middle along ``axis`` (base frame); direction ``j`` of the place looks from the centre
+        at a corner middle along ``heading0 - j 2 pi / M``, so ``theta_j = heading0 - j 2 pi / M
+        - axis`` and ``p_j = centre_map - R(theta_j) c``. Otherwise: AMCL's estimate rotated about
+        the centre.
+        """
+        v = self._last_verdict
+        place = self._candidate_place
+        if (
+            place is not None
+            and v is not None
+            and v.symmetric
+            and v.axis is not None
+            and v.center is not None
+            and place.m == self._order
+        ):
+            j = np.arange(place.m)
+            theta = wrap_angle(place.heading0 - j * 2.0 * np.pi / place.m - v.axis)
+            c, s = np.cos(theta), np.sin(theta)
+            x = place.center[0] - (c * v.center[0] - s * v.center[1])
+            y = place.center[1] - (s * v.center[0] + c * v.center[1])
+            poses = np.column_stack([x, y, theta])
+            return tuple(Hypothesis(pose=p, weight=1.0 / place.m) for p in poses)
         result = self._last_result
         if result is None or self._centre_map is None:
             return ()
@@ -441,6 +470,8 @@ class Localizer:
         self._kind = verdict.kind
         self._centre_map = self._centre_in_map(result, verdict)
         self._set_target(np.asarray(verdict.center, dtype=np.float64))
+        found = [p for p in self.places.candidates(self._gv, self._order) if p.order == self._order]
+        self._candidate_place = found[0] if len(found) == 1 else None
         self._phase = _Phase.CENTERING
         self._centering_updates = 0
         self._asym_count = 0
@@ -458,6 +489,7 @@ class Localizer:
         self._gv = place.gv_distance
         self._kind = place.kind
         self._centre_map = np.asarray(place.center, dtype=np.float64)
+        self._candidate_place = place
         # every rotated copy of the estimate sees the place's centre at the same base-frame point
         centre_base = compose(inverse(result.estimate), np.array([*place.center, 0.0]))[:2]
         self._set_target(centre_base)
@@ -590,6 +622,8 @@ class Localizer:
         self.last_decision = (place, dec)
         pose = np.array([place.center[0], place.center[1], heading])
         cov = _cov(self.config.reseed_xy_std, self.config.reseed_theta_std)
+        if self._last_result is not None:
+            self.particles_before_decision = self._last_result.particles
         self.tracker.initialize_pose(pose, cov)
         self._note(
             f"decided direction {dec.direction} of place {place.place_id} "

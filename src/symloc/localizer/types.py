@@ -191,7 +191,9 @@ class SymmetryVerdict:
 
     ``order`` k: 0 means a circle (infinite order); ``center`` (2,) and ``corners`` (K, 2) are in
     the sensor (base) frame [m]; ``facing`` is the bearing [rad] in the base frame of the middle
-    between two adjacent corners (None when there are no corners).
+    between two adjacent corners (None when there are no corners); ``axis`` [rad] is the
+    direction in the base frame from the centre to one such corner middle (regular polygons
+    only), from which the ``k`` candidate poses follow given the place's map pose.
     """
 
     symmetric: bool
@@ -202,6 +204,7 @@ class SymmetryVerdict:
     facing: float | None = None
     corners: FloatArray | None = None
     reason: str = ""
+    axis: float | None = None
 
 
 class SymmetryJudge(Protocol):
