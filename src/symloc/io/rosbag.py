@@ -299,6 +299,7 @@ class BagWriter:
     _typestore: Any = field(default=None, init=False, repr=False)
     _conns: dict[str, Any] = field(default_factory=dict, init=False, repr=False)
     _serialize: Callable[[Any, str], bytes] | None = field(default=None, init=False, repr=False)
+    _last_log_time: int = field(default=-1, init=False, repr=False)
 
     def __post_init__(self) -> None:
         if self.fmt not in ("ros2", "mcap", "ros1"):
@@ -369,13 +370,27 @@ class BagWriter:
         stamp: float,
         *,
         latched: bool = False,
-    ) -> None:
-        """Write one message given as a field dict at log time ``stamp`` [s]."""
+    ) -> bytes:
+        """Write one message given as a field dict at log time ``stamp`` [s]; returns its bytes.
+
+        Log times are made strictly increasing (+1 ns on a tie) so readers keep the write order.
+        """
         conn = self._connection(topic, msgtype, latched=latched)
         msg = build_rosbags(self._typestore, msgtype, fields)
         assert self._serialize is not None
-        self._writer.write(conn, round(stamp * 1e9), self._serialize(msg, msgtype))
+        raw = self._serialize(msg, msgtype)
+        # strictly increasing log times keep the write order when stamps tie
+        log_time = max(round(stamp * 1e9), self._last_log_time + 1)
+        self._last_log_time = log_time
+        self._writer.write(conn, log_time, raw)
         self.counts[topic] += 1
+        return raw
+
+    def deserialize(self, raw: bytes, msgtype: str) -> Any:
+        """Deserialise bytes this writer produced (the message a reader of the bag gets)."""
+        if self.fmt == "ros1":
+            return self._typestore.deserialize_ros1(raw, msgtype)
+        return self._typestore.deserialize_cdr(raw, msgtype)
 
     def write_scan(self, scan: LaserScan) -> None:
         """A sensor_msgs/LaserScan."""

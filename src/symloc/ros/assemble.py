@@ -19,7 +19,7 @@ from symloc.grid import OccupancyGrid
 from symloc.localizer import Decision, Localizer, Place
 from symloc.ros.params import NodeParams
 
-__all__ = ["MemoryPlaces", "make_localizer", "open_places"]
+__all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
 
 
 class MemoryPlaces:
@@ -59,47 +59,69 @@ class MemoryPlaces:
         return place
 
 
-def open_places(path: str, *, create: bool) -> Any:
-    """The place store for a visual-map file (``""``: :class:`MemoryPlaces`).
+def camera_matrix(params: NodeParams) -> NDArray[np.float64]:
+    """The (3, 3) intrinsics from ``params.camera_intrinsics`` (or the simulator's camera)."""
+    if params.camera_intrinsics:
+        fx, fy, cx, cy = params.camera_intrinsics
+    else:
+        from symloc.sim.camera import Camera
+
+        cam = Camera()
+        fx = fy = cam.focal
+        cx, cy = cam.width / 2.0, cam.height / 2.0
+    return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def open_places(params: NodeParams) -> Any:
+    """The place store for ``params.visual_map`` (``""``: :class:`MemoryPlaces`).
 
     Raises
     ------
     ConfigurationError
-        The file is missing (and ``create`` is False) or the visual-map adapter is unavailable.
+        The file is missing in ``localize`` mode.
     """
+    path = params.visual_map
     if not path:
         return MemoryPlaces()
     from pathlib import Path
 
-    if not create and not Path(path).is_file():
-        raise ConfigurationError(f"visual_map: {path} does not exist (mode localize)")
-    try:
-        from symloc.localizer.adapters import VisualMapStore  # type: ignore[attr-defined]
-    except ImportError as err:
-        raise ConfigurationError(
-            "visual_map: symloc.localizer.adapters.VisualMapStore is not available in this"
-            " version; run without a visual map"
-        ) from err
-    from symloc.vision.visual_map import VisualMap
+    from symloc.localizer.vision_store import VisionPlaceStore
+    from symloc.vision import VisualMap, Vocabulary
 
-    return VisualMapStore(VisualMap(path, create=create))
+    if not params.allow_mapping and not Path(path).is_file():
+        raise ConfigurationError(f"visual_map: {path} does not exist (mode localize)")
+    if params.vocabulary:
+        vocab = Vocabulary.load(params.vocabulary)
+    else:
+        from symloc.vision.default_vocabulary import default_vocabulary
+
+        vocab = default_vocabulary()
+    return VisionPlaceStore(
+        VisualMap(path, create=params.allow_mapping), vocab, camera_matrix(params)
+    )
 
 
 def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = None) -> Localizer:
-    """A globally initialised localizer on ``grid`` configured by ``params``."""
+    """A globally initialised localizer on ``grid`` configured by ``params``.
+
+    AMCL draws from ``numpy.random.default_rng(params.seed)``, so two localizers made with the
+    same parameters and fed the same messages give the same estimates.
+    """
     from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
     from symloc.mcl.amcl import Amcl
     from symloc.symmetry import judge_symmetry
 
     amcl = Amcl(grid, params.amcl, rng=np.random.default_rng(params.seed))
-    store = (
-        places
-        if places is not None
-        else open_places(params.visual_map, create=params.allow_mapping)
-    )
+    store = places if places is not None else open_places(params)
+    known = list(store.all_places()) if hasattr(store, "all_places") else []
     config = dataclasses.replace(params.localizer, allow_mapping=params.allow_mapping)
     loc = Localizer(
-        AmclTracker(amcl), ReportJudge(judge_symmetry), store, config, scorer=GridScorer(grid)
+        AmclTracker(amcl),
+        ReportJudge(judge_symmetry, config=params.symmetry_config()),
+        store,
+        config,
+        scorer=GridScorer(grid),
+        known_places=known,
     )
     loc.reset_global()
     return loc

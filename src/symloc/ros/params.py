@@ -73,6 +73,14 @@ class NodeParams:
         ``build_visual_map`` lets the localizer map places that match no stored one.
     visual_map : str
         Path of the SQLite visual map (``""``: none; with ``build_visual_map`` it is created).
+    vocabulary : str
+        ORB bag-of-words vocabulary file (symloc binary or DBoW2 text); ``""``: the shipped
+        one. It must be the vocabulary the visual map was built with.
+    camera_intrinsics : sequence of 4 floats
+        ``fx, fy, cx, cy`` [px] of the camera; empty: the simulator's 640 x 480, 65 deg camera.
+    lidar_preset : str
+        ``lds01``, ``rplidar_a2`` or ``paper_15m``: sets Algorithm 1's range noise from the
+        scanner's data sheet; ``""``: Algorithm 1's defaults.
     map_yaml : str
         A map_server YAML to load at start-up instead of waiting for the map topic.
     accept_map_updates : bool
@@ -86,6 +94,8 @@ class NodeParams:
         Seed of the filter's random numbers.
     amcl : AmclParams
     localizer : LocalizerConfig
+    symmetry : dict
+        Fields of :class:`symloc.symmetry.SymmetryConfig` overriding the preset's.
     """
 
     global_frame_id: str = "map"
@@ -108,6 +118,9 @@ class NodeParams:
     sensor_qos: str = "best_effort"
     mode: str = "localize"
     visual_map: str = ""
+    vocabulary: str = ""
+    camera_intrinsics: tuple[float, ...] = ()
+    lidar_preset: str = ""
     map_yaml: str = ""
     accept_map_updates: bool = False
     transform_tolerance: float = 1.0
@@ -115,6 +128,7 @@ class NodeParams:
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
     localizer: LocalizerConfig = field(default_factory=LocalizerConfig)
+    symmetry: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("global_frame_id", "odom_frame_id", "base_frame_id"):
@@ -133,7 +147,24 @@ class NodeParams:
             )
         if self.mode not in MODES:
             raise ConfigurationError(f"mode: expected one of {MODES}, got {self.mode!r}")
-        for name in ("visual_map", "map_yaml"):
+        intr = tuple(self.camera_intrinsics)
+        if intr and (
+            len(intr) != 4
+            or not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in intr)
+        ):
+            raise ConfigurationError(
+                f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
+            )
+        object.__setattr__(self, "camera_intrinsics", tuple(float(v) for v in intr))
+        if self.lidar_preset not in ("", "lds01", "rplidar_a2", "paper_15m"):
+            raise ConfigurationError(
+                "lidar_preset: expected '', 'lds01', 'rplidar_a2' or 'paper_15m',"
+                f" got {self.lidar_preset!r}"
+            )
+        if not isinstance(self.symmetry, dict):
+            raise ConfigurationError("symmetry: expected a mapping of SymmetryConfig fields")
+        self.symmetry_config()  # validates the block
+        for name in ("visual_map", "map_yaml", "vocabulary"):
             if not isinstance(getattr(self, name), str):
                 raise ConfigurationError(f"{name}: expected a path string")
         if not isinstance(self.accept_map_updates, bool):
@@ -156,6 +187,20 @@ class NodeParams:
             raise ConfigurationError("amcl: expected an AmclParams")
         if not isinstance(self.localizer, LocalizerConfig):
             raise ConfigurationError("localizer: expected a LocalizerConfig")
+
+    def symmetry_config(self) -> Any:
+        """The :class:`symloc.symmetry.SymmetryConfig` of Algorithm 1 (preset + overrides)."""
+        from symloc.symmetry import SymmetryConfig
+
+        known = {f.name for f in fields(SymmetryConfig)}
+        bad = sorted(set(self.symmetry) - known)
+        if bad:
+            raise ConfigurationError(f"symmetry.{bad[0]}: unknown (known: {sorted(known)})")
+        if self.lidar_preset:
+            from symloc.sim.lidar import PRESETS
+
+            return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
+        return SymmetryConfig(**self.symmetry)
 
     @property
     def allow_mapping(self) -> bool:

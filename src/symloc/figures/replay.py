@@ -1,0 +1,91 @@
+"""Figure of a replayed (or recorded) run: map, true path, estimated poses by status."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["plot_replay"]
+
+_COLOURS = {
+    "tracking": "tab:green",
+    "ambiguous": "tab:orange",
+    "going_to_centre": "tab:blue",
+    "deciding": "tab:purple",
+    "lost": "tab:red",
+}
+
+
+def plot_replay(
+    path: str | Path,
+    *,
+    grid: Any,
+    trajectory: Any,
+    truth: Any = None,
+    particles: Any = None,
+    title: str = "",
+) -> Path:
+    """Save a PNG: the occupancy grid, the true path (if known), the tracked estimates, and the
+    status over time. ``trajectory`` is a list of ``TrajectoryPoint``; ``truth`` (T, 4)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, axs) = plt.subplots(1, 2, figsize=(12, 5.5), gridspec_kw={"width_ratios": [1.3, 1.0]})
+    if grid is not None:
+        img = np.where(grid.data < 0, 0.75, 1.0 - grid.data / 100.0)
+        ax.imshow(img, cmap="gray", origin="lower", extent=grid.extent(), vmin=0, vmax=1)
+    tr = np.asarray(truth if truth is not None else np.zeros((0, 4)), dtype=float).reshape(-1, 4)
+    if len(tr):
+        ax.plot(tr[:, 1], tr[:, 2], "k-", lw=1.2, label="ground truth")
+        ax.plot(tr[0, 1], tr[0, 2], "ko", ms=6, label="start (kidnapped)")
+    if particles is not None and len(particles):
+        p = np.asarray(particles)
+        ax.plot(p[:, 0], p[:, 1], ".", ms=1, color="tab:gray", alpha=0.5, label="final particles")
+    tracked = np.array([[pt.stamp, *pt.pose] for pt in trajectory if pt.pose is not None])
+    if len(tracked):
+        ax.quiver(
+            tracked[:, 1],
+            tracked[:, 2],
+            np.cos(tracked[:, 3]),
+            np.sin(tracked[:, 3]),
+            color="tab:green",
+            scale=25,
+            width=0.004,
+            label="symloc pose (tracking)",
+        )
+    if len(tr):
+        pad = 1.0
+        ax.set_xlim(tr[:, 1].min() - pad - 2, tr[:, 1].max() + pad + 2)
+        ax.set_ylim(tr[:, 2].min() - pad - 2, tr[:, 2].max() + pad + 2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(title or "replay")
+    names = list(_COLOURS)
+    t = np.array([pt.stamp for pt in trajectory])
+    s = np.array([names.index(pt.status) if pt.status in names else -1 for pt in trajectory])
+    for i, name in enumerate(names):
+        sel = s == i
+        axs.plot(t[sel], s[sel], "s", ms=3, color=_COLOURS[name], label=name)
+    axs.set_yticks(range(len(names)), names)
+    axs.set_xlabel("time [s]")
+    axs.set_title("status at each scan")
+    if len(tr) and len(tracked):
+        err = []
+        for row in tracked:
+            j = int(np.argmin(np.abs(tr[:, 0] - row[0])))
+            err.append(np.hypot(*(row[1:3] - tr[j, 1:3])))
+        ax2 = axs.twinx()
+        ax2.plot(tracked[:, 0], np.asarray(err) * 100, "g-", lw=0.8)
+        ax2.set_ylabel("position error while tracking [cm]", color="tab:green")
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
