@@ -159,12 +159,12 @@ class Camera:
             wts = np.concatenate([k1[ok], -k1[ok]]).astype(np.float64)
             diff = np.bincount(idx, wts, minlength=(H + 2) * W)[: H * W].reshape(H, W)
             # label + 1 of the visible hit per pixel (0 = none); int16 cumsum is the fast one
-            label1 = np.cumsum(np.rint(diff).astype(np.int16), axis=0, dtype=np.int16).ravel()
-            vis = np.flatnonzero(label1)
-            if vis.size:
-                colors = self._shade_walls(hits, order, z, h, label1, vis)
+            label1 = np.cumsum(np.rint(diff).astype(np.int16), axis=0, dtype=np.int16)
+            has = label1 > 0
+            if np.any(has):
+                colors = self._shade_walls(hits, order, z, h, label1)
                 colors *= gain
-                img.reshape(-1, 3)[vis] = colors
+                np.copyto(img, colors, where=has[:, :, None])
         if self.noise_sigma > 0:
             n = img.size
             bank = _noise_bank(n)
@@ -180,14 +180,13 @@ class Camera:
         z: NDArray[np.float64],
         h: NDArray[np.float64],
         label1: NDArray[np.int16],
-        vis: NDArray[np.intp],
     ) -> NDArray[np.float32]:
-        """Colours ``(V, 3)`` of the visible wall pixels ``vis`` (flat indices)."""
-        W = int(self.width)
+        """Colours ``(H, W, 3)`` of the wall pixels (``label1 > 0``; others are don't-care)."""
+        H, W = label1.shape
+        P = order.shape[1]
         f = self.focal
         cy = self.height / 2.0
         hc = self.mount_height
-        # Per (column, hit) quantities; per pixel only the texture row varies, linearly.
         # A photographed circle (a round room's wall) shows one photo per tile of about its
         # height, photos k, k+1, ... around it, so that every direction looks different.
         mats = hits.materials
@@ -199,6 +198,7 @@ class Camera:
         first = np.repeat(np.cumsum(n_tiles) - n_tiles, n_tiles)
         all_mats = np.unique(np.repeat(mats, n_tiles) + np.arange(int(n_tiles.sum())) - first)
         atlas = texture_atlas(tuple(all_mats.tolist()))
+        # Per (column, hit) quantities; per pixel only the texture row varies, linearly.
         zs = np.where(np.isfinite(z), z, 1.0)
         tiles = n_tiles[order]
         lengths = hits.lengths[order] / tiles
@@ -216,18 +216,23 @@ class Camera:
         base = atlas.index_of(mats[order] + tile) * atlas.row_length + atlas.offsets[lvl] + tx
         # texture row at image row r (pixel centre r + 0.5):
         # (1 - (hc + (cy - r - 0.5) z / f) / h) * ls = inter + slope * r
-        slope = zs / (f * h) * ls
-        inter = (1.0 - hc / h) * ls - (cy - 0.5) * slope
-        shade = 0.55 + 0.45 * cos_i
-        col = vis % W
-        row = vis // W
-        key = (label1[vis].astype(np.intp) - 1) + col * order.shape[1]  # into (W, P) raveled
-        ty = inter.ravel().take(key) + slope.ravel().take(key) * row
-        lsp = ls.ravel().take(key)
-        tyi = np.clip(ty.astype(np.int64), 0, lsp - 1)
-        flat = base.ravel().take(key) + tyi * lsp
-        colors = atlas.texels.take(flat, axis=0).astype(np.float32)
-        colors *= shade.ravel().take(key).astype(np.float32)[:, None]
+        slope = (zs / (f * h) * ls).astype(np.float32).ravel()
+        inter = ((1.0 - hc / h) * ls - (cy - 0.5) * (zs / (f * h) * ls)).astype(np.float32).ravel()
+        shade = (0.55 + 0.45 * cos_i).astype(np.float32).ravel()
+        lsm1 = (ls - 1).astype(np.float32).ravel()
+        ls32 = ls.astype(np.int32).ravel()
+        base32 = base.astype(np.int32 if base.max() < 2**31 else np.int64).ravel()
+        # per pixel: index into the raveled (W, P) tables
+        key = np.maximum(label1.astype(np.int32) - 1, 0)
+        key += (np.arange(W, dtype=np.int32) * P)[None, :]
+        row = np.arange(H, dtype=np.float32)[:, None]
+        ty = inter.take(key)
+        ty += slope.take(key) * row
+        np.clip(ty, 0.0, lsm1.take(key), out=ty)
+        flat = base32.take(key) + ty.astype(base32.dtype) * ls32.take(key)
+        rgbx = atlas.packed.take(flat).view(np.uint8).reshape(H, W, 4)
+        colors = rgbx[:, :, :3].astype(np.float32)
+        colors *= shade.take(key)[:, :, None]
         return colors
 
 

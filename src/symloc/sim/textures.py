@@ -118,8 +118,11 @@ class TextureAtlas:
 
     Attributes
     ----------
-    texels : ndarray of shape (M, L, 3), uint8
-        For each material, all mip levels concatenated (level l is ``(size >> l)^2`` texels).
+    texels : ndarray of shape (M * L, 3), uint8
+        For each material, all mip levels concatenated (level l is ``(size >> l)^2`` texels);
+        material row ``i`` starts at ``i * row_length``.
+    packed : ndarray of shape (M * L,), uint32
+        The same texels packed as R, G, B, 0 bytes.
     offsets : ndarray of shape (levels,)
         Start of each level inside a material's row.
     """
@@ -144,6 +147,10 @@ class TextureAtlas:
                 off = self.offsets[lvl]
                 texels[i, off : off + ls * ls] = img.reshape(-1, 3)
         self.texels = texels.reshape(-1, 3)
+        rgbx = np.zeros((self.texels.shape[0], 4), dtype=np.uint8)
+        rgbx[:, :3] = self.texels
+        #: the same texels packed as one uint32 each (R, G, B, 0 bytes), for 1-D gathers
+        self.packed = rgbx.view(np.uint32).ravel()
         self.row_length = total
 
     @property
