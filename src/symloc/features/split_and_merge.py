@@ -107,10 +107,18 @@ def _tls_from_moments(
     cyy = syy / n - my * my
     cxy = sxy / n - mx * my
     theta = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
-    d = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
-    nrm = np.stack([-d[..., 1], d[..., 0]], axis=-1)
-    c = np.stack([mx, my], axis=-1)
-    off = np.sum(nrm * c, axis=-1)
+    cos_t, sin_t = np.cos(theta), np.sin(theta)
+    shape = np.shape(theta) + (2,)
+    d = np.empty(shape)
+    d[..., 0] = cos_t
+    d[..., 1] = sin_t
+    nrm = np.empty(shape)
+    nrm[..., 0] = -sin_t
+    nrm[..., 1] = cos_t
+    c = np.empty(shape)
+    c[..., 0] = mx
+    c[..., 1] = my
+    off = -sin_t * mx + cos_t * my
     # variance along the major axis (the larger eigenvalue)
     half_tr = 0.5 * (cxx + cyy)
     disc = np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy * cxy, 0.0))
@@ -200,13 +208,53 @@ class _Moments:
     """Prefix sums of point moments for O(1) fits of contiguous ranges."""
 
     def __init__(self, p: FloatArray) -> None:
+        m = p.shape[0]
         x, y = p[:, 0], p[:, 1]
-        cols = np.stack([np.ones_like(x), x, y, x * x, y * y, x * y], axis=0)
-        self.cs = np.concatenate([np.zeros((6, 1)), np.cumsum(cols, axis=1)], axis=1)
+        cols = np.empty((6, m + 1))
+        cols[:, 0] = 0.0
+        cols[0, 1:] = 1.0
+        cols[1, 1:] = x
+        cols[2, 1:] = y
+        np.multiply(x, x, out=cols[3, 1:])
+        np.multiply(y, y, out=cols[4, 1:])
+        np.multiply(x, y, out=cols[5, 1:])
+        self.cs = np.cumsum(cols, axis=1)
 
     def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
-        s = self.cs[:, np.asarray(b)] - self.cs[:, np.asarray(a)]
+        """TLS fits of the ranges [a, b); ``b`` may exceed M (the range wraps to the start)."""
+        a = np.asarray(a)
+        b = np.asarray(b)
+        m = self.cs.shape[1] - 1
+        over = b > m
+        s = self.cs[:, np.minimum(b, m)] - self.cs[:, a]
+        if np.any(over):
+            s = s + np.where(over, self.cs[:, np.where(over, b - m, 0)], 0.0)
         return _tls_from_moments(s[0], s[1], s[2], s[3], s[4], s[5])
+
+
+def _pair_excess(
+    p: FloatArray, tol: FloatArray, mom: _Moments, st: IntArray, sp: IntArray, *, closed: bool
+) -> FloatArray:
+    """For each pair of adjacent pieces, the largest |residual| / tol of their joint TLS fit."""
+    m = p.shape[0]
+    n_l = st.size
+    n_pairs = n_l if closed and n_l > 2 else n_l - 1
+    if n_pairs <= 0:
+        return np.zeros(0)
+    t = np.arange(n_pairs)
+    u = (t + 1) % n_l
+    a = st[t]
+    b = np.where(u == 0, sp[u] + m, sp[u])
+    _c, _d, nrm, off, _s = mom.fit(a, b)
+    lengths = b - a
+    rep = np.repeat(t, lengths)
+    first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    pos = (np.arange(int(lengths.sum())) - np.repeat(first - a, lengths)) % m
+    q = p[pos]
+    res = np.abs(q[:, 0] * nrm[rep, 0] + q[:, 1] * nrm[rep, 1] - off[rep]) / tol[pos]
+    out = np.maximum.reduceat(res, first)
+    out[lengths <= 2] = 0.0
+    return out
 
 
 def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
@@ -319,7 +367,8 @@ def _refine_boundaries(
     closed: bool,
     window: int = 8,
     iterations: int = 2,
-) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
+    mom: _Moments | None = None,
+) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int, _Moments]:
     """Move each boundary between two lines to where the points fit them best.
 
     Within ``window`` points of a boundary, the cut minimises the sum of squared normalised
@@ -327,18 +376,19 @@ def _refine_boundaries(
     split can cut a few points away from the true corner, and those points would otherwise bend
     the next wall's fit. For a closed contour the boundary across the end is refined too, and
     the contour is re-rolled so that the first line starts at index 0. Returns the rolled
-    points, tolerances, pieces and the roll applied.
+    points, tolerances, pieces, the roll applied and the moments of the returned points.
     """
     m = p.shape[0]
     st = st.copy()
     sp = sp.copy()
     total = 0
     n_l = st.size
+    if mom is None:
+        mom = _Moments(p)
     if n_l < 2:
-        return p, tol, st, sp, 0
+        return p, tol, st, sp, 0, mom
     offs = np.arange(-window, window)
     for _ in range(iterations):
-        mom = _Moments(p)
         _c, _d, nrm, off, _s = mom.fit(st, sp)
         n_b = n_l if closed else n_l - 1
         t = np.arange(n_b)
@@ -377,10 +427,11 @@ def _refine_boundaries(
                 p = np.roll(p, -shift, axis=0)
                 tol = np.roll(tol, -shift)
                 total = (total + shift) % m
+                mom = _Moments(p)
         else:
             st[1:] = new_b
             sp[:-1] = new_b
-    return p, tol, st, sp, total
+    return p, tol, st, sp, total, mom
 
 
 def split_and_merge(
@@ -441,68 +492,40 @@ def split_and_merge(
     starts = bounds[:-1].copy()
     stops = bounds[1:].copy()
     stops[-1] = m
-    mom = _Moments(p)
-    p, tol, starts, stops, shift = _refine_boundaries(p, tol, starts, stops, closed=closed)
+    p, tol, starts, stops, shift, mom = _refine_boundaries(p, tol, starts, stops, closed=closed)
     roll = (roll + shift) % m
-    mom = _Moments(p)
-
-    starts_l = [int(s) for s in starts]
-    stops_l = [int(s) for s in stops]
-
-    def excess(a: int, b: int) -> float:
-        # max |residual| / tol over the (possibly wrapping) range [a, b) in rolled indices
-        if b <= m:
-            idx = slice(a, b)
-            seg, t = p[idx], tol[idx]
-        else:
-            seg = np.concatenate([p[a:], p[: b - m]])
-            t = np.concatenate([tol[a:], tol[: b - m]])
-        if seg.shape[0] <= 2:
-            return 0.0
-        x, y = seg[:, 0], seg[:, 1]
-        n = float(seg.shape[0])
-        _c, _d, nrm, off, _s = _tls_from_moments(
-            np.float64(n), x.sum(), y.sum(), (x * x).sum(), (y * y).sum(), (x * y).sum()
-        )
-        return float(np.max(np.abs(seg @ nrm - off) / t))
 
     # merge: repeatedly join the adjacent pair whose joint fit is best, while it is within tol
-    def pair_score(t: int) -> float:
-        u = (t + 1) % len(starts_l)
-        if u == 0:  # across the wrap of a closed contour
-            return excess(starts_l[t], stops_l[u] + m)
-        return excess(starts_l[t], stops_l[u])
-
-    n_pairs = len(starts_l) if closed and len(starts_l) > 2 else len(starts_l) - 1
-    scores = [pair_score(t) for t in range(n_pairs)]
-    while scores:
+    st = np.asarray(starts, dtype=np.intp)
+    sp = np.asarray(stops, dtype=np.intp)
+    scores = _pair_excess(p, tol, mom, st, sp, closed=closed)
+    while scores.size:
         t = int(np.argmin(scores))
         if scores[t] > 1.0:
             break
-        u = (t + 1) % len(starts_l)
+        u = (t + 1) % st.size
         if u == 0:
             # last line joins the first: re-roll so the joined line starts at index 0
-            shift = starts_l[t]
-            new_first_stop = stops_l[0] + (m - shift)
-            starts_l = [0] + [s - shift + m for s in starts_l[1:t]]
-            stops_l = [new_first_stop] + [s - shift + m for s in stops_l[1:t]]
+            shift = int(st[t])
+            new_first_stop = int(sp[0]) + (m - shift)
+            st = np.concatenate([[0], st[1:t] - shift + m])
+            sp = np.concatenate([[new_first_stop], sp[1:t] - shift + m])
             p = np.roll(p, -shift, axis=0)
             tol = np.roll(tol, -shift)
             roll = (roll + shift) % m
             mom = _Moments(p)
         else:
-            stops_l[t] = stops_l[u]
-            del starts_l[u]
-            del stops_l[u]
-        n_pairs = len(starts_l) if closed and len(starts_l) > 2 else len(starts_l) - 1
-        scores = [pair_score(k) for k in range(n_pairs)]
+            sp[t] = sp[u]
+            st = np.delete(st, u)
+            sp = np.delete(sp, u)
+        scores = _pair_excess(p, tol, mom, st, sp, closed=closed)
 
-    st = np.asarray(starts_l, dtype=np.intp)
-    sp = np.asarray(stops_l, dtype=np.intp)
+    n_before = st.size
     p, tol, st, sp, extra = _absorb_short(p, tol, st, sp, closed=closed, max_points=2 * min_points)
-    p, tol, st, sp, shift = _refine_boundaries(p, tol, st, sp, closed=closed)
-    roll = (roll + extra + shift) % m
-    mom = _Moments(p)
+    if st.size != n_before:
+        mom = _Moments(p)
+        p, tol, st, sp, shift, mom = _refine_boundaries(p, tol, st, sp, closed=closed, mom=mom)
+        roll = (roll + extra + shift) % m
     centers, dirs, normals, offsets, var_along = mom.fit(st, sp)
     # orient each direction from the line's first point toward its last
     first = p[st]

@@ -52,35 +52,47 @@ _NAN2 = np.full(2, np.nan)
 _NO_CORNERS = np.zeros((0, 2))
 
 
-def fit_circle(points: FloatArray) -> tuple[FloatArray, float]:
-    """Least-squares circle through points: algebraic (Kasa) fit and two Gauss-Newton steps.
+def fit_circle(points: FloatArray, *, refine: int = 2) -> tuple[FloatArray, float]:
+    """Least-squares circle through points: algebraic (Kasa) fit, then Gauss-Newton steps.
 
     Parameters
     ----------
     points : ndarray of shape (M, 2), M >= 3
         [m].
+    refine : int
+        Gauss-Newton steps on the geometric distances (removes the algebraic fit's small bias).
 
     Returns
     -------
     center : ndarray of shape (2,)
         [m] (NaN if the points are collinear).
     radius : float
-        [m].
+        [m] (NaN if the points are collinear).
     """
     x, y = points[:, 0], points[:, 1]
-    a = np.column_stack([x, y, np.ones_like(x)])
-    sol, *_ = np.linalg.lstsq(a, x * x + y * y, rcond=None)
+    n = float(points.shape[0])
+    sx, sy = x.sum(), y.sum()
+    sxx, syy, sxy = (x * x).sum(), (y * y).sum(), (x * y).sum()
+    z = x * x + y * y
+    ata = np.array([[sxx, sxy, sx], [sxy, syy, sy], [sx, sy, n]])
+    atb = np.array([(x * z).sum(), (y * z).sum(), z.sum()])
+    try:
+        sol = np.linalg.solve(ata, atb)
+    except np.linalg.LinAlgError:
+        return np.full(2, np.nan), math.nan
     c = 0.5 * sol[:2]
     r2 = sol[2] + c @ c
     if not np.isfinite(r2) or r2 <= 0:
         return np.full(2, np.nan), math.nan
     r = math.sqrt(r2)
-    for _ in range(2):  # geometric refinement (removes the algebraic fit's small bias)
+    for _ in range(refine):
         d = points - c
-        dist = np.hypot(d[:, 0], d[:, 1])
-        dist = np.maximum(dist, 1e-12)
+        dist = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)
         jac = np.column_stack([-d[:, 0] / dist, -d[:, 1] / dist, -np.ones_like(dist)])
-        step, *_ = np.linalg.lstsq(jac, -(dist - r), rcond=None)
+        try:
+            step = np.linalg.solve(jac.T @ jac, -(jac.T @ (dist - r)))
+        except np.linalg.LinAlgError:
+            break
         c = c + step[:2]
         r = r + float(step[2])
     return c, float(r)
@@ -233,10 +245,14 @@ def _judge_closed(
     common = {**common, "centroid": cen}
 
     # --- circle: every point on one circle, and equally far from the centroid ---
-    c_fit, radius = fit_circle(pts)
+    c_fit, radius = fit_circle(pts, refine=0)
     if np.isfinite(radius):
         d_fit = np.hypot(*(pts - c_fit).T) - radius
-        if float(np.max(np.abs(d_fit) / tol)) <= 1.0:
+        # the algebraic fit is close to the geometric one for a circle; only refine candidates
+        if float(np.max(np.abs(d_fit) / tol)) <= 3.0:
+            c_fit, radius = fit_circle(pts, refine=2)
+            d_fit = np.hypot(*(pts - c_fit).T) - radius
+        if np.isfinite(radius) and float(np.max(np.abs(d_fit) / tol)) <= 1.0:
             r_c = np.hypot(*(pts - cen).T)
             spread = np.abs(r_c - float(np.mean(r_c)))
             tol_c = tol + 2.0 * k * sigma_c + cfg.model_tolerance
