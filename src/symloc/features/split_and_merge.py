@@ -108,7 +108,7 @@ def _tls_from_moments(
     cxy = sxy / n - mx * my
     theta = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
     cos_t, sin_t = np.cos(theta), np.sin(theta)
-    shape = np.shape(theta) + (2,)
+    shape = (*np.shape(theta), 2)
     d = np.empty(shape)
     d[..., 0] = cos_t
     d[..., 1] = sin_t
