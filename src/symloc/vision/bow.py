@@ -18,6 +18,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -251,6 +252,18 @@ class BowMatrix:
             words, values = np.zeros(0, np.int32), np.zeros(0, np.float64)
         return cls(indptr, words, values)
 
+    @cached_property
+    def _inverted(self) -> tuple[NDArray[np.int32], NDArray[np.int64], NDArray[np.int64]]:
+        order = np.argsort(self.words, kind="stable")
+        rows = np.repeat(np.arange(len(self), dtype=np.int64), np.diff(self.indptr))
+        return self.words[order], order.astype(np.int64), rows
+
+    def inverted(self) -> tuple[NDArray[np.int32], NDArray[np.int64], NDArray[np.int64]]:
+        """The inverted index: sorted words, their positions in ``words``, and each entry's row.
+
+        Built on first use and kept (the matrix is immutable)."""
+        return self._inverted
+
     def row(self, i: int) -> BowVector:
         """Return row ``i`` as a :class:`BowVector`."""
         a, b = self.indptr[i], self.indptr[i + 1]
@@ -261,6 +274,9 @@ def score_many(
     query: BowVector, database: BowMatrix | Sequence[BowVector], scoring: Scoring | int | str
 ) -> NDArray[np.float64]:
     """DBoW2 score of ``query`` (as ``v1``) against every row of ``database`` (as ``v2``).
+
+    Only words present in both vectors contribute (plus, for KL, a term of the query alone), so
+    the rows are found through an inverted index (word -> rows), as DBoW2's database does.
 
     Parameters
     ----------
@@ -279,20 +295,22 @@ def score_many(
     sc = parse_scoring(scoring)
     db = database if isinstance(database, BowMatrix) else BowMatrix.stack(list(database))
     n = len(db)
-    rows = np.repeat(np.arange(n), np.diff(db.indptr))
-    w = db.values
-    if query.words.size:
-        pos = np.minimum(np.searchsorted(query.words, db.words), query.words.size - 1)
-        common = query.words[pos] == db.words
-        v = np.where(common, query.values[pos], 0.0)
-    else:
-        common = np.zeros(db.words.size, bool)
-        v = np.zeros(db.words.size)
+    sorted_words, order, row_of = db.inverted()
+    lo = np.searchsorted(sorted_words, query.words, side="left")
+    hi = np.searchsorted(sorted_words, query.words, side="right")
+    counts = hi - lo
+    total = int(counts.sum())
+    ends = np.cumsum(counts)
+    pos = np.repeat(lo - (ends - counts), counts) + np.arange(total)
+    hit = order[pos]
+    rows = row_of[hit]
+    w = db.values[hit]
+    v = np.repeat(query.values, counts)
     if sc == Scoring.L1_NORM:
         c = np.abs(v - w) - np.abs(v) - np.abs(w)
-        return -0.5 * np.bincount(rows, weights=np.where(common, c, 0.0), minlength=n)
+        return -0.5 * np.bincount(rows, weights=c, minlength=n)
     if sc in (Scoring.L2_NORM, Scoring.DOT_PRODUCT):
-        s = np.bincount(rows, weights=np.where(common, v * w, 0.0), minlength=n)
+        s = np.bincount(rows, weights=v * w, minlength=n)
         if sc == Scoring.DOT_PRODUCT:
             return s
         out = np.ones(n)
@@ -301,19 +319,17 @@ def score_many(
         return out
     if sc == Scoring.CHI_SQUARE:
         den = v + w
-        ok = common & (den != 0.0)
+        ok = den != 0.0
         c = np.where(ok, v * w / np.where(ok, den, 1.0), 0.0)
         return 2.0 * np.bincount(rows, weights=c, minlength=n)
     if sc == Scoring.BHATTACHARYYA:
-        c = np.where(common, np.sqrt(np.abs(v * w)), 0.0)
-        return np.bincount(rows, weights=c, minlength=n)
+        return np.bincount(rows, weights=np.sqrt(np.abs(v * w)), minlength=n)
     # KL: every query word counts; words missing from the entry cost v (log v - log eps).
     qv = query.values
     with np.errstate(divide="ignore", invalid="ignore"):
-        base_terms = np.where(qv != 0.0, qv * (np.log(np.abs(qv)) - LOG_EPS), 0.0)
-        base = float(base_terms.sum())
-        both = common & (v != 0.0) & (w != 0.0)
-        only_v = common & (v != 0.0) & (w == 0.0)
+        base = float(np.where(qv != 0.0, qv * (np.log(np.abs(qv)) - LOG_EPS), 0.0).sum())
+        both = (v != 0.0) & (w != 0.0)
+        only_v = (v != 0.0) & (w == 0.0)
         safe_v = np.where(both | only_v, v, 1.0)
         safe_w = np.where(both, w, 1.0)
         miss = safe_v * (np.log(np.abs(safe_v)) - LOG_EPS)

@@ -136,6 +136,7 @@ class Vocabulary:
         self.word_of_node = np.full(n, -1, np.int32)
         self.word_of_node[self.word_nodes] = np.arange(self.word_nodes.size, dtype=np.int32)
         self._desc64 = as_u64(self.descriptors)
+        self._descent: tuple[NDArray[Any], ...] | None = None
         depth = np.zeros(n, np.int32)
         # parents precede children, so one vectorised pass per level fixes the depths
         for _ in range(self.L + 1):
@@ -146,6 +147,28 @@ class Vocabulary:
             raise DataFormatError(
                 f"vocabulary: node {node} is at depth {int(depth[node])}, deeper than L={self.L}"
             )
+
+    def _descent_index(self) -> tuple[NDArray[Any], ...]:
+        """Per inner node, its children's ids and descriptors in one ``(I, k)`` / ``(I, k, 4)``
+        block, so that one level of the descent is a single gather + XOR + popcount for all
+        features. Built on first use (not at load time)."""
+        if self._descent is None:
+            n = self.n_nodes
+            internal = np.flatnonzero(self.child_count > 0)
+            row_of = np.full(n, -1, np.int64)
+            row_of[internal] = np.arange(internal.size)
+            kk = np.arange(self.k)
+            slots = self.child_start[internal][:, None] + kk[None, :]
+            valid = kk[None, :] < self.child_count[internal][:, None]
+            safe = np.minimum(slots, max(self.child_ids.size - 1, 0))
+            kid_ids = (
+                self.child_ids[safe] if self.child_ids.size else np.zeros(slots.shape, np.int32)
+            )
+            kid_ids = np.where(valid, kid_ids, 0).astype(np.int32)
+            # missing children (fewer than k) get a penalty larger than any Hamming distance
+            penalty = np.where(valid, 0, 1 << 16).astype(np.int32)
+            self._descent = (row_of, kid_ids, self._desc64[kid_ids], penalty)
+        return self._descent
 
     @property
     def n_nodes(self) -> int:
@@ -197,26 +220,25 @@ class Vocabulary:
         nid_level = self.L - int(levelsup)
         if self.n_nodes == 1 or n == 0:
             return np.full(n, -1, np.int32), np.zeros(n), nid
+        row_of, kid_ids, kid_desc64, kid_penalty = self._descent_index()
         q64 = as_u64(desc)
         active = np.arange(n)
-        arange_k = np.arange(self.k)
+        qa = q64
         level = 0
         while active.size:
             level += 1
-            c = cur[active]
-            cnt = self.child_count[c]
-            slots = self.child_start[c][:, None] + arange_k[None, :]
-            valid = arange_k[None, :] < cnt[:, None]
-            kids = self.child_ids[np.minimum(slots, self.child_ids.size - 1)]
-            dist = np.bitwise_count(self._desc64[kids] ^ q64[active][:, None, :]).sum(
-                axis=2, dtype=np.int32
-            )
-            dist[~valid] = np.iinfo(np.int32).max
-            best = kids[np.arange(active.size), dist.argmin(axis=1)]
+            rows = row_of[cur[active]]
+            x = np.bitwise_count(kid_desc64[rows] ^ qa[:, None, :])
+            dist = (x[..., 0] + x[..., 1] + x[..., 2] + x[..., 3]).astype(np.int32)
+            dist += kid_penalty[rows]
+            best = kid_ids[rows, dist.argmin(axis=1)]
             cur[active] = best
             if level <= nid_level:
                 nid[active] = best
-            active = active[self.child_count[best] > 0]
+            keep = self.child_count[best] > 0
+            if not keep.all():
+                active = active[keep]
+                qa = qa[keep]
         word_ids = self.word_of_node[cur]
         return word_ids, self.weights[cur], nid
 
