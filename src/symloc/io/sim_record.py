@@ -43,8 +43,10 @@ from symloc.ros.scan_msg import scan_to_fields
 
 __all__ = [
     "SimRecording",
+    "SimSession",
     "TrajectoryPoint",
     "drive_command",
+    "prepare_session",
     "record_sim_run",
     "write_tum",
 ]
@@ -134,6 +136,126 @@ def _save_map(grid: Any, assets: Path) -> Path | None:
     return path
 
 
+@dataclass
+class SimSession:
+    """A kidnapped robot in a simulated room with the maps the node needs (see
+    :func:`prepare_session`). ``scan()``, ``image()`` and ``drive(v, w)`` advance the world."""
+
+    scenario: Any
+    body: Any
+    rng: np.random.Generator
+    params: NodeParams
+    params_path: Path
+    assets: Path
+    start: FloatArray
+    dt: float
+
+    @property
+    def grid(self) -> Any:
+        """The occupancy grid (ground truth of what the lidar sees)."""
+        return self.scenario.grid
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s] (the stamp of the current odometry)."""
+        return float(self.body.odom.stamp)
+
+    def odometry(self) -> OdometryReading:
+        """The robot's current (noisy) odometry reading."""
+        reading: OdometryReading = self.body.odom
+        return reading
+
+    def scan(self) -> Any:
+        """A lidar scan from the true pose, stamped with the current time, frame ``laser``."""
+        from symloc.sim.lidar import simulate_scan
+
+        return simulate_scan(
+            self.scenario.room.world,
+            self.body.pose,
+            self.scenario.preset,
+            self.rng,
+            stamp=self.time,
+            frame_id="laser",
+        )
+
+    def image(self) -> NDArray[np.uint8]:
+        """A camera image ``(H, W, 3)`` RGB from the true pose."""
+        img: NDArray[np.uint8] = self.scenario.camera.render(
+            self.scenario.room.world, self.body.pose, self.rng
+        )
+        return img
+
+    def drive(self, v: float, w: float) -> OdometryReading:
+        """Drive for one scan period; returns the new odometry reading."""
+        reading: OdometryReading = self.body.drive(v, w, self.dt)
+        return reading
+
+
+def prepare_session(
+    assets: str | Path,
+    *,
+    room: str = "square",
+    textured: bool = True,
+    seed: int = 0,
+    max_particles: int = 2000,
+    **param_changes: Any,
+) -> SimSession:
+    """Build the room in the lab, its maps (mapping stage), write the assets, kidnap the robot.
+
+    ``assets`` receives ``places.db``, ``vocabulary.bin``, ``params.yaml`` (and ``map.yaml``
+    when :mod:`symloc.grid.map_io` is available); it must not exist or be empty.
+    ``param_changes`` override :class:`NodeParams` fields in ``params.yaml``.
+    """
+    import dataclasses
+
+    from symloc.localizer.scenario import build_scenario
+    from symloc.localizer.simulation import RobotBody
+    from symloc.sim.robot import DiffDriveRobot
+
+    assets_dir = Path(assets)
+    if assets_dir.exists() and any(assets_dir.iterdir()):
+        raise ConfigurationError(f"assets: {assets_dir} exists and is not empty")
+    assets_dir.mkdir(parents=True, exist_ok=True)
+    rng = as_rng(seed)
+    scen = build_scenario(
+        room, textured=textured, rng=rng, workdir=assets_dir, max_particles=max_particles
+    )
+    places_db = assets_dir / "places.db"
+    scen.store.visual_map.close()
+    db_files = sorted(assets_dir.glob("visual_map_*.sqlite"))
+    if db_files:
+        db_files[0].rename(places_db)
+    for extra in assets_dir.glob("visual_map_*.sqlite-*"):
+        extra.unlink()
+    vocab_path = assets_dir / "vocabulary.bin"
+    scen.store.vocabulary.save(vocab_path)
+    map_yaml = _save_map(scen.grid, assets_dir)
+    params = NodeParams(
+        visual_map=str(places_db),
+        vocabulary=str(vocab_path),
+        lidar_preset=str(scen.preset.name),
+        laser_frame_id="laser",
+        seed=int(seed),
+        amcl=scen.amcl_params,
+        map_yaml=str(map_yaml) if map_yaml else "",
+    )
+    params = dataclasses.replace(params, **param_changes)
+    params_path = assets_dir / "params.yaml"
+    params_path.write_text(yaml.safe_dump(_params_doc(params), sort_keys=False))
+    start = scen.random_pose(rng)
+    body = RobotBody(DiffDriveRobot(start, rng=rng, world=scen.room.world))
+    return SimSession(
+        scenario=scen,
+        body=body,
+        rng=rng,
+        params=params,
+        params_path=params_path,
+        assets=assets_dir,
+        start=np.asarray(start),
+        dt=1.0 / float(scen.preset.scan_rate),
+    )
+
+
 def record_sim_run(
     out: str | Path,
     *,
@@ -163,52 +285,17 @@ def record_sim_run(
         (default ``<out>_assets`` beside the bag). Must not exist or be empty.
     """
     from symloc.localizer.centering import CenteringConfig
-    from symloc.localizer.scenario import build_scenario
-    from symloc.localizer.simulation import RobotBody
-    from symloc.mcl import AmclParams
-    from symloc.sim.lidar import simulate_scan
-    from symloc.sim.robot import DiffDriveRobot
 
     check_positive(max_time, "max_time")
     out = Path(out)
     if out.exists():
         raise ConfigurationError(f"out: {out} exists already; choose a new path")
     assets_dir = Path(assets) if assets is not None else out.with_name(out.name + "_assets")
-    if assets_dir.exists() and any(assets_dir.iterdir()):
-        raise ConfigurationError(f"assets: {assets_dir} exists and is not empty")
-    assets_dir.mkdir(parents=True, exist_ok=True)
-    rng = as_rng(seed)
-    scen = build_scenario(
-        room, textured=textured, rng=rng, workdir=assets_dir, max_particles=max_particles
+    sim = prepare_session(
+        assets_dir, room=room, textured=textured, seed=seed, max_particles=max_particles
     )
-    places_db = assets_dir / "places.db"
-    scen.store.visual_map.close()
-    db_files = sorted(assets_dir.glob("visual_map_*.sqlite"))
-    if db_files:
-        db_files[0].rename(places_db)
-        for extra in assets_dir.glob("visual_map_*.sqlite-*"):
-            extra.unlink()
-    vocab_path = assets_dir / "vocabulary.bin"
-    scen.store.vocabulary.save(vocab_path)
-    map_yaml = _save_map(scen.grid, assets_dir)
-    amcl: AmclParams = scen.amcl_params
-    params = NodeParams(
-        visual_map=str(places_db),
-        vocabulary=str(vocab_path),
-        lidar_preset=str(scen.preset.name),
-        laser_frame_id="laser",
-        seed=int(seed),
-        amcl=amcl,
-        map_yaml=str(map_yaml) if map_yaml else "",
-    )
-    params_path = assets_dir / "params.yaml"
-    params_path.write_text(yaml.safe_dump(_params_doc(params), sort_keys=False))
-
-    core = NodeCore(params)
-    start = scen.random_pose(rng)
-    body = RobotBody(DiffDriveRobot(start, rng=rng, world=scen.room.world))
+    core = NodeCore(sim.params)
     centering = CenteringConfig()
-    dt = 1.0 / float(scen.preset.scan_rate)
     truth_rows: list[tuple[float, FloatArray]] = []
     trajectory: list[TrajectoryPoint] = []
     last: Outputs | None = None
@@ -217,23 +304,21 @@ def record_sim_run(
         def emit(topic: str, msgtype: str, fields: dict[str, Any], stamp: float, **kw: Any) -> Any:
             return bag.deserialize(bag.write_fields(topic, msgtype, fields, stamp, **kw), msgtype)
 
-        core.on_map(
-            emit(
-                bag.map_topic,
-                "nav_msgs/msg/OccupancyGrid",
-                grid_to_fields(scen.grid, stamp=0.0),
-                0.0,
-                latched=True,
-            )
+        grid_msg = emit(
+            bag.map_topic,
+            "nav_msgs/msg/OccupancyGrid",
+            grid_to_fields(sim.grid, stamp=0.0),
+            0.0,
+            latched=True,
         )
-        odom: OdometryReading = body.odom
-        core.on_odom(
-            emit(bag.odom_topic, "nav_msgs/msg/Odometry", odometry_to_fields(odom), odom.stamp)
-        )
+        core.on_map(grid_msg)
+        odom = sim.odometry()
+        odom_fields = odometry_to_fields(odom)
+        core.on_odom(emit(bag.odom_topic, "nav_msgs/msg/Odometry", odom_fields, odom.stamp))
         calm = 0
-        while odom.stamp <= max_time:
-            t = odom.stamp
-            truth = body.pose
+        while sim.time <= max_time:
+            t = sim.time
+            truth = sim.body.pose
             truth_rows.append((t, truth))
             bag.write_fields(
                 bag.truth_topic,
@@ -241,10 +326,9 @@ def record_sim_run(
                 odometry_to_fields(OdometryReading(truth, t), frame_id="map"),
                 t,
             )
-            scan = simulate_scan(
-                scen.room.world, truth, scen.preset, rng, stamp=t, frame_id="laser"
+            scan_msg = emit(
+                bag.scan_topic, "sensor_msgs/msg/LaserScan", scan_to_fields(sim.scan()), t
             )
-            scan_msg = emit(bag.scan_topic, "sensor_msgs/msg/LaserScan", scan_to_fields(scan), t)
             last = core.on_scan(scan_msg)
             if last is None:
                 raise ConfigurationError(f"the node dropped a simulated scan: {dict(core.dropped)}")
@@ -257,7 +341,7 @@ def record_sim_run(
             else:
                 calm = 0
             if last.capture is not None:
-                image = scen.camera.render(scen.room.world, truth, rng)
+                image = sim.image()
                 if compressed_images:
                     fields = compressed_image_to_fields(image, stamp=t)
                     core.on_compressed_image(
@@ -267,16 +351,14 @@ def record_sim_run(
                     fields = image_to_fields(image, stamp=t)
                     core.on_image(emit(bag.image_topic, "sensor_msgs/msg/Image", fields, t))
                 continue
-            current_scan = core_scan(scan_msg)
-            v, w = drive_command(est.status, est.request, current_scan, centering)
-            odom = body.drive(v, w, dt)
-            core.on_odom(
-                emit(bag.odom_topic, "nav_msgs/msg/Odometry", odometry_to_fields(odom), odom.stamp)
-            )
+            v, w = drive_command(est.status, est.request, core_scan(scan_msg), centering)
+            odom = sim.drive(v, w)
+            odom_fields = odometry_to_fields(odom)
+            core.on_odom(emit(bag.odom_topic, "nav_msgs/msg/Odometry", odom_fields, odom.stamp))
         counts = dict(bag.counts)
     assert last is not None
     final = last.estimate
-    truth_final = body.pose
+    truth_final = sim.body.pose
     err = (math.nan, math.nan)
     if final.pose is not None:
         d = final.pose - truth_final
@@ -289,13 +371,13 @@ def record_sim_run(
     return SimRecording(
         bag=out,
         assets=assets_dir,
-        params_path=params_path,
-        params=params,
+        params_path=sim.params_path,
+        params=sim.params,
         trajectory=trajectory,
         truth=np.array([[t, *p] for t, p in truth_rows]),
         final=final,
         final_error=err,
-        start=np.asarray(start),
+        start=sim.start,
         counts=counts,
         dropped=dict(core.dropped),
         steps=list(getattr(core.localizer, "log", [])),
