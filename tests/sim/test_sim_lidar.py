@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from symloc.errors import ConfigurationError
 from symloc.sim.lidar import (
@@ -32,6 +34,22 @@ def test_raycast_square_hand_computed() -> None:
     # 45 deg: hits x=2 at y=0.5 -> 1.5*sqrt(2); toward corner (2, 2): sqrt(1.5^2 + 3^2)
     expected = [1.5, 3.0, 2.5, 1.0, 1.5 * math.sqrt(2), math.hypot(1.5, 3.0)]
     assert np.allclose(r, expected, atol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    x=st.floats(-1.99, 1.99),
+    y=st.floats(-1.99, 1.99),
+    theta=st.floats(-math.pi, math.pi),
+)
+def test_raycast_inside_box_property(x: float, y: float, theta: float) -> None:
+    """From inside the 4 m box, the range is the nearest positive crossing of x = +-2, y = +-2."""
+    d = np.array([math.cos(theta), math.sin(theta)])
+    with np.errstate(divide="ignore"):
+        tx = np.max((np.array([-2.0, 2.0]) - x) / d[0]) if abs(d[0]) > 1e-12 else np.inf
+        ty = np.max((np.array([-2.0, 2.0]) - y) / d[1]) if abs(d[1]) > 1e-12 else np.inf
+    r = raycast(SQUARE, [x, y], [theta])[0]
+    assert r == pytest.approx(min(tx, ty), rel=1e-9, abs=1e-9)
 
 
 def test_raycast_broadcasts_over_origins() -> None:
@@ -125,14 +143,17 @@ def test_noise_statistics_match_data_sheet(preset: LidarPreset) -> None:
     assert abs(np.mean(z)) < 0.05
     assert np.std(z) == pytest.approx(1.0, rel=0.05)
     # the data-sheet figure itself: the accuracy band maps to sigma_fraction x band
+    checked = 0
     for lo, hi in [(0.2, 0.5), (0.5, 1.0), (1.0, 1.5)]:
         sel = (t[ok] >= lo) & (t[ok] < hi)
         if sel.sum() < 2000:
             continue
+        checked += 1
         band = preset.accuracy(t[ok][sel])
         measured = np.sqrt(np.mean(err[sel] ** 2))
         expected = preset.sigma_fraction * np.sqrt(np.mean(band**2))
         assert measured == pytest.approx(expected, rel=0.2)
+    assert checked >= 2
 
 
 def test_data_sheet_figures() -> None:
