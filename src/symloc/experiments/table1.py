@@ -268,15 +268,19 @@ def run_false_positives(
     cfg = SymmetryConfig.from_lidar(preset)
     by_cen: dict[str, dict[str, int]] = {c: {"count": 0, "trials": 0} for c in CENTROIDS}
     rows: list[dict[str, Any]] = []
-    n_each = max(1, math.ceil(per_room / len(gv_distances)))
-    total = len(FP_ROOMS) * len(gv_distances) * n_each
+    # spread per_room scans over the G-V distances (the first ones get the remainder)
+    n_gv = len(gv_distances)
+    counts = [per_room // n_gv + (i < per_room % n_gv) for i in range(n_gv)]
+    total = len(FP_ROOMS) * per_room
     bar = tqdm(total=total, desc="false positives", file=sys.stderr, disable=not progress)
     for spec in FP_ROOMS:
         row = {"room": spec.label, "true_order": spec.true_order, "trials": 0}
         row.update({f"fp_{c}": 0 for c in CENTROIDS})
         row.update({f"order_found_{c}": 0 for c in CENTROIDS})
         kinds: dict[str, int] = {}
-        for gv in gv_distances:
+        for gv, n_each in zip(gv_distances, counts, strict=True):
+            if n_each == 0:
+                continue
             room = _build_fp_room(spec, gv, rng)
             pos = room.positions_inside(n_each, margin=0.3)
             for p in pos:

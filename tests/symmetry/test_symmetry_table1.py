@@ -1,0 +1,73 @@
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from symloc.cli.main import main
+from symloc.experiments.table1 import FP_ROOMS, run_false_positives, run_table1
+
+
+def test_table1_small_run_json_and_figure(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "t1.json"
+    code = main(
+        [
+            "experiment",
+            "table1",
+            "--seed",
+            "3",
+            "--positions",
+            "2",
+            "--sensors",
+            "paper_15m",
+            "--fp-per-room",
+            "1",
+            "--json",
+            str(out),
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "seed: 3" in printed
+    assert "Table 1, sensor paper_15m" in printed
+    data = json.loads(out.read_text())
+    cells = data["cells"]
+    assert {c["shape"] for c in cells} == {"triangle", "square", "pentagon", "hexagon", "circle"}
+    for c in cells:
+        assert set(c) >= {"shape", "gv", "sensor", "centroid", "correct", "trials"}
+        assert c["trials"] == 2
+        assert 0 <= c["correct"] <= 2
+    area = [c for c in cells if c["method"] == "judge" and c["centroid"] == "area"]
+    assert sum(c["correct"] for c in area) == 2 * len(area)
+    fp = data["false_positives"]
+    assert fp["trials"] == len(FP_ROOMS)
+    assert fp["count"] == 0
+    assert (tmp_path / "table1_positions.png").stat().st_size > 1000
+
+
+def test_table1_is_reproducible_and_rejects_bad_positions() -> None:
+    a = run_table1(
+        seed=5,
+        positions=1,
+        sensors=("rplidar_a2",),
+        shapes=("square",),
+        gv_distances=(3.0,),
+        progress=False,
+    )
+    b = run_table1(
+        seed=5,
+        positions=1,
+        sensors=("rplidar_a2",),
+        shapes=("square",),
+        gv_distances=(3.0,),
+        progress=False,
+    )
+    assert a["cells"] == b["cells"]
+    fp = run_false_positives(seed=1, per_room=1, gv_distances=(3.0,), progress=False)
+    assert fp["trials"] == len(FP_ROOMS)
+    assert main(["experiment", "table1", "--positions", "0"]) == 2
