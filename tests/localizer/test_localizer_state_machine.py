@@ -98,7 +98,7 @@ class FakeStore:
     def decide(self, place, image) -> Decision:
         return self.decisions.pop(0) if self.decisions else Decision("refused", reason="empty")
 
-    def add_place(self, center, heading0, order, gv_distance, kind, images) -> Place:
+    def add_place(self, center, heading0, order, gv_distance, kind, images, headings=None) -> Place:
         self.added.append((center, heading0, order, gv_distance, kind, len(images)))
         p = Place(len(self.places), np.asarray(center), heading0, len(images), order, gv_distance)
         self.places.append(p)

@@ -313,6 +313,7 @@ class Localizer:
         self._rotate_angle = 0.0
         self._outcomes: list[str] = []
         self._mapping_images: list[NDArray[np.uint8]] = []
+        self._mapping_headings: list[float] = []
         self._mapping_heading0: float | None = None
         self._mapping = False
         self._settled_reason = ""
@@ -674,6 +675,7 @@ class Localizer:
             self._mapping = True
             self._attempt = 0
             self._mapping_images = []
+            self._mapping_headings = []
             self._mapping_heading0 = None
             self._phase = _Phase.CAPTURE
             self._note("no visual map matches this place: building one (Algorithm 5 step 11)")
@@ -701,6 +703,7 @@ class Localizer:
         if self._mapping_heading0 is None:
             self._mapping_heading0 = float(result.estimate[2])
         self._mapping_images.append(image)
+        self._mapping_headings.append(float(result.estimate[2]))
         if len(self._mapping_images) < self._m:
             self._attempt = len(self._mapping_images)
             self._phase = _Phase.ROTATING
@@ -719,6 +722,7 @@ class Localizer:
             self._gv,
             self._kind,
             list(self._mapping_images),
+            headings=list(self._mapping_headings),
         )
         self.known_places.append(place)
         self._mapping = False

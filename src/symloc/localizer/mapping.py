@@ -81,7 +81,8 @@ def map_place(
     body, scan_at, image_at : the simulated robot, lidar and camera.
     judge : SymmetryJudge
     add_place : callable
-        ``add_place(center, heading0, order, gv_distance, kind, images) -> Place`` (a
+        ``add_place(center, heading0, order, gv_distance, kind, images, headings=...) -> Place``
+        (a
         :class:`~symloc.localizer.types.PlaceStore`'s method).
     map_pose : callable
         The robot's current pose in the map frame (SLAM's estimate, or ground truth).
@@ -115,17 +116,15 @@ def map_place(
     headings = [heading0]
     for _j in range(1, m):
         _turn_by(body, -2.0 * math.pi / m, dt, cfg)
-        # square up on the corner middle again (odometry turns are not exact)
-        v = judge(scan_at(body.pose))
-        if v.symmetric and v.facing is not None and abs(v.facing) < math.radians(20):
+        # square up on the nearest corner middle (odometry turns are not exact)
+        for _ in range(3):
+            v = judge(scan_at(body.pose))
+            if not (v.symmetric and v.facing is not None) or abs(v.facing) <= cfg.facing_tolerance:
+                break
             _turn_by(body, float(v.facing), dt, cfg)
         images.append(image_at(body.pose))
         headings.append(float(map_pose()[2]))
-    # direction 0's heading, fitted to all M measured headings (they are 360/M apart)
-    steps = np.arange(m) * (2.0 * math.pi / m)
-    h = np.asarray(headings) + steps
-    heading0 = float(np.arctan2(np.mean(np.sin(h)), np.mean(np.cos(h))))
-    place = add_place(centre, heading0, order, gv, kind, images)
+    place = add_place(centre, heading0, order, gv, kind, images, headings=headings)
     return MappedPlace(
         place=place,
         images=tuple(images),

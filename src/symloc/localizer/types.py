@@ -267,5 +267,10 @@ class PlaceStore(Protocol):
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
+        headings: Sequence[float] | None = None,
     ) -> Place:
-        """Store a new place with its ``m`` images taken clockwise from ``heading0``."""
+        """Store a new place with its ``m`` images taken clockwise from ``heading0``.
+
+        ``headings`` (m,) [rad], when given, are the measured map headings of the images
+        (a turn by odometry is never exactly 360/m).
+        """

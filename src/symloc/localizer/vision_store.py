@@ -142,11 +142,13 @@ class VisionPlaceStore:
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
+        headings: Sequence[float] | None = None,
     ) -> Place:
         from symloc.vision.visual_map import PlaceImage, direction_headings
 
         m = len(images)
-        headings = direction_headings(float(heading0), m)
+        if headings is None:
+            headings = direction_headings(float(heading0), m)
         stored = []
         for j, image in enumerate(images):
             feats = self.extractor.extract(image)
