@@ -129,3 +129,11 @@ def test_textures() -> None:
 def test_bad_camera_settings_raise(kwargs: dict, match: str) -> None:
     with pytest.raises(ConfigurationError, match=match):
         Camera(**kwargs)
+
+
+def test_intrinsics() -> None:
+    cam = Camera(width=640, height=480, hfov=math.radians(90.0))
+    assert cam.focal == pytest.approx(320.0)
+    assert np.allclose(cam.intrinsics, [[320, 0, 320], [0, 320, 240], [0, 0, 1]])
+    assert cam.vfov == pytest.approx(2 * math.atan(240 / 320))
+    assert cam.column_angles[0] == pytest.approx(math.atan(319.5 / 320))

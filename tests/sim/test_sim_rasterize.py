@@ -56,3 +56,23 @@ def test_grid_resolution_and_error() -> None:
     assert _value(grid, 2.0, 0.0) == OCCUPIED
     with pytest.raises(ConfigurationError, match="resolution"):
         world_to_grid(room.world, 0.0)
+
+
+def test_noise_free_scan_points_fall_on_occupied_cells() -> None:
+    from symloc.geometry import transform_points
+    from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+
+    room = build_room("pentagon", 3.0, furniture=2, tables=1, door=True)
+    grid = world_to_grid(room.world, 0.05, free_seeds=[room.center])
+    pose = np.array([0.3, -0.2, 0.4])
+    scan = simulate_scan(room.world, pose, RPLIDAR_A2, noise=False)
+    pts = transform_points(pose, scan.to_points().points)
+    # a point on a wall is within one cell of an occupied cell
+    cells = grid.world_to_cell(pts)
+    near = np.zeros(len(cells), dtype=bool)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rc = cells + np.array([dr, dc])
+            near |= grid.data[rc[:, 0], rc[:, 1]] == OCCUPIED
+    assert near.all()
+    assert _value(grid, *pose[:2]) == FREE

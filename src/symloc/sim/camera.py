@@ -101,6 +101,18 @@ class Camera:
         return (self.width / 2.0) / math.tan(self.hfov / 2.0)
 
     @property
+    def intrinsics(self) -> NDArray[np.float64]:
+        """Intrinsic matrix ``(3, 3)`` [pixels]: fx = fy = focal, principal point at the image
+        centre, in OpenCV's convention (x right, y down, z along the optical axis)."""
+        return np.array(
+            [
+                [self.focal, 0.0, self.width / 2.0],
+                [0.0, self.focal, self.height / 2.0],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+
+    @property
     def vfov(self) -> float:
         """Vertical field of view [rad] (square pixels)."""
         return 2.0 * math.atan((self.height / 2.0) / self.focal)
