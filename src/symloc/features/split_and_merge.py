@@ -366,7 +366,7 @@ def _refine_boundaries(
     *,
     closed: bool,
     window: int = 8,
-    iterations: int = 2,
+    iterations: int = 1,
     mom: _Moments | None = None,
 ) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int, _Moments]:
     """Move each boundary between two lines to where the points fit them best.

@@ -1,0 +1,79 @@
+"""Benchmark the symmetry judgement: one ``judge_symmetry`` call on a 360- and an 800-beam scan.
+
+Scans: the paper's 15 m scanner (360 beams, PAPER_15M) and the RPLIDAR A2 (800 beams), each in
+a regular hexagon (G-V 5 m, the polygon path: split-and-merge, corners, rotation test), a
+round room (G-V 5 m, the circle path) and a square with a box (the asymmetric path), from 32
+positions with random headings. Also times the paper's Algorithm 1 as written. Prints median
+wall and CPU time per call [ms]. Target (issue 3): under 1 ms.
+
+Run: ``python benchmarks/bench_symmetry.py [--repeats R] [--seed S]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from symloc.sim.lidar import PAPER_15M, RPLIDAR_A2, simulate_scan
+from symloc.sim.rooms import build_room
+from symloc.symmetry import SymmetryConfig, algorithm1, judge_symmetry
+
+
+def median_ms(fn: Callable[[int], object], repeats: int) -> tuple[float, float]:
+    """Median wall and CPU time [ms] of ``fn(i)`` over ``repeats`` calls, after warm-up.
+
+    On a shared machine the wall time includes waiting for a core; the CPU time does not.
+    """
+    for i in range(3):
+        fn(i)
+    wall, cpu = [], []
+    for i in range(repeats):
+        t0 = time.perf_counter()
+        c0 = time.process_time()
+        fn(i)
+        cpu.append(time.process_time() - c0)
+        wall.append(time.perf_counter() - t0)
+    return float(np.median(wall) * 1e3), float(np.median(cpu) * 1e3)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=300, help="timed calls per figure")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    print(f"# bench_symmetry seed={args.seed} repeats={args.repeats}")
+    rooms = {
+        "hexagon": build_room("hexagon", 5.0, lab=False),
+        "circle": build_room("circle", 5.0, lab=False),
+        "square+box": build_room("square", 5.0, lab=False, furniture=1, rng=args.seed),
+    }
+    print(f"{'scan':<26} {'room':<11} {'verdict':<22} {'wall ms':>8} {'cpu ms':>8}")
+    for preset in (PAPER_15M, RPLIDAR_A2):
+        cfg = SymmetryConfig.from_lidar(preset)
+        for name, room in rooms.items():
+            pos = room.positions_inside(32)
+            scans = [
+                simulate_scan(room.world, np.r_[p, rng.uniform(-np.pi, np.pi)], preset, rng)
+                for p in pos
+            ]
+            verdict = judge_symmetry(scans[0], config=cfg)
+            label = f"{verdict.kind} k={verdict.order}"
+            wall, cpu = median_ms(
+                lambda i, s=scans, c=cfg: judge_symmetry(s[i % len(s)], config=c), args.repeats
+            )
+            beams = f"{preset.name} ({preset.n_beams} beams)"
+            print(f"{beams:<26} {name:<11} {label:<22} {wall:>8.3f} {cpu:>8.3f}")
+        wall, cpu = median_ms(
+            lambda i, s=scans, c=cfg: algorithm1(s[i % len(s)], n=4, config=c), args.repeats
+        )
+        print(
+            f"{beams:<26} {'square+box':<11} {'Algorithm 1 (paper)':<22} {wall:>8.3f} {cpu:>8.3f}"
+        )
+
+
+if __name__ == "__main__":
+    main()
