@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from collections import Counter
 from pathlib import Path
 
@@ -62,27 +60,15 @@ def test_replay_matches_the_in_process_run(recording: SimRecording) -> None:
     assert res.dropped == {}
 
 
-def test_replay_cli_writes_tum_and_png(recording: SimRecording, tmp_path: Path) -> None:
+def test_replay_cli_writes_tum_and_png(
+    recording: SimRecording, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from symloc.cli.main import main
+
     out = tmp_path / "replay"
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "symloc.cli.main",
-            "replay",
-            str(recording.bag),
-            "--params",
-            str(recording.params_path),
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert proc.returncode == 0, proc.stderr
-    assert "final: tracking" in proc.stdout
+    argv = ["replay", str(recording.bag), "--params", str(recording.params_path), "--out", str(out)]
+    assert main(argv) == 0
+    assert "final: tracking" in capsys.readouterr().out
     lines = out.with_suffix(".tum").read_text().splitlines()
     assert lines
     assert len(lines[0].split()) == 8
