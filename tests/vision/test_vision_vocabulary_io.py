@@ -158,3 +158,12 @@ def test_native_bad_parent_names_its_byte(tmp_path) -> None:  # type: ignore[no-
     path.write_bytes(bytes(data))
     with pytest.raises(VocabularyFileError, match=f"byte {off}: node 2 has parent 7"):
         load_vocabulary(path)
+
+
+def test_convert_command(voc: Vocabulary, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from symloc.vision.vocabulary_io import main
+
+    voc.save_dbow2_text(tmp_path / "a.txt")
+    assert main([str(tmp_path / "a.txt"), str(tmp_path / "b.symvoc"), "--compress"]) == 0
+    assert main([str(tmp_path / "b.symvoc"), str(tmp_path / "c.txt")]) == 0
+    assert load_vocabulary(tmp_path / "c.txt").equals(voc)

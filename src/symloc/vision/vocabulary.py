@@ -437,5 +437,5 @@ class Vocabulary:
             and self.scoring == other.scoring
             and np.array_equal(self.parent, other.parent)
             and np.array_equal(self.descriptors[1:], other.descriptors[1:])
-            and np.allclose(self.weights, other.weights, rtol=weight_rtol, atol=0.0)
+            and np.allclose(self.weights[1:], other.weights[1:], rtol=weight_rtol, atol=0.0)
         )
