@@ -121,7 +121,7 @@ class Camera:
     def column_angles(self) -> NDArray[np.float64]:
         """Horizontal angle ``(W,)`` [rad] of each column's ray relative to the optical axis."""
         u = np.arange(self.width) + 0.5
-        return np.arctan((self.width / 2.0 - u) / self.focal)
+        return np.asarray(np.arctan((self.width / 2.0 - u) / self.focal), dtype=np.float64)
 
     def render(
         self,
@@ -245,7 +245,7 @@ class Camera:
         rgbx = atlas.packed.take(flat).view(np.uint8).reshape(H, W, 4)
         colors = rgbx[:, :, :3].astype(np.float32)
         colors *= shade.take(key)[:, :, None]
-        return colors
+        return np.asarray(colors, dtype=np.float32)
 
 
 @lru_cache(maxsize=4)

@@ -132,12 +132,13 @@ class LidarPreset:
     @property
     def angles(self) -> FloatArray:
         """Beam angles ``(n_beams,)`` [rad] in the sensor frame."""
-        return self.angle_min + self.angle_increment * np.arange(self.n_beams)
+        return np.asarray(self.angle_min + self.angle_increment * np.arange(self.n_beams))
 
     def accuracy(self, ranges: ArrayLike) -> FloatArray:
         """The data sheet's accuracy band [m] at each range ``(N,)`` [m]."""
         r = np.asarray(ranges, dtype=np.float64)
-        return np.where(r < self.accuracy_break, self.accuracy_abs, self.accuracy_rel * r)
+        out = np.where(r < self.accuracy_break, self.accuracy_abs, self.accuracy_rel * r)
+        return np.asarray(out, dtype=np.float64)
 
     def sigma(self, ranges: ArrayLike) -> FloatArray:
         """Gaussian range-noise standard deviation [m] at each range ``(N,)`` [m]."""

@@ -78,8 +78,8 @@ def ray_intersections(
     oy = o[..., 1][..., None, None]
     dx = np.cos(a)[..., None]
     dy = np.sin(a)[..., None]
-    wk = world.wall_heights > min_height  # type: ignore[operator]
-    ck = world.circle_heights > min_height  # type: ignore[operator]
+    wk = world.wall_heights > min_height
+    ck = world.circle_heights > min_height
     walls = world.walls[wk]
     circles = world.circles[ck]
     parts_t = []
@@ -134,8 +134,12 @@ def ray_intersections(
     t_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_t], axis=-1)
     s_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_s], axis=-1)
     c_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_c], axis=-1)
-    heights = np.concatenate([world.wall_heights[wk], world.circle_heights[ck]])  # type: ignore[index]
-    materials = np.concatenate([world.wall_materials[wk], world.circle_materials[ck]])  # type: ignore[index]
+    heights = np.concatenate(
+        [np.asarray(world.wall_heights)[wk], np.asarray(world.circle_heights)[ck]]
+    )
+    materials = np.concatenate(
+        [np.asarray(world.wall_materials)[wk], np.asarray(world.circle_materials)[ck]]
+    )
     lengths = np.concatenate(
         [np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]), 2 * np.pi * circles[:, 2]]
     )
@@ -172,8 +176,8 @@ def raycast(
     ox = np.broadcast_to(o[..., 0][..., None], shape).ravel()
     oy = np.broadcast_to(o[..., 1][..., None], shape).ravel()
     ang = np.broadcast_to(a, shape).ravel()
-    wk = world.wall_heights > min_height  # type: ignore[operator]
-    ck = world.circle_heights > min_height  # type: ignore[operator]
+    wk = world.wall_heights > min_height
+    ck = world.circle_heights > min_height
     walls = world.walls[wk]
     circles = world.circles[ck]
     out = np.empty(ox.size)

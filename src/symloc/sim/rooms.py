@@ -78,7 +78,7 @@ def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_
     with np.errstate(divide="ignore", invalid="ignore"):
         x_cross = a[..., 0] + (py - a[..., 1]) * (b[..., 0] - a[..., 0]) / (b[..., 1] - a[..., 1])
     crossings = np.count_nonzero(straddle & (px < x_cross), axis=1)
-    return (crossings % 2) == 1
+    return np.asarray((crossings % 2) == 1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -175,7 +175,7 @@ class Room:
                 cand = cand[self.world.distance(cand) >= margin]
             if cand.shape[0] >= n:
                 idx = np.round(np.linspace(0, cand.shape[0] - 1, n)).astype(int)
-                return cand[idx]
+                return np.asarray(cand[idx], dtype=np.float64)
             spacing *= 0.85
             if spacing < 1e-3:
                 break
@@ -376,7 +376,9 @@ def circular_room(
     boundary = c + r * np.column_stack([np.cos(ang), np.sin(ang)])
     mat = MATERIAL_PHOTO if textured else MATERIAL_WALL
     if door is False or door is None:
-        world = World(circles=[[c[0], c[1], r]], circle_heights=height, circle_materials=mat)
+        world = World(
+            circles=np.array([[c[0], c[1], r]]), circle_heights=height, circle_materials=mat
+        )
         order, has_door = 0, False
     else:
         k = _CIRCLE_DOOR_SEGMENTS
@@ -433,7 +435,7 @@ def lab(
     per_side = np.ones(4, dtype=int)
     for _ in range(n_segments - 4):  # give the next piece to the side with the longest pieces
         per_side[int(np.argmax(sides / per_side))] += 1
-    segs = []
+    segs: list[FloatArray] = []
     for i in range(4):
         a, b = corners[i], corners[(i + 1) % 4]
         t = np.linspace(0.0, 1.0, per_side[i] + 1)

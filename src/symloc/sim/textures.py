@@ -74,7 +74,7 @@ def load_photo(index: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
 
     name = PHOTO_NAMES[int(index) % len(PHOTO_NAMES)]
     if name == "motorcycle_left":
-        img = skimage.data.stereo_motorcycle()[0]
+        img = skimage.data.stereo_motorcycle()[0]  # type: ignore[no-untyped-call]
     else:
         img = getattr(skimage.data, name)()
     img = np.asarray(img)
@@ -84,7 +84,7 @@ def load_photo(index: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
         img = np.repeat(img[:, :, None], 3, axis=2)
     img = np.ascontiguousarray(img[:, :, :3]).astype(np.uint8)
     interp = cv2.INTER_AREA if min(img.shape[:2]) >= size else cv2.INTER_CUBIC
-    out = cv2.resize(img, (size, size), interpolation=interp)
+    out = np.asarray(cv2.resize(img, (size, size), interpolation=interp), dtype=np.uint8)
     out.setflags(write=False)
     return out
 
@@ -103,7 +103,7 @@ def material_texture(material: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint
     rng = np.random.default_rng(1000 + m)  # fixed: a material always looks the same
     base = np.array(PLAIN_COLORS[m], dtype=np.int16)
     tex = base + rng.integers(-3, 4, size=(size, size, 1), dtype=np.int16)
-    out = np.clip(tex, 0, 255).astype(np.uint8)
+    out: NDArray[np.uint8] = np.clip(tex, 0, 255).astype(np.uint8)
     out.setflags(write=False)
     return out
 
@@ -130,7 +130,7 @@ class TextureAtlas:
     def __init__(self, materials: tuple[int, ...], size: int = TEXTURE_SIZE) -> None:
         self.materials = np.array(materials, dtype=np.int64)
         self.size = int(size)
-        levels = []
+        levels: list[int] = []
         s = self.size
         while s >= 8 and len(levels) < _N_LEVELS:
             levels.append(s)
@@ -143,7 +143,10 @@ class TextureAtlas:
             img = material_texture(m, self.size)
             for lvl, ls in enumerate(levels):
                 if lvl:
-                    img = cv2.resize(img, (int(ls), int(ls)), interpolation=cv2.INTER_AREA)
+                    img = np.asarray(
+                        cv2.resize(img, (int(ls), int(ls)), interpolation=cv2.INTER_AREA),
+                        dtype=np.uint8,
+                    )
                 off = self.offsets[lvl]
                 texels[i, off : off + ls * ls] = img.reshape(-1, 3)
         self.texels = texels.reshape(-1, 3)
@@ -180,7 +183,7 @@ class TextureAtlas:
         tx = np.clip((u * ls).astype(np.int64), 0, ls - 1)
         ty = np.clip((v * ls).astype(np.int64), 0, ls - 1)
         flat = rows * self.row_length + self.offsets[lvl] + ty * ls + tx
-        return self.texels[flat]
+        return np.asarray(self.texels[flat], dtype=np.uint8)
 
 
 @lru_cache(maxsize=8)

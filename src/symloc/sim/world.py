@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -59,8 +60,8 @@ def _as_float(value: ArrayLike, name: str, shape: tuple[int | None, ...]) -> Flo
     return arr
 
 
-def _per_item(value: ArrayLike | float, n: int, name: str, dtype: type) -> NDArray[np.generic]:
-    arr = np.array(value, dtype=dtype)
+def _per_item(value: ArrayLike | float, n: int, name: str, dtype: type) -> NDArray[Any]:
+    arr: NDArray[Any] = np.array(value, dtype=dtype)
     if arr.ndim == 0:
         arr = np.full(n, arr, dtype=dtype)
     if arr.shape != (n,):
@@ -153,11 +154,11 @@ class World:
             return World()
         return World(
             walls=np.concatenate([w.walls for w in ws]),
-            wall_heights=np.concatenate([w.wall_heights for w in ws]),  # type: ignore[misc]
-            wall_materials=np.concatenate([w.wall_materials for w in ws]),  # type: ignore[misc]
+            wall_heights=np.concatenate([w.wall_heights for w in ws]),
+            wall_materials=np.concatenate([w.wall_materials for w in ws]),
             circles=np.concatenate([w.circles for w in ws]),
-            circle_heights=np.concatenate([w.circle_heights for w in ws]),  # type: ignore[misc]
-            circle_materials=np.concatenate([w.circle_materials for w in ws]),  # type: ignore[misc]
+            circle_heights=np.concatenate([w.circle_heights for w in ws]),
+            circle_materials=np.concatenate([w.circle_materials for w in ws]),
         )
 
     def visible_above(self, min_height: float) -> World:
