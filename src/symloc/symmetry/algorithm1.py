@@ -96,6 +96,53 @@ def count_groups(mask: NDArray[np.bool_]) -> tuple[int, NDArray[np.intp]]:
     return int(starts.sum()), labels
 
 
+def _alternating_extrema(
+    rp: FloatArray,
+    lab_max: NDArray[np.intp],
+    n_max: int,
+    lab_min: NDArray[np.intp],
+    n_min: int,
+) -> tuple[int, int, NDArray[np.intp]]:
+    """Count maxima and minima along the contour, where they alternate.
+
+    Around a polygon the distance to the centre rises to a vertex and falls to the middle of
+    the next edge, so maxima and minima alternate. Near a minimum the distance is flat and
+    the noise makes the "minimal" points come and go; groups of the same kind with no group of
+    the other kind between them are one extremum. Returns the counts and, per maximum, the
+    index of its largest distance (sorted).
+    """
+    pos, kind, best = [], [], []
+    for lab, n_grp, sign in ((lab_max, n_max, 1.0), (lab_min, n_min, -1.0)):
+        for g in range(n_grp):
+            members = np.flatnonzero(lab == g)
+            k = int(members[np.argmax(sign * rp[members])])
+            pos.append(k)
+            kind.append(sign > 0)
+            best.append(k)
+    if not pos:
+        return 0, 0, np.zeros(0, dtype=np.intp)
+    order = np.argsort(pos)
+    kinds = np.asarray(kind)[order]
+    idx = np.asarray(best)[order]
+    # runs of equal kind, circularly
+    start = kinds != np.roll(kinds, 1)
+    if not start.any():  # only one kind of extremum
+        return (1, 0, idx[:1]) if kinds[0] else (0, 1, np.zeros(0, dtype=np.intp))
+    first = int(np.flatnonzero(start)[0])
+    kinds = np.roll(kinds, -first)
+    idx = np.roll(idx, -first)
+    run = np.cumsum(kinds != np.roll(kinds, 1)) - 1
+    n_runs = int(run[-1]) + 1
+    vert = []
+    for r in range(n_runs):
+        sel = run == r
+        if kinds[sel][0]:
+            cand = idx[sel]
+            vert.append(int(cand[np.argmax(rp[cand])]))
+    num_max = len(vert)
+    return num_max, n_runs - num_max, np.sort(np.asarray(vert, dtype=np.intp))
+
+
 def algorithm1(
     scan: LaserScan,
     *,
@@ -159,8 +206,9 @@ def algorithm1(
             residual=float(rp.max() - rp.min()),
             reason="every distance to the centroid is both maximal and minimal: a round room",
         )
-    num_max, labels = count_groups(is_max)
-    num_min, _ = count_groups(is_min)
+    n_grp_max, lab_max = count_groups(is_max)
+    n_grp_min, lab_min = count_groups(is_min)
+    num_max, num_min, vidx = _alternating_extrema(rp, lab_max, n_grp_max, lab_min, n_grp_min)
     # step 6-8
     if num_max != n or num_min != n:
         return Algorithm1Result(
@@ -172,11 +220,7 @@ def algorithm1(
             centroid=c,
             reason=f"num_max={num_max}, num_min={num_min}, expected {n} each",
         )
-    # step 9: one vertex per group (its largest distance), in scan order
-    order = np.lexsort((-rp, labels))
-    grp = labels[order]
-    first = order[np.flatnonzero(np.concatenate([[True], grp[1:] != grp[:-1]]) & (grp >= 0))]
-    vidx = np.sort(first)
+    # step 9: one vertex per maximum (its largest distance), in scan order
     v = p[vidx]
     d = np.hypot(*(np.roll(v, -1, axis=0) - v).T)
     tol_v = tol[vidx]
