@@ -83,3 +83,21 @@ def test_record_refuses_existing_paths(tmp_path: Path) -> None:
     (tmp_path / "b_assets" / "x").write_text("x")
     with pytest.raises(ConfigurationError, match="not empty"):
         record_sim_run(tmp_path / "b")
+
+
+def test_sim_record_cli_mcap_compressed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from symloc.cli.main import main
+
+    out = tmp_path / "run"
+    argv = ["sim", "record", "--out", str(out), "--format", "mcap", "--compressed", "--seed", "5"]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "seed=5" in text
+    assert "/camera/image_raw/compressed" in text
+    assert list(out.glob("*.mcap"))
+    params = NodeParams.from_yaml(tmp_path / "run_assets" / "params.yaml")
+    res = replay_bag(out, params)
+    assert res.final is not None
+    assert res.final.status.value == "tracking"
+    d = res.final.pose - res.truth[-1, 1:]
+    assert math.hypot(d[0], d[1]) < 0.1

@@ -55,6 +55,9 @@ def register(subparsers: Any) -> None:
         "--image-out", type=Path, default=None, help="also write the bare camera image here"
     )
     r.set_defaults(func=_render)
+    from symloc.cli.commands.ros import add_sim_record_parser  # `sim record` (ROS part)
+
+    add_sim_record_parser(sub)
 
 
 def _render(args: argparse.Namespace) -> int:
