@@ -109,7 +109,13 @@ def run(args: argparse.Namespace) -> int:
             f"{r['room']:<10} {r['lab']:<11} {r['method']:<7} {100 * r['correct'] / n:>7.0f}% "
             f"{100 * r['confident_wrong'] / n:>9.0f}% {100 * r['undetermined'] / n:>6.0f}% "
             f"{'-' if math.isnan(t) else f'{t:.1f} s':>9} {'-' if math.isnan(d) else f'{d:.2f} m':>9}"
+            f" {100 * r['estimate_near_true_pose'] / n:>8.0f}%"
+            f" {100 * r['estimate_near_symmetric_copy'] / n:>8.0f}%"
         )
+    print(
+        "(est.@true / est.@copy: the final estimate, claimed or not, lies within 0.3 m and 10 deg "
+        "of the true pose / of a wrong symmetric copy)"
+    )
     for note in notes:
         print(f"note: {note}")
     path = localization_figure(rows, args.out / "localization.png")

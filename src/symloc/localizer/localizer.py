@@ -610,6 +610,7 @@ class Localizer:
         else:
             self._outcomes.append("undetermined")
         last = decisions[0][1].reason if decisions else "no place with this G-V distance"
+        self._note(f"image {self._attempt + 1}: {self._outcomes[-1]} ({last})")
         return self._next_attempt(last)
 
     def _reseed(self, result: TrackerResult, place: Place, dec: Decision) -> Estimate:
@@ -646,11 +647,14 @@ class Localizer:
             return self._conclude()
         self._phase = _Phase.ROTATING
         self._rotate_start = float(self._odom_pose[2])
-        self._rotate_angle = -2.0 * np.pi / self._m
+        # a polygon squares up on the next corner middle after the turn; a circle has none, and
+        # a query half-way between two stored views scores both alike, so it turns half a step
+        step = 2.0 * np.pi / self._m if self._order != 0 else np.pi / self._m
+        self._rotate_angle = -step
         return self._ambiguous(
             Status.DECIDING,
             Request(RequestKind.ROTATE, angle=self._rotate_angle),
-            f"attempt {self._attempt}: {why}; turning clockwise by {360 / self._m:.0f} deg",
+            f"attempt {self._attempt}: {why}; turning clockwise by {np.degrees(step):.0f} deg",
         )
 
     def _on_rotating(self, result, verdict, scan, image) -> Estimate:  # type: ignore[no-untyped-def]

@@ -241,6 +241,7 @@ class Outcome:
     heading_error: float
     copy_index: int | None
     confidence: float
+    near_copy: int | None = None
 
 
 def classify(
@@ -255,7 +256,8 @@ def classify(
 
     A pose claimed but not within 0.1 m and 5 degrees is ``confident_wrong``; a pose not
     claimed (ambiguous, lost) is ``undetermined``. ``copy_index`` is the symmetric copy of the
-    true pose (rotation by ``j * 360 / order`` about ``center``) nearest to ``pose``.
+    true pose (rotation by ``j * 360 / order`` about ``center``) nearest to ``pose``;
+    ``near_copy`` is that index when ``pose`` lies within 0.3 m and 10 degrees of it.
     """
     if pose is None:
         return Outcome("undetermined", math.nan, math.nan, None, confidence)
@@ -269,11 +271,18 @@ def classify(
             np.asarray(angle_diff(copies[:, 2], p[2]))
         )
         copy = int(np.argmin(d))
+        near = bool(
+            np.hypot(copies[copy, 0] - p[0], copies[copy, 1] - p[1]) <= 0.3
+            and abs(float(angle_diff(copies[copy, 2], p[2]))) <= math.radians(10.0)
+        )
+        near_copy = copy if near else None
+    else:
+        near_copy = None
     if not confident:
-        return Outcome("undetermined", dpos, dth, copy, confidence)
+        return Outcome("undetermined", dpos, dth, copy, confidence, near_copy)
     if dpos <= POSITION_TOL and dth <= HEADING_TOL:
-        return Outcome("correct", dpos, dth, 0, confidence)
-    return Outcome("confident_wrong", dpos, dth, copy, confidence)
+        return Outcome("correct", dpos, dth, 0, confidence, 0)
+    return Outcome("confident_wrong", dpos, dth, copy, confidence, near_copy)
 
 
 @dataclass

@@ -26,6 +26,7 @@ class TrialRecord:
     time: float
     distance: float
     copy_index: int | None
+    near_copy: int | None
     final_status: str
     reason: str
 
@@ -59,6 +60,8 @@ class RoomTrials:
                     "confident_wrong_symmetric_copy": sum(
                         1 for r in recs if r.grade == "confident_wrong" and r.copy_index
                     ),
+                    "estimate_near_true_pose": sum(1 for r in recs if r.near_copy == 0),
+                    "estimate_near_symmetric_copy": sum(1 for r in recs if r.near_copy),
                     "median_time_s": float(np.median([r.time for r in ok])) if ok else math.nan,
                     "median_distance_m": float(np.median([r.distance for r in ok]))
                     if ok
@@ -116,6 +119,7 @@ def run_room_trials(
                     if fin.request is None
                     else s.episode.distance,
                     copy_index=s.outcome.copy_index,
+                    near_copy=s.outcome.near_copy,
                     final_status=fin.status.value,
                     reason=fin.reason,
                 )
@@ -131,6 +135,7 @@ def run_room_trials(
                     time=a.time,
                     distance=a.distance,
                     copy_index=a.outcome.copy_index,
+                    near_copy=a.outcome.near_copy,
                     final_status="confident" if a.converged else "not confident",
                     reason=f"weight {a.weight:.2f}",
                 )
