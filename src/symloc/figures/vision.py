@@ -102,7 +102,7 @@ def matches_figure(
         for m in bf.knnMatch(fa.descriptors, fb.descriptors, k=2)
         if len(m) == 2 and m[0].distance < 0.8 * m[1].distance
     ]
-    vis = cv2.drawMatches(
+    vis = cv2.drawMatches(  # type: ignore[call-overload]
         np.ascontiguousarray(img_a), ka, np.ascontiguousarray(img_b), kb, good, None
     )
     fig, ax = plt.subplots(figsize=(12, 4.8))

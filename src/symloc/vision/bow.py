@@ -308,9 +308,9 @@ def score_many(
     v = np.repeat(query.values, counts)
     if sc == Scoring.L1_NORM:
         c = np.abs(v - w) - np.abs(v) - np.abs(w)
-        return -0.5 * np.bincount(rows, weights=c, minlength=n)
+        return np.asarray(-0.5 * np.bincount(rows, weights=c, minlength=n), np.float64)
     if sc in (Scoring.L2_NORM, Scoring.DOT_PRODUCT):
-        s = np.bincount(rows, weights=v * w, minlength=n)
+        s = np.asarray(np.bincount(rows, weights=v * w, minlength=n), np.float64)
         if sc == Scoring.DOT_PRODUCT:
             return s
         out = np.ones(n)
@@ -321,9 +321,11 @@ def score_many(
         den = v + w
         ok = den != 0.0
         c = np.where(ok, v * w / np.where(ok, den, 1.0), 0.0)
-        return 2.0 * np.bincount(rows, weights=c, minlength=n)
+        return np.asarray(2.0 * np.bincount(rows, weights=c, minlength=n), np.float64)
     if sc == Scoring.BHATTACHARYYA:
-        return np.bincount(rows, weights=np.sqrt(np.abs(v * w)), minlength=n)
+        return np.asarray(
+            np.bincount(rows, weights=np.sqrt(np.abs(v * w)), minlength=n), np.float64
+        )
     # KL: every query word counts; words missing from the entry cost v (log v - log eps).
     qv = query.values
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -336,7 +338,7 @@ def score_many(
         c = np.where(both, safe_v * np.log(safe_v / safe_w) - miss, 0.0) - np.where(
             only_v, miss, 0.0
         )
-    return base + np.bincount(rows, weights=c, minlength=n)
+    return np.asarray(base + np.bincount(rows, weights=c, minlength=n), np.float64)
 
 
 def score(a: BowVector, b: BowVector, scoring: Scoring | int | str) -> float:

@@ -19,6 +19,7 @@ import argparse
 import gzip
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -44,11 +45,11 @@ def default_vocabulary() -> Vocabulary:
     return Vocabulary.load(DEFAULT_VOCABULARY_PATH)
 
 
-def _sources() -> list[NDArray[np.uint8]]:
+def _sources() -> list[NDArray[Any]]:
     import matplotlib.cbook as cbook
     import skimage.data as sd
 
-    out: list[NDArray[np.uint8]] = []
+    out: list[NDArray[Any]] = []
     for name in (
         "text",
         "cell",
@@ -59,12 +60,14 @@ def _sources() -> list[NDArray[np.uint8]]:
         "shepp_logan_phantom",
     ):
         out.append(to_grey_uint8(getattr(sd, name)()))
-    faces = sd.lfw_subset()[:200]  # (200, 25, 25) float
+    faces = sd.lfw_subset()[:200]  # type: ignore[no-untyped-call]  # (200, 25, 25) float
     mosaic = faces.reshape(10, 20, 25, 25).transpose(0, 2, 1, 3).reshape(250, 500)
     out.append(cv2.resize(to_grey_uint8(mosaic), None, fx=3, fy=3, interpolation=cv2.INTER_CUBIC))
     for fname in ("grace_hopper.jpg", "Minduka_Present_Blue_Pack.png", "logo2.png"):
         path = cbook.get_sample_data(fname, asfileobj=False)
-        out.append(cv2.imread(str(path), cv2.IMREAD_GRAYSCALE))
+        img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        if img is not None:
+            out.append(img)
     for fname, key in (("topobathy.npz", "topo"), ("jacksboro_fault_dem.npz", "elevation")):
         with np.load(cbook.get_sample_data(fname, asfileobj=False)) as z:
             arr = np.asarray(z[key], np.float64)
@@ -116,7 +119,7 @@ def _poster(rng: np.random.Generator, size: tuple[int, int] = (480, 640)) -> NDA
     return img
 
 
-def _augment(img: NDArray[np.uint8], rng: np.random.Generator) -> list[NDArray[np.uint8]]:
+def _augment(img: NDArray[Any], rng: np.random.Generator) -> list[NDArray[Any]]:
     """Rescalings, a rotation and a random crop of one image."""
     out = []
     for s in (1.0, 0.7, 0.5):
@@ -133,7 +136,7 @@ def _augment(img: NDArray[np.uint8], rng: np.random.Generator) -> list[NDArray[n
 
 def training_images(
     rng: np.random.Generator | int | None = 0, n_posters: int = 150
-) -> list[NDArray[np.uint8]]:
+) -> list[NDArray[Any]]:
     """All training images (grey uint8): augmented bundled pictures plus ``n_posters`` posters."""
     gen = as_rng(rng)
     images = []

@@ -111,8 +111,8 @@ def run_keyframes(
     h0 = float(wall_headings(room.corners, room.center)[0])
     n_kf = round(360.0 / step_deg)
     policies = [
-        (f"symloc (M = {m})", np.arange(m) * 360.0 / m),
-        (f"keyframe every {step_deg:g} deg", np.arange(n_kf) * step_deg),
+        (f"symloc (M = {m})", np.arange(m, dtype=np.float64) * 360.0 / m),
+        (f"keyframe every {step_deg:g} deg", np.arange(n_kf, dtype=np.float64) * step_deg),
     ]
     out = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -213,7 +213,7 @@ class OrbExtractor:
     def __init__(self, settings: OrbSettings | None = None) -> None:
         self.settings = settings if settings is not None else OrbSettings()
         s = self.settings
-        self._orb = cv2.ORB_create(
+        self._orb = cv2.ORB_create(  # type: ignore[attr-defined]
             nfeatures=int(s.n_features),
             scaleFactor=float(s.scale_factor),
             nlevels=int(s.n_levels),

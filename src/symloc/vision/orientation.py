@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -183,8 +183,8 @@ def intrinsics_matrix(intrinsics: ArrayLike | object) -> NDArray[np.float64]:
             break
     else:
         if all(hasattr(intrinsics, a) for a in ("fx", "fy", "cx", "cy")):
-            o = intrinsics
-            intrinsics = [[o.fx, 0, o.cx], [0, o.fy, o.cy], [0, 0, 1]]  # type: ignore[attr-defined]
+            o: Any = intrinsics
+            intrinsics = [[o.fx, 0, o.cx], [0, o.fy, o.cy], [0, 0, 1]]
     K = np.asarray(intrinsics, np.float64)
     if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
         raise ConfigurationError(
@@ -252,7 +252,7 @@ def yaw_from_homography(H: ArrayLike, K: ArrayLike) -> tuple[float, float]:
 
 
 def _undecided(
-    status: Status, reason: str, scores: Sequence[float], n_kp: int, **kw: object
+    status: Status, reason: str, scores: Sequence[float] | NDArray[Any], n_kp: int, **kw: int
 ) -> OrientationDecision:
     s = np.sort(np.asarray(scores, float))[::-1] if len(scores) else np.zeros(0)
     return OrientationDecision(
@@ -263,8 +263,8 @@ def _undecided(
         scores=tuple(float(x) for x in scores),
         best_score=float(s[0]) if s.size else math.nan,
         second_score=float(s[1]) if s.size > 1 else math.nan,
-        inliers=int(kw.get("inliers", 0)),  # type: ignore[call-overload]
-        second_inliers=int(kw.get("second_inliers", 0)),  # type: ignore[call-overload]
+        inliers=int(kw.get("inliers", 0)),
+        second_inliers=int(kw.get("second_inliers", 0)),
         n_keypoints=n_kp,
         reason=reason,
     )

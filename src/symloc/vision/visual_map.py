@@ -143,7 +143,7 @@ class QueryResult:
 def _encode_png(image: NDArray[np.uint8]) -> bytes:
     import cv2
 
-    arr = np.ascontiguousarray(image)
+    arr: NDArray[Any] = np.ascontiguousarray(image)
     if arr.ndim == 3:
         arr = cv2.cvtColor(arr, cv2.COLOR_RGB2BGR)
     ok, buf = cv2.imencode(".png", arr)
