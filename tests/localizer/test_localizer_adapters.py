@@ -1,0 +1,123 @@
+"""Tests of the adapters from the real parts to the localizer's Protocols."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from symloc.errors import ConfigurationError
+from symloc.grid import OccupancyGrid
+from symloc.localizer.adapters import GridScorer, ReportJudge, corner_middle_bearing, verdict_from
+from symloc.localizer.directions import directions_for
+from symloc.scan import LaserScan
+
+
+def _report(**kw):
+    base = {
+        "kind": "polygon",
+        "symmetric": True,
+        "order": 4,
+        "center": np.array([1.0, 0.0]),
+        "corners": np.array([[2.0, -1.0], [2.0, 1.0], [0.0, 1.0], [0.0, -1.0]]),
+        "gv_distance": math.sqrt(2.0),
+        "reason": "ok",
+    }
+    base.update(kw)
+    return SimpleNamespace(**base)
+
+
+def test_corner_middle_bearing_picks_the_smallest_turn():
+    corners = np.array([[2.0, -1.0], [2.0, 1.0], [0.0, 1.0], [0.0, -1.0]])
+    assert corner_middle_bearing(corners) == pytest.approx(0.0)
+    assert corner_middle_bearing(corners[:1]) is None
+
+
+def test_verdict_from_polygon_has_facing_and_axis():
+    v = verdict_from(_report())
+    assert v.symmetric
+    assert v.order == 4
+    np.testing.assert_allclose(v.center, [1.0, 0.0])
+    assert v.facing == pytest.approx(0.0)
+    # axis: from the centre (1, 0) to the middle of corners 0 and 1, (2, 0): along +x
+    assert v.axis == pytest.approx(0.0)
+
+
+def test_verdict_from_circle_has_order_zero_and_no_facing():
+    v = verdict_from(_report(kind="circle", order=math.inf, corners=np.zeros((0, 2))))
+    assert v.order == 0
+    assert v.facing is None
+    assert v.axis is None
+
+
+def test_verdict_from_nan_centre_is_not_symmetric():
+    v = verdict_from(_report(center=np.array([np.nan, np.nan])))
+    assert not v.symmetric
+    assert v.center is None
+
+
+def test_report_judge_counts_a_raising_judgement_as_unknown():
+    def broken(scan, **kw):
+        raise IndexError("index 802 is out of bounds")
+
+    judge = ReportJudge(broken)
+    v = judge(None)
+    assert not v.symmetric
+    assert v.kind == "unknown"
+    assert judge.errors == 1
+    assert "IndexError" in v.reason
+
+
+def _box_grid() -> OccupancyGrid:
+    data = np.zeros((60, 60), dtype=np.int8)
+    data[10, 10:50] = 100
+    data[49, 10:50] = 100
+    data[10:50, 10] = 100
+    data[10:50, 49] = 100
+    data[15:20, 40:45] = 100  # a box that breaks the symmetry
+    return OccupancyGrid(data, 0.05, np.zeros(3))
+
+
+def _scan_from(grid: OccupancyGrid, pose) -> LaserScan:
+    """Exact scan by marching along the beams on the grid."""
+    angles = np.linspace(-math.pi, math.pi, 180, endpoint=False)
+    r = np.linspace(0.05, 3.0, 600)
+    ranges = np.full(angles.size, np.inf)
+    for i, a in enumerate(angles):
+        pts = np.column_stack(
+            [pose[0] + r * math.cos(pose[2] + a), pose[1] + r * math.sin(pose[2] + a)]
+        )
+        cells = grid.world_to_cell(pts)
+        ok = grid.in_bounds(cells)
+        hit = np.zeros(len(r), bool)
+        hit[ok] = grid.data[cells[ok, 0], cells[ok, 1]] >= 65
+        if hit.any():
+            ranges[i] = r[np.argmax(hit)]
+    return LaserScan(-math.pi, 2 * math.pi / 180, 0.05, 3.0, ranges)
+
+
+def test_grid_scorer_prefers_the_true_pose_over_a_rotated_copy():
+    grid = _box_grid()
+    pose = np.array([1.2, 1.0, 0.3])
+    scan = _scan_from(grid, pose)
+    centre = np.array([1.5, 1.5])
+    rot = np.array([2 * centre[0] - pose[0], 2 * centre[1] - pose[1], pose[2] + math.pi])
+    scores = GridScorer(grid)(np.array([pose, rot]), scan)
+    assert scores[0] > 0.8
+    assert scores[1] < scores[0]
+
+
+def test_grid_scorer_validates_sigma():
+    with pytest.raises(ConfigurationError, match="sigma"):
+        GridScorer(_box_grid(), sigma=0.0)
+
+
+def test_directions_for():
+    assert directions_for("polygon", 3) == 3
+    assert directions_for("polygon", 6) == 6
+    assert directions_for("rectangle", 2) == 4
+    assert directions_for("circle", 0) == 8
+    with pytest.raises(ConfigurationError, match="order"):
+        directions_for("polygon", 1)
