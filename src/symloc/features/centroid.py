@@ -73,7 +73,7 @@ def area_centroid(points: ArrayLike) -> tuple[FloatArray, float]:
         return np.full(2, np.nan), 0.0
     if p.shape[0] < 3:
         return p.mean(axis=0), 0.0
-    q = np.roll(p, -1, axis=0)
+    q = np.concatenate((p[1:], p[:1]))
     cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
     area = 0.5 * float(cross.sum())
     scale = float(np.max(np.abs(p))) if p.size else 0.0

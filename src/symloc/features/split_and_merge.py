@@ -204,6 +204,12 @@ def contour_runs(
     return np.stack([starts, stops], axis=-1).astype(np.intp)
 
 
+def _rolled(a: NDArray[np.generic], k: int) -> NDArray[np.generic]:
+    """``np.roll(a, -k, axis=0)`` without its overhead."""
+    k = int(k) % a.shape[0] if a.shape[0] else 0
+    return np.concatenate((a[k:], a[:k])) if k else a
+
+
 class _Moments:
     """Prefix sums of point moments for O(1) fits of contiguous ranges."""
 
@@ -233,23 +239,35 @@ class _Moments:
 
 
 def _pair_excess(
-    p: FloatArray, tol: FloatArray, mom: _Moments, st: IntArray, sp: IntArray, *, closed: bool
+    p: FloatArray,
+    tol: FloatArray,
+    mom: _Moments,
+    st: IntArray,
+    sp: IntArray,
+    *,
+    closed: bool,
+    which: IntArray | None = None,
 ) -> FloatArray:
-    """For each pair of adjacent pieces, the largest |residual| / tol of their joint TLS fit."""
+    """For each pair of adjacent pieces (or the pairs ``which``), the largest |residual| / tol
+    of their joint TLS fit."""
     m = p.shape[0]
     n_l = st.size
     n_pairs = n_l if closed and n_l > 2 else n_l - 1
     if n_pairs <= 0:
         return np.zeros(0)
-    t = np.arange(n_pairs)
+    t = np.arange(n_pairs) if which is None else np.asarray(which, dtype=np.intp)
+    if t.size == 0:
+        return np.zeros(0)
     u = (t + 1) % n_l
     a = st[t]
     b = np.where(u == 0, sp[u] + m, sp[u])
     _c, _d, nrm, off, _s = mom.fit(a, b)
     lengths = b - a
-    rep = np.repeat(t, lengths)
+    rep = np.repeat(np.arange(t.size), lengths)
     first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    pos = (np.arange(int(lengths.sum())) - np.repeat(first - a, lengths)) % m
+    pos = np.arange(int(lengths.sum())) - np.repeat(first - a, lengths)
+    if closed:
+        pos %= m
     q = p[pos]
     res = np.abs(q[:, 0] * nrm[rep, 0] + q[:, 1] * nrm[rep, 1] - off[rep]) / tol[pos]
     out = np.maximum.reduceat(res, first)
@@ -294,10 +312,10 @@ def _reroll(
     """Roll a closed contour so that piece ``first`` starts at index 0 (pieces stay in order)."""
     m = p.shape[0]
     shift = int(st[first])
-    order = np.roll(np.arange(st.size), -first)
+    order = _rolled(np.arange(st.size), first)
     st2 = (st[order] - shift) % m
     sp2 = st2 + (sp[order] - st[order])
-    return np.roll(p, -shift, axis=0), np.roll(tol, -shift), st2, sp2, shift
+    return _rolled(p, shift), _rolled(tol, shift), st2, sp2, shift
 
 
 def _absorb_short(
@@ -424,8 +442,8 @@ def _refine_boundaries(
             if shift:
                 st -= shift
                 sp -= shift
-                p = np.roll(p, -shift, axis=0)
-                tol = np.roll(tol, -shift)
+                p = _rolled(p, shift)
+                tol = _rolled(tol, shift)
                 total = (total + shift) % m
                 mom = _Moments(p)
         else:
@@ -482,8 +500,8 @@ def split_and_merge(
         # start at the point nearest the sensor (from inside a convex room, the foot of the
         # perpendicular on a wall, never a corner), and cut first at the point farthest from it
         roll = int(np.argmin(np.sum(p * p, axis=1)))
-        p = np.roll(p, -roll, axis=0)
-        tol = np.roll(tol, -roll)
+        p = _rolled(p, roll)
+        tol = _rolled(tol, roll)
         first_cut = int(np.argmax(np.sum((p - p[0]) ** 2, axis=1)))
     cuts = _split(p, tol, first_cut)
 
@@ -510,15 +528,26 @@ def split_and_merge(
             new_first_stop = int(sp[0]) + (m - shift)
             st = np.concatenate([[0], st[1:t] - shift + m])
             sp = np.concatenate([[new_first_stop], sp[1:t] - shift + m])
-            p = np.roll(p, -shift, axis=0)
-            tol = np.roll(tol, -shift)
+            p = _rolled(p, shift)
+            tol = _rolled(tol, shift)
             roll = (roll + shift) % m
             mom = _Moments(p)
+            scores = _pair_excess(p, tol, mom, st, sp, closed=closed)
         else:
             sp[t] = sp[u]
             st = np.delete(st, u)
             sp = np.delete(sp, u)
-        scores = _pair_excess(p, tol, mom, st, sp, closed=closed)
+            # only the pairs that involve the joined piece change
+            n_l = st.size
+            n_pairs = n_l if closed and n_l > 2 else n_l - 1
+            if n_pairs <= 0:
+                break
+            scores = np.delete(scores, t)[:n_pairs]
+            if scores.size < n_pairs:
+                scores = np.concatenate([scores, np.zeros(n_pairs - scores.size)])
+            redo = np.unique(np.array([t - 1, t]) % n_l)
+            redo = redo[redo < n_pairs]
+            scores[redo] = _pair_excess(p, tol, mom, st, sp, closed=closed, which=redo)
 
     n_before = st.size
     p, tol, st, sp, extra = _absorb_short(p, tol, st, sp, closed=closed, max_points=2 * min_points)
@@ -539,9 +568,7 @@ def split_and_merge(
     res = np.sum(p * normals[owner], axis=1) - offsets[owner]
     n_pts = (sp - st).astype(np.intp)
     rms = np.sqrt(np.bincount(owner, res * res, minlength=st.size) / np.maximum(n_pts, 1))
-    ratio = np.abs(res) / tol
-    max_excess = np.zeros(st.size)
-    np.maximum.at(max_excess, owner, ratio)
+    max_excess = np.maximum.reduceat(np.abs(res) / tol, st)
     t0 = np.sum((first - centers) * dirs, axis=1)
     t1 = np.sum((last - centers) * dirs, axis=1)
     endpoints = np.stack([centers + t0[:, None] * dirs, centers + t1[:, None] * dirs], axis=1)

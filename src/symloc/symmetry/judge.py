@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from symloc.errors import ConfigurationError
 from symloc.features.centroid import CENTROID_METHODS, area_centroid, mean_centroid
 from symloc.features.corners import adjacent_corners
-from symloc.features.split_and_merge import LineSet, contour_runs, split_and_merge
+from symloc.features.split_and_merge import LineSet, _rolled, contour_runs, split_and_merge
 from symloc.scan import LaserScan
 from symloc.symmetry.config import SymmetryConfig
 from symloc.symmetry.report import SymmetryReport
@@ -132,7 +132,7 @@ def rotational_order(
         ang = 2.0 * math.pi / k
         cs, sn = math.cos(ang), math.sin(ang)
         rot = np.column_stack([cs * rel[:, 0] - sn * rel[:, 1], sn * rel[:, 0] + cs * rel[:, 1]])
-        disp = np.hypot(*(rot - np.roll(rel, -m, axis=0)).T)
+        disp = np.hypot(*(rot - rel[(np.arange(n) + m) % n]).T)
         excess = float(np.max(disp / tolerance[k - 1]))
         if excess <= 1.0:
             return k, disp
@@ -311,13 +311,13 @@ def _judge_closed(
             " circle",
             **common,
         )
-    rolled_sig = np.roll(sig, -lines.roll)
+    rolled_sig = _rolled(sig, lines.roll)
     owner = np.repeat(np.arange(n_lines), lines.stops - lines.starts)
     n_l = lines.n_points.astype(np.float64)
     sig_l = np.sqrt(np.bincount(owner, rolled_sig * rolled_sig, minlength=n_lines) / n_l)
     sig_off = sig_l / np.sqrt(n_l)
     sig_ang = sig_l / (np.sqrt(n_l) * np.maximum(lines.spread, 1e-6))
-    rolled_tol = np.roll(tol, -lines.roll)
+    rolled_tol = _rolled(tol, lines.roll)
     end_tol = np.maximum(
         rolled_tol[lines.stops - 1], rolled_tol[lines.starts[(np.arange(n_lines) + 1) % n_lines]]
     )
@@ -348,7 +348,7 @@ def _judge_closed(
             mm = n // kk
             chord = 2.0 * math.sin(math.pi / kk)
             tol_k[kk - 1] = (
-                k * np.sqrt(sig_v**2 + np.roll(sig_v, -mm) ** 2 + (chord * sigma_c) ** 2)
+                k * np.sqrt(sig_v**2 + sig_v[(np.arange(n) + mm) % n] ** 2 + (chord * sigma_c) ** 2)
                 + cfg.model_tolerance
             )
     order, disp = rotational_order(v, cen, tol_k)
