@@ -78,9 +78,12 @@ def run(args: argparse.Namespace) -> int:
         f"untextured lab: undetermined {u['undetermined']}/{u['trials']} "
         f"(refused {u['refused']}), wrong {u['wrong']}, correct {u['correct']}"
     )
-    from symloc.figures.vision import table3_figure
+    from symloc.figures.vision import matches_figure, table3_figure
 
     path = table3_figure(res, args.out / "table3.png")
     print(f"wrote {path}")
+    if res.example_query is not None and res.stored_images:
+        path = matches_figure(res.example_query, res.stored_images, args.out / "table3_matches.png")
+        print(f"wrote {path} (the paper's Figure 13)")
     write_json(args.json, {"seed": args.seed, "paper_similarity": PAPER_SIMILARITY, **d})
     return 0

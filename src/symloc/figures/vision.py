@@ -82,9 +82,13 @@ def keyframes_figure(results: Sequence[Any], path: str | Path) -> Path:
 
 
 def matches_figure(
-    img_a: np.ndarray, img_b: np.ndarray, path: str | Path, *, title: str = ""
+    query: np.ndarray, stored: Sequence[np.ndarray], path: str | Path, *, lowe_ratio: float = 0.8
 ) -> Path:
-    """The paper's Figure 13: ORB matches (ratio test, homography inliers) between two images."""
+    """The paper's Figure 13: ORB matches of one query against each stored image.
+
+    Each panel draws the matches that pass Lowe's ratio test; the title gives their number and
+    the homography (RANSAC) inliers among them.
+    """
     import cv2
 
     from symloc.vision.orb import OrbExtractor
@@ -92,25 +96,32 @@ def matches_figure(
 
     plt = _plt()
     ext = OrbExtractor()
-    fa, fb = ext.extract(img_a), ext.extract(img_b)
-    _H, inl, n = match_homography(fb, fa, OrientationConfig())
-    ka = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fa.points]
-    kb = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fb.points]
+    fq = ext.extract(query)
+    kq = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fq.points]
     bf = cv2.BFMatcher(cv2.NORM_HAMMING)
-    good = [
-        m[0]
-        for m in bf.knnMatch(fa.descriptors, fb.descriptors, k=2)
-        if len(m) == 2 and m[0].distance < 0.8 * m[1].distance
-    ]
-    vis = cv2.drawMatches(  # type: ignore[call-overload]
-        np.ascontiguousarray(img_a), ka, np.ascontiguousarray(img_b), kb, good, None
-    )
-    fig, ax = plt.subplots(figsize=(12, 4.8))
-    ax.imshow(vis)
-    ax.set_axis_off()
-    ax.set_title(f"{title} {n} ratio-test matches, {inl} homography inliers")
+    cfg = OrientationConfig(lowe_ratio=lowe_ratio)
+    fig, axes = plt.subplots(len(stored), 1, figsize=(10, 3.6 * len(stored)))
+    for i, (ax, img) in enumerate(zip(np.atleast_1d(axes), stored, strict=True)):
+        fs = ext.extract(img)
+        ks = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fs.points]
+        knn = (
+            bf.knnMatch(fq.descriptors, fs.descriptors, k=2) if len(fs) > 1 and len(fq) > 1 else []
+        )
+        good = [m[0] for m in knn if len(m) == 2 and m[0].distance < lowe_ratio * m[1].distance]
+        _, inl, _ = match_homography(fq, fs, cfg)
+        vis = cv2.drawMatches(  # type: ignore[call-overload]
+            np.ascontiguousarray(query), kq, np.ascontiguousarray(img), ks, good, None
+        )
+        ax.imshow(vis)
+        ax.set_axis_off()
+        ax.set_title(
+            f"query (direction 1) vs stored image {i + 1}: {len(good)} ratio-test matches, "
+            f"{inl} homography inliers",
+            fontsize=9,
+        )
+    fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100, bbox_inches="tight")
+    fig.savefig(out, dpi=90)
     plt.close(fig)
     return out

@@ -99,6 +99,8 @@ class Table3Result:
     trials: list[TrialOutcome]
     untextured: list[TrialOutcome]
     config: dict[str, Any] = field(default_factory=dict)
+    stored_images: list[NDArray[np.uint8]] = field(default_factory=list)
+    example_query: NDArray[np.uint8] | None = None
 
     @staticmethod
     def _counts(trials: list[TrialOutcome]) -> dict[str, int]:
@@ -147,6 +149,7 @@ def _trials(
     rng: np.random.Generator,
     similarity: NDArray[np.float64] | None,
     progress: Any,
+    examples: list[NDArray[np.uint8]] | None = None,
 ) -> list[TrialOutcome]:
     K = camera_matrix(camera)
     c = place.pose[:2]
@@ -160,6 +163,8 @@ def _trials(
             heading = im.heading + dh
             pose = [c[0] + r * math.cos(a), c[1] + r * math.sin(a), heading]
             img = camera.render(world, pose, rng=rng)
+            if examples is not None and not examples:
+                examples.append(img)
             f = extractor.extract(img)
             bow = vocabulary.bow(f.descriptors)
             if similarity is not None:
@@ -223,11 +228,17 @@ def run_table3(
     }
     worlds = [("textured", True)] + ([("untextured", False)] if untextured else [])
     outcomes: dict[str, list[TrialOutcome]] = {}
+    stored: list[NDArray[np.uint8]] = []
+    examples: list[NDArray[np.uint8]] = []
     with tqdm(total=len(worlds) * m * trials, desc="table3 trials", disable=not progress) as bar:
         for name, textured in worlds:
             room = build_room("square", gv, lab=True, textured=textured)
             heads = wall_headings(room.corners, room.center)
-            place = store_place(room.world, room.center, heads, cam, voc, ext, gen, gv_distance=gv)
+            place = store_place(
+                room.world, room.center, heads, cam, voc, ext, gen, gv_distance=gv, keep_images=True
+            )
+            if textured:
+                stored = [im.image for im in place.images if im.image is not None]
             outcomes[name] = _trials(
                 room.world,
                 place,
@@ -241,7 +252,13 @@ def run_table3(
                 gen,
                 sim if textured else None,
                 bar,
+                examples if textured else None,
             )
     return Table3Result(
-        sim / trials, outcomes["textured"], outcomes.get("untextured", []), result_cfg
+        sim / trials,
+        outcomes["textured"],
+        outcomes.get("untextured", []),
+        result_cfg,
+        stored,
+        examples[0] if examples else None,
     )
