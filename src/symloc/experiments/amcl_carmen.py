@@ -1,0 +1,361 @@
+"""``symloc experiment amcl-carmen``: AMCL on real CARMEN laser logs.
+
+For each log in ``../shared/data/carmen/`` (intel, aces, freiburg-079):
+
+1. the map is built from the corrected poses (``symloc.grid.log_odds.LogOddsGrid``, 5 cm);
+2. **tracking**: the odometry is the corrected trajectory corrupted by odometry noise (the
+   corrected logs carry no raw odometry: their ``odom_*`` fields equal the corrected poses), as
+   a differential drive with ``alpha1..alpha4`` (Thrun et al. Table 5.6, the simulator's
+   ``OdometryNoise``) would report it; AMCL starts from the true first pose (covariance nav2's
+   default) and its pose is compared with the corrected pose at every scan (between filter
+   updates the pose is the last estimate moved by the odometry, as nav2's map->odom transform
+   gives it);
+3. **global localization**: from ``--starts`` random scans of the log, AMCL starts from a
+   uniform particle set over the map's free cells and runs for up to ``--window`` scans. A
+   start converges when the estimate comes within 0.3 m and 10 degrees of the corrected pose
+   and stays there for the rest of the window; we report how often, after how many scans /
+   metres, and whether the filter ever reported a *confident wrong* pose: a single
+   well-weighted hypothesis (``n_hypotheses == 1``) with position std < 0.3 m and heading std
+   < 15 degrees while more than 1 m or 30 degrees off.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc._checks import as_rng
+from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.geometry import compose, inverse, wrap_angle
+
+__all__ = [
+    "LOG_NAMES",
+    "build_map",
+    "find_carmen_dir",
+    "global_localization",
+    "noisy_odometry",
+    "register",
+    "run",
+    "tracking",
+]
+
+FloatArray = NDArray[np.float64]
+
+LOG_NAMES = ("intel", "aces", "freiburg-079")
+
+
+def find_carmen_dir() -> Path | None:
+    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
+    env = os.environ.get("SYMLOC_SHARED_DATA")
+    cands = [Path(env) / "carmen"] if env else []
+    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
+    for c in cands:
+        if c.is_dir():
+            return c.resolve()
+    return None
+
+
+def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> Any:
+    """Occupancy grid from the log's scans at their corrected poses.
+
+    With ``cache`` (an ``.npz`` path) the grid is loaded from there if present, else built and
+    saved there.
+    """
+    from symloc.grid import OccupancyGrid
+    from symloc.grid.log_odds import LogOddsGrid
+
+    if cache is not None and cache.is_file():
+        z = np.load(cache)
+        return OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
+    lo = LogOddsGrid(resolution)
+    for s in log.scans:
+        lo.integrate(s.laser_pose, s.scan)
+    grid = lo.to_occupancy_grid()
+    if cache is not None:
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(
+            cache, data=grid.data, resolution=grid.resolution, origin=np.asarray(grid.origin)
+        )
+    return grid
+
+
+def noisy_odometry(
+    poses: FloatArray, alphas: tuple[float, float, float, float], rng: np.random.Generator
+) -> FloatArray:
+    """Odometry poses ``(T, 3)`` from the true poses ``(T, 3)`` with rot-trans-rot noise.
+
+    Each increment's ``rot1, trans, rot2`` gets Gaussian noise of variance
+    ``alpha1 rot^2 + alpha2 trans^2`` (rotations) and ``alpha3 trans^2 + alpha4 (rot1^2 +
+    rot2^2)`` (translation), and the noisy increments are chained from the first pose. As in
+    nav2's motion model, a rotation's noise uses ``min(|rot|, pi - |rot|)`` so that a backward
+    step (``rot1`` near pi) is as noisy as a forward one.
+    """
+    from symloc.odometry import rot_trans_rot, rot_trans_rot_to_pose
+
+    a1, a2, a3, a4 = alphas
+    r1, tr, r2 = rot_trans_rot(poses[:-1], poses[1:])
+    n = r1.size
+    e = rng.standard_normal((3, n))
+    q1 = np.minimum(np.abs(r1), np.pi - np.abs(r1))
+    q2 = np.minimum(np.abs(r2), np.pi - np.abs(r2))
+    r1n = r1 + e[0] * np.sqrt(a1 * q1**2 + a2 * tr**2)
+    trn = tr + e[1] * np.sqrt(a3 * tr**2 + a4 * (q1**2 + q2**2))
+    r2n = r2 + e[2] * np.sqrt(a1 * q2**2 + a2 * tr**2)
+    out = np.empty_like(poses)
+    out[0] = poses[0]
+    for i in range(n):  # chaining is sequential by nature (T scans, not particles)
+        out[i + 1] = rot_trans_rot_to_pose(out[i], r1n[i], trn[i], r2n[i])
+    return out
+
+
+def _errors(est: FloatArray, truth: FloatArray) -> tuple[FloatArray, FloatArray]:
+    dxy = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
+    dth = np.abs(wrap_angle(est[:, 2] - truth[:, 2]))
+    return dxy, np.atleast_1d(dth)
+
+
+def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) -> dict[str, Any]:
+    """Feed scans ``start..stop-1``; per scan the pose estimate and the filter's confidence."""
+    from symloc.odometry import OdometryReading
+
+    n = stop - start
+    est = np.empty((n, 3))
+    conf = np.zeros(n, dtype=bool)
+    nh = np.zeros(n, dtype=np.int64)
+    last_est = None
+    last_odom = None
+    for k, i in enumerate(range(start, stop)):
+        res = amcl.update(OdometryReading(odom[i], log.scans[i].stamp), log.scans[i].scan)
+        if res.updated or last_est is None:
+            last_est, last_odom = res.estimate, odom[i]
+        # nav2's map->odom: the last estimate moved by the odometry since that update
+        est[k] = compose(last_est, compose(inverse(last_odom), odom[i]))
+        cov = res.covariance
+        sxy = math.sqrt(max(float(np.linalg.eigvalsh(cov[:2, :2]).max()), 0.0))
+        conf[k] = res.n_hypotheses == 1 and sxy < 0.3 and cov[2, 2] < math.radians(15) ** 2
+        nh[k] = res.n_hypotheses
+    return {"estimate": est, "confident": conf, "n_hypotheses": nh}
+
+
+@dataclass
+class _LogData:
+    name: str
+    log: Any
+    grid: Any
+    truth: FloatArray
+
+
+def tracking(data: _LogData, params: Any, alphas: tuple[float, ...], rng: Any) -> dict[str, Any]:
+    """Tracking from the true initial pose along the whole log."""
+    from symloc.mcl import Amcl
+
+    gen = as_rng(rng)
+    odom = noisy_odometry(data.truth, alphas, gen)  # type: ignore[arg-type]
+    amcl = Amcl(data.grid, params, gen)
+    amcl.initialize_pose(data.truth[0])
+    out = _run_filter(amcl, data.log, odom, 0, len(data.truth))
+    dxy, dth = _errors(out["estimate"], data.truth)
+    odo_xy, _ = _errors(odom, data.truth)
+    return {
+        "scans": len(dxy),
+        "mean_error_m": float(dxy.mean()),
+        "median_error_m": float(np.median(dxy)),
+        "p95_error_m": float(np.percentile(dxy, 95)),
+        "max_error_m": float(dxy.max()),
+        "mean_heading_error_deg": float(np.degrees(dth.mean())),
+        "max_heading_error_deg": float(np.degrees(dth.max())),
+        "odometry_only_mean_error_m": float(odo_xy.mean()),
+        "odometry_only_final_error_m": float(odo_xy[-1]),
+        "skipped_scans": int(amcl.n_scans_skipped),
+        "_estimate": out["estimate"],
+    }
+
+
+def global_localization(
+    data: _LogData,
+    params: Any,
+    alphas: tuple[float, ...],
+    rng: Any,
+    *,
+    starts: int,
+    window: int,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Global localization from ``starts`` random scans; see the module docstring."""
+    from tqdm import tqdm
+
+    from symloc.mcl import Amcl
+
+    gen = as_rng(rng)
+    t = len(data.truth)
+    odom = noisy_odometry(data.truth, alphas, gen)  # type: ignore[arg-type]
+    first = gen.choice(max(t - 10, 1), size=min(starts, max(t - 10, 1)), replace=False)
+    runs = []
+    tol_xy, tol_th = 0.3, math.radians(10.0)
+    for s in tqdm(
+        sorted(first.tolist()), desc=f"global {data.name}", disable=not progress, leave=False
+    ):
+        stop = min(t, s + window)
+        amcl = Amcl(data.grid, params, gen)
+        amcl.initialize_global()
+        out = _run_filter(amcl, data.log, odom, s, stop)
+        dxy, dth = _errors(out["estimate"], data.truth[s:stop])
+        ok = (dxy < tol_xy) & (dth < tol_th)
+        # converged at the first scan after which it stays within tolerance
+        bad = np.flatnonzero(~ok)
+        conv_at = 0 if bad.size == 0 else int(bad[-1] + 1)
+        converged = conv_at < len(ok)
+        gross = (dxy > 1.0) | (dth > math.radians(30.0))
+        path = np.concatenate(
+            [[0.0], np.cumsum(np.hypot(*np.diff(data.truth[s:stop, :2], axis=0).T))]
+        )
+        runs.append(
+            {
+                "start_scan": int(s),
+                "scans": int(stop - s),
+                "converged": bool(converged),
+                "scans_to_converge": int(conv_at) if converged else None,
+                "metres_to_converge": float(path[conv_at]) if converged else None,
+                "seconds_to_converge": float(
+                    data.log.scans[s + conv_at].stamp - data.log.scans[s].stamp
+                )
+                if converged
+                else None,
+                "confident_wrong_scans": int(np.count_nonzero(out["confident"] & gross)),
+                "confident_outside_tolerance_scans": int(np.count_nonzero(out["confident"] & ~ok)),
+                "final_error_m": float(dxy[-1]),
+            }
+        )
+    conv = [r for r in runs if r["converged"]]
+    return {
+        "starts": len(runs),
+        "window_scans": window,
+        "converged": len(conv),
+        "median_scans_to_converge": float(np.median([r["scans_to_converge"] for r in conv]))
+        if conv
+        else None,
+        "median_metres_to_converge": float(np.median([r["metres_to_converge"] for r in conv]))
+        if conv
+        else None,
+        "runs_with_confident_wrong": sum(r["confident_wrong_scans"] > 0 for r in runs),
+        "confident_wrong_scans": sum(r["confident_wrong_scans"] for r in runs),
+        "runs": runs,
+    }
+
+
+def register(subparsers: Any) -> None:
+    """Add ``amcl-carmen`` to ``symloc experiment``."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "amcl-carmen",
+        help="AMCL tracking and global localization on the CARMEN logs (map from corrected poses)",
+    )
+    add_common_arguments(parser)
+    parser.add_argument("--logs", nargs="+", default=list(LOG_NAMES), help="log names")
+    parser.add_argument("--data", type=Path, default=None, help="folder with the CARMEN logs")
+    parser.add_argument("--starts", type=int, default=20, help="global-localization starts")
+    parser.add_argument("--window", type=int, default=100, help="scans per global start")
+    parser.add_argument(
+        "--odom-alpha", type=float, default=0.01, help="odometry noise alpha1..4 (10%% std)"
+    )
+    parser.add_argument(
+        "--laser-model",
+        default="likelihood_field_prob",
+        choices=["likelihood_field", "likelihood_field_prob", "beam"],
+    )
+    parser.add_argument("--tracking-particles", type=int, default=2000, help="max_particles")
+    parser.add_argument("--global-particles", type=int, default=20000, help="max_particles")
+    parser.add_argument("--skip-global", action="store_true", help="tracking only")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the experiment on each log; print, write JSON and the figure."""
+    from symloc.io.carmen import read_carmen
+    from symloc.mcl import AmclParams
+
+    folder = args.data or find_carmen_dir()
+    if folder is None:
+        print("CARMEN logs not found: set SYMLOC_SHARED_DATA or pass --data")
+        return 2
+    a = args.odom_alpha
+    alphas = (a, a, a, a)
+    base = AmclParams(
+        laser_model_type=args.laser_model,
+        alpha1=a,
+        alpha2=a,
+        alpha3=a,
+        alpha4=a,
+        laser_max_range=49.9,
+    )
+    track_p = base.replace(
+        max_particles=args.tracking_particles, min_particles=min(500, args.tracking_particles)
+    )
+    glob_p = base.replace(
+        max_particles=args.global_particles,
+        min_particles=min(500, args.global_particles),
+        recovery_alpha_slow=0.001,
+        recovery_alpha_fast=0.1,
+    )
+    print_config(
+        "amcl-carmen",
+        {
+            "seed": args.seed,
+            "data": folder,
+            "logs": ", ".join(args.logs),
+            "map": "log-odds grid at 0.05 m from the corrected poses",
+            "odometry": f"corrected increments + rot-trans-rot noise, alpha1..4 = {a}",
+            "amcl": f"nav2 defaults except {args.laser_model}, alpha1..4 = {a},"
+            f" tracking {track_p.max_particles}/{track_p.min_particles} particles,"
+            f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1",
+            "global": f"{args.starts} starts x up to {args.window} scans; converged = within"
+            " 0.3 m / 10 deg to the end; confident wrong = 1 hypothesis, std < 0.3 m / 15 deg,"
+            " error > 1 m or 30 deg",
+        },
+    )
+    rng = np.random.default_rng(args.seed)
+    results = []
+    fig_logs = []
+    for name in args.logs:
+        path = folder / f"{name}-corrected.log.gz"
+        log = read_carmen(path)
+        grid = build_map(log, cache=args.out / f"amcl_carmen_map_{name}.npz")
+        truth = log.laser_poses.copy()
+        truth[:, 2] = wrap_angle(truth[:, 2])
+        data = _LogData(name, log, grid, truth)
+        tr = tracking(data, track_p, alphas, rng)
+        est = tr.pop("_estimate")
+        entry: dict[str, Any] = {"log": name, "scans": len(truth), "tracking": tr}
+        print(
+            f"{name}: tracking mean {tr['mean_error_m']:.3f} m (median {tr['median_error_m']:.3f},"
+            f" p95 {tr['p95_error_m']:.3f}, max {tr['max_error_m']:.3f}),"
+            f" heading mean {tr['mean_heading_error_deg']:.2f} deg;"
+            f" odometry alone {tr['odometry_only_mean_error_m']:.2f} m mean"
+        )
+        if not args.skip_global:
+            gl = global_localization(
+                data, glob_p, alphas, rng, starts=args.starts, window=args.window
+            )
+            entry["global"] = gl
+            print(
+                f"{name}: global {gl['converged']}/{gl['starts']} converged, median"
+                f" {gl['median_scans_to_converge']} scans / {gl['median_metres_to_converge']} m;"
+                f" runs with a confident wrong pose: {gl['runs_with_confident_wrong']}"
+                f" ({gl['confident_wrong_scans']} scans)"
+            )
+        results.append(entry)
+        fig_logs.append(
+            {"name": name, "grid": grid, "truth": truth, "estimate": est, "stamps": log.stamps}
+        )
+    from symloc.figures.mcl import amcl_carmen_figure
+
+    fig = amcl_carmen_figure(fig_logs, args.out / "amcl_carmen.png")
+    print(f"wrote {fig}")
+    write_json(args.json, {"seed": args.seed, "logs": results})
+    return 0
