@@ -104,10 +104,13 @@ def matches_figure(
     for i, (ax, img) in enumerate(zip(np.atleast_1d(axes), stored, strict=True)):
         fs = ext.extract(img)
         ks = [cv2.KeyPoint(float(x), float(y), 8) for x, y in fs.points]
-        knn = (
-            bf.knnMatch(fq.descriptors, fs.descriptors, k=2) if len(fs) > 1 and len(fq) > 1 else []
-        )
-        good = [m[0] for m in knn if len(m) == 2 and m[0].distance < lowe_ratio * m[1].distance]
+        # the same matching as the decision (stored -> query), drawn query -> stored
+        knn = bf.knnMatch(fs.descriptors, fq.descriptors, k=2) if min(len(fs), len(fq)) > 1 else []
+        good = [
+            cv2.DMatch(m[0].trainIdx, m[0].queryIdx, m[0].distance)
+            for m in knn
+            if len(m) == 2 and m[0].distance < lowe_ratio * m[1].distance
+        ]
         _, inl, _ = match_homography(fq, fs, cfg)
         vis = cv2.drawMatches(  # type: ignore[call-overload]
             np.ascontiguousarray(query), kq, np.ascontiguousarray(img), ks, good, None
