@@ -1,0 +1,81 @@
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from symloc.experiments.amcl_carmen import find_carmen_dir, noisy_odometry, tracking
+from symloc.experiments.amcl_symmetric import classify, run_room, symmetric_images
+from symloc.geometry import wrap_angle
+
+
+def test_symmetric_images_of_a_square():
+    imgs = symmetric_images(np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0]), 4)
+    np.testing.assert_allclose(imgs[1], [0.0, 1.0, np.pi / 2], atol=1e-12)
+    np.testing.assert_allclose(imgs[2], [-1.0, 0.0, np.pi], atol=1e-12)
+    assert symmetric_images(np.array([1.0, 2.0, 0.5]), np.zeros(2), 1).shape == (1, 3)
+
+
+def test_classify():
+    imgs = symmetric_images(np.array([1.0, 0.0, 0.0]), np.zeros(2), 4)
+    tol = math.radians(10)
+    assert classify(np.array([1.05, 0.0, 0.05]), imgs, 0.3, tol) == ("correct", 0)
+    assert classify(np.array([0.0, -1.0, -np.pi / 2]), imgs, 0.3, tol) == ("symmetric_copy", 3)
+    # right place, wrong heading: not a symmetry image
+    assert classify(np.array([1.0, 0.0, 1.0]), imgs, 0.3, tol) == ("not_converged", -1)
+
+
+def test_run_room_small():
+    summary, trials, grid = run_room(
+        "rectangle",
+        2,
+        3,
+        duration=6.0,
+        progress=False,
+        params=None,
+    )
+    assert summary["trials"] == 2
+    assert summary["order"] == 2
+    assert summary["correct"] + summary["symmetric_copy"] + summary["not_converged"] == 2
+    assert all(np.all(np.isfinite(t.estimate)) for t in trials)
+    assert grid.resolution == 0.05
+
+
+def test_noisy_odometry_zero_noise_is_the_truth():
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.normal(0, 0.3, (50, 3)), axis=0)
+    t[:, 2] = wrap_angle(t[:, 2])
+    o = noisy_odometry(t, (0.0, 0.0, 0.0, 0.0), rng)
+    np.testing.assert_allclose(o[:, :2], t[:, :2], atol=1e-9)
+    noisy = noisy_odometry(t, (0.01, 0.01, 0.01, 0.01), rng)
+    assert np.abs(noisy[1:, :2] - t[1:, :2]).max() > 0.01
+
+
+@pytest.mark.shared_data
+def test_tracking_on_the_start_of_the_aces_log():
+    folder = find_carmen_dir()
+    if folder is None or not (folder / "aces-corrected.log.gz").is_file():
+        pytest.skip("CARMEN logs not found (../shared/data/carmen or SYMLOC_SHARED_DATA)")
+    from symloc.experiments.amcl_carmen import _LogData, build_map
+    from symloc.io.carmen import read_carmen
+    from symloc.mcl import AmclParams
+
+    log = read_carmen(folder / "aces-corrected.log.gz")
+    short = SimpleNamespace(scans=log.scans[:40])
+    grid = build_map(short)
+    truth = log.laser_poses[:40].copy()
+    truth[:, 2] = wrap_angle(truth[:, 2])
+    p = AmclParams(
+        laser_model_type="likelihood_field_prob",
+        alpha1=0.01,
+        alpha2=0.01,
+        alpha3=0.01,
+        alpha4=0.01,
+        max_particles=1000,
+        laser_max_range=49.9,
+    )
+    res = tracking(_LogData("aces", short, grid, truth), p, (0.01,) * 4, 0)
+    assert res["mean_error_m"] < 0.2
+    assert res["odometry_only_mean_error_m"] > res["mean_error_m"]
