@@ -126,3 +126,26 @@ def test_bad_paths(tmp_path: Path) -> None:
         BagWriter(tmp_path / "a", "ros3")  # type: ignore[arg-type]
     with pytest.raises(DataFormatError, match="on_error"):
         list(read_bag(tmp_path / "junk.bag", on_error="ignore"))  # type: ignore[arg-type]
+
+
+def test_ros2_folder_named_dot_bag(tmp_path: Path) -> None:
+    path = tmp_path / "run.bag"  # as `ros2 bag record -o run.bag` names it
+    _write_run(path, "ros2", n=2)
+    assert path.is_dir()
+    assert sum(m.kind == "scan" for m in read_bag(path)) == 2
+
+
+def test_scans_with_odometry_and_map_from_bag(tmp_path: Path) -> None:
+    from symloc.ros.replay import build_map_from_bag, scans_with_odometry
+
+    path = tmp_path / "run"
+    ref = _write_run(path, "ros2", n=5)
+    scans, odom, dropped = scans_with_odometry(path)
+    assert len(scans) == 5
+    assert dropped == {}
+    np.testing.assert_allclose(odom, [o.pose for o in ref["odoms"]], atol=1e-12)
+    empty = tmp_path / "empty"
+    with BagWriter(empty) as w:
+        w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0))
+    with pytest.raises(DataFormatError, match="expected scans with odometry"):
+        build_map_from_bag(empty)

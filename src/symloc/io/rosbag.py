@@ -113,6 +113,14 @@ class BagMessage:
     value: Any
 
 
+class _Ros2Folder(type(Path())):  # type: ignore[misc]
+    """A ROS 2 bag folder whose name ends in ``.bag`` (``ros2 bag record -o run.bag``)."""
+
+    @property
+    def suffix(self) -> str:
+        return ""
+
+
 def resolve_bag_path(path: str | Path) -> Path:
     """The path AnyReader takes: a ROS 1 ``.bag`` file or a ROS 2 bag directory.
 
@@ -129,7 +137,8 @@ def resolve_bag_path(path: str | Path) -> Path:
     if p.is_dir():
         if not (p / "metadata.yaml").is_file():
             raise DataFormatError(f"bag: {p} is a folder without metadata.yaml (not a ROS 2 bag)")
-        return p
+        # AnyReader tells ROS 1 from ROS 2 by the ".bag" suffix; a ROS 2 folder may carry it
+        return _Ros2Folder(p) if p.suffix == ".bag" else p
     if p.suffix in (".db3", ".mcap"):
         if (p.parent / "metadata.yaml").is_file():
             return p.parent

@@ -24,7 +24,7 @@ from symloc.localizer import Estimate
 from symloc.ros.core import LocalizerFactory, NodeCore
 from symloc.ros.params import NodeParams
 
-__all__ = ["ReplayResult", "replay_bag"]
+__all__ = ["ReplayResult", "build_map_from_bag", "replay_bag", "scans_with_odometry"]
 
 FloatArray = NDArray[np.float64]
 
@@ -107,3 +107,55 @@ def replay_bag(
         steps=list(getattr(core.localizer, "log", [])),
         particles=core._particles() if core.localizer is not None else None,
     )
+
+
+def scans_with_odometry(
+    path: str | Path, *, topics: BagTopics | None = None, transform_tolerance: float = 1.0
+) -> tuple[list[Any], FloatArray, dict[str, int]]:
+    """The bag's scans and the odometry pose (N, 3) at each scan's stamp (interpolated).
+
+    Scans without odometry close enough in time are left out and counted in the returned
+    ``dropped`` dict (reason -> count), as the node does.
+    """
+    from symloc.ros.core import _OdomBuffer
+
+    buf = _OdomBuffer()
+    scans: list[Any] = []
+    odom: list[FloatArray] = []
+    dropped: Counter[str] = Counter()
+    for m in read_bag(path, topics=topics, on_error="skip", dropped=dropped):
+        if m.kind == "odom":
+            if not buf.add(m.value, max_age=60.0):
+                dropped["odom: stamp went backwards"] += 1
+        elif m.kind == "scan":
+            reading = buf.at(m.stamp, transform_tolerance)
+            if isinstance(reading, str):
+                dropped[f"scan: {reading}"] += 1
+                continue
+            scans.append(m.value)
+            odom.append(np.asarray(reading.pose))
+    return scans, np.asarray(odom, dtype=np.float64).reshape(-1, 3), dict(dropped)
+
+
+def build_map_from_bag(
+    path: str | Path, *, topics: BagTopics | None = None, slam_params: Any = None
+) -> Any:
+    """Build the occupancy grid from a bag's scans and odometry with symloc's SLAM.
+
+    Returns the :class:`symloc.slam.slam.SlamResult` (``.grid``, ``.poses``).
+
+    Raises
+    ------
+    DataFormatError
+        The bag has fewer than two scans with odometry.
+    """
+    from symloc.errors import DataFormatError
+    from symloc.slam.slam import run_slam
+
+    scans, odom, dropped = scans_with_odometry(path, topics=topics)
+    if len(scans) < 2:
+        raise DataFormatError(
+            f"bag {path}: expected scans with odometry to build a map, got {len(scans)}"
+            f" (dropped: {dropped or 'none'})"
+        )
+    return run_slam(scans, odom, slam_params, progress=True, desc="slam (bag)")

@@ -35,6 +35,20 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--seed", type=int, default=None, help="AMCL seed (overrides the params' seed)")
     p.add_argument(
+        "--build-map",
+        type=Path,
+        default=None,
+        metavar="MAP.yaml",
+        help="instead of localizing, build the occupancy grid from the bag's scans and odometry"
+        " (symloc SLAM) and save it in map_server format",
+    )
+    p.add_argument(
+        "--build-visual-map",
+        action="store_true",
+        help="mode build_visual_map: places that match nothing are added to --visual-map (the"
+        " bag must hold the robot's trip to the centre and its images, as a node run records)",
+    )
+    p.add_argument(
         "--out",
         type=Path,
         default=Path("replay"),
@@ -51,8 +65,12 @@ def _run(args: argparse.Namespace) -> int:
     from symloc.ros.params import NodeParams
     from symloc.ros.replay import replay_bag
 
+    if args.build_map is not None:
+        return _build_map(args)
     params = NodeParams.from_yaml(args.params) if args.params else NodeParams()
     changes: dict[str, Any] = {"map_yaml": ""}
+    if args.build_visual_map:
+        changes["mode"] = "build_visual_map"
     if args.visual_map is not None:
         changes["visual_map"] = str(args.visual_map)
     if args.vocabulary is not None:
@@ -117,4 +135,21 @@ def _run(args: argparse.Namespace) -> int:
         print(f"  step: {line}")
     print(f"wrote {tum}")
     print(f"wrote {png}")
+    return 0
+
+
+def _build_map(args: argparse.Namespace) -> int:
+    from symloc.grid.map_io import save_map  # type: ignore[import-not-found]
+    from symloc.io.rosbag import BagTopics
+    from symloc.ros.replay import build_map_from_bag
+
+    print(f"# symloc replay {args.bag} --build-map {args.build_map}")
+    topics = BagTopics(scan=args.scan_topic, odom=args.odom_topic, truth=None)
+    res = build_map_from_bag(args.bag, topics=topics)
+    path = save_map(res.grid, args.build_map)
+    print(
+        f"map: {res.grid.width} x {res.grid.height} cells at {res.grid.resolution} m;"
+        f" {len(res.poses)} scans, {len(res.loop_closures)} loop closures"
+    )
+    print(f"wrote {path}")
     return 0
