@@ -73,6 +73,11 @@ def run(args: argparse.Namespace) -> int:
         f"95th pct {d['heading_error_deg_p95']:.3f} deg, max {d['heading_error_deg_max']:.3f} deg "
         f"(uncorrected, i.e. k x 90 deg only: median {d['heading_error_uncorrected_deg_median']:.3f} deg)"
     )
+    r = d["score_ratio_best_to_second"]
+    print(
+        f"best/second BoW score ratio over the textured trials: min {r['min']:.2f}, "
+        f"median {r['median']:.2f} (the decision needs >= 2)"
+    )
     u = d["untextured"]
     print(
         f"untextured lab: undetermined {u['undetermined']}/{u['trials']} "

@@ -120,6 +120,13 @@ class Table3Result:
         herr = np.array([abs(t.heading_error_out) for t in self.trials if t.decision.decided])
         hin = np.array([abs(t.heading_error_in) for t in self.trials if t.decision.decided])
         deg = np.degrees
+        ratios = np.array(
+            [
+                t.decision.best_score / t.decision.second_score
+                for t in self.trials
+                if math.isfinite(t.decision.best_score) and t.decision.second_score > 0
+            ]
+        )
         return {
             "similarity": self.similarity.round(4).tolist(),
             "accuracy": c["correct"] / max(c["trials"], 1),
@@ -131,6 +138,10 @@ class Table3Result:
             "heading_error_uncorrected_deg_median": float(deg(np.median(hin)))
             if hin.size
             else math.nan,
+            "score_ratio_best_to_second": {
+                "min": float(ratios.min()) if ratios.size else math.nan,
+                "median": float(np.median(ratios)) if ratios.size else math.nan,
+            },
             "untextured": self._counts(self.untextured),
             "config": self.config,
         }
