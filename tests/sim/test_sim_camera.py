@@ -7,9 +7,12 @@ import math
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from symloc.errors import ConfigurationError
 from symloc.sim.camera import Camera, render
+from symloc.sim.raycast import raycast
 from symloc.sim.rooms import build_room
 from symloc.sim.textures import PHOTO_NAMES, PLAIN_COLORS, load_photo, material_texture
 from symloc.sim.world import MATERIAL_BOARD, World
@@ -137,3 +140,32 @@ def test_intrinsics() -> None:
     assert np.allclose(cam.intrinsics, [[320, 0, 320], [0, 320, 240], [0, 0, 1]])
     assert cam.vfov == pytest.approx(2 * math.atan(240 / 320))
     assert cam.column_angles[0] == pytest.approx(math.atan(319.5 / 320))
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    name=st.sampled_from(["triangle", "square", "hexagon", "circle", "l_shaped"]),
+    gv=st.floats(1.5, 5.0),
+    frac=st.floats(0.0, 1.0),
+    theta=st.floats(-math.pi, math.pi),
+    col=st.integers(0, 159),
+)
+def test_camera_agrees_with_ray_casting(
+    name: str, gv: float, frac: float, theta: float, col: int
+) -> None:
+    """The floor/board boundary in any column sits where the ray-cast distance puts it."""
+    room = build_room(name, gv, furniture=0)
+    pts = room.positions_inside(20, margin=0.3)
+    x, y = pts[int(frac * 19)]
+    cam = Camera(width=160, height=120, noise_sigma=0.0)
+    img = cam.render(room.world, [x, y, theta]).astype(float)
+    alpha = cam.column_angles[col]
+    d = raycast(room.world, [x, y], [theta + alpha])[0]
+    foot = cam.height / 2 + cam.focal * cam.mount_height / (d * math.cos(alpha))
+    floor = np.array(cam.floor_color, dtype=float)
+    below = math.ceil(foot - 0.5) + 1
+    above = math.floor(foot - 0.5) - 1
+    if below < cam.height:
+        assert np.all(img[below, col] == floor)
+    if 0 <= above < cam.height:
+        assert np.any(img[above, col] != floor)
