@@ -128,7 +128,7 @@ def write_tum(path: Path, rows: list[tuple[float, FloatArray]]) -> None:
 
 def _save_map(grid: Any, assets: Path) -> Path | None:
     try:
-        from symloc.grid.map_io import save_map  # type: ignore[import-not-found]
+        from symloc.grid.map_io import save_map
     except ImportError:
         return None
     path = assets / "map.yaml"

@@ -171,7 +171,7 @@ def _rosbags_value(typestore: Any, desc: Any, value: Any) -> Any:
         return np.zeros(length if int(kind) == 3 else 0, dtype=dtype)
     if isinstance(value, (bytes, bytearray, memoryview)):
         return np.frombuffer(value, dtype=np.uint8).astype(dtype)
-    arr = np.asarray(value, dtype=dtype).reshape(-1)
+    arr: np.ndarray[Any, Any] = np.asarray(value, dtype=dtype).reshape(-1)
     if int(kind) == 3 and arr.size != length:
         raise ValueError(f"expected {length} values, got {arr.size}")
     return arr

@@ -126,7 +126,7 @@ class NodeCore:
         params: NodeParams,
         *,
         factory: LocalizerFactory | None = None,
-        warn: Callable[[str], None] | None = None,
+        warn: Callable[[str], object] | None = None,
     ) -> None:
         if factory is None:
             from symloc.ros.assemble import make_localizer

@@ -56,7 +56,7 @@ def numeric_array(value: Any, name: str, dtype: type = np.float64) -> NDArray[An
     try:
         if isinstance(value, (bytes, bytearray, memoryview)):
             return np.frombuffer(value, dtype=np.uint8).astype(dtype, copy=False)
-        arr = np.asarray(value, dtype=dtype)
+        arr: NDArray[Any] = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError) as err:
         raise DataFormatError(f"{name}: expected a sequence of numbers") from err
     if arr.ndim != 1:
@@ -71,7 +71,7 @@ def stamp_seconds(stamp: Any, where: str) -> float:
     if sec is _MISSING or nsec is _MISSING:
         raise DataFormatError(f"{where}: expected a time with sec and nanosec, got {stamp!r}")
     try:
-        return float(sec) + 1e-9 * float(nsec)
+        return float(sec) + 1e-9 * float(nsec)  # type: ignore[arg-type]
     except (TypeError, ValueError) as err:
         raise DataFormatError(f"{where}: sec/nanosec are not numbers: {stamp!r}") from err
 

@@ -108,7 +108,7 @@ class SymlocNode:
         self.params = params
         self.node = Node(node_name, context=context, cli_args=list(cli_args or []) or None)
         log = self.node.get_logger()
-        self.core = NodeCore(params, factory=factory, warn=log.warning)
+        self.core = NodeCore(params, factory=factory, warn=lambda text: log.warning(text))
         self._types = {
             "amcl_pose": PoseWithCovarianceStamped,
             "particle_cloud": PoseArray,

@@ -61,7 +61,7 @@ def covariance_from_ros(cov: Any, where: str) -> FloatArray:
         raise DataFormatError(f"{where}: expected 36 numbers (6x6), got {c.size}")
     if not np.all(np.isfinite(c)):
         raise DataFormatError(f"{where}: contains NaN or infinite values")
-    block = c.reshape(6, 6)[np.ix_(COV_INDEX, COV_INDEX)]
+    block: FloatArray = c.reshape(6, 6)[np.ix_(COV_INDEX, COV_INDEX)]
     if np.any(np.diag(block) < 0):
         raise DataFormatError(f"{where}: negative variance on the diagonal {np.diag(block)}")
     return block

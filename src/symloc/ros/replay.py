@@ -55,7 +55,7 @@ def replay_bag(
     grid: OccupancyGrid | None = None,
     topics: BagTopics | None = None,
     factory: LocalizerFactory | None = None,
-    warn: Callable[[str], None] | None = None,
+    warn: Callable[[str], object] | None = None,
     progress: bool = False,
 ) -> ReplayResult:
     """Replay ``path`` through the node logic; ``grid`` overrides the bag's map topic.

@@ -80,7 +80,7 @@ def _run(args: argparse.Namespace) -> int:
     params = dataclasses.replace(params, **changes)
     grid = None
     if args.map is not None:
-        from symloc.grid.map_io import load_map  # type: ignore[import-not-found]
+        from symloc.grid.map_io import load_map
 
         grid = load_map(args.map)
     print(f"# symloc replay {args.bag}")
@@ -139,7 +139,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _build_map(args: argparse.Namespace) -> int:
-    from symloc.grid.map_io import save_map  # type: ignore[import-not-found]
+    from symloc.grid.map_io import save_map
     from symloc.io.rosbag import BagTopics
     from symloc.ros.replay import build_map_from_bag
 
