@@ -129,8 +129,8 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
     est = np.empty((n, 3))
     conf = np.zeros(n, dtype=bool)
     nh = np.zeros(n, dtype=np.int64)
-    last_est = None
-    last_odom = None
+    last_est: FloatArray | None = None
+    last_odom: FloatArray = odom[start]
     for k, i in enumerate(range(start, stop)):
         res = amcl.update(OdometryReading(odom[i], log.scans[i].stamp), log.scans[i].scan)
         if res.updated or last_est is None:
@@ -197,7 +197,7 @@ def global_localization(
     t = len(data.truth)
     odom = noisy_odometry(data.truth, alphas, gen)  # type: ignore[arg-type]
     first = gen.choice(max(t - 10, 1), size=min(starts, max(t - 10, 1)), replace=False)
-    runs = []
+    runs: list[dict[str, Any]] = []
     tol_xy, tol_th = 0.3, math.radians(10.0)
     for s in tqdm(
         sorted(first.tolist()), desc=f"global {data.name}", disable=not progress, leave=False
@@ -244,8 +244,8 @@ def global_localization(
         "median_metres_to_converge": float(np.median([r["metres_to_converge"] for r in conv]))
         if conv
         else None,
-        "runs_with_confident_wrong": sum(r["confident_wrong_scans"] > 0 for r in runs),
-        "confident_wrong_scans": sum(r["confident_wrong_scans"] for r in runs),
+        "runs_with_confident_wrong": int(sum(r["confident_wrong_scans"] > 0 for r in runs)),
+        "confident_wrong_scans": sum(int(r["confident_wrong_scans"]) for r in runs),
         "runs": runs,
     }
 

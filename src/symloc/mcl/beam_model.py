@@ -143,4 +143,5 @@ def beam_model_weights(
     pz += np.where(z < 0.0, z_short * lambda_short * np.exp(-lambda_short * r), 0.0)
     no_ret = ~beams.hit[None, :]
     pz += np.where(no_ret, z_max, z_rand / beams.range_max)
-    return 1.0 + np.sum(pz**3, axis=1)
+    out: FloatArray = 1.0 + np.sum(pz**3, axis=1)
+    return out

@@ -160,7 +160,7 @@ def cluster_particles(particles: FloatArray, weights: FloatArray) -> ClusterStat
 
 
 def _stats(p: FloatArray, w: FloatArray, labels: NDArray[np.intp], n: int) -> ClusterStats:
-    wsum = np.bincount(labels, weights=w, minlength=n)
+    wsum = np.asarray(np.bincount(labels, weights=w, minlength=n), dtype=np.float64)
     counts = np.bincount(labels, minlength=n)
     safe = np.where(wsum > 0, wsum, 1.0)
     # Normalise within a cluster; a zero-weight cluster falls back to equal weights.

@@ -106,6 +106,6 @@ def likelihood_field_weights(
     idx = endpoint_flat_indices(field, poses, beams.ranges[hit], beams.angles[hit])
     table = field.table("pz3", z_hit, z_rand, sigma_hit, beams.range_max)
     vals = table[idx]
-    total = vals.sum(axis=1, dtype=np.float64)
+    total: FloatArray = vals.sum(axis=1, dtype=np.float64)
     total += 1.0
     return total
