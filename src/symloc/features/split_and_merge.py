@@ -226,15 +226,20 @@ class _Moments:
         np.multiply(x, y, out=cols[5, 1:])
         self.cs = np.cumsum(cols, axis=1)
 
-    def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
-        """TLS fits of the ranges [a, b); ``b`` may exceed M (the range wraps to the start)."""
+    def sums(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
+        """Moment sums (6, K) of the ranges [a, b); ``b`` may exceed M (wraps to the start)."""
         a = np.asarray(a)
         b = np.asarray(b)
         m = self.cs.shape[1] - 1
         over = b > m
         s = self.cs[:, np.minimum(b, m)] - self.cs[:, a]
-        if np.any(over):
+        if over.any():
             s = s + np.where(over, self.cs[:, np.where(over, b - m, 0)], 0.0)
+        return s
+
+    def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
+        """TLS fits of the ranges [a, b); ``b`` may exceed M (the range wraps to the start)."""
+        s = self.sums(a, b)
         return _tls_from_moments(s[0], s[1], s[2], s[3], s[4], s[5])
 
 
@@ -259,11 +264,24 @@ def _pair_excess(
     if t.size == 0:
         return np.zeros(0)
     u = (t + 1) % n_l
-    a = st[t]
-    b = np.where(u == 0, sp[u] + m, sp[u])
+    a_all = st[t]
+    b_all = np.where(u == 0, sp[u] + m, sp[u])
+    out_all = np.full(t.size, np.inf)
+    # a joint fit whose RMS residual (the smaller eigenvalue of the scatter) already exceeds
+    # the largest tolerance cannot hold every point within its tolerance: skip the point pass
+    s = mom.sums(a_all, b_all)
+    n = np.maximum(s[0], 1.0)
+    cxx = s[3] / n - (s[1] / n) ** 2
+    cyy = s[4] / n - (s[2] / n) ** 2
+    cxy = s[5] / n - (s[1] / n) * (s[2] / n)
+    var_minor = 0.5 * (cxx + cyy) - np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy * cxy)
+    cand = np.flatnonzero(var_minor <= float(tol.max()) ** 2)
+    if cand.size == 0:
+        return out_all
+    a, b = a_all[cand], b_all[cand]
     _c, _d, nrm, off, _s = mom.fit(a, b)
     lengths = b - a
-    rep = np.repeat(np.arange(t.size), lengths)
+    rep = np.repeat(np.arange(cand.size), lengths)
     first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     pos = np.arange(int(lengths.sum())) - np.repeat(first - a, lengths)
     if closed:
@@ -272,37 +290,59 @@ def _pair_excess(
     res = np.abs(q[:, 0] * nrm[rep, 0] + q[:, 1] * nrm[rep, 1] - off[rep]) / tol[pos]
     out = np.maximum.reduceat(res, first)
     out[lengths <= 2] = 0.0
-    return out
+    out_all[cand] = out
+    return out_all
 
 
 def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
-    """Recursive split at the farthest point from the chord; returns sorted cut indices."""
+    """Split at the farthest point from the chord, recursively; returns sorted cut indices.
+
+    All segments of one recursion level are processed together (one vectorised pass over
+    their interior points per level).
+    """
     m = p.shape[0]
     cuts = [0, m - 1]
-    stack: list[tuple[int, int]] = []
     if first_cut is not None and 0 < first_cut < m - 1:
         cuts.append(first_cut)
-        stack += [(0, first_cut), (first_cut, m - 1)]
+        seg_i = np.array([0, first_cut], dtype=np.intp)
+        seg_j = np.array([first_cut, m - 1], dtype=np.intp)
     else:
-        stack.append((0, m - 1))
-    while stack:
-        i, j = stack.pop()
-        if j - i < 2:
-            continue
-        a, b = p[i], p[j]
-        d = b - a
-        length = float(np.hypot(d[0], d[1]))
-        seg = p[i + 1 : j]
-        if length < 1e-12:
-            dist = np.hypot(seg[:, 0] - a[0], seg[:, 1] - a[1])
-        else:
-            dist = np.abs(d[0] * (seg[:, 1] - a[1]) - d[1] * (seg[:, 0] - a[0])) / length
-        ratio = dist / tol[i + 1 : j]
-        k = int(np.argmax(ratio))
-        if ratio[k] > 1.0:
-            cut = i + 1 + k
-            cuts.append(cut)
-            stack += [(i, cut), (cut, j)]
+        seg_i = np.array([0], dtype=np.intp)
+        seg_j = np.array([m - 1], dtype=np.intp)
+    while seg_i.size:
+        keep = seg_j - seg_i >= 2
+        seg_i, seg_j = seg_i[keep], seg_j[keep]
+        if seg_i.size == 0:
+            break
+        n_in = seg_j - seg_i - 1
+        first = np.concatenate(([0], np.cumsum(n_in)[:-1]))
+        sid = np.repeat(np.arange(seg_i.size), n_in)
+        idx = np.arange(int(n_in.sum())) - np.repeat(first - seg_i - 1, n_in)
+        a = p[seg_i]
+        d = p[seg_j] - a
+        length = np.hypot(d[:, 0], d[:, 1])
+        q = p[idx] - a[sid]
+        ds = d[sid]
+        cross = np.abs(ds[:, 0] * q[:, 1] - ds[:, 1] * q[:, 0])
+        safe = length > 1e-12
+        dist = np.where(
+            safe[sid], cross / np.where(safe, length, 1.0)[sid], np.hypot(q[:, 0], q[:, 1])
+        )
+        ratio = dist / tol[idx]
+        best = np.maximum.reduceat(ratio, first)
+        split = best > 1.0
+        if not split.any():
+            break
+        # first index of each segment's maximum
+        is_best = ratio == best[sid]
+        cand = np.where(is_best, np.arange(idx.size), idx.size)
+        arg = np.minimum.reduceat(cand, first)
+        k = idx[arg[split]]
+        cuts.extend(int(v) for v in k)
+        seg_i, seg_j = (
+            np.concatenate((seg_i[split], k)),
+            np.concatenate((k, seg_j[split])),
+        )
     return sorted(cuts)
 
 
