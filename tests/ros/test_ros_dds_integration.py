@@ -126,7 +126,7 @@ class Driver:
 
 
 @pytest.fixture
-def node_process(tmp_path: Path) -> Any:
+def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
     """The simulated session and the node running in its own process."""
     sim = prepare_session(
         tmp_path / "assets",
@@ -152,7 +152,8 @@ def node_process(tmp_path: Path) -> Any:
         stdout=log,
         stderr=subprocess.STDOUT,
     )
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    monkeypatch.delenv("ROS_LOCALHOST_ONLY", raising=False)
     driver = Driver(domain)
     try:
         yield sim, driver, proc, tmp_path / "node.log"

@@ -280,3 +280,49 @@ def test_params_reject_bad_mode(mode: str) -> None:
 
     with pytest.raises(ConfigurationError, match="mode: expected one of"):
         NodeParams(mode=mode)
+
+
+def test_example_params_file_is_valid() -> None:
+    from pathlib import Path
+
+    import symloc.ros
+
+    path = Path(symloc.ros.__file__).parent / "examples" / "symloc_params.yaml"
+    params = NodeParams.from_yaml(path)
+    assert params.lidar_preset == "lds01"
+    assert params.amcl.max_particles == 2000
+    assert params.camera_intrinsics == (503.0, 503.0, 320.0, 240.0)
+    assert params.symmetry_config().range_sigma > 0
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("other:\n  ros__parameters: {}\n", r"no block for node 'symloc'"),
+        ("symloc:\n  ros__parameters:\n    bogus: 1\n", r"parameter 'bogus': unknown"),
+        ("symloc:\n  ros__parameters:\n    amcl: {alpha9: 1}\n", r"alpha9"),
+        ("symloc:\n  ros__parameters:\n    localizer: {nope: 1}\n", r"localizer\.nope"),
+        ("symloc:\n  ros__parameters:\n    symmetry: {nope: 1}\n", r"symmetry\.nope"),
+        ("symloc:\n  ros__parameters:\n    camera_intrinsics: [1, 2]\n", r"camera_intrinsics"),
+        ("symloc:\n  ros__parameters:\n    lidar_preset: sick\n", r"lidar_preset"),
+        ("symloc:\n  ros__parameters:\n    sensor_qos: fast\n", r"sensor_qos"),
+        ("symloc:\n  ros__parameters:\n    transform_tolerance: -1\n", r"transform_tolerance"),
+        ("symloc:\n  ros__parameters:\n    scan_topic: 'a b'\n", r"scan_topic"),
+        ("symloc:\n  ros__parameters:\n    odom_frame_id: ''\n", r"odom_frame_id"),
+        ("symloc:\n  ros__parameters:\n    seed: -3\n", r"seed"),
+        ("symloc: [1, 2\n", r"not valid YAML"),
+        ("symloc: 3\n", r"ros__parameters block"),
+    ],
+)
+def test_params_errors_name_the_parameter(text: str, match: str) -> None:
+    from symloc.errors import ConfigurationError
+
+    with pytest.raises(ConfigurationError, match=match):
+        NodeParams.from_yaml(text)
+
+
+def test_params_namespaced_and_wildcard_blocks() -> None:
+    p = NodeParams.from_yaml("robot1/symloc:\n  ros__parameters:\n    seed: 4\n")
+    assert p.seed == 4
+    p = NodeParams.from_yaml("/**:\n  ros__parameters:\n    mode: build_visual_map\n")
+    assert p.allow_mapping

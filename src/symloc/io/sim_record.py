@@ -212,7 +212,7 @@ def prepare_session(
     from symloc.localizer.simulation import RobotBody
     from symloc.sim.robot import DiffDriveRobot
 
-    assets_dir = Path(assets)
+    assets_dir = Path(assets).resolve()  # params.yaml holds absolute paths
     if assets_dir.exists() and any(assets_dir.iterdir()):
         raise ConfigurationError(f"assets: {assets_dir} exists and is not empty")
     assets_dir.mkdir(parents=True, exist_ok=True)
