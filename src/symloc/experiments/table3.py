@@ -69,6 +69,11 @@ def run(args: argparse.Namespace) -> int:
         f"wrong {c['wrong']}, undetermined {c['undetermined']} (refused {c['refused']})"
     )
     print(
+        f"with the retry protocol (turn 90 deg clockwise, up to 4 images): accuracy "
+        f"{100 * d['accuracy_with_retries']:.1f} %, wrong {c['wrong_after_retries']} "
+        f"({c['retried']} trials retried)"
+    )
+    print(
         f"heading error after offset correction: median {d['heading_error_deg_median']:.3f} deg, "
         f"95th pct {d['heading_error_deg_p95']:.3f} deg, max {d['heading_error_deg_max']:.3f} deg "
         f"(uncorrected, i.e. k x 90 deg only: median {d['heading_error_uncorrected_deg_median']:.3f} deg)"
@@ -81,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     u = d["untextured"]
     print(
         f"untextured lab: undetermined {u['undetermined']}/{u['trials']} "
-        f"(refused {u['refused']}), wrong {u['wrong']}, correct {u['correct']}"
+        f"(refused {u['refused']}), wrong {u['wrong']}, correct {u['correct']}; after retries: "
+        f"wrong {u['wrong_after_retries']}, correct {u['correct_after_retries']}"
     )
     from symloc.figures.vision import matches_figure, table3_figure
 

@@ -21,7 +21,12 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.geometry import angle_diff, wrap_angle
 from symloc.vision.orb import OrbExtractor
-from symloc.vision.orientation import OrientationConfig, OrientationDecision, decide_orientation
+from symloc.vision.orientation import (
+    OrientationConfig,
+    OrientationDecision,
+    decide_orientation,
+    decide_with_retries,
+)
 from symloc.vision.visual_map import Place, PlaceImage
 from symloc.vision.vocabulary import Vocabulary
 
@@ -89,6 +94,7 @@ class TrialOutcome:
     heading_error_in: float
     decision: OrientationDecision
     heading_error_out: float
+    retry: OrientationDecision | None = None
 
 
 @dataclass
@@ -112,6 +118,17 @@ class Table3Result:
             "wrong": sum(t.decision.direction != t.direction for t in dec),
             "undetermined": sum(not t.decision.decided for t in trials),
             "refused": sum(t.decision.status == "refused" for t in trials),
+            "retried": sum(t.retry is not None for t in trials),
+            "correct_after_retries": sum(
+                (t.decision.decided and t.decision.direction == t.direction)
+                or (t.retry is not None and t.retry.decided and t.retry.direction == t.direction)
+                for t in trials
+            ),
+            "wrong_after_retries": sum(
+                (t.decision.decided and t.decision.direction != t.direction)
+                or (t.retry is not None and t.retry.decided and t.retry.direction != t.direction)
+                for t in trials
+            ),
         }
 
     def to_dict(self) -> dict[str, Any]:
@@ -130,6 +147,7 @@ class Table3Result:
         return {
             "similarity": self.similarity.round(4).tolist(),
             "accuracy": c["correct"] / max(c["trials"], 1),
+            "accuracy_with_retries": c["correct_after_retries"] / max(c["trials"], 1),
             "trials": c["trials"],
             "counts": c,
             "heading_error_deg_median": float(deg(np.median(herr))) if herr.size else math.nan,
@@ -182,7 +200,23 @@ def _trials(
                 similarity[j] += vocabulary.score_many(bow, stored)
             d = decide_orientation(f, place, vocabulary, K, config, query_bow=bow)
             err = float(angle_diff(d.heading, heading)) if d.decided else math.nan
-            out.append(TrialOutcome(j, r, dh, d, err))
+            retry = None
+            if not d.decided:
+                # the paper's protocol: turn clockwise by 360/M and try again, up to M images
+                step = 2.0 * math.pi / len(place.images)
+
+                def capture(
+                    t: int, pose: list[float] = pose, f: Any = f, step: float = step
+                ) -> Any:
+                    if t == 0:
+                        return f
+                    p = [pose[0], pose[1], pose[2] - t * step]
+                    return extractor.extract(camera.render(world, p, rng=rng))
+
+                retry = decide_with_retries(
+                    capture, place, vocabulary, K, config, extractor=extractor
+                )
+            out.append(TrialOutcome(j, r, dh, d, err, retry))
             progress.update(1)
     return out
 
