@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -214,6 +215,23 @@ def test_bad_input_is_dropped_counted_and_survived() -> None:
     # a map that changes size, one in the wrong frame
     core.on_map(_map_msg((30, 10)))
     core.on_map(_map_msg(frame="odom"))
+    # a scan with no valid reading
+    core.on_scan(
+        _msg(
+            "sensor_msgs/msg/LaserScan",
+            scan_to_fields(
+                LaserScan(
+                    -math.pi,
+                    2 * math.pi / 36,
+                    0.1,
+                    8.0,
+                    np.full(36, np.nan),
+                    stamp=1.0,
+                    frame_id="laser",
+                )
+            ),
+        )
+    )
     # malformed scan
     bad_scan = scan_to_fields(
         LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(36), stamp=1.0, frame_id="laser")
@@ -234,6 +252,7 @@ def test_bad_input_is_dropped_counted_and_survived() -> None:
         "map: changed": 1,
         "map: wrong frame": 1,
         "scan: malformed": 1,
+        "scan: no valid readings": 1,
     }
     assert dict(core.dropped) == expected
     assert loc.poses_set == []
@@ -326,3 +345,17 @@ def test_params_namespaced_and_wildcard_blocks() -> None:
     assert p.seed == 4
     p = NodeParams.from_yaml("/**:\n  ros__parameters:\n    mode: build_visual_map\n")
     assert p.allow_mapping
+
+
+def test_ros_node_command_without_rclpy_says_what_to_install(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import symloc.ros.node as node_mod
+    from symloc.cli.main import main
+
+    monkeypatch.setattr(node_mod, "rclpy_available", lambda: False)
+    params = tmp_path / "p.yaml"
+    params.write_text("symloc:\n  ros__parameters: {}\n")
+    assert main(["ros", "node", "--params", str(params)]) == 2
+    assert "pip install 'symloc[ros]'" in capsys.readouterr().err
+    assert main(["ros", "check-params", str(params)]) == 0

@@ -295,6 +295,11 @@ class NodeCore:
         if self._beams is not None and len(scan) != self._beams:
             self.drop("scan: wrong length", f"{len(scan)} beams, expected {self._beams}")
             return None
+        if not np.any(scan.valid_mask):
+            self.drop(
+                "scan: no valid readings", f"all {len(scan)} readings NaN, inf or out of range"
+            )
+            return None
         if scan.stamp < self._last_scan_stamp:
             self.drop("scan: stamp went backwards", f"{scan.stamp:.3f} s")
             return None
