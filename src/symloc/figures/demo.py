@@ -169,19 +169,30 @@ def localization_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
                     ),
                     None,
                 )
-                vals.append(0.0 if r is None else r[key] / max(r["trials"], 1))
+                vals.append(0.0 if r is None else r.get(key, 0) / max(r["trials"], 1))
             return np.array(vals)
 
         c, w, u = share("correct"), share("confident_wrong"), share("undetermined")
         ax.bar(x, c, color="tab:green", label="correct")
         ax.bar(x, w, bottom=c, color="tab:red", label="confident wrong")
         ax.bar(x, u, bottom=c + w, color="tab:gray", label="undetermined")
+        near = share("estimate_near_symmetric_copy")
+        ax.bar(
+            x,
+            np.minimum(near, u),
+            bottom=c + w,
+            color="none",
+            edgecolor="tab:orange",
+            hatch="//",
+            label="  of which the estimate sits on a wrong copy",
+        )
         ax.set_xticks(x, [f"{r}\n{lab}" for r, lab in labels], fontsize=8)
         ax.set_title("plain AMCL" if method == "amcl" else "symloc")
         ax.set_ylim(0, 1.05)
     axes[0].set_ylabel("share of kidnapped-robot trials")
-    axes[1].legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
+    handles, labels_ = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels_, loc="lower center", ncol=4, fontsize=8)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
