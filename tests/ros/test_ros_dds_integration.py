@@ -109,13 +109,15 @@ class Driver:
             self.ex.spin_once(timeout_sec=0.02)
         return bool(cond())
 
-    def answer(self, stamp: float, timeout: float = STEP_TIMEOUT) -> NodeStatus | None:
-        ok = self.spin_until(
-            lambda: any(abs(s.stamp - stamp) < 1e-6 for s in self.statuses[-3:]), timeout
-        )
-        if not ok:
+    def answer(self, stamp: float, since: int, timeout: float = STEP_TIMEOUT) -> NodeStatus | None:
+        """The first status after index ``since`` that answers the scan stamped ``stamp``."""
+
+        def new() -> list[NodeStatus]:
+            return [s for s in self.statuses[since:] if abs(s.stamp - stamp) < 1e-6]
+
+        if not self.spin_until(lambda: bool(new()), timeout):
             return None
-        return next(s for s in reversed(self.statuses) if abs(s.stamp - stamp) < 1e-6)
+        return new()[0]
 
     def close(self) -> None:
         import rclpy
@@ -172,8 +174,9 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
 def _scan_and_wait(sim: Any, driver: Driver, *, retries: int = 2) -> NodeStatus:
     t = sim.time
     for _ in range(retries + 1):
+        since = len(driver.statuses)
         driver.send("scan", scan_to_fields(sim.scan()))
-        st = driver.answer(t)
+        st = driver.answer(t, since)
         if st is not None:
             return st
     raise AssertionError(f"no status from the node for the scan at {t:.2f} s")
@@ -189,7 +192,7 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     for _ in range(60):
         driver.send("odom", odometry_to_fields(sim.odometry()))
         driver.send("scan", scan_to_fields(sim.scan()))
-        if driver.answer(t0, timeout=1.0) is not None:
+        if driver.answer(t0, 0, timeout=1.0) is not None:
             up = True
             break
         assert proc.poll() is None, log_path.read_text()
@@ -198,6 +201,7 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     centering = CenteringConfig()
     st = driver.statuses[-1]
     calm = 0
+    images_sent = 0
     seen = set()
     while sim.time < 60.0:
         seen.add(st.status)
@@ -212,6 +216,7 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
             driver.send("image", image_to_fields(img, stamp=sim.time, frame_id="camera"))
             driver.spin_until(lambda: False, 0.3)  # let the image arrive before the next scan
             st = _scan_and_wait(sim, driver)
+            images_sent += 1
             continue
         scan = sim.scan()
         v, w = drive_command(st.status, st.request, scan, centering)
@@ -223,6 +228,7 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     assert Status.GOING_TO_CENTRE in seen or Status.DECIDING in seen
     assert driver.goals, "the node never published a goal pose"
     assert driver.captures, "the node never requested an image"
+    assert 1 <= images_sent <= 4, f"{images_sent} images for one decision"
     assert driver.spin_until(lambda: bool(driver.amcl_poses), 5.0)
     truth = sim.body.pose
     msg = driver.amcl_poses[-1]
@@ -232,7 +238,8 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     head_err = abs(math.remainder(float(est[2] - truth[2]), 2 * math.pi))
     print(
         f"DDS run: final amcl_pose error {pos_err:.4f} m, {math.degrees(head_err):.2f} deg;"
-        f" sim time {sim.time:.1f} s; {len(driver.statuses)} status messages"
+        f" sim time {sim.time:.1f} s; {len(driver.statuses)} status messages;"
+        f" {images_sent} image(s) sent"
     )
     assert pos_err < 0.1
     assert head_err < math.radians(5.0)
