@@ -59,11 +59,16 @@ class DemoResult:
 
     def rows(self) -> list[tuple[str, str]]:
         a, s = self.amcl, self.symloc
-        copy = a.outcome.copy_index
+        copy = a.outcome.near_copy
         order = self.scenario.room.order
         k = "inf" if order == 0 else str(order)
-        if copy is None:
+        if copy is None and a.outcome.copy_index is None:
             chose = "no symmetric copy (room not symmetric)"
+        elif copy is None:
+            chose = (
+                f"no copy: its estimate is not within 0.3 m and 10 deg of any symmetric copy "
+                f"(nearest: copy {a.outcome.copy_index})"
+            )
         elif copy == 0:
             chose = "the true pose (copy 0)"
         else:

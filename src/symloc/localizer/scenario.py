@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.errors import SymlocError
+from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import angle_diff
 from symloc.odometry import OdometryReading
 
@@ -142,6 +143,7 @@ class Scenario:
     amcl_params: Any
     workdir: Path
     notes: list[str] = field(default_factory=list)
+    slam_seconds: float = 0.0
 
     def scan_at(self, rng: np.random.Generator) -> Any:
         from symloc.sim.lidar import simulate_scan
@@ -172,12 +174,18 @@ def build_scenario(
     workdir: Path | None = None,
     max_particles: int = 5000,
     mapping_start: FloatArray | None = None,
+    map_source: str = "slam",
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
-    the centre with Algorithm 2 and stores M images (the mapping stage).
+    the centre with Algorithm 2 and stores M images (the mapping stage). ``map_source``
+    ``"slam"`` builds the occupancy grid with :func:`symloc.slam.run_slam` from the scans of that
+    trip and takes the image poses from SLAM; ``"raster"`` uses
+    :func:`symloc.sim.rasterize.world_to_grid` and ground-truth poses.
     """
+    if map_source not in ("slam", "raster"):
+        raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
     from symloc.mcl import AmclParams
     from symloc.sim.camera import Camera
     from symloc.sim.lidar import RPLIDAR_A2
@@ -215,20 +223,105 @@ def build_scenario(
         notes=[MAP_SOURCE],
     )
     start = mapping_start if mapping_start is not None else scen.random_pose(gen)
-    robot = RobotBody(DiffDriveRobot(start, rng=gen, world=room.world))
-    scen.mapped = map_place(
-        robot,
-        scen.scan_at(gen),
-        scen.image_at(gen),
-        judge,
-        store.add_place,
-        map_pose=lambda: robot.pose,
-        dt=1.0 / float(preset.scan_rate),
-        true_centre=room.center,
-    )
+    dt = 1.0 / float(preset.scan_rate)
+    if map_source == "raster":
+        robot = RobotBody(DiffDriveRobot(start, rng=gen, world=room.world))
+        scen.mapped = map_place(
+            robot,
+            scen.scan_at(gen),
+            scen.image_at(gen),
+            judge,
+            store.add_place,
+            map_pose=lambda: robot.pose,
+            dt=dt,
+            true_centre=room.center,
+        )
+    else:
+        scen.mapped = _map_with_slam(scen, start, gen, dt)
     if scen.mapped is None:
         scen.notes.append(f"mapping stage: the {room_name} was not judged symmetric; no visual map")
     return scen
+
+
+def _map_with_slam(
+    scen: Scenario, start: FloatArray, gen: np.random.Generator, dt: float
+) -> MappedPlace | None:
+    """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
+    turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
+    headings, measured in the odometry frame, are moved into the SLAM map frame with the SLAM
+    pose of the scan taken at that moment.
+
+    The odometry starts at the robot's true start pose, so the SLAM map frame is anchored there
+    and errors can be graded in world coordinates.
+    """
+    from symloc.geometry import compose as _compose
+    from symloc.geometry import inverse as _inverse
+    from symloc.sim.lidar import simulate_scan
+    from symloc.sim.robot import DiffDriveRobot
+    from symloc.slam import run_slam
+
+    robot = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
+    scans: list[Any] = []
+    odoms: list[FloatArray] = []
+
+    def scan_rec(pose: FloatArray) -> Any:
+        s = simulate_scan(scen.room.world, pose, scen.preset, gen)
+        scans.append(s)
+        odoms.append(np.asarray(robot.odom.pose))
+        return s
+
+    marks: list[int] = []
+
+    def map_pose() -> FloatArray:
+        scan_rec(robot.pose)  # a scan at this very moment, for its SLAM pose
+        marks.append(len(scans) - 1)
+        return np.asarray(robot.odom.pose)
+
+    deferred: list[tuple[Any, ...]] = []
+    deferred_kw: list[dict[str, Any]] = []
+
+    def add_later(*args: Any, **kw: Any) -> Any:
+        deferred.append(args)
+        deferred_kw.append(kw)
+        return None
+
+    mapped = map_place(
+        robot,
+        scan_rec,
+        scen.image_at(gen),
+        scen.judge,
+        add_later,
+        map_pose=map_pose,
+        dt=dt,
+        true_centre=scen.room.center,
+    )
+    t0 = time.perf_counter()
+    slam = run_slam(scans, np.array(odoms), progress=False)
+    scen.slam_seconds = time.perf_counter() - t0
+    scen.grid = slam.grid
+    scen.notes[0] = (
+        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip "
+        f"({scen.slam_seconds:.1f} s); visual map poses: SLAM poses"
+    )
+    if mapped is None or not deferred:
+        return None
+    centre_o, heading0_o, order, gv, kind, images = deferred[0]
+    headings_o = deferred_kw[0].get("headings") or [heading0_o]
+
+    def to_map(i: int) -> FloatArray:
+        k = marks[i]
+        return np.asarray(_compose(slam.poses[k], _inverse(odoms[k])))
+
+    t_c = to_map(0)
+    centre = _compose(t_c, np.array([centre_o[0], centre_o[1], 0.0]))[:2]
+    headings = [float(h + to_map(i)[2]) for i, h in enumerate(headings_o)]
+    place = scen.store.add_place(centre, headings[0], order, gv, kind, images, headings=headings)
+    return MappedPlace(
+        place=place,
+        images=mapped.images,
+        headings=np.asarray(headings),
+        centering=mapped.centering,
+    )
 
 
 @dataclass(frozen=True)
