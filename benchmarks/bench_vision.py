@@ -105,7 +105,11 @@ def main() -> int:
     r = args.repeats
     ext = OrbExtractor()
     imgs = images_640x480(60, rng)
+    import os
+
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
     print(f"# bench_vision: repeats {r}, seed 0, cv2 {cv2.__version__}, numpy {np.__version__}")
+    print(f"# machine load average (1, 5, 15 min): {load} on {os.cpu_count()} cores")
     print(f"{'':<46}{'symloc':>10}{'DBoW3':>10}{'ratio':>9}")
     print(f"{'(ms, median)':<46}")
 
