@@ -267,6 +267,7 @@ def record_sim_run(
     max_time: float = 60.0,
     max_particles: int = 2000,
     assets: str | Path | None = None,
+    mode: str = "localize",
 ) -> SimRecording:
     """Simulate a kidnapped-robot run with symloc in the loop and record it (module doc).
 
@@ -283,6 +284,9 @@ def record_sim_run(
     assets : path, optional
         Folder for the map, visual map, vocabulary, params and TUM files
         (default ``<out>_assets`` beside the bag). Must not exist or be empty.
+    mode : {"localize", "build_visual_map"}
+        ``build_visual_map`` runs the node in its visual-map building mode against a new, empty
+        ``places_built.db`` in the assets folder, so the place is mapped (Algorithm 5 step 11).
     """
     from symloc.localizer.centering import CenteringConfig
 
@@ -291,8 +295,17 @@ def record_sim_run(
     if out.exists():
         raise ConfigurationError(f"out: {out} exists already; choose a new path")
     assets_dir = Path(assets) if assets is not None else out.with_name(out.name + "_assets")
+    changes: dict[str, Any] = {}
+    if mode != "localize":
+        built = Path(assets_dir).resolve() / "places_built.db"
+        changes = {"mode": mode, "visual_map": str(built)}
     sim = prepare_session(
-        assets_dir, room=room, textured=textured, seed=seed, max_particles=max_particles
+        assets_dir,
+        room=room,
+        textured=textured,
+        seed=seed,
+        max_particles=max_particles,
+        **changes,
     )
     core = NodeCore(sim.params)
     centering = CenteringConfig()
@@ -356,6 +369,9 @@ def record_sim_run(
             odom_fields = odometry_to_fields(odom)
             core.on_odom(emit(bag.odom_topic, "nav_msgs/msg/Odometry", odom_fields, odom.stamp))
         counts = dict(bag.counts)
+    store = getattr(core.localizer, "places", None)
+    if store is not None and hasattr(store, "visual_map"):
+        store.visual_map.close()
     assert last is not None
     final = last.estimate
     truth_final = sim.body.pose

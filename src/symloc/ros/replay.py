@@ -94,6 +94,9 @@ def replay_bag(
         elif m.kind == "initialpose" and core.localizer is not None:
             pose, cov = m.value
             core.localizer.set_pose(pose, cov)
+    store = getattr(core.localizer, "places", None)
+    if store is not None and hasattr(store, "visual_map"):
+        store.visual_map.close()
     dropped = dict(core.dropped)
     for topic, n in bag_dropped.items():
         dropped[f"{topic}: malformed in bag"] = n
