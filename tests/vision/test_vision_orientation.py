@@ -125,3 +125,9 @@ def test_config_and_intrinsics_validation() -> None:
         fx, fy, cx, cy = 500.0, 500.0, 320.0, 240.0
 
     assert intrinsics_matrix(Cam())[0, 2] == 320.0
+
+
+def test_place_without_images_is_an_error(trained_vocabulary) -> None:  # type: ignore[no-untyped-def]
+    empty = Place(3, "square", 4, 1.0, np.zeros(3), ())
+    with pytest.raises(ConfigurationError, match="place 3: has no stored images"):
+        decide_orientation(np.zeros((48, 64), np.uint8), empty, trained_vocabulary, K)

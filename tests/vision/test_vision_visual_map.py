@@ -184,3 +184,20 @@ def test_killed_writer_loses_nothing_committed(tmp_path) -> None:  # type: ignor
         # and the map is still writable after the crash
         _add(vm, 999)
         assert len(vm) == len(ids) + 1
+
+
+def test_damaged_record_is_reported(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "d.db"
+    with VisualMap(path) as vm:
+        pid = _add(vm, 1)
+    con = sqlite3.connect(path)
+    con.execute(
+        "UPDATE images SET descriptors = x'0102' WHERE place_id = ? AND direction = 2", (pid,)
+    )
+    con.commit()
+    con.close()
+    with (
+        VisualMap(path) as vm,
+        pytest.raises(DatabaseError, match="direction 2: damaged image record"),
+    ):
+        vm.place(pid)
