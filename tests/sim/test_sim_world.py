@@ -84,3 +84,17 @@ def test_arrays_are_read_only() -> None:
     w = World(walls=[[0, 0, 1, 0]])
     with pytest.raises(ValueError, match="read-only"):
         w.walls[0, 0] = 3.0
+
+
+def test_wall_texture_coordinates() -> None:
+    w = World(walls=[[0, 0, 1, 0], [1, 0, 2, 0]], wall_tex_u=[[0.0, 0.5], [0.5, 1.0]])
+    assert np.allclose(w.wall_tex_u, [[0.0, 0.5], [0.5, 1.0]])
+    plain = World(walls=[[0, 0, 0, 1]])
+    assert np.allclose(plain.wall_tex_u, [[0.0, 1.0]])
+    merged = w + plain
+    assert merged.wall_tex_u.shape == (3, 2)
+    assert np.allclose(merged.visible_above(0.0).wall_tex_u, merged.wall_tex_u)
+    with pytest.raises(WorldError, match="wall_tex_u: each wall needs two distinct"):
+        World(walls=[[0, 0, 1, 0]], wall_tex_u=[[0.3, 0.3]])
+    with pytest.raises(WorldError, match=r"wall_tex_u: expected shape \(1, 2\)"):
+        World(walls=[[0, 0, 1, 0]], wall_tex_u=[[0.0, 0.5], [0.5, 1.0]])

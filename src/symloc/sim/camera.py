@@ -213,10 +213,12 @@ class Camera:
         # Per (column, hit) quantities; per pixel only the texture row varies, linearly.
         zs = np.where(np.isfinite(z), z, 1.0)
         tiles = n_tiles[order]
-        lengths = hits.lengths[order] / tiles
+        u0 = hits.tex_u[order, 0]
+        du = (hits.tex_u[order, 1] - u0) * tiles
+        lengths = hits.lengths[order] / np.abs(du)  # metres spanned by one whole texture
         cos_i = np.take_along_axis(hits.cos_incidence, order, axis=1)
-        tex_u = np.take_along_axis(hits.s, order, axis=1) / lengths
-        tile = np.minimum(np.floor(tex_u).astype(np.int64), tiles - 1)
+        tex_u = u0 + np.take_along_axis(hits.s, order, axis=1) / hits.lengths[order] * du
+        tile = np.clip(np.floor(tex_u).astype(np.int64), 0, tiles - 1)
         tex_u -= tile
         # one image pixel spans z / f metres on the wall; the texture spans the whole wall
         footprint = (zs / f) * atlas.size / np.minimum(lengths, h)

@@ -46,6 +46,9 @@ class RayHits:
         ``|cos|`` of the angle between the ray and the surface normal at the hit (1 head-on).
     is_circle : ndarray of shape (P,)
         True for circles, False for walls.
+    tex_u : ndarray of shape (P, 2)
+        Horizontal texture coordinates at ``s = 0`` and at ``s = length`` (walls: the world's
+        ``wall_tex_u``; circles: 0 and 1).
     """
 
     t: FloatArray
@@ -55,6 +58,7 @@ class RayHits:
     lengths: FloatArray
     cos_incidence: FloatArray
     is_circle: NDArray[np.bool_]
+    tex_u: FloatArray
 
 
 def ray_intersections(
@@ -130,6 +134,7 @@ def ray_intersections(
             np.zeros(0),
             empty,
             np.zeros(0, dtype=bool),
+            np.zeros((0, 2)),
         )
     t_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_t], axis=-1)
     s_all = np.concatenate([np.broadcast_to(p, shape + p.shape[-1:]) for p in parts_s], axis=-1)
@@ -146,7 +151,10 @@ def ray_intersections(
     is_circle = np.concatenate(
         [np.zeros(walls.shape[0], dtype=bool), np.ones(circles.shape[0], dtype=bool)]
     )
-    return RayHits(t_all, s_all, heights, materials, lengths, c_all, is_circle)
+    tex_u = np.concatenate(
+        [np.asarray(world.wall_tex_u)[wk], np.tile(np.array([0.0, 1.0]), (circles.shape[0], 1))]
+    )
+    return RayHits(t_all, s_all, heights, materials, lengths, c_all, is_circle, tex_u)
 
 
 def raycast(

@@ -389,8 +389,15 @@ def circular_room(
         mids = 0.5 * (walls[:, :2] + walls[:, 2:])
         bottom = c + np.array([0.0, -r])
         keep = np.hypot(*(mids - bottom).T) > width / 2
-        walls = walls[keep]
-        world = World(walls, height, np.full(len(walls), mat))
+        # photo tiles of about the wall height around the circle, as on the round wall
+        n_tiles = max(1, round(2 * math.pi * r / height))
+        per_tile = k / n_tiles
+        j = np.arange(k)
+        tile = np.floor(j / per_tile).astype(np.int64)
+        u0 = j / per_tile - tile
+        u1 = (j + 1) / per_tile - tile
+        mats = mat + tile if textured else np.full(k, mat)
+        world = World(walls[keep], height, mats[keep], wall_tex_u=np.column_stack([u0, u1])[keep])
         order, has_door = 1, True
     return Room(
         name="circle",
@@ -474,6 +481,7 @@ def with_lab(
         rw.circles,
         np.full(rw.n_circles, bh),
         np.full(rw.n_circles, MATERIAL_BOARD),
+        rw.wall_tex_u,
     )
     furniture = _furniture_only(room)
     lab_world = lab(
@@ -498,6 +506,7 @@ def _furniture_only(room: Room) -> World:
         w.circles[ck],
         np.asarray(w.circle_heights)[ck],
         np.asarray(w.circle_materials)[ck],
+        np.asarray(w.wall_tex_u)[wk],
     )
 
 

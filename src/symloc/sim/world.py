@@ -87,6 +87,10 @@ class World:
         Height of each circle [m], > 0.
     circle_materials : int or array of shape (C,)
         Material id of each circle.
+    wall_tex_u : array of shape (S, 2), optional
+        Horizontal texture coordinates (0..1) at each wall's first and second end point
+        (default ``(0, 1)``: the texture spans the whole wall). Lets several short walls share
+        one photograph, as the facets of a round room with a door do.
     """
 
     walls: FloatArray = field(default_factory=lambda: np.zeros((0, 4)))
@@ -95,6 +99,7 @@ class World:
     circles: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     circle_heights: FloatArray | float = 0.75
     circle_materials: IntArray | int = MATERIAL_FURNITURE
+    wall_tex_u: FloatArray | None = None
 
     def __post_init__(self) -> None:
         walls = _as_float(self.walls, "walls", (None, 4))
@@ -104,6 +109,12 @@ class World:
         ch = _per_item(self.circle_heights, c, "circle_heights", np.float64)
         wm = _per_item(self.wall_materials, s, "wall_materials", np.int64)
         cm = _per_item(self.circle_materials, c, "circle_materials", np.int64)
+        if self.wall_tex_u is None:
+            tu = np.tile(np.array([0.0, 1.0]), (s, 1))
+        else:
+            tu = _as_float(self.wall_tex_u, "wall_tex_u", (s, 2))
+            if np.any(np.abs(tu[:, 1] - tu[:, 0]) <= _EPS):
+                raise WorldError("World.wall_tex_u: each wall needs two distinct coordinates")
         lengths = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
         bad = np.flatnonzero(lengths <= _EPS)
         if bad.size:
@@ -120,7 +131,7 @@ class World:
             if h.size and (not np.all(np.isfinite(h)) or np.any(h <= 0)):
                 i = int(np.flatnonzero(~(h > 0) | ~np.isfinite(h))[0])
                 raise WorldError(f"World.{name}[{i}]: height must be a finite value > 0 m")
-        for arr in (walls, circles, wh, ch, wm, cm):
+        for arr in (walls, circles, wh, ch, wm, cm, tu):
             arr.setflags(write=False)
         set_ = object.__setattr__
         set_(self, "walls", walls)
@@ -129,6 +140,7 @@ class World:
         set_(self, "circle_heights", ch)
         set_(self, "wall_materials", wm)
         set_(self, "circle_materials", cm)
+        set_(self, "wall_tex_u", tu)
 
     @property
     def n_walls(self) -> int:
@@ -159,6 +171,7 @@ class World:
             circles=np.concatenate([w.circles for w in ws]),
             circle_heights=np.concatenate([w.circle_heights for w in ws]),
             circle_materials=np.concatenate([w.circle_materials for w in ws]),
+            wall_tex_u=np.concatenate([np.asarray(w.wall_tex_u) for w in ws]),
         )
 
     def visible_above(self, min_height: float) -> World:
@@ -172,6 +185,7 @@ class World:
             self.circles[ck],
             np.asarray(self.circle_heights)[ck],
             np.asarray(self.circle_materials)[ck],
+            np.asarray(self.wall_tex_u)[wk],
         )
 
     def distance(self, points: ArrayLike, *, min_height: float = 0.0) -> FloatArray:
