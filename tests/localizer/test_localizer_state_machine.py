@@ -466,3 +466,21 @@ def test_candidates_from_scan_and_known_place_contain_the_true_pose():
     expected = rotated_copies(true, CENTRE, 4)
     for p in expected:
         assert np.min(np.hypot(poses[:, 0] - p[0], poses[:, 1] - p[1])) < 1e-9
+
+
+class OldStore(FakeStore):
+    """A store whose add_place predates the ``headings`` keyword."""
+
+    def add_place(self, center, heading0, order, gv_distance, kind, images) -> Place:  # type: ignore[override]
+        return super().add_place(center, heading0, order, gv_distance, kind, images)
+
+
+def test_mapping_works_with_a_store_without_the_headings_keyword():
+    true = np.array([2.5, 2.0, 0.7])
+    store = OldStore(places=[])
+    loc = Localizer(
+        _ambiguous_tracker(true), SquareJudge(), store, LocalizerConfig(allow_mapping=True)
+    )
+    final = Driver(loc, true).run(600)
+    assert len(store.added) == 1
+    assert "new visual map" in final.reason

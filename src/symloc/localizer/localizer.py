@@ -19,6 +19,7 @@ visual decision. After :meth:`Localizer.reset_global` (start-up or kidnapping) n
 from __future__ import annotations
 
 import enum
+import inspect
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -719,15 +720,19 @@ class Localizer:
                 f"mapping this place: turning clockwise for image {self._attempt + 1}",
             )
         assert self._centre_map is not None
-        place = self.places.add_place(
+        args = (
             self._centre_map,
             self._mapping_heading0,
             self._order,
             self._gv,
             self._kind,
             list(self._mapping_images),
-            headings=list(self._mapping_headings),
         )
+        # measured headings when the store takes them (stores written before that keyword exist)
+        if "headings" in inspect.signature(self.places.add_place).parameters:
+            place = self.places.add_place(*args, headings=list(self._mapping_headings))
+        else:
+            place = self.places.add_place(*args)
         self.known_places.append(place)
         self._mapping = False
         return self._settle(
