@@ -148,7 +148,7 @@ WRITER = textwrap.dedent(
     sys.path[:0] = [{tests!r}]
     from test_vision_visual_map import _add
     from symloc.vision.visual_map import VisualMap
-    vm = VisualMap({path!r})
+    vm = VisualMap({path!r}, journal={journal!r})
     for seed in range(1, 1000):
         pid = _add(vm, seed, gv=float(seed), with_image=False)
         print(pid, seed, flush=True)
@@ -156,11 +156,12 @@ WRITER = textwrap.dedent(
 )
 
 
-def test_killed_writer_loses_nothing_committed(tmp_path) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize("journal", ["wal", "delete"])
+def test_killed_writer_loses_nothing_committed(tmp_path, journal: str) -> None:  # type: ignore[no-untyped-def]
     from pathlib import Path
 
     path = tmp_path / "crash.db"
-    code = WRITER.format(tests=str(Path(__file__).parent), path=str(path))
+    code = WRITER.format(tests=str(Path(__file__).parent), path=str(path), journal=journal)
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     committed = {}
     assert proc.stdout is not None
