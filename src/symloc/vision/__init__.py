@@ -1,11 +1,20 @@
-"""Visual orientation: ORB features, a DBoW2-compatible vocabulary, the visual map database."""
+"""Visual orientation: ORB features, a DBoW2-compatible vocabulary, the visual map database,
+and the orientation decision at a symmetric place (the paper's Algorithm 3)."""
 
 from __future__ import annotations
 
 from symloc.vision.bow import BowMatrix, BowVector, FeatureVector, Scoring, Weighting, score
+from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.orb import OrbExtractor, OrbFeatures, OrbSettings
+from symloc.vision.orientation import (
+    OrientationConfig,
+    OrientationDecision,
+    decide_orientation,
+    decide_with_retries,
+)
 from symloc.vision.visual_map import Place, PlaceImage, QueryResult, VisualMap
 from symloc.vision.vocabulary import Vocabulary
+from symloc.vision.vocabulary_io import load_dbow2_text, load_vocabulary, save_vocabulary
 
 __all__ = [
     "BowMatrix",
@@ -14,6 +23,8 @@ __all__ = [
     "OrbExtractor",
     "OrbFeatures",
     "OrbSettings",
+    "OrientationConfig",
+    "OrientationDecision",
     "Place",
     "PlaceImage",
     "QueryResult",
@@ -21,5 +32,11 @@ __all__ = [
     "VisualMap",
     "Vocabulary",
     "Weighting",
+    "decide_orientation",
+    "decide_with_retries",
+    "default_vocabulary",
+    "load_dbow2_text",
+    "load_vocabulary",
+    "save_vocabulary",
     "score",
 ]
