@@ -149,3 +149,38 @@ def test_scans_with_odometry_and_map_from_bag(tmp_path: Path) -> None:
         w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0))
     with pytest.raises(DataFormatError, match="expected scans with odometry"):
         build_map_from_bag(empty)
+
+
+SHARED = Path(__file__).resolve().parents[2] / ".." / "shared" / "data"
+
+
+def _shared_data() -> Path:
+    import os
+
+    root = Path(os.environ.get("SYMLOC_SHARED_DATA", SHARED))
+    log = root / "carmen" / "aces-corrected.log.gz"
+    if not log.is_file():
+        pytest.skip(f"shared CARMEN data absent ({log}); set SYMLOC_SHARED_DATA")
+    return log
+
+
+@pytest.mark.shared_data
+def test_real_carmen_log_through_a_bag(tmp_path: Path) -> None:
+    from symloc.io.carmen import read_carmen
+    from symloc.io.rosbag_carmen import carmen_to_bag
+
+    log = _shared_data()
+    counts = carmen_to_bag(log, tmp_path / "aces", fmt="mcap")
+    ref = read_carmen(log)
+    assert counts["/scan"] == len(ref.scans) == 440
+    msgs = list(read_bag(tmp_path / "aces"))
+    scans = [m.value for m in msgs if m.kind == "scan"]
+    odom = np.array([m.value.pose for m in msgs if m.kind == "odom"])
+    truth = np.array([m.value.pose for m in msgs if m.kind == "truth"])
+    assert len(scans) == 440
+    np.testing.assert_allclose(
+        scans[100].ranges, ref.scans[100].scan.ranges.astype(np.float32), equal_nan=True
+    )
+    assert scans[100].angle_min == pytest.approx(ref.scans[100].scan.angle_min, abs=1e-6)
+    np.testing.assert_allclose(odom[:, :2], ref.odom_poses[:, :2], atol=1e-9)
+    np.testing.assert_allclose(truth[:, :2], ref.laser_poses[:, :2], atol=1e-9)

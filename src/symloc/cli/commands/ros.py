@@ -27,6 +27,14 @@ def register(subparsers: Any) -> None:
     node.add_argument("--params", type=Path, required=True, help="nav2-style parameters YAML")
     node.add_argument("ros_args", nargs=argparse.REMAINDER, help="--ros-args ... for rclpy")
     node.set_defaults(func=_run_node)
+    conv = sub.add_parser(
+        "carmen-to-bag",
+        help="convert a CARMEN laser log to a ROS bag (scan, odom, ground_truth)",
+    )
+    conv.add_argument("log", type=Path, help="CARMEN log (.log or .log.gz)")
+    conv.add_argument("--out", type=Path, required=True, help="bag to create")
+    conv.add_argument("--format", choices=("ros2", "mcap", "ros1"), default="ros2")
+    conv.set_defaults(func=_carmen_to_bag)
     check = sub.add_parser("check-params", help="validate a parameters YAML and print it")
     check.add_argument("params", type=Path)
     check.set_defaults(func=_check)
@@ -36,6 +44,16 @@ def _run_node(args: argparse.Namespace) -> int:
     from symloc.ros.node import run_node
 
     return run_node(args.params, list(args.ros_args))
+
+
+def _carmen_to_bag(args: argparse.Namespace) -> int:
+    from symloc.io.rosbag_carmen import carmen_to_bag
+
+    counts = carmen_to_bag(args.log, args.out, fmt=args.format)
+    for topic, n in sorted(counts.items()):
+        print(f"  {topic}: {n} messages")
+    print(f"wrote {args.out}")
+    return 0
 
 
 def _check(args: argparse.Namespace) -> int:
