@@ -10,6 +10,7 @@ from symloc.features import (
     adjacent_corners,
     area_centroid,
     centroid,
+    contour_gaps,
     contour_runs,
     fit_line_tls,
     intersect_lines,
@@ -174,3 +175,18 @@ def test_regular_polygon_lines_property(n: int, radius: float, rot: float) -> No
     corners = adjacent_corners(lines, tolerance=0.002)
     d = np.hypot(*(corners.points[:, None, :] - v[None, :, :]).transpose(2, 0, 1))
     assert np.all(d.min(axis=0) < 1e-6)
+
+
+def test_contour_gaps_counts_only_no_return_as_openings() -> None:
+    # 12 beams: 3-5 invalid (dropout), 8-10 no return (door); points elsewhere
+    no_return = np.zeros(12, bool)
+    no_return[8:11] = True
+    idx = np.array([0, 1, 2, 6, 7, 11])
+    gaps = contour_gaps(idx, 12, max_dropout_beams=2, no_return=no_return, max_blind_beams=5)
+    np.testing.assert_array_equal(gaps, [False, False, False, False, True, False])
+    # the same gaps without the no-return mask: both are 3 missing beams
+    gaps = contour_gaps(idx, 12, max_dropout_beams=2)
+    np.testing.assert_array_equal(gaps, [False, False, True, False, True, False])
+    # a long blind run opens the contour too
+    gaps = contour_gaps(idx, 12, max_dropout_beams=2, no_return=no_return, max_blind_beams=2)
+    assert gaps[2]

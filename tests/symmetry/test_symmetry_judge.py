@@ -160,7 +160,7 @@ def test_beyond_range_is_unknown() -> None:
 def test_dropouts_are_bridged() -> None:
     room = build_room("hexagon", 4.0, lab=False)
     scan = simulate_scan(
-        room.world, np.array([0.5, 0.2, 0.0]), RPLIDAR_A2.with_(dropout_rate=0.02), 5
+        room.world, np.array([0.5, 0.2, 0.0]), RPLIDAR_A2.with_(dropout_rate=0.08), 5
     )
     assert np.isnan(scan.ranges).any()
     rep = judge_symmetry(scan, config=SymmetryConfig.from_lidar(RPLIDAR_A2))
@@ -248,3 +248,39 @@ def test_adding_a_box_breaks_the_symmetry(name: str, box_seed: int, which: int) 
     p = room.positions_inside(8)[which]
     rep = judge_symmetry(scan_in(room.world, [p[0], p[1], 0.3], box_seed), config=CFG)
     assert not rep.symmetric, rep.reason
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    ranges=st.lists(
+        st.one_of(
+            st.floats(0.0, 20.0),
+            st.sampled_from([math.nan, math.inf, -math.inf, 0.05]),
+        ),
+        min_size=1,
+        max_size=400,
+    ),
+    full=st.booleans(),
+)
+def test_judge_never_raises_on_arbitrary_ranges(ranges: list[float], full: bool) -> None:
+    n = len(ranges)
+    inc = 2 * math.pi / n if full else math.radians(0.5)
+    rep = judge_symmetry(LaserScan(0.0, inc, 0.1, 15.0, np.asarray(ranges)))
+    assert rep.kind in ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")
+    assert rep.symmetric == (rep.order != 1 and rep.order != 0)
+    assert isinstance(rep.reason, str)
+    assert rep.reason
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    n=st.integers(12, 400),
+    seed=st.integers(0, 2**16),
+    spike=st.floats(0.0, 1.0),
+)
+def test_judge_never_raises_on_noisy_closed_scans(n: int, seed: int, spike: float) -> None:
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(0.5, 8.0) + rng.normal(0, spike, n).cumsum() * 0.1
+    ranges = np.abs(ranges) + 0.2
+    rep = judge_symmetry(LaserScan(0.0, 2 * math.pi / n, 0.1, 15.0, ranges))
+    assert rep.kind in ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")

@@ -63,6 +63,7 @@ def test_config_from_lidar_presets() -> None:
         ("min_points", 2, "min_points: expected an integer >= 3"),
         ("min_points", 3.5, "min_points: expected an integer"),
         ("max_dropout_beams", -1, "max_dropout_beams"),
+        ("max_blind_beams", 1, "max_blind_beams: expected >= max_dropout_beams"),
         ("min_line_points", True, "min_line_points: expected an integer"),
         ("max_polygon_sides", 2, "max_polygon_sides"),
         ("min_angle_tolerance", 1.0, "min_angle_tolerance"),

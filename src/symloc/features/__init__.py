@@ -10,7 +10,13 @@ from symloc.features.centroid import (
     polygon_area,
 )
 from symloc.features.corners import Corners, adjacent_corners, intersect_lines
-from symloc.features.split_and_merge import LineSet, contour_runs, fit_line_tls, split_and_merge
+from symloc.features.split_and_merge import (
+    LineSet,
+    contour_gaps,
+    contour_runs,
+    fit_line_tls,
+    split_and_merge,
+)
 
 __all__ = [
     "CENTROID_METHODS",
@@ -19,6 +25,7 @@ __all__ = [
     "adjacent_corners",
     "area_centroid",
     "centroid",
+    "contour_gaps",
     "contour_runs",
     "fit_line_tls",
     "intersect_lines",

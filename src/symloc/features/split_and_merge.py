@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
 
-__all__ = ["LineSet", "contour_runs", "fit_line_tls", "split_and_merge"]
+__all__ = ["LineSet", "contour_gaps", "contour_runs", "fit_line_tls", "split_and_merge"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -161,10 +161,15 @@ def fit_line_tls(points: ArrayLike) -> tuple[FloatArray, float, FloatArray, floa
     return nrm, float(off), c, float(np.sqrt(np.mean(res * res)))
 
 
-def contour_runs(
-    indices: ArrayLike, n_beams: int, *, max_dropout_beams: int, wrap: bool
-) -> IntArray:
-    """Cut a scan's valid points into runs at gaps of more than ``max_dropout_beams`` beams.
+def contour_gaps(
+    indices: ArrayLike,
+    n_beams: int,
+    *,
+    max_dropout_beams: int,
+    no_return: ArrayLike | None = None,
+    max_blind_beams: int | None = None,
+) -> NDArray[np.bool_]:
+    """Which gaps between consecutive valid points open the contour.
 
     Parameters
     ----------
@@ -173,8 +178,53 @@ def contour_runs(
     n_beams : int
         Number of beams in the scan.
     max_dropout_beams : int
-        Longest run of missing beams (no return, invalid) that still counts as a dropout on a
-        continuous wall.
+        Longest run of missing beams that still counts as a dropout on a continuous wall.
+        With ``no_return`` given, only no-return beams count here (a door or a wall beyond
+        range gives no return; a sensor dropout gives an invalid reading).
+    no_return : array of shape (n_beams,), optional
+        True where the beam had no return (``LaserScan.no_return_mask``).
+    max_blind_beams : int, optional
+        With ``no_return`` given, a gap of more missing beams of any kind than this also opens
+        the contour (default: no limit).
+
+    Returns
+    -------
+    ndarray of shape (M,)
+        ``gap[k]`` is True when the gap after point k (to point k + 1; for k = M - 1, the
+        wrap-around gap to point 0) opens the contour.
+    """
+    idx = np.asarray(indices, dtype=np.intp)
+    m = idx.size
+    if m == 0:
+        return np.zeros(0, dtype=bool)
+    nxt = np.concatenate((idx[1:], idx[:1] + n_beams))
+    missing = nxt - idx - 1
+    if no_return is None:
+        return missing > max_dropout_beams
+    nr = np.asarray(no_return, dtype=bool)
+    cum = np.concatenate(([0], np.cumsum(np.concatenate((nr, nr)))))
+    n_nr = cum[nxt] - cum[idx + 1]
+    cut = n_nr > max_dropout_beams
+    if max_blind_beams is not None:
+        cut |= missing > max_blind_beams
+    return cut
+
+
+def contour_runs(
+    indices: ArrayLike,
+    n_beams: int,
+    *,
+    max_dropout_beams: int,
+    wrap: bool,
+    no_return: ArrayLike | None = None,
+    max_blind_beams: int | None = None,
+) -> IntArray:
+    """Cut a scan's valid points into runs at the gaps that open the contour.
+
+    Parameters
+    ----------
+    indices, n_beams, max_dropout_beams, no_return, max_blind_beams
+        As :func:`contour_gaps`.
     wrap : bool
         Whether the last beam is adjacent to the first (a full 360-degree scan).
 
@@ -190,12 +240,17 @@ def contour_runs(
     m = idx.size
     if m == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    step = np.diff(idx)
-    cut = np.flatnonzero(step - 1 > max_dropout_beams) + 1  # a run starts at each cut
-    wrap_gap = int(idx[0] + n_beams - idx[-1] - 1)
+    gaps = contour_gaps(
+        idx,
+        n_beams,
+        max_dropout_beams=max_dropout_beams,
+        no_return=no_return,
+        max_blind_beams=max_blind_beams,
+    )
+    cut = np.flatnonzero(gaps[:-1]) + 1  # a run starts at each cut
     starts = np.concatenate([[0], cut])
     stops = np.concatenate([cut, [m]])
-    if wrap and wrap_gap <= max_dropout_beams and starts.size > 1:
+    if wrap and not gaps[-1] and starts.size > 1:
         # the last run continues into the first one
         first_stop = int(stops[0])
         starts = starts[1:].copy()
@@ -454,8 +509,10 @@ def _refine_boundaries(
         b = np.where(u == 0, m, st[u])  # boundary index (m: across the end)
         len_t = sp[t] - st[t]
         len_u = sp[u] - st[u]
-        lo = -np.minimum(window, np.maximum(len_t - 2, 0))
-        hi = np.minimum(window, np.maximum(len_u - 2, 0))
+        # each boundary moves at most half-way into a neighbour, so no piece empties or two
+        # boundaries cross
+        lo = -np.minimum(window, np.maximum((len_t - 1) // 2, 0))
+        hi = np.minimum(window, np.maximum((len_u - 1) // 2, 0))
         idx = (b[:, None] + offs[None, :]) % m  # (B, 2w)
         q = p[idx]
         tq = tol[idx]

@@ -45,8 +45,13 @@ class SymmetryConfig:
     min_points : int
         Fewer valid points than this give the verdict "unknown" (>= 3).
     max_dropout_beams : int
-        Longest run of missing beams bridged as a dropout on a continuous wall (>= 0); longer
-        gaps open the contour (a door, a wall beyond range).
+        Longest run of no-return beams bridged as a dropout on a continuous wall (>= 0); longer
+        runs open the contour (a door, a wall beyond range).
+    max_blind_beams : int
+        Longest run of missing beams of any kind (invalid readings: sensor dropouts, NaN)
+        bridged on a continuous wall (>= max_dropout_beams). Invalid readings are the sensor's
+        fault, not the room's, so more of them are bridged; whether the walls on both sides of
+        the gap still meet is checked by the corner test.
     min_line_points : int
         A line with fewer points is clutter, not a wall (>= 2).
     max_clutter_points : int
@@ -67,6 +72,7 @@ class SymmetryConfig:
     model_tolerance: float = 0.005
     min_points: int = 12
     max_dropout_beams: int = 2
+    max_blind_beams: int = 10
     min_line_points: int = 3
     max_clutter_points: int = 0
     max_polygon_sides: int = 16
@@ -92,6 +98,7 @@ class SymmetryConfig:
         for name, low in (
             ("min_points", 3),
             ("max_dropout_beams", 0),
+            ("max_blind_beams", 0),
             ("min_line_points", 2),
             ("max_clutter_points", 0),
             ("max_polygon_sides", 3),
@@ -102,6 +109,11 @@ class SymmetryConfig:
             if value < low:
                 raise ConfigurationError(f"{name}: expected an integer >= {low}, got {value}")
             set_(self, name, int(value))
+        if self.max_blind_beams < self.max_dropout_beams:
+            raise ConfigurationError(
+                f"max_blind_beams: expected >= max_dropout_beams ({self.max_dropout_beams}),"
+                f" got {self.max_blind_beams}"
+            )
         set_(
             self,
             "min_angle_tolerance",

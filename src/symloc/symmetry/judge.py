@@ -39,7 +39,13 @@ from numpy.typing import NDArray
 from symloc.errors import ConfigurationError
 from symloc.features.centroid import CENTROID_METHODS, area_centroid, mean_centroid
 from symloc.features.corners import adjacent_corners
-from symloc.features.split_and_merge import LineSet, _rolled, contour_runs, split_and_merge
+from symloc.features.split_and_merge import (
+    LineSet,
+    _rolled,
+    contour_gaps,
+    contour_runs,
+    split_and_merge,
+)
 from symloc.scan import LaserScan
 from symloc.symmetry.config import SymmetryConfig
 from symloc.symmetry.report import SymmetryReport
@@ -49,6 +55,8 @@ __all__ = ["fit_circle", "judge_symmetry", "rotational_order"]
 FloatArray = NDArray[np.float64]
 
 _NAN2 = np.full(2, np.nan)
+#: Hallway walls must be parallel to better than this [rad], whatever their fit uncertainty.
+_MAX_HALLWAY_ANGLE = math.radians(3.0)
 _NO_CORNERS = np.zeros((0, 2))
 
 
@@ -211,18 +219,25 @@ def judge_symmetry(
     full_circle = scan.angle_increment * n_beams >= 2.0 * math.pi - 1.5 * scan.angle_increment
     tol = cfg.point_tolerance(sp.ranges)
     sig = cfg.sigma(sp.ranges)
-    runs = contour_runs(sp.indices, n_beams, max_dropout_beams=cfg.max_dropout_beams, wrap=True)
-    wrap_gap = int(sp.indices[0]) + n_beams - int(sp.indices[-1]) - 1
-    closed = (
-        full_circle
-        and wrap_gap <= cfg.max_dropout_beams
-        and runs.shape[0] == 1
-        and int(runs[0, 0]) == 0
-        and int(runs[0, 1]) == m
-    )
-    if closed:
-        return _judge_closed(pts, tol, sig, cfg, centroid, common)
-    return _judge_open(scan, sp.indices, pts, tol, sig, runs, full_circle, cfg, common)
+    gap_args = {
+        "max_dropout_beams": cfg.max_dropout_beams,
+        "no_return": scan.no_return_mask,
+        "max_blind_beams": cfg.max_blind_beams,
+    }
+    gaps = contour_gaps(sp.indices, n_beams, **gap_args)
+    runs = contour_runs(sp.indices, n_beams, wrap=True, **gap_args)
+    closed = full_circle and not gaps.any()
+    try:
+        if closed:
+            return _judge_closed(pts, tol, sig, cfg, centroid, common)
+        return _judge_open(scan, sp.indices, pts, tol, sig, runs, full_circle, cfg, common)
+    except (IndexError, ValueError, FloatingPointError, np.linalg.LinAlgError) as err:
+        # a safety net: a scan this code did not foresee must not stop the robot
+        return _report(
+            "unknown",
+            f"the judgement failed on this scan ({type(err).__name__}: {err}); please report it",
+            **common,
+        )
 
 
 def _centroid_of(pts: FloatArray, method: str) -> FloatArray:
@@ -450,8 +465,11 @@ def _judge_open(
         ang = math.acos(cos_)
         sa = sig_mean / (math.sqrt(npts[i]) * max(spread[i], 1e-6))
         sb = sig_mean / (math.sqrt(npts[j]) * max(spread[j], 1e-6))
+        # a wall too short to give its direction to a few degrees is no hallway wall
         ang_tol = max(cfg.k_sigma * math.hypot(sa, sb), cfg.min_angle_tolerance)
-        if ang <= ang_tol and oa * ob < 0:
+        width = abs(oa - ob)
+        long_walls = min(spread[i], spread[j]) * math.sqrt(12.0) >= width
+        if ang <= min(ang_tol, _MAX_HALLWAY_ANGLE) and oa * ob < 0 and long_walls:
             nrm = na + nb
             nrm /= np.linalg.norm(nrm)
             mid = 0.5 * (oa + ob)
