@@ -42,6 +42,7 @@ class RoomTrials:
     judge_errors: int = 0
     mapped: bool = True
     collisions: int = 0
+    map_note: str = ""
 
     def rows(self) -> list[dict[str, Any]]:
         out = []
@@ -91,12 +92,17 @@ def run_room_trials(
     amcl_duration: float = 30.0,
     symloc_max_time: float = 150.0,
     progress: bool = True,
+    preset: Any = None,
+    map_source: str = "slam",
 ) -> RoomTrials:
     """Map ``room`` once, then kidnap the robot ``trials`` times; run both methods each time."""
     gen = as_rng(rng)
-    scen = build_scenario(room, textured=textured, rng=gen, workdir=workdir)
+    scen = build_scenario(
+        room, textured=textured, rng=gen, workdir=workdir, preset=preset, map_source=map_source
+    )
     res = RoomTrials(room=room, lab="textured" if textured else "untextured")
     res.mapped = scen.mapped is not None
+    res.map_note = scen.notes[0]
     iterator: Any = range(trials)
     if progress:
         from tqdm import tqdm
