@@ -108,6 +108,8 @@ def map_place(
     if not verdict.symmetric or verdict.center is None:
         return None
     kind, order, gv = verdict.kind, verdict.order, verdict.gv_distance
+    if not math.isfinite(gv):
+        return None  # no G-V distance (an open hallway): the place cannot be indexed
     m = directions_for(kind, order)
     pose0 = np.asarray(map_pose(), dtype=np.float64)
     centre = compose(pose0, np.array([*verdict.center, 0.0]))[:2]
