@@ -17,8 +17,8 @@ from symloc.vision.table3 import run_table3, wall_headings
 def test_shipped_vocabulary(extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
     assert DEFAULT_VOCABULARY_PATH.stat().st_size < 5 * 2**20
     voc = default_vocabulary()
-    assert (voc.k, voc.L) == (10, 4)
-    assert voc.n_words > 5000
+    assert (voc.k, voc.L) == (10, 5)
+    assert voc.n_words > 50000
     bow = voc.bow(extractor.extract(wall_photos[0]).descriptors)
     assert len(bow) > 100
     assert bow.values.sum() == pytest.approx(1.0)

@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
             "trials per direction": args.trials,
             "room": f"square {args.side:g} m inside a 12-segment lab (textured, then untextured)",
             "robot spread": f"uniform in a {args.radius_mm:g} mm disc, heading +-{args.heading_deg:g} deg",
-            "vocabulary": args.vocabulary or "shipped default (k=10, L=4, TF-IDF, L1)",
+            "vocabulary": args.vocabulary or "shipped default (k=10, L=5, TF-IDF, L1)",
         },
     )
     res = run_table3(
