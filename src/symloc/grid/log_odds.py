@@ -123,6 +123,32 @@ def _beam_geometry(
     return angles[use], np.where(np.isfinite(length[use]), length[use], 0.0), hit[use]
 
 
+def _raw_cells(
+    pose: ArrayLike,
+    scan: LaserScan,
+    model: InverseSensorModel,
+    resolution: float,
+    origin_xy: ArrayLike,
+) -> tuple[IntArray, IntArray, IntArray, IntArray]:
+    """Rows and columns of every beam sample (free, with repeats) and of every hit."""
+    p = np.asarray(pose, dtype=np.float64)
+    o = np.asarray(origin_xy, dtype=np.float64)
+    ang, length, hit = _beam_geometry(scan, model)
+    world_ang = p[2] + ang
+    c, s = np.cos(world_ang), np.sin(world_ang)
+    step = model.step * resolution
+    n = np.ceil(length / step).astype(np.intp)
+    total = int(n.sum())
+    beam = np.repeat(np.arange(ang.size), n)
+    start = np.cumsum(n) - n
+    t = (np.arange(total) - start[beam]) * step
+    fx = np.floor((p[0] - o[0] + t * c[beam]) / resolution).astype(np.intp)
+    fy = np.floor((p[1] - o[1] + t * s[beam]) / resolution).astype(np.intp)
+    hx = np.floor((p[0] - o[0] + length[hit] * c[hit]) / resolution).astype(np.intp)
+    hy = np.floor((p[1] - o[1] + length[hit] * s[hit]) / resolution).astype(np.intp)
+    return fy, fx, hy, hx
+
+
 def beam_cells(
     pose: ArrayLike,
     scan: LaserScan,
@@ -150,30 +176,17 @@ def beam_cells(
     hits : ndarray of shape (K, 2)
         Unique (row, col) cells holding an end point.
     """
-    p = np.asarray(pose, dtype=np.float64)
-    o = np.asarray(origin_xy, dtype=np.float64)
-    ang, length, hit = _beam_geometry(scan, model)
-    world_ang = p[2] + ang
-    c, s = np.cos(world_ang), np.sin(world_ang)
-    step = model.step * resolution
-    n = np.ceil(length / step).astype(np.intp)
-    total = int(n.sum())
-    beam = np.repeat(np.arange(ang.size), n)
-    start = np.cumsum(n) - n
-    t = (np.arange(total) - start[beam]) * step
-    fx = (p[0] - o[0] + t * c[beam]) / resolution
-    fy = (p[1] - o[1] + t * s[beam]) / resolution
-    free = np.column_stack([np.floor(fy), np.floor(fx)]).astype(np.intp)
-    hx = (p[0] - o[0] + length[hit] * c[hit]) / resolution
-    hy = (p[1] - o[1] + length[hit] * s[hit]) / resolution
-    hits = np.unique(np.column_stack([np.floor(hy), np.floor(hx)]).astype(np.intp), axis=0)
-    if free.size:
-        free = np.unique(free, axis=0)
-        if hits.size:
-            key_f = free[:, 0] * 1_000_003 + free[:, 1]
-            key_h = hits[:, 0] * 1_000_003 + hits[:, 1]
-            free = free[~np.isin(key_f, key_h)]
-    return free.reshape(-1, 2), hits.reshape(-1, 2)
+    fy, fx, hy, hx = _raw_cells(pose, scan, model, resolution, origin_xy)
+    big = np.int64(1 << 31)
+    off = np.int64(1 << 30)
+    key_f = np.unique((fy.astype(np.int64) + off) * big + (fx + off))
+    key_h = np.unique((hy.astype(np.int64) + off) * big + (hx + off))
+    key_f = key_f[~np.isin(key_f, key_h, assume_unique=True)]
+
+    def _split(k: NDArray[np.int64]) -> IntArray:
+        return np.column_stack([k // big - off, k % big - off]).astype(np.intp).reshape(-1, 2)
+
+    return _split(key_f), _split(key_h)
 
 
 class LogOddsGrid:
@@ -239,11 +252,22 @@ class LogOddsGrid:
             reach = max(reach, self.model.no_return_range)
         reach += 2 * self.resolution
         self.ensure_contains(p[:2] - reach, p[:2] + reach)
-        free, hits = beam_cells(p, scan, self.model, self.resolution, self.origin_xy)
-        v = self.values
-        v[free[:, 0], free[:, 1]] += np.float32(self.model.l_miss)
-        v[hits[:, 0], hits[:, 1]] += np.float32(self.model.l_hit)
-        np.clip(v, self.model.l_min, self.model.l_max, out=v)
+        fy, fx, hy, hx = _raw_cells(p, scan, self.model, self.resolution, self.origin_xy)
+        if fy.size + hy.size == 0:
+            self.n_scans += 1
+            return
+        # one update per cell: mark a window covering the scan, hits override free
+        r0 = int(min(fy.min(initial=hy.min(initial=0)), hy.min(initial=fy.min(initial=0))))
+        c0 = int(min(fx.min(initial=hx.min(initial=0)), hx.min(initial=fx.min(initial=0))))
+        r1 = int(max(fy.max(initial=hy.max(initial=0)), hy.max(initial=fy.max(initial=0)))) + 1
+        c1 = int(max(fx.max(initial=hx.max(initial=0)), hx.max(initial=fx.max(initial=0)))) + 1
+        mark = np.zeros((r1 - r0, c1 - c0), dtype=np.int8)
+        mark[fy - r0, fx - c0] = 1
+        mark[hy - r0, hx - c0] = 2
+        win = self.values[r0:r1, c0:c1]
+        win[mark == 1] += np.float32(self.model.l_miss)
+        win[mark == 2] += np.float32(self.model.l_hit)
+        np.clip(win, self.model.l_min, self.model.l_max, out=win)
         self.n_scans += 1
 
     def probability(self) -> FloatArray:
@@ -255,15 +279,33 @@ class LogOddsGrid:
         return self.values != 0
 
     def to_occupancy_grid(
-        self, *, occupied_thresh: float = 0.65, free_thresh: float = 0.196
+        self,
+        *,
+        occupied_thresh: float = 0.65,
+        free_thresh: float = 0.196,
+        crop_margin: int | None = None,
     ) -> OccupancyGrid:
-        """The grid as an :class:`OccupancyGrid`: unknown -1 where never observed, else 0..100."""
+        """The grid as an :class:`OccupancyGrid`: unknown -1 where never observed, else 0..100.
+
+        With ``crop_margin`` (cells), the result is cropped to the observed cells' bounding
+        box plus that margin.
+        """
         occ = np.rint(self.probability() * 100.0).astype(np.int8)
-        occ[~self.known_mask()] = -1
+        known = self.known_mask()
+        occ[~known] = -1
+        origin = self.origin_xy.copy()
+        if crop_margin is not None and known.any():
+            rows = np.flatnonzero(known.any(axis=1))
+            cols = np.flatnonzero(known.any(axis=0))
+            m = int(crop_margin)
+            r0, r1 = max(rows[0] - m, 0), min(rows[-1] + m + 1, occ.shape[0])
+            c0, c1 = max(cols[0] - m, 0), min(cols[-1] + m + 1, occ.shape[1])
+            occ = occ[r0:r1, c0:c1]
+            origin = origin + np.array([c0, r0]) * self.resolution
         return OccupancyGrid(
             occ,
             self.resolution,
-            np.array([self.origin_xy[0], self.origin_xy[1], 0.0]),
+            np.array([origin[0], origin[1], 0.0]),
             occupied_thresh,
             free_thresh,
         )

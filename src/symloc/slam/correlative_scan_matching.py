@@ -258,9 +258,9 @@ def match_scan(
     if step == 0.0:
         d = max(float(np.percentile(np.hypot(pts[:, 0], pts[:, 1]), 90)), 2.0 * res)
         step = math.acos(1.0 - res * res / (2.0 * d * d))
-    n_ang = int(math.floor(prm.angular_window / step)) if prm.angular_window > 0 else 0
+    n_ang = math.floor(prm.angular_window / step) if prm.angular_window > 0 else 0
     dthetas = np.arange(-n_ang, n_ang + 1) * step
-    n_lin = int(math.ceil(prm.linear_window / res))
+    n_lin = math.ceil(prm.linear_window / res)
     f = int(prm.coarse_factor)
     span = 2 * n_lin + 1
     nb = -(-span // f)

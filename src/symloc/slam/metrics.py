@@ -13,15 +13,25 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import ndimage
 
 from symloc._checks import check_array
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose, inverse, relative, wrap_angle
 
-__all__ = ["AteResult", "RpeResult", "ate", "rpe", "umeyama_se2"]
+__all__ = [
+    "AteResult",
+    "MapAgreement",
+    "RpeResult",
+    "ate",
+    "map_agreement",
+    "rpe",
+    "umeyama_se2",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -130,4 +140,75 @@ def rpe(reference: ArrayLike, estimate: ArrayLike, *, delta: int = 1) -> RpeResu
         rot_mean=float(np.mean(rot)),
         n_pairs=int(i.size),
         delta=int(delta),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class MapAgreement:
+    """Agreement of an estimated grid with a ground-truth grid.
+
+    Attributes
+    ----------
+    fraction : float
+        Of the cells classified (free or occupied) in both maps, the fraction whose class in
+        the estimate is found in the truth within ``tolerance`` cells (0: the same cell).
+    n_cells : int
+        Cells compared.
+    occupied_fraction, free_fraction : float
+        The same fraction restricted to the estimate's occupied / free cells.
+    coverage : float
+        Fraction of the truth's free cells that the estimate classifies (free or occupied).
+    tolerance : int
+        Chebyshev tolerance in truth cells.
+    """
+
+    fraction: float
+    n_cells: int
+    occupied_fraction: float
+    free_fraction: float
+    coverage: float
+    tolerance: int
+
+
+def map_agreement(estimate: Any, truth: Any, *, tolerance: int = 0) -> MapAgreement:
+    """Compare two :class:`~symloc.grid.OccupancyGrid` in the same world frame.
+
+    Each estimate cell is classified as occupied / free with the estimate's thresholds and
+    looked up at its centre in the truth; unknown cells in either map are left out.
+    """
+    if int(tolerance) != tolerance or tolerance < 0:
+        raise ConfigurationError(f"tolerance: expected an integer >= 0, got {tolerance!r}")
+    est_occ = estimate.occupied_mask
+    est_free = estimate.free_mask
+    rows, cols = np.nonzero(est_occ | est_free)
+    centres = estimate.cell_to_world(np.column_stack([rows, cols]))
+    tc = truth.world_to_cell(centres)
+    inside = truth.in_bounds(tc)
+    t_occ = truth.occupied_mask
+    t_free = truth.free_mask
+    if tolerance:
+        size = 2 * int(tolerance) + 1
+        t_occ_tol = ndimage.binary_dilation(t_occ, np.ones((size, size), bool))
+        t_free_tol = ndimage.binary_dilation(t_free, np.ones((size, size), bool))
+    else:
+        t_occ_tol, t_free_tol = t_occ, t_free
+    tc_in = tc[inside]
+    r_in, c_in = rows[inside], cols[inside]
+    known = t_occ[tc_in[:, 0], tc_in[:, 1]] | t_free[tc_in[:, 0], tc_in[:, 1]]
+    tc_k = tc_in[known]
+    e_occ = est_occ[r_in[known], c_in[known]]
+    agree_occ = e_occ & t_occ_tol[tc_k[:, 0], tc_k[:, 1]]
+    agree_free = ~e_occ & t_free_tol[tc_k[:, 0], tc_k[:, 1]]
+    n = int(tc_k.shape[0])
+    n_occ = int(e_occ.sum())
+    covered = np.zeros(truth.data.shape, bool)
+    covered[tc_k[:, 0], tc_k[:, 1]] = True
+    n_truth_free = int(t_free.sum())
+    return MapAgreement(
+        fraction=float((agree_occ | agree_free).sum() / n) if n else 0.0,
+        n_cells=n,
+        occupied_fraction=float(agree_occ.sum() / n_occ) if n_occ else 0.0,
+        free_fraction=float(agree_free.sum() / (n - n_occ)) if n - n_occ else 0.0,
+        coverage=float((covered & t_free).sum() / n_truth_free) if n_truth_free else 0.0,
+        tolerance=int(tolerance),
     )

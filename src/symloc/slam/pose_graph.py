@@ -54,7 +54,7 @@ class PoseGraphParams:
         Levenberg-Marquardt iteration limit.
     """
 
-    intra_sigmas: tuple[float, float, float] = (0.02, 0.02, 0.005)
+    intra_sigmas: tuple[float, float, float] = (0.05, 0.05, 0.01)
     loop_sigmas: tuple[float, float, float] = (0.05, 0.05, 0.01)
     odom_sigmas: tuple[float, float, float] = (0.05, 0.05, 0.02)
     odom_scale: float = 0.2

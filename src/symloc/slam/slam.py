@@ -52,6 +52,11 @@ class SlamParams:
     submap : SubmapParams
     local_csm : CsmParams
         Real-time matching window around the odometry prediction.
+    retry_csm : CsmParams
+        Wider window tried when the real-time match scores below ``retry_below`` (odometry
+        errors beyond the real-time window); the better of the two matches is kept.
+    retry_below : float
+        Score (0..1) under which the wider search runs.
     loop_csm : CsmParams
         Loop-closure window around the predicted pose in an older submap.
     graph : PoseGraphParams
@@ -68,6 +73,8 @@ class SlamParams:
         Minimum match score (mean likelihood, 0..1) to accept a loop closure.
     loop_skip_submaps : int
         The newest finished submaps skipped by the loop search (they are local matches).
+    loop_max_candidates : int
+        At most this many submaps (the nearest) are matched per searched node.
     optimize_every : int
         Nodes between optimisations when new loop closures arrived.
     map_resolution : float
@@ -86,6 +93,16 @@ class SlamParams:
             rotation_weight=1.0,
         )
     )
+    retry_csm: CsmParams = field(
+        default_factory=lambda: CsmParams(
+            linear_window=1.5,
+            angular_window=math.radians(40),
+            coarse_factor=8,
+            translation_weight=0.3,
+            rotation_weight=0.3,
+        )
+    )
+    retry_below: float = 0.6
     loop_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
             linear_window=2.0, angular_window=math.radians(15), coarse_factor=8
@@ -98,6 +115,7 @@ class SlamParams:
     loop_search_distance: float = 10.0
     loop_min_score: float = 0.6
     loop_skip_submaps: int = 1
+    loop_max_candidates: int = 4
     optimize_every: int = 20
     map_resolution: float = 0.05
     table_cache: int = 40
@@ -107,11 +125,15 @@ class SlamParams:
         check_positive(self.voxel, "SlamParams.voxel", allow_zero=True)
         check_positive(self.loop_search_distance, "SlamParams.loop_search_distance")
         check_positive(self.map_resolution, "SlamParams.map_resolution")
+        if not 0.0 <= self.retry_below <= 1.0:
+            raise ConfigurationError(
+                f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
+            )
         if not 0.0 <= self.loop_min_score <= 1.0:
             raise ConfigurationError(
                 f"SlamParams.loop_min_score: expected a value in [0, 1], got {self.loop_min_score}"
             )
-        for name in ("loop_every", "optimize_every", "table_cache"):
+        for name in ("loop_every", "optimize_every", "table_cache", "loop_max_candidates"):
             v = getattr(self, name)
             if int(v) != v or v < 1:
                 raise ConfigurationError(f"SlamParams.{name}: expected an integer >= 1, got {v}")
@@ -140,8 +162,14 @@ class SlamResult:
     match_scores : ndarray of shape (N,)
         Local match score per scan (0 for the first).
     timings : dict of str to float
-        Seconds spent in ``frontend``, ``loop_search``, ``optimize``, ``map`` and ``total``.
+        Wall-clock seconds spent in ``frontend``, ``loop_search``, ``optimize``, ``map`` and
+        ``total``; ``total_cpu`` is the process CPU time [s] (all threads), the fair measure
+        on a shared machine.
     n_optimizations : int
+    n_retries : int
+        Scans whose real-time match was retried with the wide window.
+    graph : PoseGraph or None
+        The final pose graph (factors and optimised values).
     """
 
     poses: FloatArray
@@ -152,6 +180,8 @@ class SlamResult:
     match_scores: FloatArray
     timings: dict[str, float]
     n_optimizations: int
+    n_retries: int = 0
+    graph: PoseGraph | None = None
 
 
 def scan_points(scan: LaserScan, max_range: float, voxel: float) -> FloatArray:
@@ -211,6 +241,7 @@ def run_slam(
     if n == 0 or odom.shape[0] != n:
         raise ConfigurationError(f"odometry: expected one pose per scan ({n}), got {odom.shape[0]}")
     t_start = time.perf_counter()
+    cpu_start = time.process_time()
     timings = {"frontend": 0.0, "loop_search": 0.0, "optimize": 0.0, "map": 0.0}
     active = ActiveSubmaps(prm.submap)
     graph = PoseGraph(prm.graph)
@@ -220,10 +251,8 @@ def run_slam(
     global_from_local = np.zeros(3)
     pending_loops = 0
     n_opt = 0
+    n_retries = 0
     submap_centres: dict[int, FloatArray] = {}
-
-    def _global_submap(sm: Submap) -> FloatArray:
-        return graph.submap_pose(sm.index)
 
     bar = tqdm(total=n, desc=desc, unit="scan", disable=not progress, leave=False)
     for i in range(n):
@@ -237,7 +266,13 @@ def run_slam(
             if target is not None and pts.shape[0] >= 3:
                 cache.touch(target)
                 init = relative(target.local_pose, pred)
-                res = match_scan(target.table(), pts, init, prm.local_csm)
+                table = target.table()
+                res = match_scan(table, pts, init, prm.local_csm)
+                if res.score < prm.retry_below:
+                    wide = match_scan(table, pts, init, prm.retry_csm)
+                    n_retries += 1
+                    if wide.score > res.score:
+                        res = wide
                 local[i] = compose(target.local_pose, res.pose)
                 scores[i] = res.score
             else:
@@ -260,13 +295,17 @@ def run_slam(
             if prm.loop_skip_submaps:
                 finished = finished[: -prm.loop_skip_submaps]
             node_g = compose(global_from_local, local[i])
+            candidates = []
             for sm in finished:
                 if sm.index not in submap_centres:
                     submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
-                sm_g = _global_submap(sm)
-                init = relative(sm_g, node_g)
-                if np.hypot(*(init[:2] - submap_centres[sm.index])) > prm.loop_search_distance:
-                    continue
+                init = relative(graph.submap_pose(sm.index), node_g)
+                dist = float(np.hypot(*(init[:2] - submap_centres[sm.index])))
+                if dist <= prm.loop_search_distance:
+                    candidates.append((dist, sm.index, init))
+            candidates.sort(key=lambda c: c[0])
+            for _, j, init in candidates[: prm.loop_max_candidates]:
+                sm = active.submaps[j]
                 cache.touch(sm)
                 res = match_scan(sm.table(), pts, init, prm.loop_csm)
                 if res.score >= prm.loop_min_score:
@@ -301,9 +340,10 @@ def run_slam(
     grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2])
     for i in range(n):
         grid.integrate(poses[i], scans[i])
-    occ = grid.to_occupancy_grid()
+    occ = grid.to_occupancy_grid(crop_margin=10)
     timings["map"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t_start
+    timings["total_cpu"] = time.process_time() - cpu_start
     return SlamResult(
         poses=poses,
         local_poses=local,
@@ -313,4 +353,6 @@ def run_slam(
         match_scores=scores,
         timings=timings,
         n_optimizations=n_opt,
+        n_retries=n_retries,
+        graph=graph,
     )

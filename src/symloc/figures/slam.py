@@ -1,0 +1,108 @@
+"""Figures for mapping and SLAM (the only slam code that imports matplotlib)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["map_trajectory_figure", "slam_summary_figure"]
+
+
+def _grid_image(grid: Any) -> np.ndarray:
+    return np.where(grid.data < 0, 0.5, 1.0 - grid.data / 100.0)
+
+
+def map_trajectory_figure(
+    grid: Any,
+    poses: np.ndarray,
+    path: str | Path,
+    *,
+    reference: np.ndarray | None = None,
+    odometry: np.ndarray | None = None,
+    loop_nodes: Sequence[int] = (),
+    title: str = "",
+) -> Path:
+    """Save a PNG of ``grid`` with the SLAM trajectory ``poses`` (N, 3) on top.
+
+    ``reference`` and ``odometry`` (N, 3), if given, are drawn too (already in the map frame
+    or aligned by the caller); ``loop_nodes`` marks nodes that received a loop closure.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 8), dpi=120)
+    x0, x1, y0, y1 = grid.extent()
+    ax.imshow(
+        _grid_image(grid), cmap="gray", origin="lower", extent=(x0, x1, y0, y1), vmin=0, vmax=1
+    )
+    if odometry is not None:
+        ax.plot(
+            odometry[:, 0],
+            odometry[:, 1],
+            "-",
+            color="tab:orange",
+            lw=0.8,
+            alpha=0.7,
+            label="odometry",
+        )
+    if reference is not None:
+        ax.plot(reference[:, 0], reference[:, 1], "-", color="tab:green", lw=1.2, label="reference")
+    ax.plot(poses[:, 0], poses[:, 1], "-", color="tab:blue", lw=1.0, label="SLAM")
+    if len(loop_nodes):
+        idx = np.unique(np.asarray(loop_nodes, dtype=int))
+        ax.plot(poses[idx, 0], poses[idx, 1], ".", color="tab:red", ms=3, label="loop closure")
+    known = np.argwhere(grid.data >= 0)
+    if known.size:
+        c = grid.cell_to_world(np.array([known.min(axis=0), known.max(axis=0)]))
+        xs = np.concatenate([c[:, 0], poses[:, 0]])
+        ys = np.concatenate([c[:, 1], poses[:, 1]])
+        ax.set_xlim(xs.min() - 1.0, xs.max() + 1.0)
+        ax.set_ylim(ys.min() - 1.0, ys.max() + 1.0)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(loc="upper right", fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(out)
+    plt.close(fig)
+    return out
+
+
+def slam_summary_figure(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
+    """Bar charts of ATE RMSE (SLAM vs odometry) and real-time factor per run."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [r["name"] for r in rows]
+    x = np.arange(len(rows))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4), dpi=120)
+    a1.bar(x - 0.2, [r["ate_rmse_m"] for r in rows], 0.4, label="SLAM")
+    a1.bar(x + 0.2, [r["ate_odometry_rmse_m"] for r in rows], 0.4, label="odometry")
+    a1.axhline(0.10, color="k", ls="--", lw=0.8, label="0.10 m target")
+    a1.set_yscale("log")
+    a1.set_xticks(x, names, rotation=20)
+    a1.set_ylabel("ATE RMSE [m]")
+    a1.legend(fontsize=8)
+    a2.bar(x, [r["realtime_factor_cpu"] for r in rows], 0.5, label="CPU time")
+    a2.bar(x, [r["realtime_factor_wall"] for r in rows], 0.25, label="wall clock")
+    a2.axhline(10.0, color="k", ls="--", lw=0.8, label="10x target")
+    a2.set_xticks(x, names, rotation=20)
+    a2.set_ylabel("data duration / processing time")
+    a2.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out)
+    plt.close(fig)
+    return out

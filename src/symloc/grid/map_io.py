@@ -1,0 +1,363 @@
+"""ROS map_server / nav2_map_server map files: a YAML description plus a PGM/PNG image.
+
+YAML keys (as map_server reads them): ``image`` (path, relative to the YAML's folder),
+``resolution`` [m/pixel], ``origin`` ``[x, y, yaw]`` (pose of the lower-left pixel's corner),
+``occupied_thresh``, ``free_thresh`` (fractions), ``negate`` (0/1 or bool) and optional
+``mode`` (``trinary`` default, ``scale``, ``raw``).
+
+Loading, as nav2_map_server's ``loadMapFromFile``: a pixel's ``shade`` is the mean of its colour
+channels over 255 (in trinary mode an alpha channel is averaged in too); its occupancy is
+``occ = 1 - shade`` (``shade`` with ``negate``);
+
+- trinary: ``occ > occupied_thresh`` -> 100, ``occ < free_thresh`` -> 0, otherwise -1;
+- scale: a transparent pixel -> -1, then as trinary, except that values between the thresholds
+  become ``rint(100 (occ - free) / (occupied - free))``;
+- raw: ``v = round(255 shade)``; 0..100 -> v, otherwise -1.
+
+The image's top row is the map's last row (row 0 of the grid is at the origin).
+
+Saving, as nav2's ``map_saver``: trinary writes 254 (free, ``<= rint(100 free_thresh)``),
+0 (occupied, ``>= rint(100 occupied_thresh)``) and 205 (unknown); scale writes
+``255 (100 - v) / 100`` with unknown cells transparent (RGBA PNG); raw writes ``v`` and
+255 for unknown. A trinary map or any map in raw mode round-trips exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from symloc.errors import MapFileError
+from symloc.grid.occupancy_grid import OccupancyGrid
+
+__all__ = [
+    "MAP_MODES",
+    "MapMetadata",
+    "grid_to_image",
+    "image_to_grid",
+    "load_map",
+    "read_map_yaml",
+    "save_map",
+]
+
+MAP_MODES = ("trinary", "scale", "raw")
+
+
+@dataclass(frozen=True, slots=True)
+class MapMetadata:
+    """The fields of a map YAML file, validated.
+
+    Attributes
+    ----------
+    image : Path
+        Image path (resolved against the YAML's folder).
+    resolution : float
+        Metres per pixel, > 0.
+    origin : tuple of 3 floats
+        x [m], y [m], yaw [rad] of the lower-left pixel's outer corner.
+    occupied_thresh, free_thresh : float
+        ``0 <= free_thresh < occupied_thresh <= 1``.
+    negate : bool
+    mode : str
+        ``trinary``, ``scale`` or ``raw``.
+    width, height : int or None
+        Optional image size in pixels (not a map_server key; checked against the image when
+        present).
+    """
+
+    image: Path
+    resolution: float
+    origin: tuple[float, float, float]
+    occupied_thresh: float
+    free_thresh: float
+    negate: bool = False
+    mode: str = "trinary"
+    width: int | None = None
+    height: int | None = None
+
+
+def _number(doc: dict[str, Any], key: str, path: Path) -> float:
+    if key not in doc:
+        raise MapFileError(f"{path}: missing required field '{key}'")
+    value = doc[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise MapFileError(f"{path}: field '{key}' must be a number, got {value!r}")
+    out = float(value)
+    if not math.isfinite(out):
+        raise MapFileError(f"{path}: field '{key}' must be finite, got {value!r}")
+    return out
+
+
+def _check_thresholds(occupied: float, free: float, where: str) -> None:
+    if not 0.0 <= free <= 1.0:
+        raise MapFileError(f"{where}: field 'free_thresh' must be in [0, 1], got {free}")
+    if not 0.0 <= occupied <= 1.0:
+        raise MapFileError(f"{where}: field 'occupied_thresh' must be in [0, 1], got {occupied}")
+    if not free < occupied:
+        raise MapFileError(
+            f"{where}: field 'free_thresh' ({free}) must be smaller than 'occupied_thresh'"
+            f" ({occupied})"
+        )
+
+
+def read_map_yaml(path: str | Path) -> MapMetadata:
+    """Parse and validate a map YAML file.
+
+    Raises
+    ------
+    MapFileError
+        The file is missing, is not YAML, lacks a field or has a field of the wrong type or
+        range; the message names the field.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as err:
+        raise MapFileError(f"{p}: cannot read map YAML ({err.strerror})") from err
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise MapFileError(f"{p}: malformed YAML: {err}") from err
+    if not isinstance(doc, dict):
+        raise MapFileError(f"{p}: expected a YAML mapping with the map fields, got {type(doc)}")
+    if "image" not in doc:
+        raise MapFileError(f"{p}: missing required field 'image'")
+    image = doc["image"]
+    if not isinstance(image, str) or not image.strip():
+        raise MapFileError(f"{p}: field 'image' must be a non-empty file name, got {image!r}")
+    resolution = _number(doc, "resolution", p)
+    if resolution <= 0:
+        raise MapFileError(f"{p}: field 'resolution' must be > 0 m/pixel, got {resolution}")
+    if "origin" not in doc:
+        raise MapFileError(f"{p}: missing required field 'origin'")
+    origin = doc["origin"]
+    if (
+        not isinstance(origin, (list, tuple))
+        or len(origin) != 3
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in origin)
+        or not all(math.isfinite(float(v)) for v in origin)
+    ):
+        raise MapFileError(
+            f"{p}: field 'origin' must be 3 finite numbers [x, y, yaw], got {origin!r}"
+        )
+    occupied = _number(doc, "occupied_thresh", p)
+    free = _number(doc, "free_thresh", p)
+    _check_thresholds(occupied, free, str(p))
+    negate_raw = doc.get("negate", 0)
+    if isinstance(negate_raw, bool):
+        negate = negate_raw
+    elif isinstance(negate_raw, int) and negate_raw in (0, 1):
+        negate = bool(negate_raw)
+    else:
+        raise MapFileError(f"{p}: field 'negate' must be 0, 1, true or false, got {negate_raw!r}")
+    mode = doc.get("mode", "trinary")
+    if not isinstance(mode, str) or mode.lower() not in MAP_MODES:
+        raise MapFileError(f"{p}: field 'mode' must be one of {MAP_MODES}, got {mode!r}")
+    size: dict[str, int | None] = {}
+    for key in ("width", "height"):
+        v = doc.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v <= 0):
+            raise MapFileError(f"{p}: field '{key}' must be a positive integer, got {v!r}")
+        size[key] = v
+    img = Path(image)
+    if not img.is_absolute():
+        img = p.parent / img
+    return MapMetadata(
+        image=img,
+        resolution=resolution,
+        origin=(float(origin[0]), float(origin[1]), float(origin[2])),
+        occupied_thresh=occupied,
+        free_thresh=free,
+        negate=negate,
+        mode=mode.lower(),
+        width=size["width"],
+        height=size["height"],
+    )
+
+
+def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:
+    """Convert an image as ``cv2.imread(..., IMREAD_UNCHANGED)`` returns it to grid data.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W), (H, W, 3) or (H, W, 4), uint8 or uint16
+        Grey, BGR or BGRA pixels; the top row is the map's last row.
+    meta : MapMetadata
+
+    Returns
+    -------
+    ndarray of shape (H, W), int8
+        Occupancy data with row 0 at the origin.
+    """
+    img = np.asarray(image)
+    scale = 65535.0 if img.dtype == np.uint16 else 255.0
+    x = img.astype(np.float64) / scale
+    alpha = None
+    if x.ndim == 3:
+        if x.shape[2] == 4:
+            alpha = x[:, :, 3]
+            colour = x[:, :, :3]
+        else:
+            colour = x[:, :, :3]
+        channels = [colour[:, :, k] for k in range(colour.shape[2])]
+    else:
+        channels = [x]
+    if meta.mode == "trinary" and alpha is not None:
+        channels.append(alpha)
+    shade = np.mean(np.stack(channels, axis=0), axis=0)
+    occ = shade if meta.negate else 1.0 - shade
+    out = np.full(shade.shape, -1, dtype=np.int8)
+    if meta.mode == "raw":
+        v = np.round(shade * 255.0)
+        ok = (v >= 0) & (v <= 100)
+        out[ok] = v[ok].astype(np.int8)
+    else:
+        occupied = occ > meta.occupied_thresh
+        free = occ < meta.free_thresh
+        out[occupied] = 100
+        out[free] = 0
+        if meta.mode == "scale":
+            mid = ~(occupied | free)
+            ratio = (occ - meta.free_thresh) / (meta.occupied_thresh - meta.free_thresh)
+            out[mid] = np.rint(ratio[mid] * 100.0).astype(np.int8)
+            if alpha is not None:
+                out[alpha < 1.0] = -1
+    return np.ascontiguousarray(out[::-1])
+
+
+def grid_to_image(
+    grid: OccupancyGrid,
+    mode: str = "trinary",
+    *,
+    free_thresh: float | None = None,
+    occupied_thresh: float | None = None,
+) -> NDArray[np.uint8]:
+    """Pixels for ``grid`` as nav2's map_saver writes them (top row = last grid row).
+
+    Returns ``(H, W)`` uint8 for trinary and raw, ``(H, W, 4)`` BGRA for scale.
+    """
+    if mode not in MAP_MODES:
+        raise MapFileError(f"mode: expected one of {MAP_MODES}, got {mode!r}")
+    free = grid.free_thresh if free_thresh is None else float(free_thresh)
+    occ = grid.occupied_thresh if occupied_thresh is None else float(occupied_thresh)
+    _check_thresholds(occ, free, "save_map")
+    d = grid.data[::-1].astype(np.int16)
+    unknown = (d < 0) | (d > 100)
+    if mode == "trinary":
+        free_i = int(np.rint(free * 100.0))
+        occ_i = int(np.rint(occ * 100.0))
+        img = np.full(d.shape, 205, dtype=np.uint8)
+        img[~unknown & (d <= free_i)] = 254
+        img[~unknown & (d >= occ_i) & ~(d <= free_i)] = 0
+        return img
+    if mode == "raw":
+        return np.where(unknown, 255, d).astype(np.uint8)
+    grey = np.rint(255.0 * (100.0 - np.clip(d, 0, 100)) / 100.0).astype(np.uint8)
+    grey[unknown] = 128
+    alpha = np.where(unknown, 0, 255).astype(np.uint8)
+    return np.dstack([grey, grey, grey, alpha])
+
+
+def load_map(path: str | Path) -> OccupancyGrid:
+    """Load a map_server map (YAML + image) as an :class:`OccupancyGrid`.
+
+    Raises
+    ------
+    MapFileError
+        Malformed YAML or field (named), missing or unreadable image, or an image whose size
+        disagrees with the YAML's optional ``width``/``height``.
+    """
+    meta = read_map_yaml(path)
+    if not meta.image.is_file():
+        raise MapFileError(f"{path}: field 'image': file not found: {meta.image}")
+    img = cv2.imread(str(meta.image), cv2.IMREAD_UNCHANGED)
+    if img is None or img.size == 0:
+        raise MapFileError(f"{path}: field 'image': cannot decode image {meta.image}")
+    h, w = img.shape[:2]
+    if meta.width is not None and meta.width != w:
+        raise MapFileError(
+            f"{path}: field 'width' is {meta.width} pixels but image {meta.image.name} is {w}"
+        )
+    if meta.height is not None and meta.height != h:
+        raise MapFileError(
+            f"{path}: field 'height' is {meta.height} pixels but image {meta.image.name} is {h}"
+        )
+    data = image_to_grid(img, meta)
+    return OccupancyGrid(
+        data,
+        meta.resolution,
+        np.array(meta.origin),
+        meta.occupied_thresh,
+        meta.free_thresh,
+    )
+
+
+def save_map(
+    grid: OccupancyGrid,
+    path: str | Path,
+    *,
+    mode: str = "trinary",
+    image_format: str | None = None,
+    free_thresh: float | None = None,
+    occupied_thresh: float | None = None,
+    write_size: bool = True,
+) -> Path:
+    """Write ``grid`` as ``<stem>.yaml`` + ``<stem>.pgm`` (``.png`` for scale mode).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    path : str or Path
+        The YAML path or its stem (``maps/lab`` -> ``maps/lab.yaml`` + ``maps/lab.pgm``).
+    mode : str
+        ``trinary``, ``scale`` or ``raw``.
+    image_format : str, optional
+        ``pgm`` or ``png`` (default ``pgm``, ``png`` for scale, which needs transparency).
+    free_thresh, occupied_thresh : float, optional
+        Written thresholds (default: the grid's).
+    write_size : bool
+        Also write ``width`` and ``height`` (ignored by map_server, checked by :func:`load_map`).
+
+    Returns
+    -------
+    Path
+        The YAML file written.
+    """
+    if mode not in MAP_MODES:
+        raise MapFileError(f"mode: expected one of {MAP_MODES}, got {mode!r}")
+    fmt = image_format or ("png" if mode == "scale" else "pgm")
+    if fmt not in ("pgm", "png"):
+        raise MapFileError(f"image_format: expected 'pgm' or 'png', got {fmt!r}")
+    if mode == "scale" and fmt != "png":
+        raise MapFileError("image_format: mode 'scale' needs transparency, use 'png'")
+    p = Path(path)
+    stem = p.with_suffix("") if p.suffix in (".yaml", ".yml") else p
+    free = grid.free_thresh if free_thresh is None else float(free_thresh)
+    occ = grid.occupied_thresh if occupied_thresh is None else float(occupied_thresh)
+    img = grid_to_image(grid, mode, free_thresh=free, occupied_thresh=occ)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    image_path = stem.with_name(stem.name + "." + fmt)
+    if not cv2.imwrite(str(image_path), img):
+        raise MapFileError(f"{image_path}: cannot write image")
+    yaml_path = stem.with_name(stem.name + ".yaml")
+    o = grid.origin
+    lines = [
+        f"image: {image_path.name}",
+        f"mode: {mode}",
+        f"resolution: {grid.resolution!r}",
+        f"origin: [{float(o[0])!r}, {float(o[1])!r}, {float(o[2])!r}]",
+        "negate: 0",
+        f"occupied_thresh: {occ!r}",
+        f"free_thresh: {free!r}",
+    ]
+    if write_size:
+        lines += [f"width: {grid.width}", f"height: {grid.height}"]
+    yaml_path.write_text("\n".join(lines) + "\n")
+    return yaml_path

@@ -1,0 +1,127 @@
+"""Tests of the inverse sensor model and the log-odds grid (symloc.grid.log_odds)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from symloc.errors import ConfigurationError
+from symloc.grid.log_odds import (
+    InverseSensorModel,
+    LogOddsGrid,
+    beam_cells,
+    log_odds,
+    probability,
+)
+from symloc.scan import LaserScan
+
+
+def _scan(ranges: list[float], angle_min: float = 0.0, inc: float = 0.1) -> LaserScan:
+    return LaserScan(angle_min, inc, 0.05, 10.0, np.array(ranges, dtype=float))
+
+
+def test_single_beam_free_then_occupied() -> None:
+    model = InverseSensorModel(no_return_range=0.0)
+    free, hits = beam_cells(np.zeros(3), _scan([1.0]), model, 0.1, (-0.05, -0.05))
+    # beam along +x from the centre of cell (0, 0): cells 0..9 free, cell 10 hit
+    assert hits.tolist() == [[0, 10]]
+    assert sorted(c for r, c in free.tolist()) == list(range(10))
+    assert all(r == 0 for r, c in free.tolist())
+
+
+def test_hit_cell_is_never_free() -> None:
+    model = InverseSensorModel()
+    angles = np.linspace(-1, 1, 50)
+    scan = LaserScan(-1.0, 2.0 / 49, 0.05, 10.0, 2.0 + 0.3 * np.sin(5 * angles))
+    free, hits = beam_cells(np.array([0.3, -0.2, 0.4]), scan, model, 0.05, (-5.0, -5.0))
+    fset = {tuple(c) for c in free.tolist()}
+    assert hits.shape[0] > 0
+    assert not any(tuple(h) in fset for h in hits.tolist())
+
+
+def test_no_return_beams_clear_only_up_to_configured_range() -> None:
+    scan = _scan([math.inf])
+    model = InverseSensorModel(no_return_range=2.0)
+    free, hits = beam_cells(np.zeros(3), scan, model, 0.1, (-0.05, -0.05))
+    assert hits.size == 0
+    # the beam starts at the centre of cell 0 and ends 2.0 m further, inside cell 20
+    assert free[:, 1].max() == 20
+    off = InverseSensorModel(no_return_range=0.0)
+    free0, hits0 = beam_cells(np.zeros(3), scan, off, 0.1, (-0.05, -0.05))
+    assert free0.size == 0 and hits0.size == 0
+
+
+def test_readings_beyond_max_range_are_truncated_without_hit() -> None:
+    model = InverseSensorModel(max_range=1.0, no_return_range=0.0)
+    free, hits = beam_cells(np.zeros(3), _scan([5.0]), model, 0.1, (-0.05, -0.05))
+    assert hits.size == 0 and free[:, 1].max() == 10  # ends at 1.0 m, inside cell 10
+
+
+def test_invalid_readings_do_nothing() -> None:
+    model = InverseSensorModel()
+    free, hits = beam_cells(np.zeros(3), _scan([math.nan, 0.01]), model, 0.1, (0.0, 0.0))
+    assert free.size == 0 and hits.size == 0
+
+
+def test_grid_grows_and_converts_to_occupancy_grid() -> None:
+    g = LogOddsGrid(0.1)
+    g.integrate(np.array([5.0, -3.0, math.pi / 2]), _scan([2.0], angle_min=0.0))
+    occ = g.to_occupancy_grid()
+    # the hit lies at (5, -1): occupied; the robot's cell is free; far cells unknown
+    hit = occ.world_to_cell([[5.0, -1.0]])[0]
+    assert occ.data[hit[0], hit[1]] == int(round(100 * 0.7))
+    me = occ.world_to_cell([[5.0, -3.0]])[0]
+    assert occ.data[me[0], me[1]] == int(round(100 * 0.4))
+    assert (occ.data == -1).sum() > 0.9 * occ.data.size
+    assert g.n_scans == 1
+
+
+def test_repeated_updates_clamp() -> None:
+    model = InverseSensorModel(p_max=0.9, p_min=0.2)
+    g = LogOddsGrid(0.1, model)
+    for _ in range(30):
+        g.integrate(np.zeros(3), _scan([1.0]))
+    assert g.values.max() == pytest.approx(log_odds(0.9), abs=1e-6)
+    assert g.values.min() == pytest.approx(log_odds(0.2), abs=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.01, 0.99))
+def test_log_odds_inverts(p: float) -> None:
+    assert float(probability(log_odds(p))) == pytest.approx(p)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"p_hit": 0.4}, "expected 0 < p_min < p_miss < 0.5 < p_hit"),
+        ({"p_miss": 0.6}, "expected 0 < p_min"),
+        ({"max_range": 0.0}, "max_range: expected a value > 0"),
+        ({"no_return_range": -1.0}, "no_return_range: expected a value >= 0"),
+        ({"step": 1.5}, "step: expected <= 1 cell"),
+    ],
+)
+def test_model_validation(kwargs: dict[str, float], match: str) -> None:
+    with pytest.raises(ConfigurationError, match=match):
+        InverseSensorModel(**kwargs)
+
+
+def test_grid_resolution_validation() -> None:
+    with pytest.raises(ConfigurationError, match="resolution: expected a value > 0"):
+        LogOddsGrid(0.0)
+
+
+def test_crop_keeps_world_coordinates() -> None:
+    g = LogOddsGrid(0.1)
+    g.integrate(np.array([5.0, -3.0, 0.0]), _scan([2.03]))
+    full = g.to_occupancy_grid()
+    crop = g.to_occupancy_grid(crop_margin=2)
+    assert crop.data.size < full.data.size
+    hit = np.array([[7.03, -3.0]])
+    a = full.world_to_cell(hit)[0]
+    b = crop.world_to_cell(hit)[0]
+    assert full.data[a[0], a[1]] == crop.data[b[0], b[1]] == 70

@@ -1,0 +1,78 @@
+"""ATE / RPE as evo defines them (symloc.slam.metrics)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose
+from symloc.slam.metrics import ate, rpe, umeyama_se2
+
+
+def _traj(n: int = 30) -> np.ndarray:
+    t = np.linspace(0, 6, n)
+    return np.column_stack([np.cos(t) * 3, np.sin(2 * t), t * 0.7])
+
+
+@settings(max_examples=25, deadline=None)
+@given(x=st.floats(-50, 50), y=st.floats(-50, 50), th=st.floats(-3.1, 3.1))
+def test_ate_is_zero_for_a_rigidly_moved_copy(x: float, y: float, th: float) -> None:
+    ref = _traj()
+    est = compose(np.array([x, y, th]), ref)
+    res = ate(ref, est)
+    assert res.rmse < 1e-9
+    assert ate(ref, est, align=False).rmse == pytest.approx(
+        np.sqrt(np.mean(np.sum((est[:, :2] - ref[:, :2]) ** 2, axis=1)))
+    )
+
+
+def test_ate_known_value_for_constant_lateral_noise() -> None:
+    ref = _traj(40)
+    est = ref.copy()
+    est[::2, 0] += 0.1
+    est[1::2, 0] -= 0.1  # zero-mean: alignment cannot remove it
+    res = ate(ref, est)
+    assert res.rmse == pytest.approx(0.1, abs=2e-3)
+    assert res.max >= res.median >= res.min
+    assert res.errors.shape == (40,)
+
+
+def test_umeyama_recovers_transform() -> None:
+    rng = np.random.default_rng(0)
+    src = rng.normal(size=(20, 2))
+    pose = np.array([1.0, -2.0, 0.7])
+    c, s = np.cos(0.7), np.sin(0.7)
+    dst = src @ np.array([[c, s], [-s, c]]) + pose[:2]
+    np.testing.assert_allclose(umeyama_se2(src, dst), pose, atol=1e-12)
+
+
+def test_rpe_matches_hand_computed_example() -> None:
+    ref = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    est = np.array([[0.0, 0, 0], [1, 0.1, 0], [2, 0.1, 0.2]])
+    r = rpe(ref, est)
+    # pair 0-1: translation error 0.1, rotation 0; pair 1-2: translation 0, rotation 0.2
+    assert r.n_pairs == 2
+    assert r.trans_rmse == pytest.approx(np.sqrt((0.1**2 + 0.0) / 2))
+    assert r.rot_rmse == pytest.approx(np.sqrt((0 + 0.2**2) / 2))
+    r2 = rpe(ref, est, delta=2)
+    assert r2.n_pairs == 1 and r2.trans_rmse == pytest.approx(0.1)
+
+
+def test_rpe_zero_for_rigid_copy() -> None:
+    ref = _traj()
+    est = compose(np.array([3.0, 1.0, 2.0]), ref)
+    assert rpe(ref, est).trans_rmse < 1e-9
+
+
+def test_errors() -> None:
+    with pytest.raises(ConfigurationError, match="estimate: expected as many poses"):
+        ate(_traj(5), _traj(6))
+    with pytest.raises(ConfigurationError, match="delta: expected an integer >= 1"):
+        rpe(_traj(5), _traj(5), delta=0)
+    with pytest.raises(ConfigurationError, match="expected more than delta=10 poses"):
+        rpe(_traj(5), _traj(5), delta=10)
+    with pytest.raises(ConfigurationError, match="reference: expected shape"):
+        ate(np.zeros((4, 2)), np.zeros((4, 2)))
