@@ -80,8 +80,12 @@ def _run(args: argparse.Namespace) -> int:
     params = dataclasses.replace(params, **changes)
     grid = None
     if args.map is not None:
-        from symloc.grid.map_io import load_map
+        try:
+            from symloc.grid.map_io import load_map
+        except ImportError as err:
+            from symloc.errors import ConfigurationError
 
+            raise ConfigurationError("--map: map_server file support is missing") from err
         grid = load_map(args.map)
     print(f"# symloc replay {args.bag}")
     print(f"#   seed: {params.seed}")
