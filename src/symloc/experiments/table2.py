@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print(f"{'paper':<12} {'86 %':>8} {'94 %':>8} {'100 %':>8}")
     for res in results:
-        d = res.to_dict()
+        d: dict[str, Any] = res.to_dict()
         sh = d["shares"]
         print(
             f"{res.preset:<12} {100 * sh['5']:>6.0f} % {100 * sh['10']:>6.0f} % "

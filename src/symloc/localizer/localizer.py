@@ -23,6 +23,7 @@ import inspect
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,7 +54,7 @@ __all__ = ["Localizer", "LocalizerConfig", "rotated_copies", "symmetry_consisten
 
 FloatArray = NDArray[np.float64]
 #: Poses x scan -> (K,) scores in [0, 1]: how well the scan fits the map at each pose.
-PoseScorer = Callable[[FloatArray, object], FloatArray]
+PoseScorer = Callable[[FloatArray, Any], FloatArray]
 
 #: How many candidates to list for a circle (infinite order).
 CIRCLE_SAMPLES = 8
@@ -241,6 +242,8 @@ class Localizer:
         self.scorer = scorer
         self.known_places = list(known_places)
         self.log: list[str] = []
+        self._last_result: TrackerResult | None = None
+        self._last_verdict: SymmetryVerdict | None = None
         #: (place, decision) of the last visual decision that reseeded AMCL.
         self.last_decision: tuple[Place, Decision] | None = None
         #: AMCL's particles when the ambiguity was declared (for figures).
@@ -319,8 +322,8 @@ class Localizer:
         self._mapping = False
         self._settled_reason = ""
         self._candidate_place: Place | None = None
-        self._last_result: TrackerResult | None = None
-        self._last_verdict: SymmetryVerdict | None = None
+        self._last_result = None
+        self._last_verdict = None
         self._odom_pose = np.zeros(3)
 
     def _note(self, text: str) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,7 +48,7 @@ class Table2Result:
         err = self.errors_mm
         return {f"{r:g}": float(np.mean(done & (err <= r))) for r in self.radii_mm}
 
-    def to_dict(self) -> dict[str, object]:
+    def to_dict(self) -> dict[str, Any]:
         err = self.errors_mm
         heading = np.array([r.heading_error for r in self.runs])
         return {
@@ -112,7 +113,7 @@ def run_table2(
         if progress:
             from tqdm import tqdm
 
-            iterator = tqdm(iterator, desc=f"table2 {preset.name}", leave=False)  # type: ignore[attr-defined, assignment]
+            iterator = tqdm(iterator, desc=f"table2 {preset.name}", leave=False)  # type: ignore[attr-defined]
         for i in iterator:
             robot = DiffDriveRobot(starts[i], rng=gen, world=room.world)
             body = RobotBody(robot)

@@ -112,7 +112,7 @@ class VisionPlaceStore:
             extractor=self.extractor,
         )
         self.last_decision = d
-        status = d.status
+        status: str = d.status
         if (
             status == "undetermined"
             and math.isfinite(d.best_score)
@@ -147,8 +147,11 @@ class VisionPlaceStore:
         from symloc.vision.visual_map import PlaceImage, direction_headings
 
         m = len(images)
-        if headings is None:
-            headings = direction_headings(float(heading0), m)
+        heads = (
+            direction_headings(float(heading0), m)
+            if headings is None
+            else np.asarray(headings, dtype=np.float64)
+        )
         stored = []
         for j, image in enumerate(images):
             feats = self.extractor.extract(image)
@@ -156,7 +159,7 @@ class VisionPlaceStore:
             stored.append(
                 PlaceImage(
                     direction=j,
-                    heading=float(headings[j]),
+                    heading=float(heads[j]),
                     features=feats,
                     bow=bow,
                     image=np.asarray(image) if self.keep_images else None,
