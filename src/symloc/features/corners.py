@@ -118,8 +118,10 @@ def adjacent_corners(lines: LineSet, *, tolerance: ArrayLike = 0.0) -> Corners:
     sin_phi = np.abs(np.sin(turn))
     with np.errstate(invalid="ignore", divide="ignore"):
         reach = gap / np.maximum(sin_phi, 1e-6) + tol
-        ahead_a = np.sum((pts - end_a) * da, axis=1) >= -tol
-        behind_b = np.sum((start_b - pts) * db, axis=1) >= -tol
+        # a point within tol of the next wall may sit up to tol / sin(phi) past the corner
+        slack = tol / np.maximum(sin_phi, 0.1)
+        ahead_a = np.sum((pts - end_a) * da, axis=1) >= -slack
+        behind_b = np.sum((start_b - pts) * db, axis=1) >= -slack
         near = (np.linalg.norm(pts - end_a, axis=1) <= reach) & (
             np.linalg.norm(pts - start_b, axis=1) <= reach
         )
