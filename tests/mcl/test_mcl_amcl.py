@@ -192,3 +192,25 @@ def test_global_init_is_uniform_over_free_cells():
     left = np.mean(amcl.particles[:, 0] < 4.0)
     assert left == pytest.approx(np.mean(np.nonzero(grid.free_mask)[1] < 80), abs=0.02)
     assert abs(np.mean(np.cos(amcl.particles[:, 2]))) < 0.03
+
+
+def test_likelihood_exponent_tempers_the_weights():
+    grid = asymmetric_room()
+    scan = synthetic_scan(grid, np.array([2.0, 4.0, 0.0]), np.random.default_rng(0))
+    ess = []
+    for expo in (1.0, 0.05):
+        p = AmclParams(
+            max_particles=2000,
+            min_particles=2000,
+            resample_interval=5,
+            laser_model_type="likelihood_field_prob",
+            laser_likelihood_exponent=expo,
+        )
+        amcl = Amcl(grid, p, rng=1)
+        amcl.initialize_global()
+        r = amcl.update(OdometryReading([0, 0, 0]), scan)
+        assert not r.resampled
+        ess.append(1.0 / np.sum(r.weights**2))
+    assert ess[1] > 3 * ess[0]
+    with pytest.raises(ConfigurationError, match="laser_likelihood_exponent"):
+        AmclParams(laser_likelihood_exponent=0.0)

@@ -271,6 +271,12 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--tracking-particles", type=int, default=2000, help="max_particles")
     parser.add_argument("--global-particles", type=int, default=20000, help="max_particles")
+    parser.add_argument(
+        "--global-exponent",
+        type=float,
+        default=1.0,
+        help="laser_likelihood_exponent for global localization (1 = nav2's likelihood)",
+    )
     parser.add_argument("--skip-global", action="store_true", help="tracking only")
     parser.set_defaults(func=run)
 
@@ -302,6 +308,7 @@ def run(args: argparse.Namespace) -> int:
         min_particles=min(500, args.global_particles),
         recovery_alpha_slow=0.001,
         recovery_alpha_fast=0.1,
+        laser_likelihood_exponent=args.global_exponent,
     )
     print_config(
         "amcl-carmen",
@@ -313,7 +320,8 @@ def run(args: argparse.Namespace) -> int:
             "odometry": f"corrected increments + rot-trans-rot noise, alpha1..4 = {a}",
             "amcl": f"nav2 defaults except {args.laser_model}, alpha1..4 = {a},"
             f" tracking {track_p.max_particles}/{track_p.min_particles} particles,"
-            f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1",
+            f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1,"
+            f" global likelihood exponent {glob_p.laser_likelihood_exponent}",
             "global": f"{args.starts} starts x up to {args.window} scans; converged = within"
             " 0.3 m / 10 deg to the end; confident wrong = 1 hypothesis, std < 0.3 m / 15 deg,"
             " error > 1 m or 30 deg",

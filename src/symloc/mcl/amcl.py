@@ -348,6 +348,8 @@ class Amcl:
                 sigma_hit=p.sigma_hit,
                 laser_pose=laser_pose,
             )
+            if p.laser_likelihood_exponent != 1.0:
+                factor **= p.laser_likelihood_exponent
             w = w_prev * factor
             total = float(w.sum())
             w_avg = total / w.size
@@ -365,6 +367,7 @@ class Amcl:
                 beam_skip_threshold=p.beam_skip_threshold,
                 beam_skip_error_threshold=p.beam_skip_error_threshold,
             )
+            logf *= p.laser_likelihood_exponent
             shift = float(logf.max())
             w = w_prev * np.exp(logf - shift)
             total = float(w.sum())
@@ -382,6 +385,8 @@ class Amcl:
                 lambda_short=p.lambda_short,
                 laser_pose=laser_pose,
             )
+            if p.laser_likelihood_exponent != 1.0:
+                factor **= p.laser_likelihood_exponent
             w = w_prev * factor
             total = float(w.sum())
             w_avg = total / w.size

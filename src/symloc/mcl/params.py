@@ -7,8 +7,13 @@ raises :class:`~symloc.errors.ConfigurationError`; it is never reset to a defaul
 line. Parameters that only concern ROS plumbing (frame ids, topics, tf) are accepted from the
 YAML and kept in :attr:`AmclParams.ros_extras` but play no role in the filter.
 
-Two symloc additions (not nav2 names): ``hypothesis_min_weight`` (the weight fraction a
-cluster needs to count as a well-weighted hypothesis) and ``update_min_d_euclidean``.
+Three symloc additions (not nav2 names): ``hypothesis_min_weight`` (the weight fraction a
+cluster needs to count as a well-weighted hypothesis), ``update_min_d_euclidean`` and
+``laser_likelihood_exponent`` (default 1 = nav2): the scan likelihood is raised to this power
+in (0, 1] before it multiplies the weights. Neighbouring beams are not independent, so the
+product over beams of ``likelihood_field_prob`` is far too peaked (Thrun et al. 2005,
+Section 6.3.4); an exponent < 1 tempers it and keeps the filter from collapsing onto one
+wrong hypothesis after a single scan during global localization.
 """
 
 from __future__ import annotations
@@ -112,6 +117,7 @@ class AmclParams:
     # symloc additions
     hypothesis_min_weight: float = 0.1
     update_min_d_euclidean: bool = True
+    laser_likelihood_exponent: float = 1.0
     ros_extras: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -191,6 +197,11 @@ class AmclParams:
             "a value in [0, 1]",
         )
         need(0.0 < self.hypothesis_min_weight <= 1.0, "hypothesis_min_weight", "a value in (0, 1]")
+        need(
+            0.0 < self.laser_likelihood_exponent <= 1.0,
+            "laser_likelihood_exponent",
+            "a value in (0, 1]",
+        )
 
     @property
     def motion_model(self) -> str:
