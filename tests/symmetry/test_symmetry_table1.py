@@ -71,3 +71,17 @@ def test_table1_is_reproducible_and_rejects_bad_positions() -> None:
     fp = run_false_positives(seed=1, per_room=1, gv_distances=(3.0,), progress=False)
     assert fp["trials"] == len(FP_ROOMS)
     assert main(["experiment", "table1", "--positions", "0"]) == 2
+
+
+def test_plot_judgement_writes_a_png(tmp_path: Path) -> None:
+    import numpy as np
+
+    from symloc.figures.symmetry import plot_judgement
+    from symloc.sim.lidar import PAPER_15M, simulate_scan
+    from symloc.sim.rooms import build_room
+    from symloc.symmetry import judge_symmetry
+
+    room = build_room("pentagon", 3.0, lab=False)
+    scan = simulate_scan(room.world, np.array([0.5, 0.2, 0.1]), PAPER_15M, 0)
+    out = plot_judgement(scan, judge_symmetry(scan), tmp_path / "j.png")
+    assert out.stat().st_size > 1000

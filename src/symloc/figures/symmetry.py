@@ -81,7 +81,7 @@ def plot_table1_positions(
         f" orange ring = {methods[1] if len(methods) > 1 else ''} wrong",
         fontsize=9,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
