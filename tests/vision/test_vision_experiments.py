@@ -41,6 +41,11 @@ def test_table3_small_run_never_picks_a_wrong_direction() -> None:
     assert d["untextured"]["trials"] == 12
     assert d["untextured"]["wrong"] == 0
     assert d["untextured"]["correct"] == 0
+    # with a FAST threshold low enough for >= 100 keypoints, the *decision* must say undetermined
+    sens = d["untextured_sensitive_orb"]
+    assert sens["trials"] == 12
+    assert sens["wrong_after_retries"] == 0
+    assert sens["correct_after_retries"] == 0
     assert d["heading_error_deg_median"] < 1.0  # offset correction works (robot off by <= 5 deg)
 
 

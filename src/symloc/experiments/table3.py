@@ -89,6 +89,15 @@ def run(args: argparse.Namespace) -> int:
         f"(refused {u['refused']}), wrong {u['wrong']}, correct {u['correct']}; after retries: "
         f"wrong {u['wrong_after_retries']}, correct {u['correct_after_retries']}"
     )
+    us = d["untextured_sensitive_orb"]
+    if us["trials"]:
+        print(
+            f"untextured lab, ORB FAST threshold {us['fast_threshold']} "
+            f"({us['mean_keypoints']:.0f} keypoints per image from board edges and noise): "
+            f"undetermined {us['undetermined']}/{us['trials']} (refused {us['refused']}), "
+            f"wrong {us['wrong']}, correct {us['correct']}; after retries: "
+            f"wrong {us['wrong_after_retries']}, correct {us['correct_after_retries']}"
+        )
     from symloc.figures.vision import matches_figure, table3_figure
 
     path = table3_figure(res, args.out / "table3.png")

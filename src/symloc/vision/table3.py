@@ -105,6 +105,7 @@ class Table3Result:
     trials: list[TrialOutcome]
     untextured: list[TrialOutcome]
     config: dict[str, Any] = field(default_factory=dict)
+    untextured_sensitive: list[TrialOutcome] = field(default_factory=list)
     stored_images: list[NDArray[np.uint8]] = field(default_factory=list)
     example_query: NDArray[np.uint8] | None = None
 
@@ -161,6 +162,15 @@ class Table3Result:
                 "median": float(np.median(ratios)) if ratios.size else math.nan,
             },
             "untextured": self._counts(self.untextured),
+            "untextured_sensitive_orb": {
+                **self._counts(self.untextured_sensitive),
+                "fast_threshold": self.config.get("sensitive_fast_threshold"),
+                "mean_keypoints": float(
+                    np.mean([t.decision.n_keypoints for t in self.untextured_sensitive])
+                )
+                if self.untextured_sensitive
+                else math.nan,
+            },
             "config": self.config,
         }
 
@@ -231,6 +241,7 @@ def run_table3(
     config: OrientationConfig | None = None,
     rng: np.random.Generator | int | None = 0,
     untextured: bool = True,
+    sensitive_fast_threshold: int | None = 4,
     progress: bool = True,
 ) -> Table3Result:
     """Run the Table 3 protocol (see the module docstring).
@@ -247,6 +258,12 @@ def run_table3(
         Largest heading error [rad] of the robot when it captures the query.
     vocabulary : Vocabulary, optional
         Default: the shipped :func:`~symloc.vision.default_vocabulary.default_vocabulary`.
+    untextured : bool
+        Also run the untextured lab (the paper's failure case).
+    sensitive_fast_threshold : int or None
+        Also run the untextured lab with this (very low) FAST threshold, so that board edges and
+        pixel noise give ORB keypoints and the decision, not the keypoint count, must refuse to
+        pick a direction among four views that look alike. None skips it.
     """
     from tqdm import tqdm
 
@@ -271,16 +288,32 @@ def run_table3(
         "camera": f"{cam.width}x{cam.height}, hfov {math.degrees(cam.hfov):.0f} deg, noise {cam.noise_sigma}",
         "orientation": cfg.__dict__,
     }
-    worlds = [("textured", True)] + ([("untextured", False)] if untextured else [])
+    from symloc.vision.orb import OrbSettings
+
+    result_cfg["sensitive_fast_threshold"] = sensitive_fast_threshold
+    worlds: list[tuple[str, bool, OrbExtractor]] = [("textured", True, ext)]
+    if untextured:
+        worlds.append(("untextured", False, ext))
+        if sensitive_fast_threshold is not None:
+            sens = OrbExtractor(OrbSettings(fast_threshold=int(sensitive_fast_threshold)))
+            worlds.append(("untextured_sensitive", False, sens))
     outcomes: dict[str, list[TrialOutcome]] = {}
     stored: list[NDArray[np.uint8]] = []
     examples: list[NDArray[np.uint8]] = []
     with tqdm(total=len(worlds) * m * trials, desc="table3 trials", disable=not progress) as bar:
-        for name, textured in worlds:
+        for name, textured, wext in worlds:
             room = build_room("square", gv, lab=True, textured=textured)
             heads = wall_headings(room.corners, room.center)
             place = store_place(
-                room.world, room.center, heads, cam, voc, ext, gen, gv_distance=gv, keep_images=True
+                room.world,
+                room.center,
+                heads,
+                cam,
+                voc,
+                wext,
+                gen,
+                gv_distance=gv,
+                keep_images=True,
             )
             if textured:
                 stored = [im.image for im in place.images if im.image is not None]
@@ -289,7 +322,7 @@ def run_table3(
                 place,
                 cam,
                 voc,
-                ext,
+                wext,
                 cfg,
                 trials,
                 radius,
@@ -304,6 +337,7 @@ def run_table3(
         outcomes["textured"],
         outcomes.get("untextured", []),
         result_cfg,
+        outcomes.get("untextured_sensitive", []),
         stored,
         examples[0] if examples else None,
     )
