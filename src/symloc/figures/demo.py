@@ -50,8 +50,9 @@ def table2_figure(results: Sequence[Any], path: Path) -> Path:
         ax2.set_ylim(-18, 18)
         sh = res.shares()
         ax2.set_title(
-            f"final positions [mm]: {100 * sh['5']:.0f}/{100 * sh['10']:.0f}/"
-            f"{100 * sh['15']:.0f} % within 5/10/15 mm"
+            f"{res.preset}: final positions [mm]\n{100 * sh['5']:.0f} / {100 * sh['10']:.0f} / "
+            f"{100 * sh['15']:.0f} % within 5 / 10 / 15 mm",
+            fontsize=10,
         )
         ax2.legend(loc="upper right", fontsize=7)
     fig.suptitle("Table 2: Algorithm 2 (go to the centre) from many start positions")
