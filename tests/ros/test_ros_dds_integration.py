@@ -1,7 +1,7 @@
 """The symloc node over real DDS on loopback: a simulated kidnapped-robot run and bad input.
 
 Starts ``symloc ros node`` as its own process on a random ROS_DOMAIN_ID with discovery limited
-to this host, plays the simulator into it over topics (map, odom, scan, camera), carries out the
+to this host (its scan topic remapped with ``--ros-args -r scan:=front/scan``), plays the simulator into it over topics (map, odom, scan, camera), carries out the
 node's requests (read from ``symloc/status``) in the simulator, and checks that ``amcl_pose``
 ends within 0.1 m and 5 degrees of the truth. Then it sends a burst of malformed messages and
 checks that the node counts them, stays up and keeps localizing.
@@ -81,7 +81,7 @@ class Driver:
         self.pub = {
             "map": n.create_publisher(GridMsg, "map", latched),
             "odom": n.create_publisher(Odometry, "odom", 50),
-            "scan": n.create_publisher(LaserScan, "scan", 50),
+            "scan": n.create_publisher(LaserScan, "front/scan", 50),  # remapped for the node
             "image": n.create_publisher(Image, "camera/image_raw", 10),
             "initialpose": n.create_publisher(PoseWithCovarianceStamped, "initialpose", 10),
         }
@@ -149,7 +149,18 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
     env.pop("ROS_LOCALHOST_ONLY", None)
     log = (tmp_path / "node.log").open("w")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "symloc.cli.main", "ros", "node", "--params", str(sim.params_path)],
+        [
+            sys.executable,
+            "-m",
+            "symloc.cli.main",
+            "ros",
+            "node",
+            "--params",
+            str(sim.params_path),
+            "--ros-args",
+            "-r",
+            "scan:=front/scan",
+        ],
         env=env,
         stdout=log,
         stderr=subprocess.STDOUT,

@@ -21,11 +21,17 @@ def register(subparsers: Any) -> None:
         help="run the symloc localization node",
         description="Run the symloc node: subscribes scan, odom, map, camera, initialpose;"
         " publishes amcl_pose, particle_cloud, symloc/status, symloc/candidates, goal_pose,"
-        " symloc/capture_request. Extra arguments after --ros-args go to rclpy"
+        " symloc/capture_request. Arguments after --ros-args (last) go to rclpy"
         " (e.g. --ros-args -r scan:=/front/scan -r __ns:=/robot1).",
     )
     node.add_argument("--params", type=Path, required=True, help="nav2-style parameters YAML")
-    node.add_argument("ros_args", nargs=argparse.REMAINDER, help="--ros-args ... for rclpy")
+    node.add_argument(
+        "--ros-args",
+        dest="ros_args",
+        nargs=argparse.REMAINDER,
+        default=None,
+        help="everything after it goes to rclpy, as in ros2 run (give it last)",
+    )
     node.set_defaults(func=_run_node)
     conv = sub.add_parser(
         "carmen-to-bag",
@@ -43,7 +49,8 @@ def register(subparsers: Any) -> None:
 def _run_node(args: argparse.Namespace) -> int:
     from symloc.ros.node import run_node
 
-    return run_node(args.params, list(args.ros_args))
+    ros_args = [] if args.ros_args is None else ["--ros-args", *args.ros_args]
+    return run_node(args.params, ros_args)
 
 
 def _carmen_to_bag(args: argparse.Namespace) -> int:
