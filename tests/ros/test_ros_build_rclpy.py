@@ -54,3 +54,63 @@ def test_rclpy_grid_image_posearray() -> None:
 def test_rclpy_unknown_field() -> None:
     with pytest.raises(DataFormatError, match=r"LaserScan\.nope: no such field"):
         build_rclpy(sensor_msgs.LaserScan, {"nope": 1})
+
+
+def test_node_loads_map_yaml_and_survives_a_crashing_localizer(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import os
+    import random
+    import time
+
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+
+    from symloc.grid.map_io import save_map
+    from symloc.odometry import OdometryReading
+    from symloc.ros import odometry_to_fields
+    from symloc.ros.node import SymlocNode
+    from symloc.ros.params import NodeParams
+
+    diagnostic_msgs = pytest.importorskip("diagnostic_msgs.msg", reason="pip install symloc[ros]")
+    grid = OccupancyGrid(np.zeros((20, 20), np.int8), 0.1)
+    save_map(grid, tmp_path / "m.yaml")
+
+    class Crashing:
+        def update(self, odom, scan, image=None):  # type: ignore[no-untyped-def]
+            raise RuntimeError("boom")
+
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=random.randint(1, 100))
+    params = NodeParams(map_yaml=str(tmp_path / "m.yaml"), sensor_qos="reliable")
+    node = SymlocNode(params, context=ctx, factory=lambda g, p: Crashing())
+    drv = rclpy.create_node("drv", context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node.node)
+    ex.add_node(drv)
+    try:
+        assert node.core.grid is not None
+        assert node.core.grid.width == 20
+        statuses: list[object] = []
+        drv.create_subscription(
+            diagnostic_msgs.DiagnosticArray, "symloc/status", statuses.append, 10
+        )
+        po = drv.create_publisher(nav_msgs.Odometry, "odom", 10)
+        ps = drv.create_publisher(sensor_msgs.LaserScan, "scan", 10)
+        scan = LaserScan(-math.pi, math.pi / 180, 0.1, 10.0, np.full(360, 2.0), stamp=1.0)
+        end = time.monotonic() + 10
+        while node.core.dropped["internal error"] < 2 and time.monotonic() < end:
+            po.publish(
+                build_rclpy(
+                    nav_msgs.Odometry, odometry_to_fields(OdometryReading(np.zeros(3), 1.0))
+                )
+            )
+            ps.publish(build_rclpy(sensor_msgs.LaserScan, scan_to_fields(scan)))
+            ex.spin_once(timeout_sec=0.1)
+        assert node.core.dropped["internal error"] >= 2  # counted, the node is still spinning
+        assert statuses == []  # nothing published for a failed step
+    finally:
+        ex.shutdown()
+        node.destroy()
+        drv.destroy_node()
+        rclpy.shutdown(context=ctx)
