@@ -120,7 +120,7 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
         ReportJudge(judge_symmetry, config=params.symmetry_config()),
         store,
         config,
-        scorer=GridScorer(grid),  # type: ignore[arg-type]
+        scorer=GridScorer(grid),
         known_places=known,
     )
     loc.reset_global()
