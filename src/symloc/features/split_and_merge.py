@@ -594,9 +594,10 @@ def split_and_merge(
     roll = 0
     first_cut: int | None = None
     if closed and m >= 4:
-        # start at the point nearest the sensor (from inside a convex room, the foot of the
-        # perpendicular on a wall, never a corner), and cut first at the point farthest from it
-        roll = int(np.argmin(np.sum(p * p, axis=1)))
+        # start at the point farthest from the sensor (from inside a convex room, next to a
+        # corner, so the contour's ends rarely need joining), and cut first at the point
+        # farthest from it
+        roll = int(np.argmax(np.sum(p * p, axis=1)))
         p = _rolled(p, roll)
         tol = _rolled(tol, roll)
         first_cut = int(np.argmax(np.sum((p - p[0]) ** 2, axis=1)))
@@ -647,7 +648,9 @@ def split_and_merge(
             scores[redo] = _pair_excess(p, tol, mom, st, sp, closed=closed, which=redo)
 
     n_before = st.size
-    p, tol, st, sp, extra = _absorb_short(p, tol, st, sp, closed=closed, max_points=2 * min_points)
+    p, tol, st, sp, extra = _absorb_short(
+        p, tol, st, sp, closed=closed, max_points=max(2 * min_points, 32)
+    )
     if st.size != n_before:
         mom = _Moments(p)
         p, tol, st, sp, shift, mom = _refine_boundaries(p, tol, st, sp, closed=closed, mom=mom)
