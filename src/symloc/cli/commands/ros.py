@@ -93,6 +93,11 @@ def add_sim_record_parser(sim_subparsers: Any) -> None:
     rec.add_argument("--compressed", action="store_true", help="images as CompressedImage (PNG)")
     rec.add_argument("--max-time", type=float, default=60.0, help="simulated seconds at most")
     rec.add_argument("--particles", type=int, default=2000, help="AMCL max_particles")
+    rec.add_argument(
+        "--build-visual-map",
+        action="store_true",
+        help="run the node in its visual-map building mode against a new places_built.db",
+    )
     rec.add_argument("--seed", type=int, default=0, help="random seed (printed)")
     rec.set_defaults(func=_sim_record)
 
@@ -112,6 +117,7 @@ def _sim_record(args: argparse.Namespace) -> int:
         compressed_images=args.compressed,
         max_time=args.max_time,
         max_particles=args.particles,
+        mode="build_visual_map" if args.build_visual_map else "localize",
     )
     print(f"kidnapped to {rec.start.round(3).tolist()}; {len(rec.trajectory)} scans")
     for line in rec.steps:
