@@ -274,7 +274,7 @@ def run_false_positives(
     total = len(FP_ROOMS) * per_room
     bar = tqdm(total=total, desc="false positives", file=sys.stderr, disable=not progress)
     for spec in FP_ROOMS:
-        row = {"room": spec.label, "true_order": spec.true_order, "trials": 0}
+        row: dict[str, Any] = {"room": spec.label, "true_order": spec.true_order, "trials": 0}
         row.update({f"fp_{c}": 0 for c in CENTROIDS})
         row.update({f"order_found_{c}": 0 for c in CENTROIDS})
         kinds: dict[str, int] = {}

@@ -36,7 +36,7 @@ def mean_centroid(points: ArrayLike) -> FloatArray:
     p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if p.shape[0] == 0:
         return np.full(2, np.nan)
-    return p.mean(axis=0)
+    return np.asarray(p.mean(axis=0), dtype=np.float64)
 
 
 def polygon_area(points: ArrayLike) -> float:

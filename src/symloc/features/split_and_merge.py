@@ -26,6 +26,7 @@ Tolerances are per point [m]: the caller derives them from the sensor's range no
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -36,6 +37,7 @@ __all__ = ["LineSet", "contour_gaps", "contour_runs", "fit_line_tls", "split_and
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+_Num = FloatArray | np.float64
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,11 +96,13 @@ class LineSet:
     @property
     def lengths(self) -> FloatArray:
         """Length [m] of each line between its projected end points, shape (L,)."""
-        return np.linalg.norm(self.endpoints[:, 1] - self.endpoints[:, 0], axis=-1)
+        return np.asarray(
+            np.linalg.norm(self.endpoints[:, 1] - self.endpoints[:, 0], axis=-1), dtype=np.float64
+        )
 
 
 def _tls_from_moments(
-    n: FloatArray, sx: FloatArray, sy: FloatArray, sxx: FloatArray, syy: FloatArray, sxy: FloatArray
+    n: _Num, sx: _Num, sy: _Num, sxx: _Num, syy: _Num, sxy: _Num
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """TLS lines from summed moments; returns centres, directions, normals, offsets, spread^2."""
     n = np.maximum(n, 1.0)
@@ -259,10 +263,13 @@ def contour_runs(
     return np.stack([starts, stops], axis=-1).astype(np.intp)
 
 
-def _rolled(a: NDArray[np.generic], k: int) -> NDArray[np.generic]:
+_A = TypeVar("_A", bound=np.ndarray)
+
+
+def _rolled(a: _A, k: int) -> _A:
     """``np.roll(a, -k, axis=0)`` without its overhead."""
     k = int(k) % a.shape[0] if a.shape[0] else 0
-    return np.concatenate((a[k:], a[:k])) if k else a
+    return np.concatenate((a[k:], a[:k])) if k else a  # type: ignore[return-value]
 
 
 class _Moments:
@@ -290,7 +297,7 @@ class _Moments:
         s = self.cs[:, np.minimum(b, m)] - self.cs[:, a]
         if over.any():
             s = s + np.where(over, self.cs[:, np.where(over, b - m, 0)], 0.0)
-        return s
+        return np.asarray(s, dtype=np.float64)
 
     def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
         """TLS fits of the ranges [a, b); ``b`` may exceed M (the range wraps to the start)."""

@@ -219,13 +219,22 @@ def judge_symmetry(
     full_circle = scan.angle_increment * n_beams >= 2.0 * math.pi - 1.5 * scan.angle_increment
     tol = cfg.point_tolerance(sp.ranges)
     sig = cfg.sigma(sp.ranges)
-    gap_args = {
-        "max_dropout_beams": cfg.max_dropout_beams,
-        "no_return": scan.no_return_mask,
-        "max_blind_beams": cfg.max_blind_beams,
-    }
-    gaps = contour_gaps(sp.indices, n_beams, **gap_args)
-    runs = contour_runs(sp.indices, n_beams, wrap=True, **gap_args)
+    no_return = scan.no_return_mask
+    gaps = contour_gaps(
+        sp.indices,
+        n_beams,
+        max_dropout_beams=cfg.max_dropout_beams,
+        no_return=no_return,
+        max_blind_beams=cfg.max_blind_beams,
+    )
+    runs = contour_runs(
+        sp.indices,
+        n_beams,
+        wrap=True,
+        max_dropout_beams=cfg.max_dropout_beams,
+        no_return=no_return,
+        max_blind_beams=cfg.max_blind_beams,
+    )
     closed = full_circle and not gaps.any()
     try:
         if closed:
@@ -326,7 +335,7 @@ def _judge_closed(
             " circle",
             **common,
         )
-    rolled_sig = _rolled(sig, lines.roll)
+    rolled_sig: FloatArray = _rolled(sig, lines.roll)
     owner = np.repeat(np.arange(n_lines), lines.stops - lines.starts)
     n_l = lines.n_points.astype(np.float64)
     sig_l = np.sqrt(np.bincount(owner, rolled_sig * rolled_sig, minlength=n_lines) / n_l)
