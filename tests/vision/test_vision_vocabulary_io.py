@@ -167,3 +167,16 @@ def test_convert_command(voc: Vocabulary, tmp_path) -> None:  # type: ignore[no-
     assert main([str(tmp_path / "a.txt"), str(tmp_path / "b.symvoc"), "--compress"]) == 0
     assert main([str(tmp_path / "b.symvoc"), str(tmp_path / "c.txt")]) == 0
     assert load_vocabulary(tmp_path / "c.txt").equals(voc)
+
+
+def test_compressed_payload_that_does_not_inflate(voc: Vocabulary, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import zlib
+
+    path = tmp_path / "z.bin"
+    save_vocabulary(voc, path, compress=True)
+    data = bytearray(path.read_bytes())
+    data[HEADER_SIZE + 8 : HEADER_SIZE + 12] = b"\x00\x01\x02\x03"  # break the zlib stream
+    data[44:48] = struct.pack("<I", zlib.crc32(bytes(data[HEADER_SIZE:])) & 0xFFFFFFFF)
+    path.write_bytes(bytes(data))
+    with pytest.raises(VocabularyFileError, match="byte 64: cannot decompress weights and parents"):
+        load_vocabulary(path)
