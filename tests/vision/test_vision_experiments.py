@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+import vision_helpers as helpers
 
 from symloc.cli.main import main
 from symloc.vision.default_vocabulary import DEFAULT_VOCABULARY_PATH, default_vocabulary
@@ -14,7 +15,9 @@ from symloc.vision.keyframes import run_keyframes
 from symloc.vision.table3 import run_table3, wall_headings
 
 
-def test_shipped_vocabulary(extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
+def test_shipped_vocabulary() -> None:
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     assert DEFAULT_VOCABULARY_PATH.stat().st_size < 5 * 2**20
     voc = default_vocabulary()
     assert (voc.k, voc.L) == (10, 5)

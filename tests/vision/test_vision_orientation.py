@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from conftest import K, rotated_view
+import vision_helpers as helpers
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from vision_helpers import K, rotated_view
 
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff
@@ -32,9 +33,10 @@ def _place(photos: list[np.ndarray], voc: Vocabulary, ext: OrbExtractor) -> Plac
     return Place(1, "square", 4, 1.0, np.array([0.0, 0.0, 0.5]), tuple(images))
 
 
-def test_decides_each_direction_with_heading_offset(
-    trained_vocabulary, extractor, wall_photos
-) -> None:  # type: ignore[no-untyped-def]
+def test_decides_each_direction_with_heading_offset() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     place = _place(wall_photos, trained_vocabulary, extractor)
     for j, yaw in enumerate([0.06, -0.04, 0.0, -0.08]):
         d = decide_orientation(rotated_view(wall_photos[j], yaw), place, trained_vocabulary, K)
@@ -46,7 +48,10 @@ def test_decides_each_direction_with_heading_offset(
         assert d.inliers >= 20
 
 
-def test_refuses_featureless_images(trained_vocabulary, extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
+def test_refuses_featureless_images() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     place = _place(wall_photos, trained_vocabulary, extractor)
     flat = np.full((480, 640, 3), 200, np.uint8)
     d = decide_orientation(flat, place, trained_vocabulary, K)
@@ -62,7 +67,10 @@ def test_refuses_featureless_images(trained_vocabulary, extractor, wall_photos) 
     assert d2.n_keypoints < 100
 
 
-def test_symmetric_views_are_undetermined(trained_vocabulary, extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
+def test_symmetric_views_are_undetermined() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     # a room that looks the same in all four directions: never pick one
     place = _place([wall_photos[0]] * 4, trained_vocabulary, extractor)
     d = decide_orientation(rotated_view(wall_photos[0], 0.02), place, trained_vocabulary, K)
@@ -71,7 +79,10 @@ def test_symmetric_views_are_undetermined(trained_vocabulary, extractor, wall_ph
     assert "ambiguous" in d.reason
 
 
-def test_unknown_view_is_undetermined(trained_vocabulary, extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
+def test_unknown_view_is_undetermined() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     import skimage.data
 
     place = _place(wall_photos, trained_vocabulary, extractor)
@@ -81,7 +92,10 @@ def test_unknown_view_is_undetermined(trained_vocabulary, extractor, wall_photos
     assert d.status == "undetermined"
 
 
-def test_retry_protocol_turns_clockwise(trained_vocabulary, extractor, wall_photos) -> None:  # type: ignore[no-untyped-def]
+def test_retry_protocol_turns_clockwise() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     place = _place(wall_photos, trained_vocabulary, extractor)
     flat = np.full((480, 640), 128, np.uint8)
     start = 1  # the robot starts facing direction 1, but the first image is blank (occluded)
@@ -127,7 +141,8 @@ def test_config_and_intrinsics_validation() -> None:
     assert intrinsics_matrix(Cam())[0, 2] == 320.0
 
 
-def test_place_without_images_is_an_error(trained_vocabulary) -> None:  # type: ignore[no-untyped-def]
+def test_place_without_images_is_an_error() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
     empty = Place(3, "square", 4, 1.0, np.zeros(3), ())
     with pytest.raises(ConfigurationError, match="place 3: has no stored images"):
         decide_orientation(np.zeros((48, 64), np.uint8), empty, trained_vocabulary, K)

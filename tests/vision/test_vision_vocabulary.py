@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import vision_helpers as helpers
 
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.vision.bow import Scoring, Weighting
@@ -174,7 +175,7 @@ def test_training_errors() -> None:
         Vocabulary.train([np.zeros((3, 31), np.uint8)], progress=False)
 
 
-def test_train_from_folder(tmp_path, extractor) -> None:  # type: ignore[no-untyped-def]
+def test_train_from_folder(tmp_path) -> None:  # type: ignore[no-untyped-def]
     import cv2
     import skimage.data
 
@@ -189,9 +190,10 @@ def test_train_from_folder(tmp_path, extractor) -> None:  # type: ignore[no-unty
         Vocabulary.train_from_folder(tmp_path / "missing")
 
 
-def test_same_image_scores_higher_than_other_images(  # type: ignore[no-untyped-def]
-    trained_vocabulary, extractor, wall_photos
-) -> None:
+def test_same_image_scores_higher_than_other_images() -> None:
+    trained_vocabulary = helpers.trained_vocabulary()
+    extractor = helpers.extractor()
+    wall_photos = helpers.wall_photos()
     bows = [trained_vocabulary.bow(extractor.extract(p).descriptors) for p in wall_photos]
     again = trained_vocabulary.bow(extractor.extract(wall_photos[0]).descriptors)
     scores = trained_vocabulary.score_many(again, bows)

@@ -1,12 +1,12 @@
-"""Shared fixtures of the vision tests: small vocabularies and synthetic rotated views."""
+"""Helpers of the vision tests (a uniquely named module, importable from the test files)."""
 
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import cv2
 import numpy as np
-import pytest
 import skimage.data
 
 from symloc.vision.orb import OrbExtractor
@@ -24,23 +24,26 @@ def rotated_view(image: np.ndarray, yaw: float) -> np.ndarray:
     return cv2.warpPerspective(src, K @ R @ np.linalg.inv(K), (W, H))
 
 
-@pytest.fixture(scope="session")
+@lru_cache(maxsize=1)
 def extractor() -> OrbExtractor:
+    """The default ORB extractor (500 features)."""
     return OrbExtractor()
 
 
-@pytest.fixture(scope="session")
-def trained_vocabulary(extractor: OrbExtractor) -> Vocabulary:
+@lru_cache(maxsize=1)
+def trained_vocabulary() -> Vocabulary:
+    """A k=10, L=4 vocabulary trained on bundled photos that are not the test's wall photos."""
     docs = []
     for name in ("camera", "brick", "grass", "gravel", "coins", "moon", "clock", "page"):
         img = getattr(skimage.data, name)()
         for s in (1.0, 0.75, 0.5):
-            docs.append(extractor.extract(cv2.resize(img, None, fx=s, fy=s)).descriptors)
+            docs.append(extractor().extract(cv2.resize(img, None, fx=s, fy=s)).descriptors)
     return Vocabulary.train(docs, k=10, L=4, rng=1, progress=False)
 
 
-@pytest.fixture(scope="session")
+@lru_cache(maxsize=1)
 def wall_photos() -> list[np.ndarray]:
+    """Four distinct photos standing for a square room's four walls."""
     return [
         skimage.data.astronaut(),
         skimage.data.coffee(),
