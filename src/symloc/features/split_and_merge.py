@@ -356,12 +356,18 @@ def _pair_excess(
     return out_all
 
 
-def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
+def _split(
+    p: FloatArray, tol: FloatArray, first_cut: int | None, mom: _Moments | None = None
+) -> list[int]:
     """Split at the farthest point from the chord, recursively; returns sorted cut indices.
 
-    All segments of one recursion level are processed together (one vectorised pass over
-    their interior points per level).
+    A segment is kept whole when its TLS line holds every interior point within tolerance;
+    otherwise it is cut at the interior point farthest from its chord. (Testing the chord
+    itself, as the textbook does, over-splits: a chord between two noisy end points is tilted
+    by their noise.) All segments of one recursion level are processed together.
     """
+    if mom is None:
+        mom = _Moments(p)
     m = p.shape[0]
     cuts = [0, m - 1]
     if first_cut is not None and 0 < first_cut < m - 1:
@@ -392,7 +398,10 @@ def _split(p: FloatArray, tol: FloatArray, first_cut: int | None) -> list[int]:
         )
         ratio = dist / tol[idx]
         best = np.maximum.reduceat(ratio, first)
-        split = best > 1.0
+        # the segment's own line decides whether it is one wall
+        _c, _d, nrm, off, _s = mom.fit(seg_i + 1, seg_j)
+        res = np.abs(p[idx, 0] * nrm[sid, 0] + p[idx, 1] * nrm[sid, 1] - off[sid]) / tol[idx]
+        split = (best > 1.0) & (np.maximum.reduceat(res, first) > 1.0)
         if not split.any():
             break
         # first index of each segment's maximum
@@ -608,14 +617,17 @@ def split_and_merge(
         p = _rolled(p, roll)
         tol = _rolled(tol, roll)
         first_cut = int(np.argmax(np.sum((p - p[0]) ** 2, axis=1)))
-    cuts = _split(p, tol, first_cut)
+    mom = _Moments(p)
+    cuts = _split(p, tol, first_cut, mom)
 
     # pieces [cuts[t], cuts[t+1]) ; the last piece takes the final point
     bounds = np.asarray(cuts, dtype=np.intp)
     starts = bounds[:-1].copy()
     stops = bounds[1:].copy()
     stops[-1] = m
-    p, tol, starts, stops, shift, mom = _refine_boundaries(p, tol, starts, stops, closed=closed)
+    p, tol, starts, stops, shift, mom = _refine_boundaries(
+        p, tol, starts, stops, closed=closed, mom=mom
+    )
     roll = (roll + shift) % m
 
     # merge: repeatedly join the adjacent pair whose joint fit is best, while it is within tol
