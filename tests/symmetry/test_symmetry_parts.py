@@ -87,7 +87,7 @@ def test_report_is_frozen_and_validates_kind() -> None:
         rep.center[0] = 1.0
     d = rep.to_dict()
     assert json.loads(json.dumps(d))["corners"] == [[1.0, 1.0], [-1.0, 1.0]]
-    with pytest.raises(ValueError, match="kind: expected one of"):
+    with pytest.raises(ConfigurationError, match="kind: expected one of"):
         SymmetryReport("blob", False, 1, False, [0, 0], [], 0.0, 0.0, "")
 
 

@@ -50,7 +50,9 @@ def test_table1_small_run_json_and_figure(
     assert (tmp_path / "table1_positions.png").stat().st_size > 1000
 
 
-def test_table1_is_reproducible_and_rejects_bad_positions() -> None:
+def test_table1_is_reproducible_and_rejects_bad_positions(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     a = run_table1(
         seed=5,
         positions=1,
@@ -71,6 +73,19 @@ def test_table1_is_reproducible_and_rejects_bad_positions() -> None:
     fp = run_false_positives(seed=1, per_room=1, gv_distances=(3.0,), progress=False)
     assert fp["trials"] == len(FP_ROOMS)
     assert main(["experiment", "table1", "--positions", "0"]) == 2
+    assert "--positions: expected an integer >= 1" in capsys.readouterr().err
+    assert main(["experiment", "table1", "--fp-per-room", "0"]) == 2
+    assert "--fp-per-room: expected an integer >= 1" in capsys.readouterr().err
+
+
+def test_unknown_false_positive_family_is_rejected() -> None:
+    import numpy as np
+
+    from symloc.errors import ConfigurationError
+    from symloc.experiments.table1 import FPRoom, _build_fp_room
+
+    with pytest.raises(ConfigurationError, match=r"FPRoom.family: expected .* got 'blob'"):
+        _build_fp_room(FPRoom("blob 1", "blob", 1), 3.0, np.random.default_rng(0))
 
 
 def test_plot_judgement_writes_a_png(tmp_path: Path) -> None:

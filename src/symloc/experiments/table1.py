@@ -34,6 +34,7 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
+from symloc.errors import ConfigurationError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import transform_points
 
@@ -138,7 +139,10 @@ def _build_fp_room(spec: FPRoom, gv: float, rng: np.random.Generator) -> Any:
         )
     if spec.family == "door":
         return rooms.build_room(label.split()[0], gv, lab=False, door=True)
-    raise ValueError(f"unknown false-positive family {spec.family!r}")
+    raise ConfigurationError(
+        f"FPRoom.family: expected rectangle, rhombus, kite, l_shaped, furniture or door,"
+        f" got {spec.family!r}"
+    )
 
 
 def _expected(shape: str) -> tuple[str, float]:
@@ -385,8 +389,6 @@ def format_false_positives(fp: dict[str, Any]) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from symloc.errors import ConfigurationError
-
     if args.positions < 1:
         raise ConfigurationError(f"--positions: expected an integer >= 1, got {args.positions}")
     if args.fp_per_room < 1:

@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from symloc.errors import ConfigurationError
+
 __all__ = ["KINDS", "SymmetryReport"]
 
 FloatArray = NDArray[np.float64]
@@ -98,7 +100,7 @@ class SymmetryReport:
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
-            raise ValueError(f"kind: expected one of {KINDS}, got {self.kind!r}")
+            raise ConfigurationError(f"kind: expected one of {KINDS}, got {self.kind!r}")
         set_ = object.__setattr__
         set_(self, "center", _frozen(self.center, ()).reshape(2))
         set_(self, "corners", _frozen(self.corners, (2,)))
