@@ -327,17 +327,20 @@ def run(args: argparse.Namespace) -> int:
             " error > 1 m or 30 deg",
         },
     )
-    rng = np.random.default_rng(args.seed)
     results = []
     fig_logs = []
     for name in args.logs:
+        # independent streams per log and task, so one log's numbers do not depend on the others
+        idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
+        rng_track = np.random.default_rng([args.seed, idx, 0])
+        rng_global = np.random.default_rng([args.seed, idx, 1])
         path = folder / f"{name}-corrected.log.gz"
         log = read_carmen(path)
         grid = build_map(log, cache=args.out / f"amcl_carmen_map_{name}.npz")
         truth = log.laser_poses.copy()
         truth[:, 2] = wrap_angle(truth[:, 2])
         data = _LogData(name, log, grid, truth)
-        tr = tracking(data, track_p, alphas, rng)
+        tr = tracking(data, track_p, alphas, rng_track)
         est = tr.pop("_estimate")
         entry: dict[str, Any] = {"log": name, "scans": len(truth), "tracking": tr}
         print(
@@ -348,7 +351,7 @@ def run(args: argparse.Namespace) -> int:
         )
         if not args.skip_global:
             gl = global_localization(
-                data, glob_p, alphas, rng, starts=args.starts, window=args.window
+                data, glob_p, alphas, rng_global, starts=args.starts, window=args.window
             )
             entry["global"] = gl
             print(
