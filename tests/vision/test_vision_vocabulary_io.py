@@ -180,3 +180,17 @@ def test_compressed_payload_that_does_not_inflate(voc: Vocabulary, tmp_path) -> 
     path.write_bytes(bytes(data))
     with pytest.raises(VocabularyFileError, match="byte 64: cannot decompress weights and parents"):
         load_vocabulary(path)
+
+
+def test_text_fast_and_fallback_parsers_agree(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    d0 = " ".join(["07"] * 32)  # leading zeros: still integers
+    d1 = " ".join(["+9"] * 32)  # a sign: the vectorised parser hands over to the slower one
+    lines = ["2 1  0 0", f"0 1 {d0}  1e-3", f"0 1 {d0}  2.5E+00"]
+    (tmp_path / "a.txt").write_text("\n".join(lines) + "\n")
+    (tmp_path / "b.txt").write_text("\n".join([*lines[:2], f"0 1 {d1}  2.5"]) + "\n")
+    a = load_dbow2_text(tmp_path / "a.txt")
+    b = load_dbow2_text(tmp_path / "b.txt")
+    assert a.word_weights().tolist() == [0.001, 2.5]
+    assert b.word_weights().tolist() == [0.001, 2.5]
+    assert a.descriptors[1:].tolist() == [[7] * 32, [7] * 32]
+    assert b.descriptors[2].tolist() == [9] * 32

@@ -229,14 +229,26 @@ def parse_dbow2_text(text: str, name: str = "<text>") -> Vocabulary:
     n_rows = len(body_idx)
     ncol = 3 + DESC_BYTES
     rows: NDArray[np.float64]
-    body = "\n".join(lines[i] for i in body_idx)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            flat = np.fromstring(body, dtype=np.float64, sep=" ") if body else np.zeros(0)
-        ok = flat.size == n_rows * ncol
-    except (ValueError, DeprecationWarning):
-        ok = False
+    chunks = []
+    chunk = 1 << 16  # lines per vectorised chunk (bounds the temporary arrays)
+    for a in range(0, n_rows, chunk):
+        part = body_idx[a : a + chunk]
+        fast = _parse_rows_fast("\n".join(lines[i] for i in part), len(part), ncol)
+        if fast is None:
+            break
+        chunks.append(fast)
+    if sum(c.shape[0] for c in chunks) == n_rows and n_rows:
+        flat, ok = np.concatenate(chunks).reshape(-1), True
+    else:
+        chunks.clear()
+        body = "\n".join(lines[i] for i in body_idx)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                flat = np.fromstring(body, dtype=np.float64, sep=" ") if body else np.zeros(0)
+            ok = flat.size == n_rows * ncol
+        except (ValueError, DeprecationWarning):
+            ok = False
     if not ok:
         for i in body_idx:
             toks = lines[i].split()
@@ -282,6 +294,50 @@ def parse_dbow2_text(text: str, name: str = "<text>") -> Vocabulary:
     return _build(
         name, max(k, 2), L, scoring, weighting, full_parent, desc, weights, where="line 1"
     )
+
+
+def _parse_rows_fast(body: str, n_rows: int, ncol: int) -> NDArray[np.float64] | None:
+    """Vectorised parse of ``n_rows`` lines of ``ncol - 1`` unsigned integers and one float.
+
+    Returns ``(n_rows, ncol)`` values, or None when the text is not exactly that (the caller
+    then falls back to a slower parser that names the offending line).
+    """
+    if n_rows == 0:
+        return None
+    try:
+        raw = body.encode("ascii")
+    except UnicodeEncodeError:
+        return None
+    buf = np.frombuffer(raw, np.uint8)
+    space = (buf == 32) | (buf == 10) | (buf == 9) | (buf == 13)
+    edge = np.flatnonzero(np.diff(np.concatenate(([True], space, [True])).astype(np.int8)))
+    edge = edge.astype(np.int32) if buf.size < 2**31 else edge
+    starts, ends = edge[0::2], edge[1::2]
+    if starts.size != n_rows * ncol:
+        return None
+    starts = starts.reshape(n_rows, ncol)
+    ends = ends.reshape(n_rows, ncol)
+    s_int, e_int = starts[:, :-1].ravel(), ends[:, :-1].ravel()
+    length = e_int - s_int
+    if length.max(initial=0) > 9:
+        return None
+    value = np.zeros(s_int.size, np.int64)
+    for pos in range(int(length.max(initial=0))):
+        live = pos < length
+        digit = buf[np.where(live, s_int + pos, 0)].astype(np.int64) - 48
+        if np.any(live & ((digit < 0) | (digit > 9))):
+            return None
+        value = np.where(live, value * 10 + digit, value)
+    try:
+        weights = np.array(
+            [raw[a:b] for a, b in zip(starts[:, -1].tolist(), ends[:, -1].tolist(), strict=True)]
+        ).astype(np.float64)
+    except ValueError:
+        return None
+    out = np.empty((n_rows, ncol), np.float64)
+    out[:, :-1] = value.reshape(n_rows, ncol - 1)
+    out[:, -1] = weights
+    return out
 
 
 def save_dbow2_text(voc: Vocabulary, path: str | Path) -> None:
