@@ -429,6 +429,49 @@ def _reroll(
     return _rolled(p, shift), _rolled(tol, shift), st2, sp2, shift
 
 
+def _absorbable(
+    p: FloatArray,
+    tol: FloatArray,
+    mom: _Moments,
+    st: IntArray,
+    sp: IntArray,
+    cand: IntArray,
+) -> tuple[IntArray, IntArray]:
+    """For candidate pieces, whether a prefix fits the previous line and the rest the next one.
+
+    Returns the candidates that can be absorbed and, for each, the number of its points that
+    go to the previous line (the smallest such split).
+    """
+    n_l = st.size
+    _c, _d, nrm, off, _s = mom.fit(st, sp)
+    prev = (cand - 1) % n_l
+    nxt = (cand + 1) % n_l
+    lengths = sp[cand] - st[cand]
+    first = np.concatenate(([0], np.cumsum(lengths)[:-1]))
+    rep = np.repeat(np.arange(cand.size), lengths)
+    pos = np.arange(int(lengths.sum())) - np.repeat(first - st[cand], lengths)
+    q = p[pos]
+    tq = tol[pos]
+    bad_prev = np.abs(q[:, 0] * nrm[prev[rep], 0] + q[:, 1] * nrm[prev[rep], 1] - off[prev[rep]])
+    bad_next = np.abs(q[:, 0] * nrm[nxt[rep], 0] + q[:, 1] * nrm[nxt[rep], 1] - off[nxt[rep]])
+    bp = np.concatenate(([0], np.cumsum(bad_prev > tq)))
+    bn = np.concatenate(([0], np.cumsum(bad_next > tq)))
+    # split s (0..n) of piece c: points [0, s) to prev, [s, n) to next; with n + 1 choices
+    # per piece, laid out as piece-major positions j = first + c_index + s
+    n_choice = lengths + 1
+    first_c = np.concatenate(([0], np.cumsum(n_choice)[:-1]))
+    rep_c = np.repeat(np.arange(cand.size), n_choice)
+    s_c = np.arange(int(n_choice.sum())) - first_c[rep_c]
+    g0 = first[rep_c]  # global index of the piece's first point
+    pre_bad = bp[g0 + s_c] - bp[g0]
+    suf_bad = bn[g0 + lengths[rep_c]] - bn[g0 + s_c]
+    ok = (pre_bad == 0) & (suf_bad == 0)
+    big = int(s_c.size) + 1
+    first_ok = np.minimum.reduceat(np.where(ok, s_c, big), first_c)
+    yes = first_ok < big
+    return cand[yes], first_ok[yes]
+
+
 def _absorb_short(
     p: FloatArray,
     tol: FloatArray,
@@ -437,6 +480,7 @@ def _absorb_short(
     *,
     closed: bool,
     max_points: int,
+    mom: _Moments | None = None,
 ) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
     """Hand the points of short pieces to the neighbouring lines when they fit there.
 
@@ -455,35 +499,23 @@ def _absorb_short(
         cand = short if closed else short[(short > 0) & (short < n_l - 1)]
         if cand.size == 0:
             break
-        mom = _Moments(p)
-        _c, _d, nrm, off, _s = mom.fit(st, sp)
-        done = False
-        for t in cand:
-            t = int(t)
-            prev, nxt = (t - 1) % n_l, (t + 1) % n_l
-            q = p[st[t] : sp[t]]
-            tq = tol[st[t] : sp[t]]
-            fit_prev = np.abs(q @ nrm[prev] - off[prev]) <= tq
-            fit_next = np.abs(q @ nrm[nxt] - off[nxt]) <= tq
-            # a prefix of s points goes to prev, the rest to next
-            pre = np.concatenate([[True], np.cumprod(fit_prev).astype(bool)])
-            suf = np.concatenate([np.cumprod(fit_next[::-1])[::-1].astype(bool), [True]])
-            ok = np.flatnonzero(pre & suf)
-            if ok.size == 0:
-                continue
-            if closed and t in (0, n_l - 1):
-                p, tol, st, sp, shift = _reroll(p, tol, st, sp, prev)
-                total_shift = (total_shift + shift) % m
-                t, prev, nxt = 1, 0, 2 % n_l
-            cut = int(st[t] + ok[0])
-            sp[prev] = cut
-            st[nxt] = cut
-            st = np.delete(st, t)
-            sp = np.delete(sp, t)
-            done = True
+        if mom is None:
+            mom = _Moments(p)
+        which, n_prev = _absorbable(p, tol, mom, st, sp, cand)
+        if which.size == 0:
             break
-        if not done:
-            break
+        t = int(which[0])
+        prev, nxt = (t - 1) % n_l, (t + 1) % n_l
+        if closed and t in (0, n_l - 1):
+            p, tol, st, sp, shift = _reroll(p, tol, st, sp, prev)
+            total_shift = (total_shift + shift) % m
+            t, prev, nxt = 1, 0, 2 % n_l
+            mom = None  # the points moved
+        cut = int(st[t] + n_prev[0])
+        sp[prev] = cut
+        st[nxt] = cut
+        st = np.delete(st, t)
+        sp = np.delete(sp, t)
     return p, tol, st, sp, total_shift
 
 
@@ -668,7 +700,7 @@ def split_and_merge(
 
     n_before = st.size
     p, tol, st, sp, extra = _absorb_short(
-        p, tol, st, sp, closed=closed, max_points=max(2 * min_points, 32)
+        p, tol, st, sp, closed=closed, max_points=max(2 * min_points, 32), mom=mom
     )
     if st.size != n_before:
         mom = _Moments(p)
