@@ -87,7 +87,8 @@ def full_tree(k: int, L: int, rng: np.random.Generator) -> Vocabulary:
     n = (k ** (L + 1) - 1) // (k - 1)
     parent = np.concatenate([[-1], (np.arange(1, n) - 1) // k])
     desc = rng.integers(0, 256, (n, 32), dtype=np.uint8)
-    return Vocabulary(k, L, "tf-idf", "l1", parent, desc, rng.uniform(0.1, 3.0, n))
+    idf = np.log(300.0 / rng.integers(1, 300, n))  # idf-like weights: ln(N / N_i), N = 300 images
+    return Vocabulary(k, L, "tf-idf", "l1", parent, desc, idf)
 
 
 def row(name: str, ours: float, ref: float | None) -> None:

@@ -142,7 +142,9 @@ def _parse_native(data: bytes, name: str) -> Vocabulary:
         raise VocabularyFileError(
             f"{name}: bytes {HEADER_SIZE}..{HEADER_SIZE + plen}: checksum mismatch (corrupt payload)"
         )
-    payload: bytes | memoryview = stored
+    head: bytes | memoryview = stored
+    desc_buf: bytes | memoryview = stored
+    desc_at = 12 * n
     if flags & 1:
         try:
             (nz,) = struct.unpack_from("<Q", stored, 0)
@@ -151,15 +153,17 @@ def _parse_native(data: bytes, name: str) -> Vocabulary:
             raise VocabularyFileError(
                 f"{name}: byte {HEADER_SIZE}: cannot decompress weights and parents: {err}"
             ) from err
-        payload = head + bytes(stored[8 + nz :])
-    need = n * (8 + 4 + DESC_BYTES)
-    if len(payload) != need:
+        desc_at = 8 + nz
+    n_head = len(head) if flags & 1 else 12 * n
+    n_desc = len(desc_buf) - desc_at
+    if n_head != 12 * n or n_desc != n * DESC_BYTES:
         raise VocabularyFileError(
-            f"{name}: byte {HEADER_SIZE}: payload holds {len(payload)} bytes, {n} nodes need {need}"
+            f"{name}: byte {HEADER_SIZE}: payload holds {n_head} bytes of weights and parents and "
+            f"{n_desc} of descriptors, {n} nodes need {12 * n} and {n * DESC_BYTES}"
         )
-    weights = np.frombuffer(payload, "<f8", n, 0)
-    parent = np.frombuffer(payload, "<i4", n, 8 * n)
-    desc = np.frombuffer(payload, np.uint8, n * DESC_BYTES, 12 * n).reshape(n, DESC_BYTES)
+    weights = np.frombuffer(head, "<f8", n, 0)
+    parent = np.frombuffer(head, "<i4", n, 8 * n)
+    desc = np.frombuffer(desc_buf, np.uint8, n * DESC_BYTES, desc_at).reshape(n, DESC_BYTES)
     bad = np.flatnonzero((parent[1:] < 0) | (parent[1:] >= np.arange(1, n)))
     if bad.size:
         i = int(bad[0]) + 1
