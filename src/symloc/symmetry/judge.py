@@ -516,7 +516,11 @@ def _judge_open(
         la, lb = run_lines[r], run_lines[r2]
         on_a = abs(float(pts[nxt] @ la.normals[-1] - la.offsets[-1])) <= tol[nxt]
         on_b = abs(float(pts[end] @ lb.normals[0] - lb.offsets[0])) <= tol[end]
-        if width <= cfg.max_door_width and on_a and on_b:
+        # a gap whose edges are at the sensor's range limit is the range limit, not a door
+        r_end = float(np.hypot(*pts[end]))
+        r_nxt = float(np.hypot(*pts[nxt]))
+        at_limit = max(r_end, r_nxt) >= scan.range_max - float(cfg.point_tolerance(scan.range_max))
+        if width <= cfg.max_door_width and on_a and on_b and not at_limit:
             gap_beams = int((indices[nxt] - indices[end]) % n_beams) - 1
             return _report(
                 "asymmetric",
