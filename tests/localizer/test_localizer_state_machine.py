@@ -484,3 +484,16 @@ def test_mapping_works_with_a_store_without_the_headings_keyword():
     final = Driver(loc, true).run(600)
     assert len(store.added) == 1
     assert "new visual map" in final.reason
+
+
+def test_decision_at_a_place_without_heading_reference_claims_no_pose():
+    true = np.array([2.3, 1.2, 0.2])
+    place = Place(9, CENTRE.copy(), 0.3, 4, 4, HALF * math.sqrt(2), heading_reliable=False)
+    store = FakeStore(places=[place], decisions=[Decision("decided", 1, 0.0, 0.9)])
+    tracker = _ambiguous_tracker(true)
+    loc = Localizer(tracker, SquareJudge(), store)
+    final = Driver(loc, true).run(300)
+    assert final.status is Status.AMBIGUOUS
+    assert final.pose is None
+    assert "no reliable heading reference" in final.reason
+    assert tracker.seeded == []

@@ -604,6 +604,8 @@ class Localizer:
                     self._outcomes.append("undetermined")
                     return self._next_attempt("two places decided alike")
             place, dec = decided[0]
+            if not place.heading_reliable:
+                return self._unanchored(place, dec)
             return self._reseed(result, place, dec)
         if not candidates:
             self._outcomes.append("no_place")
@@ -643,6 +645,18 @@ class Localizer:
             covariance=cov,
             hypotheses=(Hypothesis(pose=pose, weight=1.0),),
             reason=f"visual decision: place {place.place_id}, direction {dec.direction}",
+        )
+
+    def _unanchored(self, place: Place, dec: Decision) -> Estimate:
+        """A direction was decided, but the place's heading reference is odometry's: no claim."""
+        self.last_decision = (place, dec)
+        self._note(
+            f"decided direction {dec.direction} of place {place.place_id}, but its stored "
+            "headings came from odometry (not observable by the laser when it was mapped)"
+        )
+        return self._settle(
+            "undetermined: the visual map of this place has no reliable heading reference "
+            "(mapped where laser SLAM cannot observe heading); pose not claimed"
         )
 
     def _next_attempt(self, why: str) -> Estimate:

@@ -90,9 +90,8 @@ def map_place(
         For the centering run's error report only.
     """
     cfg = config if config is not None else CenteringConfig()
-    verdict = judge(scan_at(body.pose))
-    if not verdict.symmetric or verdict.center is None:
-        return None
+    # go_to_centre explores towards the middle of the scan while no verdict is symmetric yet
+    # (e.g. the far walls are beyond range) and gives up after ``explore_time``
     run = go_to_centre(
         body,
         scan_at,

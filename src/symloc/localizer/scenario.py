@@ -35,7 +35,7 @@ from .localizer import Localizer, LocalizerConfig, rotated_copies
 from .mapping import MappedPlace, map_place
 from .simulation import Episode, RobotBody, run_episode
 from .types import Estimate, Status
-from .vision_store import VisionPlaceStore
+from .vision_store import UNANCHORED_LABEL, VisionPlaceStore
 
 __all__ = [
     "DEFAULT_GV",
@@ -315,7 +315,16 @@ def _map_with_slam(
     t_c = to_map(0)
     centre = _compose(t_c, np.array([centre_o[0], centre_o[1], 0.0]))[:2]
     headings = [float(h + to_map(i)[2]) for i, h in enumerate(headings_o)]
-    place = scen.store.add_place(centre, headings[0], order, gv, kind, images, headings=headings)
+    # laser SLAM cannot observe heading in a round room: its headings there are odometry's
+    label = UNANCHORED_LABEL if (kind == "circle" or order == 0) else None
+    if label is not None:
+        scen.notes.append(
+            "mapping stage: a round room gives laser SLAM no heading; the visual map is stored "
+            "as heading-from-odometry and the localizer will not claim a pose from it"
+        )
+    place = scen.store.add_place(
+        centre, headings[0], order, gv, kind, images, headings=headings, label=label
+    )
     return MappedPlace(
         place=place,
         images=mapped.images,

@@ -130,6 +130,7 @@ def go_to_centre(
     config: CenteringConfig | None = None,
     dt: float = 0.2,
     max_time: float = 120.0,
+    explore_time: float = 30.0,
     smoothing: float = 0.5,
     odom_start: OdometryReading | None = None,
     true_facings: FloatArray | None = None,
@@ -146,6 +147,9 @@ def go_to_centre(
         Ground truth, for the reported error only.
     true_facings : ndarray of shape (D,), optional
         World headings [rad] of the true corner middles, for the reported heading error only.
+    explore_time : float
+        While no scan has been judged symmetric the robot heads for the middle of what it sees;
+        after this long [s] without a symmetric verdict it stops (phase ``"no_symmetry"``).
     """
     cfg = config if config is not None else CenteringConfig()
     filt = CentreFilter(alpha=smoothing)
@@ -157,6 +161,9 @@ def go_to_centre(
     facing_odom: float | None = None
     t = 0.0
     while t < max_time:
+        if judged == 0 and t >= explore_time:
+            phase = "no_symmetry"  # explored without ever seeing a symmetric place
+            break
         pose = body.pose
         scan = scan_at(pose)
         verdict = judge(scan)

@@ -219,6 +219,9 @@ class Place:
 
     ``center`` (2,) map frame [m]; ``heading0`` [rad] map-frame heading of stored image 0; the
     ``m`` images were taken clockwise, image ``j`` at ``heading0 - j * 2 pi / m``.
+    ``heading_reliable`` is False when the mapping pose could not observe heading there (laser
+    SLAM in a round room carries only odometry's heading): a decision at such a place gives a
+    direction but not a pose the localizer may claim.
     """
 
     place_id: int
@@ -228,6 +231,7 @@ class Place:
     order: int
     gv_distance: float
     kind: str = "polygon"
+    heading_reliable: bool = True
 
 
 @dataclass(frozen=True, slots=True)

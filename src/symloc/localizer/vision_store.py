@@ -21,7 +21,10 @@ from symloc._checks import check_positive
 
 from .types import Decision, Place
 
-__all__ = ["VisionPlaceStore"]
+__all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
+
+#: Label of a place whose stored headings came from odometry alone (see ``Place``).
+UNANCHORED_LABEL = "heading-from-odometry"
 
 FloatArray = NDArray[np.float64]
 
@@ -86,6 +89,7 @@ class VisionPlaceStore:
             order=order,
             gv_distance=float(vp.gv_distance),
             kind=str(vp.kind),
+            heading_reliable=vp.label != UNANCHORED_LABEL,
         )
 
     def all_places(self) -> list[Place]:
@@ -143,6 +147,8 @@ class VisionPlaceStore:
         kind: str,
         images: Sequence[NDArray[np.uint8]],
         headings: Sequence[float] | None = None,
+        *,
+        label: str | None = None,
     ) -> Place:
         from symloc.vision.visual_map import PlaceImage, direction_headings
 
@@ -172,6 +178,7 @@ class VisionPlaceStore:
             gv_distance=float(gv_distance),
             pose=np.array([center[0], center[1], heading0], dtype=np.float64),
             images=stored,
+            label=label,
         )
         self._places.pop(pid, None)
         return self._to_place(self._vplace(pid))
