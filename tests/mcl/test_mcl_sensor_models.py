@@ -176,3 +176,27 @@ def test_beam_model_hand_computed():
         z2 = 10.0 - r2
         pz2 = 0.5 * np.exp(-z2 * z2 / 0.08) + 0.05
         assert w[0] == pytest.approx(1.0 + pz1**3 + pz2**3, rel=1e-9)
+
+
+def test_blocked_evaluation_matches_small_batches():
+    df = distance_field(_wall_grid(), 2.0)
+    rng = np.random.default_rng(0)
+    ranges = rng.uniform(0.2, 3.0, 60)
+    b = select_beams(LaserScan(-np.pi, 2 * np.pi / 60, 0.05, 10.0, ranges), 60)
+    parts = np.column_stack(
+        [rng.uniform(-1, 5, 3000), rng.uniform(-1, 3, 3000), rng.uniform(-np.pi, np.pi, 3000)]
+    )
+    kw = {"z_hit": 0.5, "z_rand": 0.5, "sigma_hit": 0.2}
+    big = likelihood_field_weights(df, parts, b, **kw)
+    small = np.concatenate(
+        [likelihood_field_weights(df, parts[i : i + 7], b, **kw) for i in range(0, 3000, 7)]
+    )
+    np.testing.assert_allclose(big, small, rtol=1e-6)
+    big_l, _ = likelihood_field_prob_log_weights(df, parts, b, **kw)
+    small_l = np.concatenate(
+        [
+            likelihood_field_prob_log_weights(df, parts[i : i + 7], b, **kw)[0]
+            for i in range(0, 3000, 7)
+        ]
+    )
+    np.testing.assert_allclose(big_l, small_l, rtol=1e-6)

@@ -22,6 +22,9 @@ __all__ = ["endpoint_flat_indices", "laser_poses_grid", "likelihood_field_weight
 
 FloatArray = NDArray[np.float64]
 
+#: Particle-beam pairs processed per block (about 256 kB per float32 temporary).
+CHUNK_ELEMENTS = 65536
+
 
 def laser_poses_grid(
     field: DistanceField, particles: FloatArray, laser_pose: FloatArray
@@ -103,9 +106,13 @@ def likelihood_field_weights(
     if not hit.any():
         return np.ones(n)
     poses = laser_poses_grid(field, particles, lp)
-    idx = endpoint_flat_indices(field, poses, beams.ranges[hit], beams.angles[hit])
     table = field.table("pz3", z_hit, z_rand, sigma_hit, beams.range_max)
-    vals = table[idx]
-    total: FloatArray = vals.sum(axis=1, dtype=np.float64)
+    r, a = beams.ranges[hit], beams.angles[hit]
+    total: FloatArray = np.empty(n)
+    # Blocks of particles keep the (block, B) temporaries in cache; the work stays vectorised.
+    step = max(1, CHUNK_ELEMENTS // r.size)
+    for s in range(0, n, step):
+        idx = endpoint_flat_indices(field, poses[s : s + step], r, a)
+        total[s : s + step] = table[idx].sum(axis=1, dtype=np.float64)
     total += 1.0
     return total

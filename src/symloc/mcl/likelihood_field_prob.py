@@ -23,7 +23,11 @@ from numpy.typing import NDArray
 
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import BeamSet
-from symloc.mcl.likelihood_field import endpoint_flat_indices, laser_poses_grid
+from symloc.mcl.likelihood_field import (
+    CHUNK_ELEMENTS,
+    endpoint_flat_indices,
+    laser_poses_grid,
+)
 
 __all__ = ["BeamSkipReport", "likelihood_field_prob_log_weights"]
 
@@ -65,11 +69,17 @@ def likelihood_field_prob_log_weights(
     if nb == 0:
         return np.zeros(n), BeamSkipReport(0, 0, False)
     poses = laser_poses_grid(field, particles, lp)
-    idx = endpoint_flat_indices(field, poses, beams.ranges[hit], beams.angles[hit])
     table = field.table("logpz", z_hit, z_rand, sigma_hit, beams.range_max)
-    logs = table[idx]
+    r, a = beams.ranges[hit], beams.angles[hit]
     if not do_beamskip:
-        return logs.sum(axis=1, dtype=np.float64), BeamSkipReport(nb, 0, False)
+        out = np.empty(n)
+        step = max(1, CHUNK_ELEMENTS // nb)
+        for s in range(0, n, step):  # blocks of particles, see likelihood_field
+            blk = endpoint_flat_indices(field, poses[s : s + step], r, a)
+            out[s : s + step] = table[blk].sum(axis=1, dtype=np.float64)
+        return out, BeamSkipReport(nb, 0, False)
+    idx = endpoint_flat_indices(field, poses, r, a)
+    logs = table[idx]
     near = field.padded.ravel()[idx] < beam_skip_distance
     frac = near.mean(axis=0)
     mask = frac > beam_skip_threshold
