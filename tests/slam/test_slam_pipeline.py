@@ -41,7 +41,8 @@ def test_slam_closes_the_loop_and_beats_odometry(room: np.ndarray) -> None:
     assert err < 0.05
     assert err < err_odom / 3
     assert len(res.loop_closures) > 0
-    assert res.n_submaps >= 10
+    assert res.n_submaps >= 5
+    assert 20 < res.node_scans.size < len(scans)  # the motion filter dropped some scans
     # the map marks the room's walls occupied and its inside free
     g = res.grid
     wall = np.array([[4.0, 0.027]])  # bottom wall; the map frame is the first pose's world frame

@@ -57,6 +57,10 @@ class SlamParams:
         errors beyond the real-time window); the better of the two matches is kept.
     retry_below : float
         Score (0..1) under which the wider search runs.
+    retry_margin : float
+        The wide match replaces the real-time one only if it scores this much higher (a
+        corridor gives many similar scores far from the odometry; a real odometry error gives
+        a clearly better one).
     loop_csm : CsmParams
         Loop-closure window around the predicted pose in an older submap.
     graph : PoseGraphParams
@@ -64,6 +68,14 @@ class SlamParams:
         Points farther than this [m] are not used for matching.
     voxel : float
         Points are thinned to one per ``voxel`` x ``voxel`` square [m] for matching (0: off).
+    motion_filter_distance, motion_filter_angle : float
+        A scan becomes a graph node (inserted into the submaps, searched for loop closures)
+        only if the robot moved at least this far [m] or turned this much [rad] since the last
+        node (Cartographer's motion filter); the final pose of another scan follows its last
+        node. 0 and 0 make every scan a node.
+    match_filtered_scans : bool
+        Also scan-match the scans the motion filter drops (their pose then follows the match,
+        not only the odometry); False saves their matching time.
     loop_every : int
         Search loop closures for every ``loop_every``-th node.
     loop_search_distance : float
@@ -103,15 +115,19 @@ class SlamParams:
         )
     )
     retry_below: float = 0.6
+    retry_margin: float = 0.1
     loop_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
             linear_window=2.0, angular_window=math.radians(15), coarse_factor=8
         )
     )
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
-    max_range: float = 20.0
+    max_range: float = 40.0
     voxel: float = 0.05
-    loop_every: int = 3
+    motion_filter_distance: float = 0.2
+    motion_filter_angle: float = math.radians(10.0)
+    match_filtered_scans: bool = False
+    loop_every: int = 1
     loop_search_distance: float = 10.0
     loop_min_score: float = 0.6
     loop_skip_submaps: int = 1
@@ -124,6 +140,11 @@ class SlamParams:
         check_positive(self.max_range, "SlamParams.max_range")
         check_positive(self.voxel, "SlamParams.voxel", allow_zero=True)
         check_positive(self.loop_search_distance, "SlamParams.loop_search_distance")
+        check_positive(self.retry_margin, "SlamParams.retry_margin", allow_zero=True)
+        check_positive(
+            self.motion_filter_distance, "SlamParams.motion_filter_distance", allow_zero=True
+        )
+        check_positive(self.motion_filter_angle, "SlamParams.motion_filter_angle", allow_zero=True)
         check_positive(self.map_resolution, "SlamParams.map_resolution")
         if not 0.0 <= self.retry_below <= 1.0:
             raise ConfigurationError(
@@ -156,9 +177,11 @@ class SlamResult:
         Front-end (scan matching only) poses.
     grid : OccupancyGrid
         Map from all scans at the optimised poses.
-    loop_closures : list of (submap, node)
+    loop_closures : list of (submap, scan index)
         Accepted loop constraints.
     n_submaps : int
+    node_scans : ndarray of shape (K,)
+        Scan index of each graph node (the scans kept by the motion filter).
     match_scores : ndarray of shape (N,)
         Local match score per scan (0 for the first).
     timings : dict of str to float
@@ -177,6 +200,7 @@ class SlamResult:
     grid: OccupancyGrid
     loop_closures: list[tuple[int, int]]
     n_submaps: int
+    node_scans: NDArray[np.intp]
     match_scores: FloatArray
     timings: dict[str, float]
     n_optimizations: int
@@ -253,17 +277,30 @@ def run_slam(
     n_opt = 0
     n_retries = 0
     submap_centres: dict[int, FloatArray] = {}
+    node_scans: list[int] = []
 
     bar = tqdm(total=n, desc=desc, unit="scan", disable=not progress, leave=False)
     for i in range(n):
         t0 = time.perf_counter()
         pts = scan_points(scans[i], prm.max_range, prm.voxel)
+
+        def _is_node(pose: FloatArray, i: int = i) -> bool:
+            if not node_scans or i == n - 1:
+                return True
+            moved = relative(local[node_scans[-1]], pose)
+            return (
+                float(np.hypot(moved[0], moved[1])) >= prm.motion_filter_distance
+                or abs(float(moved[2])) >= prm.motion_filter_angle
+            )
+
         if i == 0:
             local[0] = odom[0]
         else:
             pred = compose(local[i - 1], relative(odom[i - 1], odom[i]))
             target = active.matching_submap
-            if target is not None and pts.shape[0] >= 3:
+            if not prm.match_filtered_scans and not _is_node(pred):
+                local[i] = pred  # dropped by the motion filter: odometry since the last scan
+            elif target is not None and pts.shape[0] >= 3:
                 cache.touch(target)
                 init = relative(target.local_pose, pred)
                 table = target.table()
@@ -271,27 +308,35 @@ def run_slam(
                 if res.score < prm.retry_below:
                     wide = match_scan(table, pts, init, prm.retry_csm)
                     n_retries += 1
-                    if wide.score > res.score:
+                    if wide.score > res.score + prm.retry_margin:
                         res = wide
                 local[i] = compose(target.local_pose, res.pose)
                 scores[i] = res.score
             else:
                 local[i] = pred
+        is_node = _is_node(local[i])
+        if not is_node:
+            timings["frontend"] += time.perf_counter() - t0
+            bar.update(1)
+            continue
+        k = len(node_scans)
+        node_scans.append(i)
         n_before = len(active.submaps)
-        touched = active.insert(i, local[i], scans[i])
-        graph.add_node(i, compose(global_from_local, local[i]))
+        touched = active.insert(k, local[i], scans[i])
+        graph.add_node(k, compose(global_from_local, local[i]))
         for sm in active.submaps[n_before:]:
             graph.add_submap(sm.index, compose(global_from_local, sm.local_pose))
         for sm in touched:
-            graph.add_intra(sm.index, i, sm.node_poses[-1])
-        if i > 0:
-            graph.add_odometry(i - 1, i, relative(odom[i - 1], odom[i]))
+            graph.add_intra(sm.index, k, sm.node_poses[-1])
+        if k > 0:
+            prev = node_scans[-2]
+            graph.add_odometry(k - 1, k, relative(odom[prev], odom[i]))
         timings["frontend"] += time.perf_counter() - t0
 
         # loop closures against older finished submaps
         t1 = time.perf_counter()
-        if i % prm.loop_every == 0 and pts.shape[0] >= 10:
-            finished = [s for s in active.submaps if s.finished and i not in s.nodes]
+        if k % prm.loop_every == 0 and pts.shape[0] >= 10:
+            finished = [s for s in active.submaps if s.finished and k not in s.nodes]
             if prm.loop_skip_submaps:
                 finished = finished[: -prm.loop_skip_submaps]
             node_g = compose(global_from_local, local[i])
@@ -309,23 +354,27 @@ def run_slam(
                 cache.touch(sm)
                 res = match_scan(sm.table(), pts, init, prm.loop_csm)
                 if res.score >= prm.loop_min_score:
-                    graph.add_loop(sm.index, i, res.pose)
+                    graph.add_loop(sm.index, k, res.pose)
                     pending_loops += 1
         timings["loop_search"] += time.perf_counter() - t1
 
-        if pending_loops and (i + 1) % prm.optimize_every == 0:
+        if pending_loops and (k + 1) % prm.optimize_every == 0:
             t2 = time.perf_counter()
             graph.optimize()
             n_opt += 1
             pending_loops = 0
-            global_from_local = compose(graph.node_pose(i), inverse(local[i]))
+            global_from_local = compose(graph.node_pose(k), inverse(local[i]))
             timings["optimize"] += time.perf_counter() - t2
         bar.update(1)
     bar.close()
     t2 = time.perf_counter()
     graph.optimize()
     n_opt += 1
-    poses = graph.node_poses()
+    node_poses = graph.node_poses()
+    nodes = np.array(node_scans, dtype=np.intp)
+    # every scan follows its last node: node pose composed with the front-end motion since it
+    owner = np.searchsorted(nodes, np.arange(n), side="right") - 1
+    poses = compose(node_poses[owner], relative(local[nodes[owner]], local))
     timings["optimize"] += time.perf_counter() - t2
 
     t3 = time.perf_counter()
@@ -348,8 +397,9 @@ def run_slam(
         poses=poses,
         local_poses=local,
         grid=occ,
-        loop_closures=list(graph.loops),
+        loop_closures=[(j, int(nodes[k])) for j, k in graph.loops],
         n_submaps=len(active.submaps),
+        node_scans=nodes,
         match_scores=scores,
         timings=timings,
         n_optimizations=n_opt,

@@ -45,7 +45,7 @@ class SubmapParams:
     """
 
     resolution: float = 0.05
-    scans_per_submap: int = 40
+    scans_per_submap: int = 20
     sigma: float = 0.075
     table_refresh: int = 3
     model: InverseSensorModel = field(default_factory=InverseSensorModel)
