@@ -52,19 +52,22 @@ def test_no_return_beams_clear_only_up_to_configured_range() -> None:
     assert free[:, 1].max() == 20
     off = InverseSensorModel(no_return_range=0.0)
     free0, hits0 = beam_cells(np.zeros(3), scan, off, 0.1, (-0.05, -0.05))
-    assert free0.size == 0 and hits0.size == 0
+    assert free0.size == 0
+    assert hits0.size == 0
 
 
 def test_readings_beyond_max_range_are_truncated_without_hit() -> None:
     model = InverseSensorModel(max_range=1.0, no_return_range=0.0)
     free, hits = beam_cells(np.zeros(3), _scan([5.0]), model, 0.1, (-0.05, -0.05))
-    assert hits.size == 0 and free[:, 1].max() == 10  # ends at 1.0 m, inside cell 10
+    assert hits.size == 0
+    assert free[:, 1].max() == 10
 
 
 def test_invalid_readings_do_nothing() -> None:
     model = InverseSensorModel()
     free, hits = beam_cells(np.zeros(3), _scan([math.nan, 0.01]), model, 0.1, (0.0, 0.0))
-    assert free.size == 0 and hits.size == 0
+    assert free.size == 0
+    assert hits.size == 0
 
 
 def test_grid_grows_and_converts_to_occupancy_grid() -> None:
@@ -73,9 +76,9 @@ def test_grid_grows_and_converts_to_occupancy_grid() -> None:
     occ = g.to_occupancy_grid()
     # the hit lies at (5, -1): occupied; the robot's cell is free; far cells unknown
     hit = occ.world_to_cell([[5.0, -1.0]])[0]
-    assert occ.data[hit[0], hit[1]] == int(round(100 * 0.7))
+    assert occ.data[hit[0], hit[1]] == round(100 * 0.7)
     me = occ.world_to_cell([[5.0, -3.0]])[0]
-    assert occ.data[me[0], me[1]] == int(round(100 * 0.4))
+    assert occ.data[me[0], me[1]] == round(100 * 0.4)
     assert (occ.data == -1).sum() > 0.9 * occ.data.size
     assert g.n_scans == 1
 

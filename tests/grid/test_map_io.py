@@ -60,7 +60,8 @@ def test_nav2_doc_yaml_is_read_with_its_values(tmp_path: Path) -> None:
     assert meta.image == tmp_path / "testmap.png"
     assert meta.resolution == 0.1
     assert meta.origin == (2.0, 3.0, 1.0)
-    assert meta.mode == "trinary" and meta.negate is False
+    assert meta.mode == "trinary"
+    assert meta.negate is False
     grid = load_map(y)
     assert grid.resolution == pytest.approx(0.1)
     np.testing.assert_allclose(grid.origin, [2.0, 3.0, 1.0])
@@ -72,14 +73,17 @@ def test_ros_wiki_yaml_defaults_to_trinary(tmp_path: Path) -> None:
     y = _write_pair(tmp_path, ROS_WIKI_YAML, _image())
     grid = load_map(y)
     assert read_map_yaml(y).mode == "trinary"
-    assert grid.data[2, 0] == 100 and grid.data[2, 1] == 0 and grid.data[2, 2] == -1
+    assert grid.data[2, 0] == 100
+    assert grid.data[2, 1] == 0
+    assert grid.data[2, 2] == -1
 
 
 def test_round_trip_trinary_through_nav2_file_is_identical(tmp_path: Path) -> None:
     y = _write_pair(tmp_path, NAV2_DOC_YAML, _image())
     grid = load_map(y)
     out = save_map(grid, tmp_path / "out" / "copy")
-    assert out.name == "copy.yaml" and (tmp_path / "out" / "copy.pgm").is_file()
+    assert out.name == "copy.yaml"
+    assert (tmp_path / "out" / "copy.pgm").is_file()
     again = load_map(out)
     np.testing.assert_array_equal(again.data, grid.data)
     np.testing.assert_allclose(again.origin, grid.origin)
@@ -95,7 +99,7 @@ def test_round_trip_trinary_through_nav2_file_is_identical(tmp_path: Path) -> No
     ),
     yaw=st.floats(-3.1, 3.1),
 )
-def test_raw_mode_round_trips_every_value(tmp_path_factory, data, yaw) -> None:  # noqa: ANN001
+def test_raw_mode_round_trips_every_value(tmp_path_factory, data, yaw) -> None:
     tmp = tmp_path_factory.mktemp("raw")
     grid = OccupancyGrid(data, 0.05, np.array([-1.5, 2.25, yaw]))
     y = save_map(grid, tmp / "m.yaml", mode="raw")
@@ -110,11 +114,14 @@ def test_scale_mode_keeps_classes_and_unknown_transparency(tmp_path: Path) -> No
     y = save_map(grid, tmp_path / "s", mode="scale")
     assert y.with_suffix(".png").is_file()
     back = load_map(y)
-    assert back.data[0, 0] == -1 and back.data[0, 1] == 0 and back.data[0, 2] == 100
+    assert back.data[0, 0] == -1
+    assert back.data[0, 1] == 0
+    assert back.data[0, 2] == 100
     # nav2 scale semantics: rint(100 (occ - free) / (occ_t - free)) between the thresholds
     occ = 1.0 - np.rint(255 * 0.5) / 255.0
     assert back.data[1, 1] == int(np.rint((occ - 0.196) / (0.65 - 0.196) * 100))
-    assert back.data[1, 0] == 0 and back.data[1, 2] == 100
+    assert back.data[1, 0] == 0
+    assert back.data[1, 2] == 100
 
 
 def test_negate_swaps_black_and_white(tmp_path: Path) -> None:
@@ -195,7 +202,9 @@ def test_undecodable_image(tmp_path: Path) -> None:
 
 def test_wrong_image_size_names_width_and_height(tmp_path: Path) -> None:
     y = _write_pair(tmp_path, ROS_WIKI_YAML + "width: 5\nheight: 3\n", _image())
-    with pytest.raises(MapFileError, match="field 'width' is 5 pixels but image testmap.png is 4"):
+    with pytest.raises(
+        MapFileError, match=r"field 'width' is 5 pixels but image testmap\.png is 4"
+    ):
         load_map(y)
     y = _write_pair(tmp_path, ROS_WIKI_YAML + "width: 4\nheight: 7\n", _image())
     with pytest.raises(MapFileError, match="field 'height' is 7 pixels"):

@@ -44,19 +44,22 @@ def test_reads_scans_odometry_params_and_skipped(tmp_path: Path) -> None:
     p = tmp_path / "a.log"
     p.write_text(LOG + "\n")
     log = read_carmen(p)
-    assert len(log.scans) == 2 and len(log.odometry) == 1
+    assert len(log.scans) == 2
+    assert len(log.odometry) == 1
     s = log.scans[0]
     assert s.line == 4
     np.testing.assert_allclose(s.laser_pose, [1.0, 2.0, 0.5])
     np.testing.assert_allclose(s.odom_pose, [1.1, 2.1, 0.6])
-    assert s.stamp == 1.5 and s.logger_stamp == pytest.approx(1.51)
+    assert s.stamp == 1.5
+    assert s.logger_stamp == pytest.approx(1.51)
     assert s.scan.angle_min == pytest.approx(-math.pi / 2)
     assert s.scan.angle_increment == pytest.approx(math.pi / 4)
     assert s.scan.no_return_mask.tolist() == [False, True, False, False]
     assert log.skipped == {"NEFF": 1, "TRUEPOS": 1}
     assert log.params == {"robot_frontlaser_offset": "0.0"}
     assert log.duration == pytest.approx(1.0)
-    assert log.laser_poses.shape == (2, 3) and log.stamps.tolist() == [1.5, 2.5]
+    assert log.laser_poses.shape == (2, 3)
+    assert log.stamps.tolist() == [1.5, 2.5]
     o = log.odometry[0]
     np.testing.assert_allclose(o.pose, [0.1, 0.2, 0.3])
     assert (o.tv, o.rv, o.accel, o.line) == (0.4, 0.5, 0.6, 3)

@@ -93,5 +93,5 @@ def test_params_validation(kwargs: dict[str, float], match: str) -> None:
 
 
 def test_table_validation() -> None:
-    with pytest.raises(ConfigurationError, match="LikelihoodTable.values: expected"):
+    with pytest.raises(ConfigurationError, match=r"LikelihoodTable\.values: expected"):
         LikelihoodTable(np.zeros(3), 0.05, (0, 0))

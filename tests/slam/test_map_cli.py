@@ -11,25 +11,28 @@ from symloc.cli.main import main
 from symloc.grid.map_io import load_map
 
 
-def test_map_build_world_writes_map_server_files(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+def test_map_build_world_writes_map_server_files(tmp_path: Path, capsys) -> None:
     code = main(["map", "build", "--world", "square", "--laps", "1.1", "--out", str(tmp_path)])
     assert code == 0
     out = capsys.readouterr().out
-    assert "seed 0" in out and "ATE RMSE" in out and "map agreement" in out
+    assert "seed 0" in out
+    assert "ATE RMSE" in out
+    assert "map agreement" in out
     grid = load_map(tmp_path / "map.yaml")
-    assert (tmp_path / "map.pgm").is_file() and (tmp_path / "map_trajectory.png").is_file()
+    assert (tmp_path / "map.pgm").is_file()
+    assert (tmp_path / "map_trajectory.png").is_file()
     assert grid.resolution == pytest.approx(0.05)
     assert np.count_nonzero(grid.data == 100) > 100  # the board walls
     assert np.count_nonzero(grid.data == 0) > 1000  # the room's free floor
 
 
-def test_map_build_missing_log(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+def test_map_build_missing_log(tmp_path: Path, capsys) -> None:
     code = main(["map", "build", "--carmen", str(tmp_path / "none.log"), "--out", str(tmp_path)])
     assert code == 2
     assert "CARMEN log not found" in capsys.readouterr().out
 
 
-def test_experiment_slam_rejects_unknown_world(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+def test_experiment_slam_rejects_unknown_world(tmp_path: Path, capsys) -> None:
     code = main(["experiment", "slam", "--worlds", "attic", "--logs", "--out", str(tmp_path)])
     assert code == 2
     assert "world: expected one of" in capsys.readouterr().err

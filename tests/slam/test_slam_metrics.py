@@ -58,7 +58,8 @@ def test_rpe_matches_hand_computed_example() -> None:
     assert r.trans_rmse == pytest.approx(np.sqrt((0.1**2 + 0.0) / 2))
     assert r.rot_rmse == pytest.approx(np.sqrt((0 + 0.2**2) / 2))
     r2 = rpe(ref, est, delta=2)
-    assert r2.n_pairs == 1 and r2.trans_rmse == pytest.approx(0.1)
+    assert r2.n_pairs == 1
+    assert r2.trans_rmse == pytest.approx(0.1)
 
 
 def test_rpe_zero_for_rigid_copy() -> None:

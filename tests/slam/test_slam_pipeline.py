@@ -67,9 +67,7 @@ def test_run_slam_validates_inputs(room: np.ndarray) -> None:
 
 def _graph_error(huber_k: float) -> float:
     # stiff odometry, so that a wrong loop cannot be absorbed by bending the chain
-    g = PoseGraph(
-        PoseGraphParams(huber_k=huber_k, odom_sigmas=(0.02, 0.02, 0.01), odom_scale=0.0)
-    )
+    g = PoseGraph(PoseGraphParams(huber_k=huber_k, odom_sigmas=(0.02, 0.02, 0.01), odom_scale=0.0))
     truth = _loop_path(12)
     for i, p in enumerate(truth):
         g.add_node(i, p)

@@ -92,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
     from symloc.geometry import compose, inverse
     from symloc.slam.runs import run_carmen, run_simulated
 
-    alphas = tuple(float(a) for a in args.alphas)
+    a1, a2, a3, a4 = (float(a) for a in args.alphas)
+    alphas = (a1, a2, a3, a4)
     print_config(
         "slam",
         {
@@ -107,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
     for k, world in enumerate(args.worlds):
-        r = run_simulated(world, alphas=alphas, rng=args.seed + k, laps=args.laps)  # type: ignore[arg-type]
+        r = run_simulated(world, alphas=alphas, rng=args.seed + k, laps=args.laps)
         s = r.summary()
         rows.append(s)
         print(_row(s))
@@ -131,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
                 r = run_carmen(
                     path,
                     alphas=alphas,
-                    rng=args.seed + 100 + k,  # type: ignore[arg-type]
+                    rng=args.seed + 100 + k,
                     max_scans=args.max_scans,
                 )
                 s = r.summary()

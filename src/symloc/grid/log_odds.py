@@ -276,7 +276,7 @@ class LogOddsGrid:
 
     def known_mask(self) -> NDArray[np.bool_]:
         """``(H, W)`` True where the cell was observed (log-odds not 0)."""
-        return self.values != 0
+        return np.asarray(self.values != 0, dtype=bool)
 
     def to_occupancy_grid(
         self,

@@ -285,7 +285,7 @@ def match_scan(
     ang_prior = np.exp(-rw * dthetas**2)
 
     def _closest(o: NDArray[np.intp]) -> NDArray[np.intp]:
-        return np.clip(0, o, o + f - 1)
+        return np.asarray(np.clip(0, o, o + f - 1), dtype=np.intp)
 
     cb = _closest(offs)
     block_prior = np.exp(-tw * (cb[:, None] ** 2 + cb[None, :] ** 2))

@@ -74,7 +74,7 @@ def exploration_path(room: Room, margin: float = 0.5) -> FloatArray:
         path = path[:: max(1, v.shape[0] // 16)]
     if not np.all(room.contains(path)):
         raise WorldError(f"exploration_path: margin {m} m puts the path outside room {room.name!r}")
-    return path
+    return np.asarray(path, dtype=np.float64)
 
 
 def simulate_exploration(

@@ -56,7 +56,8 @@ def _build(args: argparse.Namespace) -> int:
     from symloc.slam.runs import run_carmen, run_simulated
     from symloc.slam.slam import SlamParams
 
-    alphas = tuple(float(a) for a in args.alphas)
+    a1, a2, a3, a4 = (float(a) for a in args.alphas)
+    alphas = (a1, a2, a3, a4)
     params = SlamParams(map_resolution=args.resolution)
     source = f"world {args.world}" if args.world else f"CARMEN log {args.carmen}"
     print(f"# symloc map build: {source}, seed {args.seed}, alphas {alphas}")
@@ -65,7 +66,7 @@ def _build(args: argparse.Namespace) -> int:
             args.world,
             alphas=alphas,
             rng=args.seed,
-            params=params,  # type: ignore[arg-type]
+            params=params,
             laps=args.laps,
         )
         reference = run.reference
@@ -77,7 +78,7 @@ def _build(args: argparse.Namespace) -> int:
             args.carmen,
             alphas=alphas,
             rng=args.seed,
-            params=params,  # type: ignore[arg-type]
+            params=params,
             max_scans=args.max_scans,
         )
         reference = compose(inverse(run.ate.alignment), run.reference)
