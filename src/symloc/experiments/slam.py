@@ -11,6 +11,10 @@ Thrun/nav2 odometry noise with ``--alphas`` (seeded) to the increments of the co
 reported: ATE RMSE (SE(2) Umeyama alignment) and RPE (consecutive scans) against the corrected
 poses, evo's definitions; loop closures; processing speed as data duration / CPU time and /
 wall-clock time. Targets: ATE < 0.10 m on intel and aces, >= 10x real time.
+
+Seeds: world ``w`` uses ``seed + index of w in SIM_WORLDS``, log ``l`` uses
+``seed + 100 + index of l in CARMEN_LOGS``, so a row is the same whether run alone or with
+the others.
 """
 
 from __future__ import annotations
@@ -86,6 +90,13 @@ def _row(s: dict[str, Any]) -> str:
     )
 
 
+def _world_index(world: str, k: int) -> int:
+    from symloc.slam.runs import SIM_WORLDS
+
+    names = list(SIM_WORLDS)
+    return names.index(world) if world in names else k
+
+
 def run(args: argparse.Namespace) -> int:
     """Run every requested world and log; print a table, write JSON and figures."""
     from symloc.figures.slam import map_trajectory_figure, slam_summary_figure
@@ -108,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
     for k, world in enumerate(args.worlds):
-        r = run_simulated(world, alphas=alphas, rng=args.seed + k, laps=args.laps)
+        r = run_simulated(
+            world, alphas=alphas, rng=args.seed + _world_index(world, k), laps=args.laps
+        )
         s = r.summary()
         rows.append(s)
         print(_row(s))
@@ -132,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
                 r = run_carmen(
                     path,
                     alphas=alphas,
-                    rng=args.seed + 100 + k,
+                    rng=args.seed + 100 + (CARMEN_LOGS.index(name) if name in CARMEN_LOGS else k),
                     max_scans=args.max_scans,
                 )
                 s = r.summary()

@@ -126,7 +126,7 @@ class SlamParams:
     voxel: float = 0.05
     motion_filter_distance: float = 0.2
     motion_filter_angle: float = math.radians(10.0)
-    match_filtered_scans: bool = False
+    match_filtered_scans: bool = True
     loop_every: int = 1
     loop_search_distance: float = 10.0
     loop_min_score: float = 0.6
