@@ -8,6 +8,13 @@ from __future__ import annotations
 
 from symloc.mcl.amcl import Amcl, AmclResult, NotInitializedError
 from symloc.mcl.clustering import ClusterStats, Hypothesis, cluster_particles
+from symloc.mcl.confidence import (
+    Confidence,
+    ConfidenceConfig,
+    ScanConsistency,
+    assess,
+    scan_consistency,
+)
 from symloc.mcl.params import AmclParams
 
 __all__ = [
@@ -15,7 +22,12 @@ __all__ = [
     "AmclParams",
     "AmclResult",
     "ClusterStats",
+    "Confidence",
+    "ConfidenceConfig",
     "Hypothesis",
     "NotInitializedError",
+    "ScanConsistency",
+    "assess",
     "cluster_particles",
+    "scan_consistency",
 ]

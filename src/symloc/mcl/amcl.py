@@ -14,7 +14,10 @@ augmented-MCL extensions of Section 4.4):
 5. clustered into hypotheses; the estimate is the heaviest cluster, reported with its own
    covariance, and ``n_hypotheses`` counts the clusters holding at least
    ``hypothesis_min_weight`` of the weight, which is what tells a caller that the robot may
-   stand in a symmetric place.
+   stand in a symmetric place;
+6. assessed: :mod:`symloc.mcl.confidence` decides whether the estimate is *confident* (one
+   dominant, tight hypothesis whose scan agrees with the map, sustained over a few updates);
+   ``AmclResult.confidence`` and :meth:`Amcl.confidence` report it.
 
 Differences from nav2_amcl, on purpose: ``update_min_d`` is tested on the Euclidean distance
 (nav2 tests |dx| and |dy| in the odom frame separately, so its threshold depends on the
@@ -30,7 +33,7 @@ odometry raises :class:`~symloc.errors.DataFormatError`. The pose estimate is ne
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,6 +46,7 @@ from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.beam_model import beam_model_weights
 from symloc.mcl.beams import BeamSet, select_beams
 from symloc.mcl.clustering import ClusterStats, Hypothesis, bin_keys, cluster_particles
+from symloc.mcl.confidence import Confidence, ConfidenceConfig, assess, scan_consistency
 from symloc.mcl.kld_sampling import kld_stop_index, pf_z_quantile
 from symloc.mcl.likelihood_field import likelihood_field_weights
 from symloc.mcl.likelihood_field_prob import BeamSkipReport, likelihood_field_prob_log_weights
@@ -95,6 +99,9 @@ class AmclResult:
         Random particles injected by recovery in this call.
     beam_skip : BeamSkipReport or None
         Beam-skipping report (likelihood_field_prob with ``do_beamskip``).
+    confidence : Confidence or None
+        Whether the estimate is confident (:mod:`symloc.mcl.confidence`); set by
+        :meth:`Amcl.update`.
     """
 
     estimate: FloatArray
@@ -109,6 +116,7 @@ class AmclResult:
     n_beams: int = 0
     injected: int = 0
     beam_skip: BeamSkipReport | None = None
+    confidence: Confidence | None = None
 
     @property
     def weight(self) -> float:
@@ -136,6 +144,8 @@ class Amcl:
         nav2-named parameters (defaults as nav2).
     rng : numpy.random.Generator or int or None
         Source of all randomness.
+    confidence_config : ConfidenceConfig, optional
+        Thresholds of the confidence verdict (default :class:`ConfidenceConfig()`).
     """
 
     def __init__(
@@ -143,6 +153,8 @@ class Amcl:
         grid: OccupancyGrid,
         params: AmclParams | None = None,
         rng: np.random.Generator | int | None = None,
+        *,
+        confidence_config: ConfidenceConfig | None = None,
     ) -> None:
         if not isinstance(grid, OccupancyGrid):
             raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
@@ -164,6 +176,17 @@ class Amcl:
         self._force_update = False
         self._resample_count = 0
         self._stats: ClusterStats | None = None
+        self.confidence_config = (
+            ConfidenceConfig() if confidence_config is None else confidence_config
+        )
+        if not isinstance(self.confidence_config, ConfidenceConfig):
+            raise ConfigurationError("confidence_config: expected a ConfidenceConfig")
+        self._confidence: Confidence | None = None
+        tol = self.confidence_config.consistency_sigmas * p.sigma_hit
+        # The scan check needs distances beyond its tolerance: a wider field if the map's is not.
+        self._consistency_field = (
+            self.field if tol < self.field.max_dist else distance_field(grid, 2.0 * tol)
+        )
 
     # ------------------------------------------------------------------ state
     @property
@@ -204,6 +227,7 @@ class Amcl:
         self._force_update = True
         self._resample_count = 0
         self.recovery.reset()
+        self._confidence = None
 
     # ----------------------------------------------------------- initialise
     def initialize_global(self) -> None:
@@ -269,7 +293,35 @@ class Amcl:
         Returns
         -------
         AmclResult
+            With ``confidence`` set (see :meth:`confidence`).
         """
+        res = self._update(odom, scan, laser_pose)
+        pose = np.asarray(odom.pose, dtype=np.float64)
+        cons = None
+        if res.updated and not res.sensor_skipped:
+            cons = scan_consistency(
+                self._consistency_field,
+                res.estimate,
+                scan,
+                sigma_hit=self.params.sigma_hit,
+                sigmas=self.confidence_config.consistency_sigmas,
+                laser_pose=laser_pose,
+                laser_max_range=self.params.laser_max_range,
+                laser_min_range=self.params.laser_min_range,
+            )
+        self._confidence = assess(
+            res, cons, self.confidence_config, previous=self._confidence, odom=pose
+        )
+        return replace(res, confidence=self._confidence)
+
+    def confidence(self) -> Confidence | None:
+        """The confidence verdict after the last :meth:`update` (None before the first one).
+
+        See :mod:`symloc.mcl.confidence` for the definition.
+        """
+        return self._confidence
+
+    def _update(self, odom: OdometryReading, scan: LaserScan, laser_pose: ArrayLike) -> AmclResult:
         if self._particles is None:
             raise NotInitializedError("Amcl: call initialize_global() or initialize_pose() first")
         if not isinstance(odom, OdometryReading):

@@ -1,0 +1,387 @@
+"""When is AMCL's pose *confident*? The one definition every symloc experiment and the localizer use.
+
+A pose estimate from :class:`~symloc.mcl.amcl.Amcl` is **confident** only when all of these
+hold (each threshold is a field of :class:`ConfidenceConfig`):
+
+1. **One dominant hypothesis**: the heaviest cluster holds at least ``min_weight_share``
+   (default 0.9) of the particle weight. Two or more well-weighted clusters mean the filter
+   itself does not know which place it is in (e.g. a symmetric room).
+2. **That hypothesis is tight**: its *own* covariance (not the whole set's, which nav2
+   publishes) has a position standard deviation (square root of the largest eigenvalue of the
+   x-y block) at most ``max_xy_std`` (default 0.15 m) and a heading standard deviation at
+   most ``max_theta_std`` (default 8 degrees). 0.15 m is half the 0.3 m tolerance with which
+   the experiments call a pose correct, so the 2-sigma circle lies inside it; 8 degrees is the
+   threshold the localizer used before this module existed. A heading error that large still
+   moves a beam end point at 5 m by 0.7 m, which check 3 sees.
+3. **The scan agrees with the map at the estimate**: placing the current scan at the
+   estimated pose, at least ``min_scan_consistency`` (default 0.8) of its valid returning
+   beams end within ``consistency_sigmas * sigma_hit`` (default 2 x 0.2 m = 0.4 m) of an
+   occupied cell of the map's distance field (:func:`scan_consistency`). If the laser model's
+   noise ``sigma_hit`` were right, about 95 % of the beams at the true pose would pass; the
+   margin down to 80 % absorbs people, glass and map errors. A wrong pose in a real,
+   non-symmetric building lets many beams end in free space or behind walls and fails. Fewer
+   than ``min_beams`` valid beams is not evidence: not confident.
+4. **Sustained (hysteresis)**: checks 1-3 passed at each of the last ``hold_updates``
+   (default 3) consecutive filter updates that integrated a scan, and between those updates
+   the estimate moved as the odometry says (within ``max_jump_xy`` = 0.5 m and
+   ``max_jump_theta`` = 20 degrees of the odometry-predicted pose), so a filter that hops
+   from one hypothesis to another restarts the count. A call that did not integrate a scan
+   (the robot moved less than ``update_min_d``) keeps the previous verdict; a failed check
+   drops confidence at once.
+
+What this cannot catch: in a truly symmetric room a symmetric copy of the true pose matches
+the scan perfectly and forms a single tight cluster once the other copies die out, so AMCL
+is *confident* there and wrong; telling the copies apart is the localizer's job (vision).
+
+Use :meth:`symloc.mcl.Amcl.confidence` (the filter tracks it along its updates; also
+``AmclResult.confidence``), or :func:`assess` with :func:`scan_consistency` for hand-fed
+results.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose, relative, wrap_angle
+from symloc.grid.distance_field import DistanceField
+from symloc.mcl.beams import select_beams
+from symloc.scan import LaserScan
+
+__all__ = [
+    "Confidence",
+    "ConfidenceConfig",
+    "ScanConsistency",
+    "assess",
+    "hypothesis_std",
+    "scan_consistency",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ConfidenceConfig:
+    """Thresholds of the confidence definition (see the module docstring).
+
+    Attributes
+    ----------
+    min_weight_share : float
+        Weight fraction in (0.5, 1] the heaviest cluster must hold.
+    max_xy_std : float
+        Largest position standard deviation [m] (> 0) of that cluster.
+    max_theta_std : float
+        Largest heading standard deviation [rad] in (0, pi) of that cluster.
+    consistency_sigmas : float
+        A beam agrees with the map when its end point lies within this many ``sigma_hit``
+        of an obstacle (> 0).
+    min_scan_consistency : float
+        Fraction in (0, 1] of valid beams that must agree.
+    min_beams : int
+        Fewest valid returning beams (>= 1) for the scan check to count.
+    hold_updates : int
+        Consecutive scan-integrating updates (>= 1) over which checks 1-3 must pass.
+    max_jump_xy : float
+        Largest disagreement [m] (> 0) between the estimate and the previous estimate moved
+        by the odometry, before the hysteresis count restarts.
+    max_jump_theta : float
+        Same for the heading [rad], in (0, pi].
+    """
+
+    min_weight_share: float = 0.9
+    max_xy_std: float = 0.15
+    max_theta_std: float = math.radians(8.0)
+    consistency_sigmas: float = 2.0
+    min_scan_consistency: float = 0.8
+    min_beams: int = 10
+    hold_updates: int = 3
+    max_jump_xy: float = 0.5
+    max_jump_theta: float = math.radians(20.0)
+
+    def __post_init__(self) -> None:
+        def need(ok: bool, name: str, what: str) -> None:
+            if not ok:
+                raise ConfigurationError(
+                    f"ConfidenceConfig.{name}: expected {what}, got {getattr(self, name)!r}"
+                )
+
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name in ("min_beams", "hold_updates"):
+                need(
+                    isinstance(v, (int, np.integer)) and not isinstance(v, bool),
+                    f.name,
+                    "an integer",
+                )
+            else:
+                need(
+                    isinstance(v, (int, float, np.number))
+                    and not isinstance(v, bool)
+                    and math.isfinite(float(v)),
+                    f.name,
+                    "a finite number",
+                )
+        need(0.5 < self.min_weight_share <= 1.0, "min_weight_share", "a value in (0.5, 1]")
+        need(self.max_xy_std > 0.0, "max_xy_std", "a value > 0 m")
+        need(0.0 < self.max_theta_std < math.pi, "max_theta_std", "a value in (0, pi) rad")
+        need(self.consistency_sigmas > 0.0, "consistency_sigmas", "a value > 0")
+        need(
+            0.0 < self.min_scan_consistency <= 1.0,
+            "min_scan_consistency",
+            "a value in (0, 1]",
+        )
+        need(self.min_beams >= 1, "min_beams", "an integer >= 1")
+        need(self.hold_updates >= 1, "hold_updates", "an integer >= 1")
+        need(self.max_jump_xy > 0.0, "max_jump_xy", "a value > 0 m")
+        need(0.0 < self.max_jump_theta <= math.pi, "max_jump_theta", "a value in (0, pi] rad")
+
+
+@dataclass(frozen=True, slots=True)
+class ScanConsistency:
+    """How well one scan placed at one pose agrees with the map.
+
+    Attributes
+    ----------
+    fraction : float
+        Fraction of valid returning beams whose end point lies within ``tolerance`` of an
+        obstacle (0 when there is no such beam).
+    n_beams : int
+        Valid returning beams considered.
+    tolerance : float
+        Distance [m] used (``consistency_sigmas * sigma_hit``).
+    """
+
+    fraction: float
+    n_beams: int
+    tolerance: float
+
+
+@dataclass(frozen=True, slots=True)
+class Confidence:
+    """The verdict for one filter state.
+
+    Attributes
+    ----------
+    confident : bool
+        All checks passed for ``hold_updates`` consecutive updates.
+    reason : str
+        Why (the first failed check, or a summary when confident).
+    checks_pass : bool
+        Checks 1-3 (and the jump check) passed at this update.
+    streak : int
+        Consecutive scan-integrating updates at which they passed (0 after a failure).
+    weight_share : float
+        Weight of the heaviest cluster.
+    std_xy : float
+        Its position standard deviation [m].
+    std_theta : float
+        Its heading standard deviation [rad].
+    scan_consistency : float
+        Fraction of agreeing beams at the estimate (NaN when not measured).
+    n_beams : int
+        Beams in that fraction.
+    estimate : ndarray of shape (3,)
+        The assessed estimate (map frame).
+    odom : ndarray of shape (3,) or None
+        The odometry pose at that update (for the jump check of the next one).
+    """
+
+    confident: bool
+    reason: str
+    checks_pass: bool
+    streak: int
+    weight_share: float
+    std_xy: float
+    std_theta: float
+    scan_consistency: float
+    n_beams: int
+    estimate: FloatArray
+    odom: FloatArray | None = None
+
+
+def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
+    """Position std [m] (sqrt of the largest x-y eigenvalue) and heading std [rad] of a
+    ``(3, 3)`` covariance."""
+    c = np.asarray(covariance, dtype=np.float64)
+    if c.shape != (3, 3) or not np.all(np.isfinite(c)):
+        raise ConfigurationError(f"covariance: expected a finite (3, 3) array, got {c.shape}")
+    ev = np.linalg.eigvalsh(0.5 * (c[:2, :2] + c[:2, :2].T))
+    return math.sqrt(max(float(ev.max()), 0.0)), math.sqrt(max(float(c[2, 2]), 0.0))
+
+
+def scan_consistency(
+    field: DistanceField,
+    pose: ArrayLike,
+    scan: LaserScan,
+    *,
+    sigma_hit: float = 0.2,
+    sigmas: float = 2.0,
+    laser_pose: ArrayLike = (0.0, 0.0, 0.0),
+    laser_max_range: float = -1.0,
+    laser_min_range: float = -1.0,
+) -> ScanConsistency:
+    """Fraction of ``scan``'s valid returning beams that end near an obstacle seen from ``pose``.
+
+    Parameters
+    ----------
+    field : DistanceField
+        The map's distance field (clipped at ``max_dist``; off the map reads ``max_dist``).
+    pose : array of shape (3,)
+        Robot pose x [m], y [m], theta [rad] in the map frame.
+    scan : LaserScan
+        Every beam is used (no ``max_beams`` sub-sampling); beams are cleaned as nav2 does
+        (:func:`~symloc.mcl.beams.select_beams`): NaN dropped, no-return beams ignored.
+    sigma_hit : float
+        The laser model's hit noise [m] (> 0).
+    sigmas : float
+        Tolerance in units of ``sigma_hit``; must stay below ``field.max_dist``.
+    laser_pose : array of shape (3,)
+        The laser in the robot frame.
+    laser_max_range, laser_min_range : float
+        nav2's range overrides [m] (<= 0: the scan's own).
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ConfigurationError(f"pose: expected finite shape (3,) x, y, theta, got {p}")
+    if not (math.isfinite(sigma_hit) and sigma_hit > 0.0):
+        raise ConfigurationError(f"sigma_hit: expected a value > 0 m, got {sigma_hit!r}")
+    tol = float(sigmas) * float(sigma_hit)
+    if not (tol > 0.0 and tol < field.max_dist):
+        raise ConfigurationError(
+            f"sigmas * sigma_hit: expected a tolerance in (0, laser_likelihood_max_dist ="
+            f" {field.max_dist} m), got {tol!r} m"
+        )
+    beams = select_beams(
+        scan,
+        max(len(scan), 2),
+        laser_max_range=laser_max_range,
+        laser_min_range=laser_min_range,
+    )
+    r, a = beams.ranges[beams.hit], beams.angles[beams.hit]
+    if r.size == 0:
+        return ScanConsistency(0.0, 0, tol)
+    lp = compose(p, np.asarray(laser_pose, dtype=np.float64))
+    pts = np.column_stack([lp[0] + r * np.cos(lp[2] + a), lp[1] + r * np.sin(lp[2] + a)])
+    d = field.lookup(pts)
+    return ScanConsistency(float(np.count_nonzero(d <= tol)) / r.size, int(r.size), tol)
+
+
+def assess(
+    result: Any,
+    consistency: ScanConsistency | None,
+    config: ConfidenceConfig | None = None,
+    *,
+    previous: Confidence | None = None,
+    odom: ArrayLike | None = None,
+) -> Confidence:
+    """Assess one filter result; chain ``previous`` for the hysteresis.
+
+    Parameters
+    ----------
+    result : AmclResult
+        Anything with ``estimate (3,)``, ``covariance (3, 3)``, ``hypotheses`` (heaviest
+        first, each with ``weight``), ``updated`` and ``sensor_skipped``.
+    consistency : ScanConsistency or None
+        :func:`scan_consistency` of this update's scan at ``result.estimate`` (None: not
+        measured, which fails check 3).
+    config : ConfidenceConfig, optional
+    previous : Confidence, optional
+        The verdict of the previous call on the same filter (None after an initialisation).
+    odom : array of shape (3,), optional
+        Odometry pose of this update; with ``previous.odom`` it enables the jump check.
+
+    Returns
+    -------
+    Confidence
+    """
+    cfg = ConfidenceConfig() if config is None else config
+    if not isinstance(cfg, ConfidenceConfig):
+        raise ConfigurationError(f"config: expected a ConfidenceConfig, got {type(cfg).__name__}")
+    est = np.asarray(result.estimate, dtype=np.float64).copy()
+    od = None if odom is None else np.asarray(odom, dtype=np.float64).copy()
+    if od is not None and (od.shape != (3,) or not np.all(np.isfinite(od))):
+        raise ConfigurationError(f"odom: expected finite shape (3,) x, y, theta, got {od}")
+    hyps = list(result.hypotheses)
+    share = float(hyps[0].weight) if hyps else 1.0
+    sxy, sth = hypothesis_std(result.covariance)
+    frac = math.nan if consistency is None else float(consistency.fraction)
+    nb = 0 if consistency is None else int(consistency.n_beams)
+
+    def verdict(ok: bool, streak: int, reason: str, **kw: Any) -> Confidence:
+        confident = ok and streak >= cfg.hold_updates
+        if ok and not confident:
+            reason = f"checks pass for {streak} of {cfg.hold_updates} updates"
+        return Confidence(
+            confident=confident,
+            reason=reason,
+            checks_pass=ok,
+            streak=streak,
+            weight_share=share,
+            std_xy=sxy,
+            std_theta=sth,
+            scan_consistency=frac,
+            n_beams=nb,
+            estimate=kw.get("estimate", est),
+            odom=kw.get("odom", od),
+        )
+
+    no_scan = not bool(getattr(result, "updated", True)) or bool(
+        getattr(result, "sensor_skipped", False)
+    )
+    if no_scan and previous is not None:
+        # No new scan evidence: keep the verdict and the reference pose of the last update.
+        return Confidence(
+            previous.confident,
+            previous.reason,
+            previous.checks_pass,
+            previous.streak,
+            share,
+            sxy,
+            sth,
+            previous.scan_consistency,
+            previous.n_beams,
+            previous.estimate,
+            previous.odom,
+        )
+    if no_scan:
+        return verdict(False, 0, "no scan integrated since initialisation")
+    reason = ""
+    if share < cfg.min_weight_share:
+        reason = f"no dominant hypothesis: heaviest holds {share:.2f} < {cfg.min_weight_share:.2f}"
+    elif sxy > cfg.max_xy_std or sth > cfg.max_theta_std:
+        reason = (
+            f"hypothesis too wide: std {sxy:.3f} m / {math.degrees(sth):.1f} deg (limits"
+            f" {cfg.max_xy_std:.3f} m / {math.degrees(cfg.max_theta_std):.1f} deg)"
+        )
+    elif consistency is None:
+        reason = "scan consistency not measured"
+    elif nb < cfg.min_beams:
+        reason = f"too few valid beams for the scan check ({nb} < {cfg.min_beams})"
+    elif frac < cfg.min_scan_consistency:
+        reason = (
+            f"scan disagrees with the map: {frac:.2f} of beams within"
+            f" {consistency.tolerance:.2f} m of an obstacle (< {cfg.min_scan_consistency:.2f})"
+        )
+    elif previous is not None and previous.odom is not None and od is not None:
+        pred = compose(previous.estimate, relative(previous.odom, od))
+        jxy = float(np.hypot(*(est[:2] - pred[:2])))
+        jth = abs(float(wrap_angle(est[2] - pred[2])))
+        if jxy > cfg.max_jump_xy or jth > cfg.max_jump_theta:
+            reason = (
+                f"estimate jumped {jxy:.2f} m / {math.degrees(jth):.1f} deg from the"
+                " odometry prediction"
+            )
+    if reason:
+        return verdict(False, 0, reason)
+    streak = 1 + (previous.streak if previous is not None and previous.checks_pass else 0)
+    return verdict(
+        True,
+        streak,
+        f"confident: share {share:.2f}, std {sxy:.3f} m / {math.degrees(sth):.1f} deg,"
+        f" scan {frac:.2f} of {nb} beams, {streak} updates",
+    )
