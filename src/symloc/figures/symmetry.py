@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_judgement", "plot_table1_positions"]
+__all__ = ["plot_judgement", "plot_judgement_grid", "plot_table1_positions"]
 
 
 def _pyplot() -> Any:
@@ -89,8 +89,45 @@ def plot_table1_positions(
     return out
 
 
-def plot_judgement(scan: Any, report: Any, path: str | Path) -> Path:
-    """One scan in the sensor frame with the judgement: points, corners, centroid, centre.
+def _draw_judgement(ax: Any, scan: Any, report: Any, lines: Any, title: str) -> None:
+    """Points, fitted lines, corners, centroid, centre and hallway axis of one scan."""
+    pts = scan.to_points().points
+    ax.plot(pts[:, 0], pts[:, 1], ".", ms=1.5, color="0.45", label="scan points")
+    ax.plot(0, 0, "^", color="k", ms=6, label="sensor (x forward)")
+    ax.plot([0, 0.5], [0, 0], "-", color="k", lw=1)
+    if lines is not None and lines.segments.size:
+        # pieces of fewer than 3 points (edges of depth jumps, clutter) are drawn faintly
+        wall = lines.n_points >= 3
+        first = True
+        for seg, is_wall in zip(lines.segments, wall, strict=True):
+            ax.plot(
+                seg[:, 0],
+                seg[:, 1],
+                "-",
+                color="tab:green" if is_wall else "0.8",
+                lw=1.5 if is_wall else 0.6,
+                label="fitted lines (>= 3 points)" if is_wall and first else None,
+            )
+            first = first and not is_wall
+    if report.corners.size:
+        c = report.corners
+        ax.plot(c[:, 0], c[:, 1], "o", color="tab:blue", ms=4, label="corners")
+    if np.all(np.isfinite(report.centroid)):
+        ax.plot(*report.centroid, "s", color="tab:orange", ms=5, label="centroid")
+    if np.all(np.isfinite(report.center)):
+        ax.plot(*report.center, "*", color="tab:red", ms=12, label="centre")
+        if np.isfinite(report.axis_angle):
+            d = np.array([np.cos(report.axis_angle), np.sin(report.axis_angle)])
+            span = float(np.max(np.abs(pts))) if pts.size else 1.0
+            ends = report.center + np.outer([-span, span], d)
+            ax.plot(ends[:, 0], ends[:, 1], "--", color="tab:red", lw=0.8, label="axis")
+    ax.set_title(title, fontsize=7)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=6)
+
+
+def plot_judgement(scan: Any, report: Any, path: str | Path, *, lines: Any = None) -> Path:
+    """One scan in the sensor frame with the judgement: points, lines, corners, centre.
 
     Parameters
     ----------
@@ -98,28 +135,56 @@ def plot_judgement(scan: Any, report: Any, path: str | Path) -> Path:
     report : SymmetryReport
     path : path
         PNG file to write.
+    lines : ScanLines, optional
+        Fitted lines to draw (:func:`symloc.symmetry.scan_lines`).
     """
     plt = _pyplot()
-    pts = scan.to_points().points
-    fig, ax = plt.subplots(figsize=(5, 5))
-    ax.plot(pts[:, 0], pts[:, 1], ".", ms=2, color="0.3", label="scan points")
-    ax.plot(0, 0, "^", color="k", label="sensor")
-    if report.corners.size:
-        c = np.vstack([report.corners, report.corners[:1]])
-        ax.plot(c[:, 0], c[:, 1], "-o", color="tab:blue", ms=4, lw=1, label="walls / corners")
-    if np.all(np.isfinite(report.centroid)):
-        ax.plot(
-            *report.centroid, "s", color="tab:orange", label=f"{report.centroid_method} centroid"
-        )
-    if np.all(np.isfinite(report.center)):
-        ax.plot(*report.center, "*", color="tab:red", ms=12, label="centre")
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
     order = "inf" if report.continuous else report.order
-    ax.set_title(f"{report.kind}, order {order}, symmetric={report.symmetric}", fontsize=9)
-    ax.set_aspect("equal")
+    _draw_judgement(
+        ax, scan, report, lines, f"{report.kind}, order {order}, symmetric={report.symmetric}"
+    )
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def plot_judgement_grid(
+    items: Sequence[tuple[Any, Any, Any, str]], path: str | Path, *, title: str, ncols: int = 4
+) -> Path:
+    """Several judged scans side by side, for a person to check the verdicts.
+
+    Parameters
+    ----------
+    items : sequence of (LaserScan, SymmetryReport, ScanLines or None, label)
+    path : path
+        PNG file to write.
+    title : str
+    ncols : int
+        Panels per row.
+    """
+    plt = _pyplot()
+    n = max(len(items), 1)
+    ncols = max(1, min(ncols, n))
+    nrows = -(-n // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.6 * ncols, 3.6 * nrows + 0.4), squeeze=False)
+    for ax in axes.ravel()[len(items) :]:
+        ax.axis("off")
+    if not items:
+        axes[0, 0].text(0.5, 0.5, "no scans", ha="center", va="center")
+    for ax, (scan, report, lines, label) in zip(axes.ravel(), items, strict=False):
+        order = "inf" if report.continuous else report.order
+        _draw_judgement(ax, scan, report, lines, f"{label}\n{report.kind}, order {order}")
+    if items:
+        axes[0, 0].legend(fontsize=6, loc="lower left")
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=100)
     plt.close(fig)
     return out

@@ -63,6 +63,12 @@ class SymmetryConfig:
     max_door_width : float
         A gap in a wall up to this wide [m] is reported as an opening (door) that breaks the
         symmetry, rather than as a wall beyond range (> 0).
+    partial_view : bool
+        Judge scans whose field of view is under 360 degrees for the one symmetric pattern a
+        partial view can show: a hallway (two long parallel walls on either side whose far
+        ends are beyond range). The part behind the sensor is not seen and is *assumed* to
+        continue the hallway; the report's reason says so. Default False: a partial view gives
+        "unknown".
     """
 
     range_sigma: float = 0.01
@@ -78,6 +84,7 @@ class SymmetryConfig:
     max_polygon_sides: int = 16
     min_angle_tolerance: float = math.radians(0.5)
     max_door_width: float = 2.0
+    partial_view: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -120,6 +127,9 @@ class SymmetryConfig:
             check_in_range(self.min_angle_tolerance, "min_angle_tolerance", 1e-9, math.pi / 4),
         )
         set_(self, "max_door_width", check_positive(self.max_door_width, "max_door_width"))
+        if not isinstance(self.partial_view, (bool, np.bool_)):
+            raise ConfigurationError(f"partial_view: expected a bool, got {self.partial_view!r}")
+        set_(self, "partial_view", bool(self.partial_view))
 
     @classmethod
     def from_noise(cls, sigma: float, relative: float = 0.0, **overrides: Any) -> SymmetryConfig:

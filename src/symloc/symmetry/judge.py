@@ -227,10 +227,11 @@ def judge_symmetry(
         no_return=no_return,
         max_blind_beams=cfg.max_blind_beams,
     )
+    partial = not full_circle and cfg.partial_view
     runs = contour_runs(
         sp.indices,
         n_beams,
-        wrap=True,
+        wrap=not partial,
         max_dropout_beams=cfg.max_dropout_beams,
         no_return=no_return,
         max_blind_beams=cfg.max_blind_beams,
@@ -239,7 +240,9 @@ def judge_symmetry(
     try:
         if closed:
             return _judge_closed(pts, tol, sig, cfg, centroid, common)
-        return _judge_open(scan, sp.indices, pts, tol, sig, runs, full_circle, cfg, common)
+        return _judge_open(
+            scan, sp.indices, pts, tol, sig, runs, full_circle or partial, cfg, common
+        )
     except (IndexError, ValueError, FloatingPointError, np.linalg.LinAlgError) as err:
         # a safety net: a scan this code did not foresee must not stop the robot
         return _report(
@@ -439,11 +442,13 @@ def _judge_open(
 ) -> SymmetryReport:
     m = pts.shape[0]
     n_beams = len(scan)
+    fov = math.degrees(scan.angle_increment * n_beams)
+    partial = fov < 360.0 - 1.5 * math.degrees(scan.angle_increment)
     if not full_circle:
-        fov = math.degrees(scan.angle_increment * n_beams)
         return _report(
             "unknown",
-            f"field of view {fov:.0f} deg < 360 deg: the room cannot be seen closed",
+            f"field of view {fov:.0f} deg < 360 deg: the room cannot be seen closed"
+            " (SymmetryConfig.partial_view=True tests it for a hallway)",
             **common,
         )
     # fit lines per run
@@ -485,6 +490,12 @@ def _judge_open(
             center = nrm * mid  # foot of the perpendicular from the sensor on the mid-line
             width = abs(oa - ob)
             axis = math.atan2(float(nrm[0]), float(-nrm[1]))
+            caveat = (
+                f"; partial view of {fov:.0f} deg: the part outside the field of view was not"
+                " seen and is assumed to continue the hallway"
+                if partial
+                else ""
+            )
             return SymmetryReport(
                 kind="hallway",
                 symmetric=True,
@@ -498,7 +509,7 @@ def _judge_open(
                 f" ({math.degrees(ang):.2f} deg apart), both ends unseen ({n_missing} beams"
                 " without a point); order 2 about a centre on the mid-line whose position"
                 " along the hallway is undetermined (reported: the mid-line point nearest the"
-                " sensor)",
+                f" sensor){caveat}",
                 tolerance=ang_tol,
                 axis_angle=axis,
                 **common,  # type: ignore[arg-type]
@@ -506,7 +517,8 @@ def _judge_open(
     # --- a narrow opening in a straight wall: a door ---
     # (the middle of a straight wall is nearer than its ends, so a gap between two collinear
     # pieces of wall is never the sensor's range limit)
-    for r in range(runs.shape[0]):
+    # (with a partial view, the last run and the first are not neighbours)
+    for r in range(runs.shape[0] - 1 if partial else runs.shape[0]):
         r2 = (r + 1) % runs.shape[0]
         if r not in run_lines or r2 not in run_lines:
             continue
@@ -530,6 +542,14 @@ def _judge_open(
                 **common,
             )
     no_ret = int(np.count_nonzero(scan.no_return_mask))
+    if partial:
+        return _report(
+            "unknown",
+            f"partial view of {fov:.0f} deg in {runs.shape[0]} runs of wall and {int(npts.size)}"
+            " lines: not a hallway (two long parallel walls on either side), and nothing else"
+            " can be judged without seeing the whole room",
+            **common,
+        )
     return _report(
         "unknown",
         f"the contour is open in {runs.shape[0]} places ({no_ret} beams with no return within"
