@@ -60,6 +60,7 @@ class AmclTracker:
             particles=np.asarray(r.particles),
             weights=np.asarray(r.weights),
             updated=bool(r.updated),
+            confident=_confident(r),
         )
 
 
@@ -181,3 +182,9 @@ class GridScorer:
         d[inside] = self._dist[cells[inside, 0], cells[inside, 1]]
         s = np.exp(-0.5 * (d / self.sigma) ** 2).reshape(p.shape[0], -1)
         return np.asarray(s.mean(axis=1) if s.shape[1] else np.zeros(p.shape[0]))
+
+
+def _confident(result: Any) -> bool | None:
+    """AMCL's own confidence verdict (:mod:`symloc.mcl.confidence`), None if it gives none."""
+    conf = getattr(result, "confidence", None)
+    return None if conf is None else bool(conf.confident)

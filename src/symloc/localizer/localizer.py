@@ -331,6 +331,8 @@ class Localizer:
 
     def _converged(self, result: TrackerResult) -> bool:
         cfg = self.config
+        if result.confident is not None:  # the tracker's verdict (symloc.mcl.confidence)
+            return bool(result.confident)
         if not result.hypotheses:
             return False
         top = result.hypotheses[0]

@@ -2,7 +2,8 @@
 
 :func:`build_scenario` builds a room inside a lab, its occupancy grid, and the visual map of the
 room (the mapping stage, :func:`~symloc.localizer.mapping.map_place`). :func:`run_plain_amcl`
-kidnaps the robot and runs nav2-style AMCL from a global start while the robot turns on the spot;
+kidnaps the robot and runs AMCL with nav2 defaults from a global start while the robot drives a
+seeded collision-free random path;
 :func:`run_symloc` runs the :class:`~symloc.localizer.localizer.Localizer` from the same start.
 :func:`classify` grades a final answer against the ground truth: correct (within 0.1 m and
 5 degrees), a symmetric copy, confident wrong, or undetermined.
@@ -66,6 +67,10 @@ MAP_SOURCE = (
     "occupancy grid: symloc.sim.rasterize.world_to_grid (ground truth of what the lidar sees); "
     "visual map poses: simulator ground truth (a real run takes both from SLAM)"
 )
+
+#: odometry noise alpha1..4 of the kidnapped robot (as ``symloc experiment amcl-symmetric``);
+#: both methods' AMCL use the same alphas (matched to the robot, as nav2's tuning guide asks)
+ODOM_ALPHA = 0.05
 
 POSITION_TOL = 0.1
 HEADING_TOL = math.radians(5.0)
@@ -144,6 +149,24 @@ class Scenario:
     workdir: Path
     notes: list[str] = field(default_factory=list)
     slam_seconds: float = 0.0
+    #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
+    odom_alpha: float = ODOM_ALPHA
+
+    def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
+        """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
+        from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
+
+        a = self.odom_alpha
+        cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
+        return RobotBody(DiffDriveRobot(start, cfg, rng, world=self.room.world))
+
+    def plain_amcl_params(self) -> Any:
+        """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
+        from symloc.mcl import AmclParams
+
+        return AmclParams(
+            **dict.fromkeys(("alpha1", "alpha2", "alpha3", "alpha4"), self.odom_alpha)
+        )
 
     def scan_at(self, rng: np.random.Generator) -> Any:
         from symloc.sim.lidar import simulate_scan
@@ -218,7 +241,11 @@ def build_scenario(
         judge=judge,
         store=store,
         mapped=None,
-        amcl_params=AmclParams(max_particles=max_particles, min_particles=500),
+        amcl_params=AmclParams(
+            max_particles=max_particles,
+            min_particles=500,
+            **dict.fromkeys(("alpha1", "alpha2", "alpha3", "alpha4"), ODOM_ALPHA),
+        ),
         workdir=wd,
         notes=[MAP_SOURCE],
     )
@@ -389,7 +416,11 @@ def classify(
 
 @dataclass
 class AmclRun:
-    """Plain AMCL after a kidnapping: final estimate, its cluster weight and std, particles."""
+    """Plain AMCL after a kidnapping: final estimate, its cluster weight and std, particles.
+
+    ``collisions`` counts motions the simulator refused (the drive must keep it at 0);
+    ``path`` (T, 3) true poses of the drive.
+    """
 
     true_pose: FloatArray
     estimate: FloatArray
@@ -401,6 +432,13 @@ class AmclRun:
     outcome: Outcome
     time: float
     distance: float
+    collisions: int = 0
+    path: FloatArray | None = None
+    confidence_reason: str = ""
+
+
+#: What plain AMCL does by default in the experiments: the robot drives like this.
+AMCL_DRIVE = "seeded random collision-free drive at 0.3 m/s (as amcl-symmetric)"
 
 
 def run_plain_amcl(
@@ -408,46 +446,53 @@ def run_plain_amcl(
     start: FloatArray,
     rng: np.random.Generator,
     *,
-    commands: list[tuple[float, float]] | None = None,
-    duration: float = 30.0,
+    duration: float = 45.0,
+    params: Any = None,
+    drive: str = "explore",
     w: float = 0.6,
 ) -> AmclRun:
     """Kidnap the robot to ``start``, initialise AMCL globally, drive, grade the final estimate.
 
-    The robot replays ``commands`` (v, w) (symloc's own motion, for a side-by-side comparison),
-    then turns on the spot until ``duration`` [s] has passed, so AMCL integrates scans.
+    This is what a nav2 user gets: AMCL with nav2's defaults (``params`` None:
+    :meth:`Scenario.plain_amcl_params`, 2000/500 particles, likelihood field, alphas matched to
+    the robot), a global start, and the robot driven for
+    ``duration`` [s]. ``drive`` ``"explore"`` (default) is a seeded collision-free random drive
+    (:class:`~symloc.localizer.explore.ExploreDrive`, the same kind as
+    ``symloc experiment amcl-symmetric``); ``"spin"`` turns on the spot at ``w`` [rad/s].
 
-    AMCL counts as confident when the covariance it reports for its estimate (the heaviest
-    cluster's own) has a position std <= 0.15 m and a heading std <= 8 degrees: a nav2 user
-    receives that pose with that covariance, whatever the cluster's weight.
+    AMCL counts as confident by :func:`amcl_confident` (the project's one definition).
     """
     from symloc.mcl import Amcl
-    from symloc.sim.robot import DiffDriveRobot
 
-    amcl = Amcl(scen.grid, scen.amcl_params, rng)
+    from .explore import ExploreDrive
+
+    if drive not in ("explore", "spin"):
+        raise ConfigurationError(f"drive: expected 'explore' or 'spin', got {drive!r}")
+    amcl = Amcl(scen.grid, scen.plain_amcl_params() if params is None else params, rng)
     amcl.initialize_global()
-    robot = RobotBody(DiffDriveRobot(start, rng=rng, world=scen.room.world))
+    robot = scen.robot(start, rng)
     scan_at = scen.scan_at(rng)
     dt = 1.0 / float(scen.preset.scan_rate)
+    driver = ExploreDrive(scen.room.world.distance, rng)
     odom = robot.odom
     t = 0.0
-    result = None
-    plan = list(commands or [])
-    n = max(len(plan), math.ceil(duration / dt))
+    n = math.ceil(duration / dt)
     dist = 0.0
-    for i in range(n):
-        result = amcl.update(odom, scan_at(robot.pose))
-        v_i, w_i = plan[i] if i < len(plan) else (0.0, w)
+    path = [robot.pose]
+    for _ in range(n):
+        amcl.update(odom, scan_at(robot.pose))
+        v_i, w_i = driver.command(robot.pose, dt) if drive == "explore" else (0.0, w)
         before = robot.pose
         odom = robot.drive(v_i, w_i, dt)
         dist += float(np.hypot(*(robot.pose[:2] - before[:2])))
+        path.append(robot.pose)
         t += dt
     result = amcl.update(odom, scan_at(robot.pose))
     cov = np.asarray(result.covariance)
     xy_std = math.sqrt(max(cov[0, 0], cov[1, 1]))
     th_std = math.sqrt(cov[2, 2])
     weight = float(result.weight)
-    converged = xy_std <= 0.15 and th_std <= math.radians(8.0)
+    converged, rule = amcl_confident(result)
     truth = robot.pose
     outcome = classify(
         np.asarray(result.estimate), converged, truth, scen.room.center, _order(scen), weight
@@ -463,7 +508,20 @@ def run_plain_amcl(
         outcome=outcome,
         time=t,
         distance=dist,
+        collisions=robot.collisions,
+        path=np.asarray(path),
+        confidence_reason=rule,
     )
+
+
+def amcl_confident(result: Any) -> tuple[bool, str]:
+    """Whether an AMCL result is confident and why: the project's one definition,
+    :mod:`symloc.mcl.confidence` (``AmclResult.confidence``: one dominant tight hypothesis whose
+    scan agrees with the map, sustained over 3 updates)."""
+    conf = result.confidence
+    if conf is None:
+        return False, "no confidence verdict"
+    return bool(conf.confident), str(conf.reason)
 
 
 def _order(scen: Scenario) -> int:
@@ -481,6 +539,7 @@ class SymlocRun:
     localizer: Localizer
     outcome: Outcome
     steps: list[str]
+    collisions: int = 0
 
 
 def run_symloc(
@@ -493,7 +552,6 @@ def run_symloc(
 ) -> SymlocRun:
     """Kidnap the robot to ``start`` and run the localizer until it settles (or ``max_time``)."""
     from symloc.mcl import Amcl
-    from symloc.sim.robot import DiffDriveRobot
 
     tracker = AmclTracker(Amcl(scen.grid, scen.amcl_params, rng))
     loc = Localizer(
@@ -505,7 +563,7 @@ def run_symloc(
         known_places=scen.store.all_places(),
     )
     loc.reset_global()
-    robot = RobotBody(DiffDriveRobot(start, rng=rng, world=scen.room.world))
+    robot = scen.robot(start, rng)
     ep = run_episode(
         loc,
         robot,
@@ -527,6 +585,7 @@ def run_symloc(
         localizer=loc,
         outcome=outcome,
         steps=list(loc.log),
+        collisions=robot.collisions,
     )
 
 

@@ -42,6 +42,7 @@ class RoomTrials:
     judge_errors: int = 0
     mapped: bool = True
     collisions: int = 0
+    amcl_collisions: int = 0
     map_note: str = ""
 
     def rows(self) -> list[dict[str, Any]]:
@@ -68,6 +69,7 @@ class RoomTrials:
                     if ok
                     else math.nan,
                     "reasons": _top_reasons(recs),
+                    "collisions": self.collisions if method == "symloc" else self.amcl_collisions,
                 }
             )
         return out
@@ -89,7 +91,7 @@ def run_room_trials(
     trials: int = 100,
     rng: np.random.Generator | int | None = None,
     workdir: Path | None = None,
-    amcl_duration: float = 30.0,
+    amcl_duration: float = 45.0,
     symloc_max_time: float = 150.0,
     progress: bool = True,
     preset: Any = None,
@@ -115,6 +117,7 @@ def run_room_trials(
                 scen, start, np.random.default_rng(gen.integers(2**32)), max_time=symloc_max_time
             )
             fin = s.episode.final
+            res.collisions += s.collisions
             res.symloc.append(
                 TrialRecord(
                     grade=s.outcome.grade,
@@ -133,6 +136,7 @@ def run_room_trials(
             a = run_plain_amcl(
                 scen, start, np.random.default_rng(gen.integers(2**32)), duration=amcl_duration
             )
+            res.amcl_collisions += a.collisions
             res.amcl.append(
                 TrialRecord(
                     grade=a.outcome.grade,
@@ -143,7 +147,7 @@ def run_room_trials(
                     copy_index=a.outcome.copy_index,
                     near_copy=a.outcome.near_copy,
                     final_status="confident" if a.converged else "not confident",
-                    reason=f"weight {a.weight:.2f}",
+                    reason=a.confidence_reason.split(":")[0],
                 )
             )
     finally:

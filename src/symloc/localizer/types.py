@@ -160,6 +160,9 @@ class TrackerResult:
 
     ``estimate`` (3,), ``covariance`` (3, 3) of the heaviest cluster, ``hypotheses`` (every
     cluster, heaviest first), ``particles`` (N, 3) and ``weights`` (N,) for display.
+    ``confident`` the tracker's own verdict (:mod:`symloc.mcl.confidence`, the project's one
+    definition) or None when the tracker gives none (then the localizer applies its
+    ``converged_*`` thresholds).
     """
 
     estimate: FloatArray
@@ -169,6 +172,7 @@ class TrackerResult:
     particles: FloatArray | None = None
     weights: FloatArray | None = None
     updated: bool = True
+    confident: bool | None = None
 
 
 @runtime_checkable
