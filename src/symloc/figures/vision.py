@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["keyframes_figure", "matches_figure", "table3_figure"]
+__all__ = ["keyframes_figure", "matches_figure", "photos_figure", "table3_figure"]
 
 
 def _plt() -> Any:
@@ -126,5 +126,64 @@ def matches_figure(
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=90)
+    plt.close(fig)
+    return out
+
+
+def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, Any]] = ()) -> Path:
+    """Real-photo experiment: outcome counts per case, heading-offset errors, example queries.
+
+    Parameters
+    ----------
+    result : symloc.vision.photos.PhotosResult
+    path : output PNG
+    examples : sequence of (title, (H, W[, 3]) uint8 image)
+        Shown in a row under the plots (e.g. the stored views and some re-captures).
+    """
+    plt = _plt()
+    cases = [*result.conditions, *result.ambiguity]
+    n_ex = len(examples)
+    fig = plt.figure(figsize=(13, 8.5 if n_ex else 4.8))
+    rows = 2 if n_ex else 1
+    gs = fig.add_gridspec(rows, max(n_ex, 2), height_ratios=[1.4, 1] if n_ex else [1])
+    mid = max(n_ex, 2) // 2
+    ax1 = fig.add_subplot(gs[0, :mid])
+    ax2 = fig.add_subplot(gs[0, mid:])
+    names = [c.case for c in cases]
+    y = np.arange(len(cases))
+    left = np.zeros(len(cases))
+    for key, colour in (
+        ("correct", "tab:green"),
+        ("undetermined", "tab:orange"),
+        ("refused", "tab:gray"),
+        ("wrong", "tab:red"),
+    ):
+        vals = np.array([getattr(c, key) / max(c.trials, 1) for c in cases])
+        ax1.barh(y, vals, left=left, color=colour, label=key)
+        left += vals
+    ax1.set_yticks(y, names)
+    ax1.invert_yaxis()
+    ax1.axhline(len(result.conditions) - 0.5, color="k", lw=0.8)
+    ax1.set_xlabel("fraction of queries")
+    ax1.set_title(f"decisions on real photos (yaw up to {result.max_yaw_deg:g} deg)")
+    ax1.legend(loc="lower right", fontsize=8)
+    data = []
+    for c in cases:
+        e = [t.heading_error_deg for t in result.trials if t.case == c.case and t.correct]
+        data.append(e if e else [np.nan])
+    ax2.boxplot(data, vert=False, labels=names, showfliers=True)
+    ax2.invert_yaxis()
+    ax2.set_xscale("symlog", linthresh=0.1)
+    ax2.set_xlabel("|heading offset - true yaw| [deg] (correct decisions)")
+    ax2.set_title("heading-offset error")
+    for i, (title, img) in enumerate(examples):
+        ax = fig.add_subplot(gs[1, i])
+        ax.imshow(img, cmap="gray" if np.ndim(img) == 2 else None)
+        ax.set_title(title, fontsize=8)
+        ax.axis("off")
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=100)
     plt.close(fig)
     return out

@@ -394,11 +394,27 @@ class Vocabulary:
             raise ConfigurationError(f"folder: no images ({', '.join(IMAGE_SUFFIXES)}) in {root}")
         ext = extractor or OrbExtractor()
         docs = []
+        unreadable = []
         for p in tqdm(files, desc="ORB features", unit="img", disable=not progress):
             img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
             if img is None:
-                raise DataFormatError(f"folder: cannot read image {p}")
-            docs.append(ext.extract(img).descriptors)
+                unreadable.append(p)
+                continue
+            d = ext.extract(img).descriptors
+            if d.shape[0]:
+                docs.append(d)
+        if unreadable:
+            import warnings
+
+            warnings.warn(
+                f"folder: skipped {len(unreadable)} unreadable image file(s), e.g. {unreadable[0]}",
+                stacklevel=2,
+            )
+        if not docs:
+            raise DataFormatError(
+                f"folder: none of the {len(files)} image file(s) in {root} is a readable image "
+                "with ORB features"
+            )
         return cls.train(docs, progress=progress, **kwargs)
 
     # ------------------------------------------------------------------ files

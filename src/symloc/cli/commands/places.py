@@ -1,0 +1,183 @@
+"""``symloc places``: the SQLite visual map of symmetric places built from your own photos:
+add a place (M photos taken at its centre, clockwise), list, decide a query's direction, remove."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+__all__ = ["register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add ``places`` with ``add``, ``list``, ``decide`` and ``remove``."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "places", help="visual map of symmetric places (SQLite): add, list, decide, remove"
+    )
+    sub = parser.add_subparsers(dest="places_command", metavar="ACTION")
+    sub.required = True
+
+    a = sub.add_parser(
+        "add",
+        help="store a place from M photos taken at its centre, in clockwise order",
+        description="Photo j looks along heading - j * 360/M degrees (clockwise order, as the "
+        "paper stores them). Creates the database when it does not exist.",
+    )
+    a.add_argument("--db", type=Path, required=True, help="visual map database (SQLite)")
+    a.add_argument("--images", type=Path, nargs="+", required=True, metavar="IMG")
+    a.add_argument("--kind", default="polygon", help="room kind (square, polygon, circle, ...)")
+    a.add_argument("--order", type=int, required=True, help="symmetry order of the room")
+    a.add_argument("--gv", type=float, required=True, help="G-V distance [m]")
+    a.add_argument(
+        "--pose",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.0),
+        metavar=("X", "Y", "THETA_DEG"),
+        help="map pose of the centre [m, m, deg]; THETA is the heading of the first photo",
+    )
+    a.add_argument("--label", default=None)
+    a.add_argument("--vocabulary", type=Path, default=None, help="default: the shipped one")
+    a.add_argument("--keep-images", action="store_true", help="also store the pixels (PNG)")
+    a.set_defaults(func=_add)
+
+    ls = sub.add_parser("list", help="list the stored places")
+    ls.add_argument("--db", type=Path, required=True)
+    ls.set_defaults(func=_list)
+
+    d = sub.add_parser(
+        "decide",
+        help="which stored direction does a photo taken at the place's centre face?",
+        description="Scores the query against the place's M photos (BoW), requires the best to "
+        "beat the second clearly, verifies it with a RANSAC homography and reads the residual "
+        "heading offset from it. Exit code 0 when decided, 3 when undetermined or refused.",
+    )
+    d.add_argument("--db", type=Path, required=True)
+    d.add_argument("--place", type=int, required=True, help="place id (see 'places list')")
+    d.add_argument("--query", type=Path, required=True, help="query photo")
+    cam = d.add_mutually_exclusive_group(required=True)
+    cam.add_argument("--hfov", type=float, help="horizontal field of view [deg]")
+    cam.add_argument(
+        "--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"), help="[px]"
+    )
+    d.add_argument("--vocabulary", type=Path, default=None, help="default: the one used by add")
+    d.set_defaults(func=_decide)
+
+    r = sub.add_parser("remove", help="remove a place and its images")
+    r.add_argument("--db", type=Path, required=True)
+    r.add_argument("--place", type=int, required=True)
+    r.set_defaults(func=_remove)
+
+
+def _open(db: Path, create: bool = False) -> Any:
+    from symloc.vision.visual_map import VisualMap
+
+    return VisualMap(db, create=create)
+
+
+def _vocabulary(path: Path | None, vmap: Any | None = None) -> tuple[Any, str]:
+    from symloc.vision.default_vocabulary import default_vocabulary
+    from symloc.vision.vocabulary import Vocabulary
+
+    stored = vmap.get_meta("vocabulary") if vmap is not None else None
+    if path is None and stored not in (None, "default"):
+        path = Path(str(stored))
+    if path is None:
+        return default_vocabulary(), "default"
+    return Vocabulary.load(path), str(path.resolve())
+
+
+def _add(args: argparse.Namespace) -> int:
+    from symloc.errors import ConfigurationError
+    from symloc.vision.image_files import place_images_from_files
+
+    if args.order >= 1 and len(args.images) % args.order:
+        raise ConfigurationError(
+            f"--images: {len(args.images)} photos for a room of symmetry order {args.order}; "
+            "expected a multiple of the order"
+        )
+    with _open(args.db, create=True) as vmap:
+        voc, voc_name = _vocabulary(args.vocabulary)
+        stored = vmap.get_meta("vocabulary")
+        if stored is not None and stored != voc_name:
+            raise ConfigurationError(
+                f"--vocabulary: this map's BoW vectors were made with {stored}, not {voc_name}"
+            )
+        images = place_images_from_files(
+            args.images,
+            voc,
+            heading0=math.radians(args.pose[2]),
+            keep_images=args.keep_images,
+        )
+        x, y, th = args.pose
+        pid = vmap.add_place(
+            kind=args.kind,
+            order=args.order,
+            gv_distance=args.gv,
+            pose=(x, y, math.radians(th)),
+            images=images,
+            label=args.label,
+        )
+        if stored is None:
+            vmap.set_meta("vocabulary", voc_name)
+    counts = ", ".join(str(len(im.features)) for im in images)
+    print(f"added place {pid} to {args.db}: {args.kind}, order {args.order}, G-V {args.gv} m")
+    print(f"  {len(images)} directions (ORB keypoints: {counts})")
+    return 0
+
+
+def _list(args: argparse.Namespace) -> int:
+    with _open(args.db) as vmap:
+        ids = vmap.place_ids()
+        print(f"{args.db}: {len(ids)} place(s), vocabulary {vmap.get_meta('vocabulary')}")
+        if ids:
+            print(f"{'id':>4}  {'kind':<10}{'order':>6}{'G-V [m]':>9}{'M':>3}  pose (x, y, deg)")
+        for pid in ids:
+            p = vmap.place(pid, with_images=False)
+            print(
+                f"{p.id:>4}  {p.kind:<10}{p.order:>6}{p.gv_distance:>9.3f}{p.n_directions:>3}  "
+                f"({p.pose[0]:.2f}, {p.pose[1]:.2f}, {math.degrees(p.pose[2]):.1f})"
+                + (f"  {p.label}" if p.label else "")
+            )
+    return 0
+
+
+def _decide(args: argparse.Namespace) -> int:
+    from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values, read_image
+    from symloc.vision.orientation import decide_orientation
+
+    with _open(args.db) as vmap:
+        place = vmap.place(args.place, with_images=False)
+        voc, _ = _vocabulary(args.vocabulary, vmap)
+    query = read_image(args.query)
+    h, w = query.shape[:2]
+    K = (
+        intrinsics_from_fov(args.hfov, w, h)
+        if args.hfov is not None
+        else intrinsics_from_values(*args.intrinsics)
+    )
+    d = decide_orientation(query, place, voc, K)
+    scores = ", ".join(f"{s:.3f}" for s in d.scores)
+    print(f"place {place.id} ({place.kind}, M={place.n_directions}), query {args.query}")
+    print(f"status:         {d.status}")
+    if d.decided:
+        print(f"direction:      {d.direction}")
+        print(f"heading offset: {math.degrees(d.heading_offset):+.2f} deg (CCW positive)")
+        print(f"heading:        {math.degrees(d.heading):.2f} deg (map)")
+    print(f"scores:         [{scores}]")
+    print(f"inliers:        {d.inliers} (second direction {d.second_inliers})")
+    print(f"keypoints:      {d.n_keypoints}")
+    print(f"reason:         {d.reason}")
+    if not d.decided:
+        print(f"advice:         turn clockwise by {360.0 / place.n_directions:g} deg and try again")
+    return 0 if d.decided else 3
+
+
+def _remove(args: argparse.Namespace) -> int:
+    with _open(args.db) as vmap:
+        vmap.place(args.place, with_images=False)  # raises DatabaseError for a bad id
+        vmap.delete_place(args.place)
+        print(f"removed place {args.place} from {args.db} ({len(vmap)} left)")
+    return 0

@@ -1,0 +1,130 @@
+"""``symloc vocab``: train a vocabulary from a folder of images, convert between DBoW2 text and
+symloc's binary format, and describe a vocabulary file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+__all__ = ["register"]
+
+_WEIGHTINGS = ["tf-idf", "tf", "idf", "binary"]
+_SCORINGS = ["l1", "l2", "chi-square", "kl", "bhattacharyya", "dot-product"]
+
+
+def register(subparsers: Any) -> None:
+    """Add ``vocab`` with ``train``, ``convert`` and ``info``."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "vocab", help="visual vocabularies (DBoW2-compatible): train, convert, info"
+    )
+    sub = parser.add_subparsers(dest="vocab_command", metavar="ACTION")
+    sub.required = True
+
+    t = sub.add_parser(
+        "train",
+        help="train a vocabulary on the ORB features of every image in a folder",
+        description="Hierarchical k-means of ORB descriptors (DBoW2's scheme: k-means++ seeding, "
+        "bit-wise majority centres, Hamming distance), then word weights. Images are searched "
+        "recursively (png, jpg, bmp, tif, pgm, ppm); unreadable files are skipped with a warning.",
+    )
+    t.add_argument("folder", type=Path, help="folder of training images")
+    t.add_argument("--k", type=int, default=10, help="branching factor (default 10)")
+    t.add_argument("--L", type=int, default=5, help="depth levels (default 5)")
+    t.add_argument("--weighting", choices=_WEIGHTINGS, default="tf-idf")
+    t.add_argument("--scoring", choices=_SCORINGS, default="l1")
+    t.add_argument("--features", type=int, default=1000, help="ORB features per image")
+    t.add_argument("--out", type=Path, required=True, help="output file (.symvoc, or .txt)")
+    t.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
+    t.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    t.set_defaults(func=_train)
+
+    c = sub.add_parser(
+        "convert",
+        help="convert DBoW2 text (ORBvoc.txt, .txt.gz) <-> symloc binary",
+        description="OUT ending in .txt gets DBoW2's text format (loadFromTextFile), anything "
+        "else symloc's binary format. The input format is detected from its content.",
+    )
+    c.add_argument("input", type=Path)
+    c.add_argument("output", type=Path)
+    c.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
+    c.set_defaults(func=_convert)
+
+    i = sub.add_parser("info", help="k, L, words, weighting, scoring and size of a vocabulary")
+    i.add_argument("path", type=Path)
+    i.set_defaults(func=_info)
+
+
+def _save(voc: Any, out: Path, compress: bool) -> None:
+    from symloc.errors import ConfigurationError
+    from symloc.vision.vocabulary_io import save_dbow2_text, save_vocabulary
+
+    if not out.parent.is_dir():
+        raise ConfigurationError(f"--out: folder {out.parent} does not exist")
+    if out.suffix == ".txt":
+        save_dbow2_text(voc, out)
+    else:
+        save_vocabulary(voc, out, compress=compress)
+
+
+def _train(args: argparse.Namespace) -> int:
+    from symloc.vision.orb import OrbExtractor, OrbSettings
+    from symloc.vision.vocabulary import Vocabulary
+
+    weighting = args.weighting
+    scoring = args.scoring.replace("dot-product", "dot_product")
+    print(
+        f"# symloc vocab train {args.folder}: seed {args.seed}, k={args.k}, L={args.L}, "
+        f"weighting {args.weighting}, scoring {args.scoring}, {args.features} ORB features/image"
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        voc = Vocabulary.train_from_folder(
+            args.folder,
+            extractor=OrbExtractor(OrbSettings(n_features=args.features)),
+            k=args.k,
+            L=args.L,
+            weighting=weighting,
+            scoring=scoring,
+            rng=args.seed,
+            progress=True,
+        )
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    _save(voc, args.out, args.compress)
+    print(f"{voc!r} -> {args.out} ({args.out.stat().st_size:,} bytes)")
+    return 0
+
+
+def _convert(args: argparse.Namespace) -> int:
+    from symloc.vision.vocabulary_io import load_vocabulary
+
+    voc = load_vocabulary(args.input)
+    _save(voc, args.output, args.compress)
+    print(f"{voc!r}: {args.input} -> {args.output} ({args.output.stat().st_size:,} bytes)")
+    return 0
+
+
+def _info(args: argparse.Namespace) -> int:
+    from symloc.vision.vocabulary_io import MAGIC, load_vocabulary
+
+    voc = load_vocabulary(args.path)
+    with open(args.path, "rb") as fh:
+        head = fh.read(len(MAGIC) + 36)
+    if head[: len(MAGIC)] == MAGIC:
+        flags = int.from_bytes(head[40:44], "little")
+        fmt = "symloc binary" + (" (compressed)" if flags & 1 else "")
+    else:
+        fmt = "DBoW2 text"
+    print(f"file:      {args.path}")
+    print(f"format:    {fmt}")
+    print(f"k:         {voc.k}")
+    print(f"L:         {voc.L}")
+    print(f"words:     {voc.n_words:,}")
+    print(f"nodes:     {voc.n_nodes:,}")
+    print(f"weighting: {voc.weighting.name}")
+    print(f"scoring:   {voc.scoring.name}")
+    print(f"size:      {args.path.stat().st_size:,} bytes")
+    return 0
