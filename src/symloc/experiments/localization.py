@@ -12,7 +12,9 @@ from symloc.experiments._common import add_common_arguments, print_config, write
 
 __all__ = ["ROOMS", "register", "run"]
 
-#: (room, textured lab) pairs of the issue: seven rooms in a textured lab, the square untextured.
+#: (room, textured lab) pairs of the issue: seven rooms in a textured lab, the square untextured,
+#: and a true hallway (40 m x 2 m, its ends beyond the lidar's range; the built-in "hallway" is
+#: only 6.3 m long, so the lidar sees all of it and the judge calls it a rectangle).
 ROOMS = (
     ("triangle", True),
     ("square", True),
@@ -21,6 +23,7 @@ ROOMS = (
     ("circle", True),
     ("rectangle", True),
     ("hallway", True),
+    ("hallway_40m", True),
     ("square", False),
 )
 

@@ -63,6 +63,10 @@ DEFAULT_GV = {
     "hallway": 3.2,
 }
 
+#: A true hallway: 40 m x 2 m, its ends beyond the 16 m RPLIDAR range from most of its length.
+LONG_HALLWAY = "hallway_40m"
+LONG_HALLWAY_SIZE = (40.0, 2.0)
+
 MAP_SOURCE = (
     "occupancy grid: symloc.sim.rasterize.world_to_grid (ground truth of what the lidar sees); "
     "visual map poses: simulator ground truth (a real run takes both from SLAM)"
@@ -221,7 +225,14 @@ def build_scenario(
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
     gv = DEFAULT_GV.get(room_name, 2.0)
-    room = build_room(room_name, gv, lab=True, textured=textured)
+    long_hallway = room_name == LONG_HALLWAY
+    if long_hallway:
+        from symloc.sim.rooms import hallway, with_lab
+
+        room = with_lab(hallway(*LONG_HALLWAY_SIZE, textured=textured), textured=textured)
+        map_source = "raster"  # see the note below
+    else:
+        room = build_room(room_name, gv, lab=True, textured=textured)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
     camera = Camera()
     f = camera.focal
@@ -265,8 +276,19 @@ def build_scenario(
         )
     else:
         scen.mapped = _map_with_slam(scen, start, gen, dt)
+    if long_hallway:
+        scen.notes.append(
+            f"{room_name}: a {LONG_HALLWAY_SIZE[0]:g} m x {LONG_HALLWAY_SIZE[1]:g} m corridor; "
+            "laser SLAM cannot fix position along a featureless corridor whose ends it does not "
+            "see, so the occupancy grid is the ground-truth raster (this favours plain AMCL)"
+        )
     if scen.mapped is None:
-        scen.notes.append(f"mapping stage: the {room_name} was not judged symmetric; no visual map")
+        scen.notes.append(
+            f"mapping stage: no indexable symmetric place in the {room_name} (a hallway has no "
+            "G-V distance); no visual map"
+            if long_hallway
+            else f"mapping stage: the {room_name} was not judged symmetric; no visual map"
+        )
     return scen
 
 

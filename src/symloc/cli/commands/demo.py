@@ -9,7 +9,16 @@ from typing import Any
 
 __all__ = ["register", "run"]
 
-ROOMS = ("triangle", "square", "pentagon", "hexagon", "circle", "rectangle", "hallway")
+ROOMS = (
+    "triangle",
+    "square",
+    "pentagon",
+    "hexagon",
+    "circle",
+    "rectangle",
+    "hallway",
+    "hallway_40m",
+)
 
 
 def register(subparsers: Any) -> None:
@@ -40,7 +49,11 @@ def run(args: argparse.Namespace) -> int:
     )
     res = run_demo(args.room, seed=args.seed, workdir=args.out, textured=not args.untextured)
     scen = res.scenario
-    print(f"# lidar {scen.preset.name}; AMCL max_particles {scen.amcl_params.max_particles}")
+    print(
+        f"# lidar {scen.preset.name}; symloc AMCL max_particles {scen.amcl_params.max_particles}; "
+        f"plain AMCL nav2 defaults (max_particles {scen.plain_amcl_params().max_particles}); "
+        f"robot odometry noise alpha1..4 = {scen.odom_alpha} (both AMCLs matched)"
+    )
     for note in scen.notes:
         print(f"# {note}")
     if scen.mapped is not None:
