@@ -202,7 +202,7 @@ def _figures(
                     (scan, rep, scan_lines(scan, cfg), f"{name} scan {i}: {reason_tag(rep.reason)}")
                 )
     n_sym = sum(r["partial_symmetric"] for r in result["logs"].values())
-    paths = [
+    return [
         plot_judgement_grid(
             sym_items,
             out / "symmetry_carmen_symmetric.png",
@@ -215,7 +215,6 @@ def _figures(
             title="CARMEN: random sample of scans judged not symmetric (partial_view=True)",
         ),
     ]
-    return paths
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -254,10 +253,7 @@ def _run(args: argparse.Namespace) -> int:
     for name, res in result["logs"].items():
         for mode in ("strict", "partial"):
             cnt = " ".join(f"{res[mode].get(k, 0):>10}" for k in kinds)
-            print(
-                f"{name:<13} {mode:<8} {res['n_judged']:>7} {cnt}"
-                f" {res[mode + '_symmetric']:>10}"
-            )
+            print(f"{name:<13} {mode:<8} {res['n_judged']:>7} {cnt} {res[mode + '_symmetric']:>10}")
     print("\nreasons (partial_view=True):")
     for name, res in result["logs"].items():
         print(f"  {name} ({res['beams']} beams, {res['ms_per_scan']:.2f} ms CPU per judgement):")
@@ -316,4 +312,3 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figures")
     parser.set_defaults(func=_run)
-

@@ -1,0 +1,180 @@
+"""``symloc symmetry judge``: judge the symmetry of the room around the robot from one scan.
+
+The scan comes from a CARMEN log (``--carmen PATH [--index N]``), a ROS bag topic
+(``--bag PATH [--topic /scan] [--index N]``) or a simulated room
+(``--room square --gv 3 --pose X Y DEG``). Prints the :class:`SymmetryReport` (and the ground
+truth for a simulated room); ``--png`` saves a picture of the scan with its lines and centre,
+``--json`` the report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add ``symmetry`` with its ``judge`` sub-command."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "symmetry", help="symmetry judgement of one laser scan (Algorithm 1, generalised)"
+    )
+    sub = parser.add_subparsers(dest="symmetry_command", metavar="ACTION")
+    sub.required = True
+    j = sub.add_parser(
+        "judge",
+        help="judge one scan from a CARMEN log, a ROS bag or a simulated room",
+        description="Judge whether the room around the robot is symmetric (regular polygon, "
+        "circle, rectangle, hallway), with the symmetry order, the centre in the sensor frame "
+        "and the reason. A scan of under 360 degrees gives 'unknown' unless --partial-view.",
+    )
+    src = j.add_mutually_exclusive_group(required=True)
+    src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
+    src.add_argument("--bag", type=Path, metavar="PATH", help="ROS 1 .bag or ROS 2 bag folder")
+    src.add_argument("--room", metavar="NAME", help="simulated room: square, hexagon, circle, ...")
+    j.add_argument("--index", type=int, default=0, help="scan index in the log / topic (0)")
+    j.add_argument("--topic", default=None, help="bag: LaserScan topic (default: the first)")
+    j.add_argument("--gv", type=float, default=None, help="room: G-V distance [m]")
+    j.add_argument(
+        "--pose",
+        type=float,
+        nargs=3,
+        default=None,
+        metavar=("X", "Y", "DEG"),
+        help="room: robot pose in the room frame (centre at 0 0) [m m deg]",
+    )
+    j.add_argument("--sensor", default="paper_15m", help="room: lidar preset (paper_15m)")
+    j.add_argument("--door", action="store_true", help="room: open a door in the first wall")
+    j.add_argument("--furniture", type=int, default=0, help="room: number of boxes inside")
+    j.add_argument("--seed", type=int, default=0, help="room: random seed for the range noise")
+    j.add_argument(
+        "--range-sigma",
+        type=float,
+        default=None,
+        help="range noise [m] the tolerances follow from (default: the preset's for a room, "
+        "0.01 otherwise)",
+    )
+    j.add_argument(
+        "--range-sigma-relative", type=float, default=None, help="relative range noise (0)"
+    )
+    j.add_argument(
+        "--centroid", choices=["area", "mean"], default="area", help="centroid method (area)"
+    )
+    j.add_argument(
+        "--partial-view",
+        action="store_true",
+        help="judge scans under 360 degrees for a hallway (the unseen part is assumed)",
+    )
+    j.add_argument("--png", type=Path, default=None, metavar="PATH", help="save a figure")
+    j.add_argument("--json", type=Path, default=None, metavar="PATH", help="save the report")
+    j.set_defaults(func=_judge)
+
+
+def _error(text: str) -> int:
+    print(f"symloc symmetry judge: error: {text}", file=sys.stderr)
+    return 2
+
+
+def _fmt(v: Any) -> str:
+    a = np.asarray(v, dtype=np.float64)
+    if a.ndim == 0:
+        return f"{float(a):.3f}"
+    return "(" + ", ".join(f"{x:.3f}" for x in a.ravel()) + ")"
+
+
+def _judge(args: argparse.Namespace) -> int:
+    from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
+    from symloc.symmetry.scan_sources import bag_scan, carmen_scan, room_scan
+
+    if args.room is not None:
+        if args.gv is None or args.pose is None:
+            return _error("--room needs --gv M and --pose X Y DEG")
+        if args.furniture < 0:
+            return _error(f"--furniture: expected >= 0, got {args.furniture}")
+        src = room_scan(
+            args.room,
+            args.gv,
+            args.pose,
+            sensor=args.sensor,
+            rng=args.seed,
+            door=args.door,
+            furniture=args.furniture,
+        )
+    else:
+        room_only = [
+            n
+            for n, bad in (
+                ("--gv", args.gv is not None),
+                ("--pose", args.pose is not None),
+                ("--door", args.door),
+                ("--furniture", args.furniture != 0),
+            )
+            if bad
+        ]
+        if room_only:
+            return _error(f"{', '.join(room_only)} only apply to --room")
+        if args.carmen is not None:
+            if args.topic is not None:
+                return _error("--topic only applies to --bag")
+            src = carmen_scan(args.carmen, args.index)
+        else:
+            src = bag_scan(args.bag, args.topic, args.index)
+    sigma = args.range_sigma if args.range_sigma is not None else (src.sigma or 0.01)
+    rel = (
+        args.range_sigma_relative
+        if args.range_sigma_relative is not None
+        else (src.sigma_relative if src.sigma is not None else 0.0)
+    )
+    cfg = SymmetryConfig(
+        range_sigma=sigma, range_sigma_relative=rel, partial_view=bool(args.partial_view)
+    )
+    report = judge_symmetry(src.scan, config=cfg, centroid=args.centroid)
+    scan = src.scan
+    fov = math.degrees(scan.angle_increment * len(scan))
+    print(f"# symloc symmetry judge: {src.source}")
+    print(
+        f"#   {len(scan)} beams over {fov:.0f} deg, range {scan.range_min:g}..{scan.range_max:g}"
+        f" m; noise sigma {sigma:g} m + {rel:g} r; centroid {args.centroid};"
+        f" partial_view {cfg.partial_view}"
+    )
+    order = "inf" if report.continuous else str(report.order)
+    print(f"kind        {report.kind}")
+    print(f"symmetric   {report.symmetric}")
+    print(f"order       {order}")
+    print(f"regular     {report.regular}")
+    print(f"centre      {_fmt(report.center)} m (sensor frame)")
+    print(f"G-V         {_fmt(report.gv_distance)} m")
+    print(f"residual    {_fmt(report.residual)} m (tolerance {_fmt(report.tolerance)} m)")
+    print(f"points      {report.n_points}, lines {report.n_lines}, corners {report.n_corners}")
+    if report.n_corners:
+        print("corners     " + " ".join(_fmt(c) for c in report.corners))
+    print(f"reason      {report.reason}")
+    if src.truth:
+        t = src.truth
+        t_order = "inf" if t["order"] == 0 and t["kind"] == "circle" else str(t["order"])
+        err = float(np.hypot(*(report.center - t["center"])))
+        where = f", centre error {err:.3f} m" if np.isfinite(err) else ""
+        print(
+            f"truth       {t['kind']}, order {t_order}, centre {_fmt(t['center'])} m (sensor"
+            f" frame), G-V {t['gv_distance']:.3f} m{where}"
+        )
+    if args.png is not None:
+        from symloc.figures.symmetry import plot_judgement
+
+        out = plot_judgement(scan, report, args.png, lines=scan_lines(scan, cfg))
+        print(f"wrote {out}")
+    if args.json is not None:
+        data = {"source": src.source, "index": src.index, "report": report.to_dict()}
+        if src.truth:
+            data["truth"] = {**src.truth, "center": [float(v) for v in src.truth["center"]]}
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(data, indent=2) + "\n")
+        print(f"wrote {args.json}")
+    return 0
