@@ -17,7 +17,7 @@ def _folder(tmp_path: Path) -> Path:
     (d / "sub").mkdir(parents=True)
     for name in ("camera", "brick"):
         cv2.imwrite(str(d / f"{name}.png"), getattr(skimage.data, name)())
-    cv2.imwrite(str(d / "sub" / "coins.jpg"), skimage.data.coins())
+    cv2.imwrite(str(d / "sub" / "coins.jpg"), skimage.data.coins())  # type: ignore[no-untyped-call]
     return d
 
 
@@ -38,8 +38,8 @@ def test_train_info_convert_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
 
     assert main(["vocab", "info", str(out)]) == 0
     info = capsys.readouterr().out
-    assert "k:         4" in info and f"words:     {voc.n_words}" in info
-    assert "TF" in info and "L2_NORM" in info and "symloc binary" in info
+    for expected in ("k:         4", f"words:     {voc.n_words}", "TF", "L2_NORM", "symloc binary"):
+        assert expected in info
 
     txt = tmp_path / "voc.txt"
     assert main(["vocab", "convert", str(out), str(txt)]) == 0

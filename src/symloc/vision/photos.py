@@ -95,7 +95,7 @@ def flat_wall(rng: np.random.Generator | int | None = None) -> NDArray[np.uint8]
     w, h = SCENE_SIZE
     base = np.array([200, 196, 188], np.int16)
     noise = gen.integers(-3, 4, size=(h, w, 1), dtype=np.int16)
-    return np.clip(base + noise, 0, 255).astype(np.uint8)
+    return np.asarray(np.clip(base + noise, 0, 255), np.uint8)
 
 
 def view(scene: NDArray[np.uint8], yaw: float = 0.0, zoom: float = 1.0) -> NDArray[np.uint8]:
@@ -109,9 +109,10 @@ def view(scene: NDArray[np.uint8], yaw: float = 0.0, zoom: float = 1.0) -> NDArr
     c, s = math.cos(yaw), math.sin(yaw)
     R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
     H = VIEW_K @ R @ np.linalg.inv(VIEW_K) @ Z @ T
-    return cv2.warpPerspective(
+    out = cv2.warpPerspective(
         scene, H, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
     )
+    return np.asarray(out, np.uint8)
 
 
 def _jpeg(img: NDArray[np.uint8], quality: int) -> NDArray[np.uint8]:
@@ -144,8 +145,8 @@ def perturb(
         h, w = img.shape[:2]
         frac = rng.uniform(0.25, 0.40)
         aspect = rng.uniform(0.6, 1.6)
-        oh = min(h, int(round(math.sqrt(frac * h * w / aspect))))
-        ow = min(w, int(round(frac * h * w / max(oh, 1))))
+        oh = min(h, round(math.sqrt(frac * h * w / aspect)))
+        ow = min(w, round(frac * h * w / max(oh, 1)))
         y0, x0 = int(rng.integers(0, h - oh + 1)), int(rng.integers(0, w - ow + 1))
         img[y0 : y0 + oh, x0 : x0 + ow] = rng.uniform(0, 255, size=3)
     if every or condition == "noise":
@@ -366,7 +367,7 @@ def run_photos(
     ext = OrbExtractor()
     max_yaw = math.radians(max_yaw_deg)
     scenes = [load_scene(n) for n in photos]
-    A, B, C, D = scenes
+    A, B, _, D = scenes
     place = make_place(scenes, vocabulary, ext)
 
     mirrored = np.ascontiguousarray(A[:, ::-1])
@@ -411,7 +412,9 @@ def run_photos(
                     )
                     y0 = float(gen.uniform(-max_yaw, max_yaw))
 
-                    def capture(t: int, j: int = j, y0: float = y0) -> NDArray[np.uint8]:
+                    def capture(
+                        t: int, j: int = j, y0: float = y0, sc: list[Any] = sc
+                    ) -> NDArray[np.uint8]:
                         # the robot turned clockwise t times: it faces direction j + t
                         return view(sc[(j + t) % 4], y0)
 
@@ -440,7 +443,9 @@ def example_views(
     """The stored view of each photo, then one re-capture per condition (for figures)."""
     gen = as_rng(rng)
     scenes = [load_scene(n) for n in photos]
-    out = [(f"stored {j}: {n}", view(s)) for j, (n, s) in enumerate(zip(photos, scenes))]
+    out = [
+        (f"stored {j}: {n}", view(s)) for j, (n, s) in enumerate(zip(photos, scenes, strict=True))
+    ]
     for i, cond in enumerate(("occlusion", "photometric", "combined")):
         img, yaw = perturb(scenes[i % len(scenes)], cond, gen, math.radians(max_yaw_deg))
         out.append((f"{cond}, yaw {math.degrees(yaw):+.1f} deg", img))
