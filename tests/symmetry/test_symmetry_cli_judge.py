@@ -83,7 +83,7 @@ def test_room_scan_truth_is_in_the_sensor_frame() -> None:
     ],
 )
 def test_room_scan_errors(kwargs: dict[str, Any], match: str) -> None:
-    args = {"room": "square", "gv": 3.0, "pose": [0.0, 0.0, 0.0]} | kwargs
+    args: dict[str, Any] = {"room": "square", "gv": 3.0, "pose": [0.0, 0.0, 0.0]} | kwargs
     with pytest.raises(ConfigurationError, match=match):
         room_scan(args.pop("room"), args.pop("gv"), args.pop("pose"), **args)
 
