@@ -202,6 +202,7 @@ def build_scenario(
     max_particles: int = 5000,
     mapping_start: FloatArray | None = None,
     map_source: str = "slam",
+    gyro: Any = "default",
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -210,6 +211,13 @@ def build_scenario(
     ``"slam"`` builds the occupancy grid with :func:`symloc.slam.run_slam` from the scans of that
     trip and takes the image poses from SLAM; ``"raster"`` uses
     :func:`symloc.sim.rasterize.world_to_grid` and ground-truth poses.
+
+    ``gyro`` (SLAM maps only): the mapping robot's odometry takes its heading from a simulated
+    yaw-rate gyro (:class:`~symloc.localizer.gyro.GyroSpec`; ``"default"`` is the Kobuki's
+    :data:`~symloc.localizer.gyro.L3G4200D`, None: wheel odometry only). In a round room, where
+    laser SLAM cannot observe heading, the stored image headings then come from gyro-odometry
+    and are trusted; without a gyro they are stored as heading-from-odometry and never yield a
+    claimed pose.
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
@@ -275,7 +283,10 @@ def build_scenario(
             true_centre=room.center,
         )
     else:
-        scen.mapped = _map_with_slam(scen, start, gen, dt)
+        from .gyro import L3G4200D
+
+        spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
+        scen.mapped = _map_with_slam(scen, start, gen, dt, spec)
     if long_hallway:
         scen.notes.append(
             f"{room_name}: a {LONG_HALLWAY_SIZE[0]:g} m x {LONG_HALLWAY_SIZE[1]:g} m corridor; "
@@ -293,7 +304,7 @@ def build_scenario(
 
 
 def _map_with_slam(
-    scen: Scenario, start: FloatArray, gen: np.random.Generator, dt: float
+    scen: Scenario, start: FloatArray, gen: np.random.Generator, dt: float, gyro: Any = None
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -309,7 +320,11 @@ def _map_with_slam(
     from symloc.sim.robot import DiffDriveRobot
     from symloc.slam import run_slam
 
-    robot = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
+    robot: Any = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
+    if gyro is not None:
+        from .gyro import GyroOdometryBody, SimulatedGyro
+
+        robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
     odoms: list[FloatArray] = []
 
@@ -363,9 +378,20 @@ def _map_with_slam(
 
     t_c = to_map(0)
     centre = _compose(t_c, np.array([centre_o[0], centre_o[1], 0.0]))[:2]
-    headings = [float(h + to_map(i)[2]) for i, h in enumerate(headings_o)]
-    # laser SLAM cannot observe heading in a round room: its headings there are odometry's
-    label = UNANCHORED_LABEL if (kind == "circle" or order == 0) else None
+    round_room = kind == "circle" or order == 0
+    if round_room and gyro is not None:
+        # laser SLAM cannot observe heading in a round room; the gyro-odometry frame is the map
+        # frame at the start (both start at the robot's start pose), so its headings are used
+        headings = [float(h) for h in headings_o]
+    else:
+        headings = [float(h + to_map(i)[2]) for i, h in enumerate(headings_o)]
+    # without a gyro, a round room's headings are wheel odometry's: not trusted
+    label = UNANCHORED_LABEL if (round_room and gyro is None) else None
+    if round_room and gyro is not None:
+        scen.notes.append(
+            "mapping stage: a round room gives laser SLAM no heading; image headings from "
+            f"gyro-odometry ({gyro.source.split(':')[0]})"
+        )
     if label is not None:
         scen.notes.append(
             "mapping stage: a round room gives laser SLAM no heading; the visual map is stored "
