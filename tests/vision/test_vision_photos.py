@@ -8,12 +8,18 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.vision.default_vocabulary import _sources, default_vocabulary
 from symloc.vision.image_files import place_images_from_files
 from symloc.vision.orb import OrbExtractor
-from symloc.vision.orientation import OrientationConfig, decide_orientation
+from symloc.vision.orientation import (
+    OrientationConfig,
+    decide_orientation,
+    rotation_from_correspondences,
+)
 from symloc.vision.photos import (
     PLACE_PHOTOS,
     VIEW_K,
@@ -130,3 +136,33 @@ def test_run_photos_errors_and_featureless_files(tmp_path: Path) -> None:
         place_images_from_files([path], voc, min_keypoints=100)
     with pytest.raises(ConfigurationError, match="at least one image file"):
         place_images_from_files([], voc)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    yaw=st.floats(-0.3, 0.3),
+    zoom=st.floats(0.8, 1.25),
+    tilt=st.floats(-0.05, 0.05),
+)
+def test_rotation_from_correspondences_recovers_yaw_zoom_tilt(
+    yaw: float, zoom: float, tilt: float
+) -> None:
+    rng = np.random.default_rng(0)
+    src = rng.uniform([0, 0], [640, 480], size=(60, 2))
+    c, s = math.cos(yaw), math.sin(yaw)
+    Ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    ct, st_ = math.cos(tilt), math.sin(tilt)
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, ct, -st_], [0.0, st_, ct]])
+    H = VIEW_K @ Ry @ Rx @ np.diag([zoom, zoom, 1.0]) @ np.linalg.inv(VIEW_K)
+    p = np.column_stack([src, np.ones(60)]) @ H.T
+    dst = p[:, :2] / p[:, 2:]
+    got_yaw, got_tilt, got_zoom = rotation_from_correspondences(src, dst, VIEW_K, iterations=6)
+    assert got_yaw == pytest.approx(yaw, abs=2e-3)
+    assert got_zoom == pytest.approx(zoom, rel=5e-3)
+    assert got_tilt == pytest.approx(abs(tilt), abs=3e-3)
+
+
+def test_rotation_from_correspondences_degenerate_and_config() -> None:
+    assert math.isnan(rotation_from_correspondences(np.zeros((1, 2)), np.zeros((1, 2)), VIEW_K)[0])
+    with pytest.raises(ConfigurationError, match="offset_from: expected 'rotation' or"):
+        OrientationConfig(offset_from="affine")

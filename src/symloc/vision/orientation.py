@@ -29,7 +29,8 @@ that look alike in two directions still fit both with similar inlier counts and 
 undetermined.
 
 The residual heading offset (query heading minus stored heading, counter-clockwise positive) is
-read from the homography, so the decided heading is ``heading_j + offset``, continuous rather
+read from the homography's inliers (a rotation plus a small zoom fitted to them, or optionally
+the rotation nearest to ``K^-1 H K``), so the decided heading is ``heading_j + offset``, continuous rather
 than a multiple of 360/M. When the decision is not clear, the caller turns the robot clockwise
 by 360/M and tries again (the paper's protocol), up to M times: see :func:`decide_with_retries`.
 """
@@ -59,6 +60,8 @@ __all__ = [
     "decide_with_retries",
     "intrinsics_matrix",
     "match_homography",
+    "match_inliers",
+    "rotation_from_correspondences",
     "yaw_from_homography",
 ]
 
@@ -93,6 +96,10 @@ class OrientationConfig:
         When the BoW scores are weak or ambiguous, decide by the homography inliers alone
         (direction with the most inliers, same ``min_inliers`` / ``min_inlier_ratio`` tests);
         False gives the paper's BoW-first rule (undetermined as soon as BoW is ambiguous).
+    offset_from : {"rotation", "homography"}
+        How the heading offset (and the tilt check) is read from the RANSAC inliers: a rotation
+        plus zoom fitted to them (:func:`rotation_from_correspondences`, default), or the
+        rotation nearest to ``K^-1 H K`` of the 8-DOF homography (:func:`yaw_from_homography`).
     """
 
     min_keypoints: int = 100
@@ -105,6 +112,7 @@ class OrientationConfig:
     max_offset: float | None = None
     max_tilt: float = math.radians(10.0)
     geometric_fallback: bool = True
+    offset_from: str = "rotation"
 
     def __post_init__(self) -> None:
         if int(self.min_keypoints) != self.min_keypoints or self.min_keypoints < 1:
@@ -136,6 +144,10 @@ class OrientationConfig:
         if self.max_offset is not None and not 0 < self.max_offset <= math.pi:
             raise ConfigurationError(
                 f"max_offset: expected None or a value in (0, pi] [rad], got {self.max_offset}"
+            )
+        if self.offset_from not in ("rotation", "homography"):
+            raise ConfigurationError(
+                f"offset_from: expected 'rotation' or 'homography', got {self.offset_from!r}"
             )
         if not 0 < self.max_tilt <= math.pi:
             raise ConfigurationError(
@@ -209,6 +221,36 @@ def intrinsics_matrix(intrinsics: ArrayLike | object) -> NDArray[np.float64]:
     return K
 
 
+def match_inliers(
+    query: OrbFeatures, stored: OrbFeatures, config: OrientationConfig
+) -> tuple[NDArray[np.float64] | None, NDArray[np.float64], NDArray[np.float64], int]:
+    """Match ORB descriptors (Lowe ratio test) and fit ``stored -> query`` homography (RANSAC).
+
+    Returns
+    -------
+    H : (3, 3) float64 or None
+    src, dst : (n, 2) float64
+        Stored and query pixel positions of the n RANSAC inliers.
+    matches : int
+        Matches that passed the ratio test.
+    """
+    none = np.zeros((0, 2))
+    if len(query) < 2 or len(stored) < 2:
+        return None, none, none, 0
+    matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
+    knn = matcher.knnMatch(stored.descriptors, query.descriptors, k=2)
+    good = [m[0] for m in knn if len(m) == 2 and m[0].distance < config.lowe_ratio * m[1].distance]
+    if len(good) < 4:
+        return None, none, none, len(good)
+    src = stored.points[[m.queryIdx for m in good]].astype(np.float64)
+    dst = query.points[[m.trainIdx for m in good]].astype(np.float64)
+    H, mask = cv2.findHomography(src, dst, cv2.RANSAC, config.ransac_threshold)
+    if H is None or mask is None:
+        return None, none, none, len(good)
+    keep = mask.ravel().astype(bool)
+    return np.asarray(H, np.float64), src[keep], dst[keep], len(good)
+
+
 def match_homography(
     query: OrbFeatures, stored: OrbFeatures, config: OrientationConfig
 ) -> tuple[NDArray[np.float64] | None, int, int]:
@@ -221,19 +263,67 @@ def match_homography(
     matches : int
         Matches that passed the ratio test.
     """
-    if len(query) < 2 or len(stored) < 2:
-        return None, 0, 0
-    matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
-    knn = matcher.knnMatch(stored.descriptors, query.descriptors, k=2)
-    good = [m[0] for m in knn if len(m) == 2 and m[0].distance < config.lowe_ratio * m[1].distance]
-    if len(good) < 4:
-        return None, 0, len(good)
-    src = stored.points[[m.queryIdx for m in good]].astype(np.float64)
-    dst = query.points[[m.trainIdx for m in good]].astype(np.float64)
-    H, mask = cv2.findHomography(src, dst, cv2.RANSAC, config.ransac_threshold)
-    if H is None or mask is None:
-        return None, 0, len(good)
-    return np.asarray(H, np.float64), int(mask.sum()), len(good)
+    H, src, _, n = match_inliers(query, stored, config)
+    return H, int(src.shape[0]), n
+
+
+def rotation_from_correspondences(
+    src: ArrayLike, dst: ArrayLike, K: ArrayLike, iterations: int = 3
+) -> tuple[float, float, float]:
+    """Yaw, tilt and zoom of ``dst ~ K R diag(z, z, 1) K^-1 src`` from inlier pixel pairs.
+
+    The camera turned in place by ``R`` and the robot stood slightly nearer to or farther from
+    a wall facing it (a zoom ``z`` about the principal point). ``R`` solves Wahba's problem on
+    the unit bearing vectors (SVD), alternating with the least-squares ``z``. With 4 degrees of
+    freedom instead of the homography's 8, the offset stays accurate when the inliers are few
+    or cover a small part of the image (an occluded view), where reading the yaw from a full
+    homography can be off by 10 degrees or more (see :mod:`symloc.vision.photos`).
+
+    Parameters
+    ----------
+    src, dst : (n, 2) array, n >= 2
+        Stored and query pixel positions [px].
+    K : (3, 3) array
+    iterations : int
+
+    Returns
+    -------
+    yaw : float
+        Query heading minus stored heading [rad], CCW positive.
+    tilt : float
+        Roll/pitch [rad] left after removing the yaw.
+    zoom : float
+        Scale of the query against the stored view (> 1: nearer).
+    """
+    a_px = np.asarray(src, np.float64).reshape(-1, 2)
+    b_px = np.asarray(dst, np.float64).reshape(-1, 2)
+    if a_px.shape[0] < 2 or b_px.shape != a_px.shape:
+        return math.nan, math.nan, math.nan
+    Kinv = np.linalg.inv(np.asarray(K, np.float64))
+    a = np.column_stack([a_px, np.ones(len(a_px))]) @ Kinv.T
+    b = np.column_stack([b_px, np.ones(len(b_px))]) @ Kinv.T
+    bn = b / np.linalg.norm(b, axis=1, keepdims=True)
+    z = 1.0
+    R = np.eye(3)
+    for _ in range(max(1, int(iterations))):
+        da = a.copy()
+        da[:, :2] *= z
+        da /= np.linalg.norm(da, axis=1, keepdims=True)
+        U, _, Vt = np.linalg.svd(bn.T @ da)
+        R = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+        c = b @ R  # rows R^T b
+        c = c[:, :2] / c[:, 2:3]
+        den = float(np.sum(a[:, :2] ** 2))
+        if den <= 0 or not np.isfinite(den):
+            break
+        z = float(np.sum(c * a[:, :2]) / den)
+        if not (np.isfinite(z) and z > 0):
+            return math.nan, math.nan, math.nan
+    yaw = math.atan2(R[0, 2], R[2, 2])
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    tilt = math.acos(max(-1.0, min(1.0, (np.trace(Ry.T @ R) - 1.0) / 2.0)))
+    return yaw, tilt, z
 
 
 def yaw_from_homography(H: ArrayLike, K: ArrayLike) -> tuple[float, float]:
@@ -352,8 +442,8 @@ def decide_orientation(
         return _undecided("undetermined", bow_problem, scores, n_kp)
     # geometric verification against every stored direction (M is small), so that a second
     # view of the same scene is caught even when the BoW ranking put it far down
-    fits = [match_homography(feats, im.features, cfg) for im in place.images]
-    inliers = np.array([f[1] for f in fits], np.int64)
+    fits = [match_inliers(feats, im.features, cfg) for im in place.images]
+    inliers = np.array([f[1].shape[0] for f in fits], np.int64)
     if bow_problem:
         best = int(np.argmax(inliers))
     H = fits[best][0]
@@ -381,7 +471,10 @@ def decide_orientation(
             n_kp,
             **kw,
         )
-    yaw, tilt = yaw_from_homography(H, K)
+    if cfg.offset_from == "homography":
+        yaw, tilt = yaw_from_homography(H, K)
+    else:
+        yaw, tilt, _ = rotation_from_correspondences(fits[best][1], fits[best][2], K)
     max_off = cfg.max_offset if cfg.max_offset is not None else math.pi / m
     if not math.isfinite(yaw) or abs(yaw) > max_off or tilt > cfg.max_tilt:
         return _undecided(
