@@ -91,6 +91,47 @@ def full_tree(k: int, L: int, rng: np.random.Generator) -> Vocabulary:
     return Vocabulary(k, L, "tf-idf", "l1", parent, desc, idf)
 
 
+def orb_breakdown(ext: OrbExtractor, imgs: list[np.ndarray], repeats: int) -> None:
+    """Where ORB's time goes: grey conversion, OpenCV itself (1 vs default threads, interleaved
+    so that the machine's load hits both alike), our keypoint conversion, and the fastest run
+    (a load-independent lower bound)."""
+    from symloc.vision.orb import to_grey_uint8
+
+    greys = [to_grey_uint8(i) for i in imgs]
+    row(
+        "  of which grey conversion (cvtColor)", median_ms(lambda: to_grey_uint8(imgs[0]), 50), None
+    )
+    default_threads = cv2.getNumThreads()
+    times: dict[int, list[float]] = {1: [], default_threads: []}
+    n_rounds = max(3, repeats // 10)
+    for _ in range(n_rounds):
+        for th in times:
+            cv2.setNumThreads(th)
+            for g in greys:
+                t0 = time.perf_counter()
+                ext._orb.detectAndCompute(g, None)
+                times[th].append(1000.0 * (time.perf_counter() - t0))
+    cv2.setNumThreads(default_threads)
+    for th, t in times.items():
+        row(f"  OpenCV detectAndCompute, {th} thread(s)", float(np.median(t)), DBOW3_MS["orb"])
+    kps, _ = ext._orb.detectAndCompute(greys[0], None)
+    from symloc.vision.orb import _KP_ATTRS, _KP_DTYPE
+
+    row(
+        f"  keypoint conversion ({len(kps)} keypoints)",
+        median_ms(
+            lambda: (
+                cv2.KeyPoint_convert(kps),
+                np.fromiter(map(_KP_ATTRS, kps), dtype=_KP_DTYPE, count=len(kps)),
+            ),
+            50,
+        ),
+        None,
+    )
+    fastest = min(min(t) for t in times.values())
+    row("  OpenCV detectAndCompute, fastest run", fastest, DBOW3_MS["orb"])
+
+
 def row(name: str, ours: float, ref: float | None) -> None:
     if ref is None:
         print(f"{name:<46}{ours:>10.3f}{'':>10}{'':>9}")
@@ -120,6 +161,7 @@ def main() -> int:
         orb_t.append(median_ms(lambda img=img: ext.extract(img), 3))
         feats.append(ext.extract(img))
     row("ORB, 500 features, 640x480 colour photo", float(np.median(orb_t)), DBOW3_MS["orb"])
+    orb_breakdown(ext, imgs[:12], r)
     try:
         import math as _m
 
