@@ -129,6 +129,22 @@ def _tls_from_moments(
     return c, d, nrm, off, np.maximum(half_tr + disc, 0.0)
 
 
+def _normals_offsets(s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """TLS normals (x, y components) and offsets from summed moments ``s`` (6, K).
+
+    The same arithmetic as :func:`_tls_from_moments`, without the centres, directions and
+    spread that the split and merge tests do not need.
+    """
+    n = np.maximum(s[0], 1.0)
+    mx, my = s[1] / n, s[2] / n
+    cxx = s[3] / n - mx * mx
+    cyy = s[4] / n - my * my
+    cxy = s[5] / n - mx * my
+    theta = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
+    cos_t, sin_t = np.cos(theta), np.sin(theta)
+    return -sin_t, cos_t, -sin_t * mx + cos_t * my
+
+
 def fit_line_tls(points: ArrayLike) -> tuple[FloatArray, float, FloatArray, float]:
     """Total-least-squares (orthogonal) line through points.
 
@@ -292,12 +308,13 @@ class _Moments:
         """Moment sums (6, K) of the ranges [a, b); ``b`` may exceed M (wraps to the start)."""
         a = np.asarray(a)
         b = np.asarray(b)
-        m = self.cs.shape[1] - 1
+        cs = self.cs
+        m = cs.shape[1] - 1
         over = b > m
-        s = self.cs[:, np.minimum(b, m)] - self.cs[:, a]
-        if over.any():
-            s = s + np.where(over, self.cs[:, np.where(over, b - m, 0)], 0.0)
-        return np.asarray(s, dtype=np.float64)
+        if not over.any():
+            return np.asarray(cs[:, b] - cs[:, a], dtype=np.float64)
+        s = cs[:, np.minimum(b, m)] - cs[:, a]
+        return np.asarray(s + np.where(over, cs[:, np.where(over, b - m, 0)], 0.0), np.float64)
 
     def fit(self, a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, ...]:
         """TLS fits of the ranges [a, b); ``b`` may exceed M (the range wraps to the start)."""
@@ -341,15 +358,15 @@ def _pair_excess(
     if cand.size == 0:
         return out_all
     a, b = a_all[cand], b_all[cand]
-    _c, _d, nrm, off, _s = mom.fit(a, b)
+    nx, ny, off = _normals_offsets(s[:, cand])
     lengths = b - a
     rep = np.repeat(np.arange(cand.size), lengths)
-    first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    pos = np.arange(int(lengths.sum())) - np.repeat(first - a, lengths)
+    ends = np.cumsum(lengths)
+    first = ends - lengths
+    pos = np.arange(int(ends[-1])) - (first - a)[rep]
     if closed:
         pos %= m
-    q = p[pos]
-    res = np.abs(q[:, 0] * nrm[rep, 0] + q[:, 1] * nrm[rep, 1] - off[rep]) / tol[pos]
+    res = np.abs(p[pos, 0] * nx[rep] + p[pos, 1] * ny[rep] - off[rep]) / tol[pos]
     out = np.maximum.reduceat(res, first)
     out[lengths <= 2] = 0.0
     out_all[cand] = out
@@ -377,31 +394,44 @@ def _split(
     else:
         seg_i = np.array([0], dtype=np.intp)
         seg_j = np.array([m - 1], dtype=np.intp)
+    cs = mom.cs
+    new_cuts = []
     while seg_i.size:
         keep = seg_j - seg_i >= 2
-        seg_i, seg_j = seg_i[keep], seg_j[keep]
-        if seg_i.size == 0:
-            break
+        if not keep.all():
+            seg_i, seg_j = seg_i[keep], seg_j[keep]
+            if seg_i.size == 0:
+                break
         n_in = seg_j - seg_i - 1
-        first = np.concatenate(([0], np.cumsum(n_in)[:-1]))
+        ends = np.cumsum(n_in)
+        first = ends - n_in
         sid = np.repeat(np.arange(seg_i.size), n_in)
-        idx = np.arange(int(n_in.sum())) - np.repeat(first - seg_i - 1, n_in)
+        idx = np.arange(int(ends[-1])) - (first - seg_i - 1)[sid]
+        pi = p[idx]
+        ti = tol[idx]
+        # the segment's own line decides whether it is one wall (interior points: the moment
+        # sums of [seg_i + 1, seg_j) never wrap)
+        nx, ny, off = _normals_offsets(cs[:, seg_j] - cs[:, seg_i + 1])
+        res = np.abs(pi[:, 0] * nx[sid] + pi[:, 1] * ny[sid] - off[sid]) / ti
+        bent = np.maximum.reduceat(res, first) > 1.0
+        if not bent.any():
+            break
         a = p[seg_i]
         d = p[seg_j] - a
         length = np.hypot(d[:, 0], d[:, 1])
-        q = p[idx] - a[sid]
+        q = pi - a[sid]
         ds = d[sid]
         cross = np.abs(ds[:, 0] * q[:, 1] - ds[:, 1] * q[:, 0])
         safe = length > 1e-12
-        dist = np.where(
-            safe[sid], cross / np.where(safe, length, 1.0)[sid], np.hypot(q[:, 0], q[:, 1])
-        )
-        ratio = dist / tol[idx]
+        if safe.all():
+            dist = cross / length[sid]
+        else:
+            dist = np.where(
+                safe[sid], cross / np.where(safe, length, 1.0)[sid], np.hypot(q[:, 0], q[:, 1])
+            )
+        ratio = dist / ti
         best = np.maximum.reduceat(ratio, first)
-        # the segment's own line decides whether it is one wall
-        _c, _d, nrm, off, _s = mom.fit(seg_i + 1, seg_j)
-        res = np.abs(p[idx, 0] * nrm[sid, 0] + p[idx, 1] * nrm[sid, 1] - off[sid]) / tol[idx]
-        split = (best > 1.0) & (np.maximum.reduceat(res, first) > 1.0)
+        split = (best > 1.0) & bent
         if not split.any():
             break
         # first index of each segment's maximum
@@ -409,11 +439,13 @@ def _split(
         cand = np.where(is_best, np.arange(idx.size), idx.size)
         arg = np.minimum.reduceat(cand, first)
         k = idx[arg[split]]
-        cuts.extend(int(v) for v in k)
+        new_cuts.append(k)
         seg_i, seg_j = (
             np.concatenate((seg_i[split], k)),
             np.concatenate((k, seg_j[split])),
         )
+    if new_cuts:
+        cuts.extend(np.concatenate(new_cuts).tolist())
     return sorted(cuts)
 
 
@@ -550,7 +582,7 @@ def _refine_boundaries(
         return p, tol, st, sp, 0, mom
     offs = np.arange(-window, window)
     for _ in range(iterations):
-        _c, _d, nrm, off, _s = mom.fit(st, sp)
+        nx, ny, off = _normals_offsets(mom.sums(st, sp))
         n_b = n_l if closed else n_l - 1
         t = np.arange(n_b)
         u = (t + 1) % n_l
@@ -564,8 +596,9 @@ def _refine_boundaries(
         idx = (b[:, None] + offs[None, :]) % m  # (B, 2w)
         q = p[idx]
         tq = tol[idx]
-        e_t = ((np.einsum("bwk,bk->bw", q, nrm[t]) - off[t][:, None]) / tq) ** 2
-        e_u = ((np.einsum("bwk,bk->bw", q, nrm[u]) - off[u][:, None]) / tq) ** 2
+        qx, qy = q[..., 0], q[..., 1]
+        e_t = ((qx * nx[t][:, None] + qy * ny[t][:, None] - off[t][:, None]) / tq) ** 2
+        e_u = ((qx * nx[u][:, None] + qy * ny[u][:, None] - off[u][:, None]) / tq) ** 2
         valid = (offs[None, :] >= lo[:, None]) & (offs[None, :] < hi[:, None])
         e_t = np.where(valid, e_t, 0.0)
         e_u = np.where(valid, e_u, 0.0)
@@ -684,18 +717,19 @@ def split_and_merge(
             scores = _pair_excess(p, tol, mom, st, sp, closed=closed)
         else:
             sp[t] = sp[u]
-            st = np.delete(st, u)
-            sp = np.delete(sp, u)
+            st = np.concatenate((st[:u], st[u + 1 :]))
+            sp = np.concatenate((sp[:u], sp[u + 1 :]))
             # only the pairs that involve the joined piece change
             n_l = st.size
             n_pairs = n_l if closed and n_l > 2 else n_l - 1
             if n_pairs <= 0:
                 break
-            scores = np.delete(scores, t)[:n_pairs]
+            scores = np.concatenate((scores[:t], scores[t + 1 :]))[:n_pairs]
             if scores.size < n_pairs:
                 scores = np.concatenate([scores, np.zeros(n_pairs - scores.size)])
-            redo = np.unique(np.array([t - 1, t]) % n_l)
-            redo = redo[redo < n_pairs]
+            redo = np.array(
+                [r for r in sorted({(t - 1) % n_l, t % n_l}) if r < n_pairs], dtype=np.intp
+            )
             scores[redo] = _pair_excess(p, tol, mom, st, sp, closed=closed, which=redo)
 
     n_before = st.size

@@ -228,18 +228,18 @@ def judge_symmetry(
         max_blind_beams=cfg.max_blind_beams,
     )
     partial = not full_circle and cfg.partial_view
-    runs = contour_runs(
-        sp.indices,
-        n_beams,
-        wrap=not partial,
-        max_dropout_beams=cfg.max_dropout_beams,
-        no_return=no_return,
-        max_blind_beams=cfg.max_blind_beams,
-    )
     closed = full_circle and not gaps.any()
     try:
         if closed:
             return _judge_closed(pts, tol, sig, cfg, centroid, common)
+        runs = contour_runs(
+            sp.indices,
+            n_beams,
+            wrap=not partial,
+            max_dropout_beams=cfg.max_dropout_beams,
+            no_return=no_return,
+            max_blind_beams=cfg.max_blind_beams,
+        )
         return _judge_open(
             scan, sp.indices, pts, tol, sig, runs, full_circle or partial, cfg, common
         )
