@@ -70,7 +70,10 @@ def test_perturb_conditions() -> None:
         load_scene("nonexistent")
 
 
-def test_decisions_on_real_photos() -> None:
+def test_decisions_on_real_photos(tmp_path: Path) -> None:
+    from symloc.figures.vision import photos_figure
+    from symloc.vision.photos import example_views
+
     res = run_photos(
         default_vocabulary(),
         trials_per_direction=1,
@@ -99,6 +102,8 @@ def test_decisions_on_real_photos() -> None:
     d = res.to_dict()
     assert set(d["conditions"]) == {"yaw", "jpeg60", "combined"}
     assert d["ambiguity"]["duplicate"]["wrong"] == 0
+    png = photos_figure(res, tmp_path / "photos.png", example_views(rng=0)[:2])
+    assert png.stat().st_size > 10_000
 
 
 def test_bow_only_rule_is_undetermined_when_bow_is_ambiguous() -> None:

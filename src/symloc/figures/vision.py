@@ -171,7 +171,7 @@ def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, A
     for c in cases:
         e = [t.heading_error_deg for t in result.trials if t.case == c.case and t.correct]
         data.append(e if e else [np.nan])
-    ax2.boxplot(data, vert=False, labels=names, showfliers=True)
+    ax2.boxplot(data, orientation="horizontal", tick_labels=names, showfliers=True)
     ax2.invert_yaxis()
     ax2.set_xscale("symlog", linthresh=0.1)
     ax2.set_xlabel("|heading offset - true yaw| [deg] (correct decisions)")
