@@ -117,13 +117,17 @@ def run(args: argparse.Namespace) -> int:
             rows.extend(res.rows())
             if res.judge_errors:
                 notes.append(f"{room}: the symmetry judge raised {res.judge_errors} times")
-            if not res.mapped:
-                notes.append(f"{room}: mapping stage found no symmetric place (no visual map)")
+            notes.append(f"{room} ({res.lab}): {res.map_note}")
+            if res.collisions or res.amcl_collisions:
+                notes.append(
+                    f"{room}: refused (colliding) motions: symloc {res.collisions}, "
+                    f"plain AMCL {res.amcl_collisions}"
+                )
             _print_room(res.rows())
     print()
     print(
         f"{'room':<10} {'lab':<11} {'method':<7} {'correct':>8} {'conf.wrong':>10} "
-        f"{'undet.':>7} {'med. time':>9} {'med. dist':>9}"
+        f"{'undet.':>7} {'med. time':>9} {'med. dist':>9} {'est.@true':>9} {'est.@copy':>9}"
     )
     for r in rows:
         n = max(r["trials"], 1)
@@ -138,7 +142,8 @@ def run(args: argparse.Namespace) -> int:
         )
     print(
         "(est.@true / est.@copy: the final estimate, claimed or not, lies within 0.3 m and 10 deg "
-        "of the true pose / of a wrong symmetric copy)"
+        "of the true pose / of a wrong symmetric copy; for plain AMCL that estimate is the pose "
+        "nav2 publishes on /amcl_pose, confident or not)"
     )
     for note in notes:
         print(f"note: {note}")

@@ -177,10 +177,10 @@ def localization_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
         ax.bar(x, c, color="tab:green", label="correct")
         ax.bar(x, w, bottom=c, color="tab:red", label="confident wrong")
         ax.bar(x, u, bottom=c + w, color="tab:gray", label="undetermined")
-        near = share("estimate_near_symmetric_copy")
+        near = share("undetermined_estimate_on_wrong_copy")
         ax.bar(
             x,
-            np.minimum(near, u),
+            near,
             bottom=c + w,
             color="none",
             edgecolor="tab:orange",

@@ -223,6 +223,11 @@ class Localizer:
         well as the estimate (the ambiguity is real even when AMCL has collapsed to one copy).
     known_places : sequence of Place, optional
         Symmetric places of the map (from the mapping stage) for that test.
+    map_symmetries : sequence of MapSymmetry, optional
+        Rotational symmetries of the whole map (``centre``, ``order``;
+        :func:`~symloc.localizer.map_symmetry.map_symmetries`). Where AMCL converged outside any
+        known place, a rotated copy that explains the scan as well keeps the pose unearned
+        (status ambiguous, the copies as candidates).
     """
 
     def __init__(
@@ -234,6 +239,7 @@ class Localizer:
         *,
         scorer: PoseScorer | None = None,
         known_places: Sequence[Place] = (),
+        map_symmetries: Sequence[Any] = (),
     ) -> None:
         self.tracker = tracker
         self.judge = judge
@@ -241,6 +247,10 @@ class Localizer:
         self.config = config if config is not None else LocalizerConfig()
         self.scorer = scorer
         self.known_places = list(known_places)
+        #: rotational symmetries of the map itself (:func:`~symloc.localizer.map_symmetry.
+        #: map_symmetries`): a converged pose whose rotated copy fits the scan as well is not
+        #: earned.
+        self.map_symmetries = list(map_symmetries)
         self.log: list[str] = []
         self._last_result: TrackerResult | None = None
         self._last_verdict: SymmetryVerdict | None = None
@@ -435,6 +445,24 @@ class Localizer:
             ):
                 self._converged_count = 0
                 return self._start_ambiguity_at_place(result, place)
+            for sym in self.map_symmetries:
+                if self._copies_fit(result.estimate, sym.centre, sym.order, scan):
+                    self._converged_count = 0
+                    copies = rotated_copies(result.estimate, sym.centre, sym.order)
+                    why = (
+                        f"the map itself is symmetric (order {sym.order}) and a rotated copy of "
+                        "AMCL's pose explains the scan as well: pose not earned"
+                    )
+                    if not self.log or self.log[-1] != why:
+                        self._note(why)
+                    return Estimate(
+                        status=Status.AMBIGUOUS,
+                        hypotheses=tuple(
+                            Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies
+                        ),
+                        order=sym.order,
+                        reason=why,
+                    )
             self._converged_count += 1
             if self._converged_count >= self.config.converged_updates:
                 self._phase = _Phase.TRACKING

@@ -155,6 +155,7 @@ class Scenario:
     slam_seconds: float = 0.0
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
+    _map_symmetries: list[Any] | None = None
 
     def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
         """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
@@ -163,6 +164,14 @@ class Scenario:
         a = self.odom_alpha
         cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
         return RobotBody(DiffDriveRobot(start, cfg, rng, world=self.room.world))
+
+    def map_symmetries(self) -> list[Any]:
+        """Rotational symmetries of the occupancy grid (computed once)."""
+        if self._map_symmetries is None:
+            from .map_symmetry import map_symmetries
+
+            self._map_symmetries = map_symmetries(self.grid)
+        return self._map_symmetries
 
     def plain_amcl_params(self) -> Any:
         """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
@@ -609,6 +618,7 @@ def run_symloc(
         config,
         scorer=GridScorer(scen.grid),
         known_places=scen.store.all_places(),
+        map_symmetries=scen.map_symmetries(),
     )
     loc.reset_global()
     robot = scen.robot(start, rng)

@@ -64,6 +64,9 @@ class RoomTrials:
                     ),
                     "estimate_near_true_pose": sum(1 for r in recs if r.near_copy == 0),
                     "estimate_near_symmetric_copy": sum(1 for r in recs if r.near_copy),
+                    "undetermined_estimate_on_wrong_copy": sum(
+                        1 for r in recs if r.grade == "undetermined" and r.near_copy
+                    ),
                     "median_time_s": float(np.median([r.time for r in ok])) if ok else math.nan,
                     "median_distance_m": float(np.median([r.distance for r in ok]))
                     if ok
@@ -104,7 +107,7 @@ def run_room_trials(
     )
     res = RoomTrials(room=room, lab="textured" if textured else "untextured")
     res.mapped = scen.mapped is not None
-    res.map_note = scen.notes[0]
+    res.map_note = "; ".join(scen.notes)
     iterator: Any = range(trials)
     if progress:
         from tqdm import tqdm

@@ -1,0 +1,86 @@
+"""Rotational self-symmetry of an occupancy grid (is the *map* itself symmetric?).
+
+A pose that AMCL converged to cannot be earned when the map maps onto itself under a rotation
+that also carries the pose onto a copy explaining the scan as well: in a 40 m hallway whose far
+ends the lidar sees one at a time, the two ends look alike and AMCL's particles die out at one
+of them by chance. :func:`map_symmetries` finds such rotations once per map: the occupied cells
+are rotated by ``2 pi / k`` about their centroid and the share of rotated cells landing within
+``tolerance`` of an occupied cell is measured; orders whose share reaches ``min_overlap`` are
+symmetries of the map.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import distance_transform_edt
+
+from symloc._checks import check_in_range, check_positive
+from symloc.grid import OccupancyGrid
+
+__all__ = ["MapSymmetry", "map_symmetries"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MapSymmetry:
+    """The map maps onto itself when rotated by ``2 pi / order`` about ``centre`` (2,) [m];
+    ``overlap`` is the share of occupied cells that land on occupied cells."""
+
+    centre: FloatArray
+    order: int
+    overlap: float
+
+
+def map_symmetries(
+    grid: OccupancyGrid,
+    orders: tuple[int, ...] = (2, 3, 4, 5, 6, 8),
+    *,
+    tolerance: float = 0.1,
+    min_overlap: float = 0.9,
+) -> list[MapSymmetry]:
+    """The rotational symmetries of ``grid`` about its occupied cells' centroid.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    orders : tuple of int
+        Orders k (>= 2) to test (rotation by ``2 pi / k``).
+    tolerance : float
+        A rotated occupied cell matches when it lies within this distance [m] of an occupied cell.
+    min_overlap : float
+        Share in (0, 1] of occupied cells that must match.
+
+    Returns
+    -------
+    list of MapSymmetry
+        Every tested order that passes, highest first (empty for an asymmetric map).
+    """
+    check_positive(tolerance, "tolerance")
+    check_in_range(min_overlap, "min_overlap", 1e-9, 1.0)
+    occ = np.asarray(grid.occupied_mask, dtype=bool)
+    rc = np.argwhere(occ)
+    if rc.shape[0] < 10:
+        return []
+    pts = np.asarray(grid.cell_to_world(rc), dtype=np.float64)[:, :2]
+    dist = distance_transform_edt(~occ) * grid.resolution
+    centre = pts.mean(axis=0)
+    out: list[MapSymmetry] = []
+    for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
+        a = 2.0 * math.pi / k
+        c, s = math.cos(a), math.sin(a)
+        d = pts - centre
+        rot = centre + np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]])
+        cells = np.asarray(grid.world_to_cell(rot))
+        inside = np.asarray(grid.in_bounds(cells), dtype=bool)
+        hit = np.zeros(len(rot), dtype=bool)
+        ci = cells[inside].astype(int)
+        hit[inside] = dist[ci[:, 0], ci[:, 1]] <= tolerance
+        share = float(hit.mean())
+        if share >= min_overlap:
+            out.append(MapSymmetry(centre=centre.copy(), order=k, overlap=share))
+    return out
