@@ -666,8 +666,10 @@ def split_and_merge(
     if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 2:
         raise ConfigurationError(f"points: expected shape (M, 2) with M >= 2, got {p.shape}")
     m = p.shape[0]
-    tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (m,))
-    if not np.all(tol > 0):
+    tol = np.asarray(tolerance, dtype=np.float64)
+    if tol.shape != (m,):
+        tol = np.broadcast_to(tol, (m,))
+    if not (tol > 0).all():
         raise ConfigurationError("tolerance: expected values > 0 m")
     if min_points < 1:
         raise ConfigurationError(f"min_points: expected >= 1, got {min_points}")
@@ -678,10 +680,11 @@ def split_and_merge(
         # start at the point farthest from the sensor (from inside a convex room, next to a
         # corner, so the contour's ends rarely need joining), and cut first at the point
         # farthest from it
-        roll = int(np.argmax(np.sum(p * p, axis=1)))
+        roll = int((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]).argmax())
         p = _rolled(p, roll)
         tol = _rolled(tol, roll)
-        first_cut = int(np.argmax(np.sum((p - p[0]) ** 2, axis=1)))
+        d0 = p - p[0]
+        first_cut = int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
     mom = _Moments(p)
     cuts = _split(p, tol, first_cut, mom)
 
@@ -744,19 +747,27 @@ def split_and_merge(
     # orient each direction from the line's first point toward its last
     first = p[st]
     last = p[sp - 1]
-    flip = np.sum((last - first) * dirs, axis=1) < 0
-    dirs = np.where(flip[:, None], -dirs, dirs)
-    normals = np.stack([-dirs[:, 1], dirs[:, 0]], axis=1)
-    offsets = np.sum(normals * centers, axis=1)
+    chord = last - first
+    flip = chord[:, 0] * dirs[:, 0] + chord[:, 1] * dirs[:, 1] < 0
+    dirs[flip] = -dirs[flip]
+    normals = np.empty_like(dirs)
+    normals[:, 0] = -dirs[:, 1]
+    normals[:, 1] = dirs[:, 0]
+    offsets = normals[:, 0] * centers[:, 0] + normals[:, 1] * centers[:, 1]
     # residuals per line (one pass over all points)
-    owner = np.repeat(np.arange(st.size), sp - st)
-    res = np.sum(p * normals[owner], axis=1) - offsets[owner]
     n_pts = (sp - st).astype(np.intp)
+    owner = np.repeat(np.arange(st.size), n_pts)
+    nrm_o = normals[owner]
+    res = p[:, 0] * nrm_o[:, 0] + p[:, 1] * nrm_o[:, 1] - offsets[owner]
     rms = np.sqrt(np.bincount(owner, res * res, minlength=st.size) / np.maximum(n_pts, 1))
     max_excess = np.maximum.reduceat(np.abs(res) / tol, st)
-    t0 = np.sum((first - centers) * dirs, axis=1)
-    t1 = np.sum((last - centers) * dirs, axis=1)
-    endpoints = np.stack([centers + t0[:, None] * dirs, centers + t1[:, None] * dirs], axis=1)
+    f_c = first - centers
+    l_c = last - centers
+    t0 = f_c[:, 0] * dirs[:, 0] + f_c[:, 1] * dirs[:, 1]
+    t1 = l_c[:, 0] * dirs[:, 0] + l_c[:, 1] * dirs[:, 1]
+    endpoints = np.empty((st.size, 2, 2))
+    endpoints[:, 0] = centers + t0[:, None] * dirs
+    endpoints[:, 1] = centers + t1[:, None] * dirs
     return LineSet(
         starts=st,
         stops=sp,
