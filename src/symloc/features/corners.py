@@ -110,20 +110,25 @@ def adjacent_corners(lines: LineSet, *, tolerance: ArrayLike = 0.0) -> Corners:
     pts = intersect_lines(lines.normals[a], lines.offsets[a], lines.normals[b], lines.offsets[b])
     da, db = lines.directions[a], lines.directions[b]
     cross = da[:, 0] * db[:, 1] - da[:, 1] * db[:, 0]
-    turn = np.arctan2(cross, np.sum(da * db, axis=1))
+    turn = np.arctan2(cross, da[:, 0] * db[:, 0] + da[:, 1] * db[:, 1])
     end_a = lines.endpoints[a, 1]
     start_b = lines.endpoints[b, 0]
-    gap = np.linalg.norm(start_b - end_a, axis=1)
-    tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), a.shape)
+    g = start_b - end_a
+    gap = np.sqrt(g[:, 0] * g[:, 0] + g[:, 1] * g[:, 1])
+    tol = np.asarray(tolerance, dtype=np.float64)
+    if tol.shape != a.shape:
+        tol = np.broadcast_to(tol, a.shape)
     sin_phi = np.abs(np.sin(turn))
     with np.errstate(invalid="ignore", divide="ignore"):
         reach = gap / np.maximum(sin_phi, 1e-6) + tol
         # a point within tol of the next wall may sit up to tol / sin(phi) past the corner
         slack = tol / np.maximum(sin_phi, 0.1)
-        ahead_a = np.sum((pts - end_a) * da, axis=1) >= -slack
-        behind_b = np.sum((start_b - pts) * db, axis=1) >= -slack
-        near = (np.linalg.norm(pts - end_a, axis=1) <= reach) & (
-            np.linalg.norm(pts - start_b, axis=1) <= reach
+        pa = pts - end_a
+        bp = start_b - pts
+        ahead_a = pa[:, 0] * da[:, 0] + pa[:, 1] * da[:, 1] >= -slack
+        behind_b = bp[:, 0] * db[:, 0] + bp[:, 1] * db[:, 1] >= -slack
+        near = (np.sqrt(pa[:, 0] * pa[:, 0] + pa[:, 1] * pa[:, 1]) <= reach) & (
+            np.sqrt(bp[:, 0] * bp[:, 0] + bp[:, 1] * bp[:, 1]) <= reach
         )
     seen = np.isfinite(pts[:, 0]) & ahead_a & behind_b & near
     return Corners(pts, np.stack([a, b], axis=1).astype(np.intp), turn, seen, gap)

@@ -172,7 +172,18 @@ class SymmetryConfig:
     def sigma(self, ranges: ArrayLike) -> NDArray[np.float64]:
         """Range noise standard deviation [m] at each range [m]."""
         r = np.asarray(ranges, dtype=np.float64)
+        if self.range_sigma_relative == 0.0:
+            return np.full(r.shape, self.range_sigma)  # == hypot(range_sigma, 0)
         return np.hypot(self.range_sigma, self.range_sigma_relative * r)
+
+    def sigma_and_tolerance(
+        self, ranges: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`sigma` and :meth:`point_tolerance` at each range [m], computed together."""
+        sig = self.sigma(ranges)
+        if self.tolerance is not None:
+            return sig, np.full(sig.shape, self.tolerance)
+        return sig, self.k_sigma * sig + self.model_tolerance
 
     def point_tolerance(self, ranges: ArrayLike) -> NDArray[np.float64]:
         """Largest distance [m] of a point at each range from its wall: ``k sigma(r) + slack``."""

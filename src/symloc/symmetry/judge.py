@@ -217,8 +217,7 @@ def judge_symmetry(
             **common,
         )
     full_circle = scan.angle_increment * n_beams >= 2.0 * math.pi - 1.5 * scan.angle_increment
-    tol = cfg.point_tolerance(sp.ranges)
-    sig = cfg.sigma(sp.ranges)
+    sig, tol = cfg.sigma_and_tolerance(sp.ranges)
     no_return = scan.no_return_mask
     gaps = contour_gaps(
         sp.indices,
@@ -267,7 +266,7 @@ def _judge_closed(
     m = pts.shape[0]
     cen = _centroid_of(pts, method)
     # standard deviation of the centroid from the point noise (random part only)
-    sigma_c = 2.0 * float(np.sqrt(np.mean(sig * sig) / m))
+    sigma_c = 2.0 * math.sqrt(float(np.mean(sig * sig)) / m)
     k = cfg.k_sigma
     common = {**common, "centroid": cen}
 
