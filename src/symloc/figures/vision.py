@@ -143,12 +143,12 @@ def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, A
     plt = _plt()
     cases = [*result.conditions, *result.ambiguity]
     n_ex = len(examples)
-    fig = plt.figure(figsize=(13, 8.5 if n_ex else 4.8))
-    rows = 2 if n_ex else 1
-    gs = fig.add_gridspec(rows, max(n_ex, 2), height_ratios=[1.4, 1] if n_ex else [1])
-    mid = max(n_ex, 2) // 2
-    ax1 = fig.add_subplot(gs[0, :mid])
-    ax2 = fig.add_subplot(gs[0, mid:])
+    fig = plt.figure(figsize=(14, 8.0 if n_ex else 4.8), layout="constrained")
+    if n_ex:
+        top, bottom = fig.subfigures(2, 1, height_ratios=[1.6, 1])
+    else:
+        top, bottom = fig, None
+    ax1, ax2 = top.subplots(1, 2)
     names = [c.case for c in cases]
     y = np.arange(len(cases))
     left = np.zeros(len(cases))
@@ -174,14 +174,15 @@ def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, A
     ax2.boxplot(data, orientation="horizontal", tick_labels=names, showfliers=True)
     ax2.invert_yaxis()
     ax2.set_xscale("symlog", linthresh=0.1)
+    ax2.set_xlim(left=0.0)
     ax2.set_xlabel("|heading offset - true yaw| [deg] (correct decisions)")
     ax2.set_title("heading-offset error")
-    for i, (title, img) in enumerate(examples):
-        ax = fig.add_subplot(gs[1, i])
-        ax.imshow(img, cmap="gray" if np.ndim(img) == 2 else None)
-        ax.set_title(title, fontsize=8)
-        ax.axis("off")
-    fig.tight_layout()
+    if bottom is not None:
+        axes = np.atleast_1d(bottom.subplots(1, n_ex))
+        for ax, (title, img) in zip(axes, examples, strict=True):
+            ax.imshow(img, cmap="gray" if np.ndim(img) == 2 else None)
+            ax.set_title(title, fontsize=8)
+            ax.axis("off")
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=100)
