@@ -40,6 +40,13 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="the paper's BoW-first rule: no geometric fallback when BoW is ambiguous",
     )
+    parser.add_argument(
+        "--offset-from",
+        choices=["rotation", "homography"],
+        default="rotation",
+        help="heading offset from a rotation+zoom fit to the inliers (default) or from the "
+        "8-DOF homography",
+    )
     parser.set_defaults(func=run)
 
 
@@ -50,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from symloc.vision.vocabulary import Vocabulary
 
     voc = Vocabulary.load(args.vocabulary) if args.vocabulary else default_vocabulary()
-    cfg = OrientationConfig(geometric_fallback=not args.bow_only)
+    cfg = OrientationConfig(geometric_fallback=not args.bow_only, offset_from=args.offset_from)
     print_config(
         "photos",
         {
@@ -62,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
             "max yaw": f"{args.max_yaw:g} deg",
             "conditions": ", ".join(args.conditions),
             "decision": "BoW first, no geometric fallback" if args.bow_only else "BoW + geometry",
+            "heading offset from": args.offset_from,
         },
     )
     res = run_photos(
@@ -105,5 +113,13 @@ def run(args: argparse.Namespace) -> int:
         res, args.out / "photos.png", example_views(args.photos, args.seed, args.max_yaw)
     )
     print(f"wrote {path}")
-    write_json(args.json, {"seed": args.seed, "bow_only": args.bow_only, **res.to_dict()})
+    write_json(
+        args.json,
+        {
+            "seed": args.seed,
+            "bow_only": args.bow_only,
+            "offset_from": args.offset_from,
+            **res.to_dict(),
+        },
+    )
     return 0
