@@ -354,13 +354,13 @@ def _pair_excess(
     cyy = s[4] / n - (s[2] / n) ** 2
     cxy = s[5] / n - (s[1] / n) * (s[2] / n)
     var_minor = 0.5 * (cxx + cyy) - np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy * cxy)
-    cand = np.flatnonzero(var_minor <= float(tol.max()) ** 2)
+    cand = (var_minor <= float(np.maximum.reduce(tol)) ** 2).nonzero()[0]
     if cand.size == 0:
         return out_all
     a, b = a_all[cand], b_all[cand]
     nx, ny, off = _normals_offsets(s[:, cand])
     lengths = b - a
-    rep = np.repeat(np.arange(cand.size), lengths)
+    rep = np.arange(cand.size).repeat(lengths)
     ends = np.cumsum(lengths)
     first = ends - lengths
     pos = np.arange(int(ends[-1])) - (first - a)[rep]
@@ -405,7 +405,7 @@ def _split(
         n_in = seg_j - seg_i - 1
         ends = np.cumsum(n_in)
         first = ends - n_in
-        sid = np.repeat(np.arange(seg_i.size), n_in)
+        sid = np.arange(seg_i.size).repeat(n_in)
         idx = np.arange(int(ends[-1])) - (first - seg_i - 1)[sid]
         pi = p[idx]
         ti = tol[idx]
@@ -480,8 +480,8 @@ def _absorbable(
     nxt = (cand + 1) % n_l
     lengths = sp[cand] - st[cand]
     first = np.concatenate(([0], np.cumsum(lengths)[:-1]))
-    rep = np.repeat(np.arange(cand.size), lengths)
-    pos = np.arange(int(lengths.sum())) - np.repeat(first - st[cand], lengths)
+    rep = np.arange(cand.size).repeat(lengths)
+    pos = np.arange(int(lengths.sum())) - (first - st[cand]).repeat(lengths)
     q = p[pos]
     tq = tol[pos]
     bad_prev = np.abs(q[:, 0] * nrm[prev[rep], 0] + q[:, 1] * nrm[prev[rep], 1] - off[prev[rep]])
@@ -492,7 +492,7 @@ def _absorbable(
     # per piece, laid out as piece-major positions j = first + c_index + s
     n_choice = lengths + 1
     first_c = np.concatenate(([0], np.cumsum(n_choice)[:-1]))
-    rep_c = np.repeat(np.arange(cand.size), n_choice)
+    rep_c = np.arange(cand.size).repeat(n_choice)
     s_c = np.arange(int(n_choice.sum())) - first_c[rep_c]
     g0 = first[rep_c]  # global index of the piece's first point
     pre_bad = bp[g0 + s_c] - bp[g0]
@@ -527,7 +527,7 @@ def _absorb_short(
         n_l = st.size
         if n_l < (3 if closed else 2):
             break
-        short = np.flatnonzero(sp - st <= max_points)
+        short = (sp - st <= max_points).nonzero()[0]
         cand = short if closed else short[(short > 0) & (short < n_l - 1)]
         if cand.size == 0:
             break
@@ -603,13 +603,13 @@ def _refine_boundaries(
         e_t = np.where(valid, e_t, 0.0)
         e_u = np.where(valid, e_u, 0.0)
         # cost of cutting before window position j: sum_{<j} e_t + sum_{>=j} e_u
-        ct = np.concatenate([np.zeros((n_b, 1)), np.cumsum(e_t, axis=1)], axis=1)
-        cu = np.concatenate([np.cumsum(e_u[:, ::-1], axis=1)[:, ::-1], np.zeros((n_b, 1))], axis=1)
-        cost = ct + cu
+        cost = np.zeros((n_b, 2 * window + 1))
+        e_t.cumsum(axis=1, out=cost[:, 1:])
+        cost[:, :-1] += e_u[:, ::-1].cumsum(axis=1)[:, ::-1]
         pos = np.arange(-window, window + 1)
         allowed = (pos[None, :] >= lo[:, None]) & (pos[None, :] <= hi[:, None])
         cost = np.where(allowed, cost, np.inf)
-        new_b = b + pos[np.argmin(cost, axis=1)]
+        new_b = b + pos[cost.argmin(axis=1)]
         if np.array_equal(new_b, b):
             break
         if closed:
@@ -756,7 +756,7 @@ def split_and_merge(
     offsets = normals[:, 0] * centers[:, 0] + normals[:, 1] * centers[:, 1]
     # residuals per line (one pass over all points)
     n_pts = (sp - st).astype(np.intp)
-    owner = np.repeat(np.arange(st.size), n_pts)
+    owner = np.arange(st.size).repeat(n_pts)
     nrm_o = normals[owner]
     res = p[:, 0] * nrm_o[:, 0] + p[:, 1] * nrm_o[:, 1] - offsets[owner]
     rms = np.sqrt(np.bincount(owner, res * res, minlength=st.size) / np.maximum(n_pts, 1))

@@ -79,11 +79,13 @@ def fit_circle(points: FloatArray, *, refine: int = 2) -> tuple[FloatArray, floa
     """
     x, y = points[:, 0], points[:, 1]
     n = float(points.shape[0])
-    sx, sy = x.sum(), y.sum()
-    sxx, syy, sxy = (x * x).sum(), (y * y).sum(), (x * y).sum()
-    z = x * x + y * y
+    add = np.add.reduce
+    xx, yy = x * x, y * y
+    sx, sy = add(x), add(y)
+    sxx, syy, sxy = add(xx), add(yy), add(x * y)
+    z = xx + yy
     ata = np.array([[sxx, sxy, sx], [sxy, syy, sy], [sx, sy, n]])
-    atb = np.array([(x * z).sum(), (y * z).sum(), z.sum()])
+    atb = np.array([add(x * z), add(y * z), add(z)])
     try:
         sol = np.linalg.solve(ata, atb)
     except np.linalg.LinAlgError:
@@ -338,7 +340,7 @@ def _judge_closed(
             **common,
         )
     rolled_sig: FloatArray = _rolled(sig, lines.roll)
-    owner = np.repeat(np.arange(n_lines), lines.stops - lines.starts)
+    owner = np.arange(n_lines).repeat(lines.stops - lines.starts)
     n_l = lines.n_points.astype(np.float64)
     sig_l = np.sqrt(np.bincount(owner, rolled_sig * rolled_sig, minlength=n_lines) / n_l)
     sig_off = sig_l / np.sqrt(n_l)
