@@ -20,6 +20,7 @@ the others.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 from pathlib import Path
@@ -72,6 +73,17 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--max-scans", type=int, default=None, help="use only the first N scans")
     parser.add_argument("--laps", type=float, default=1.3, help="loops of the simulated run")
+    parser.add_argument(
+        "--loop-every",
+        type=int,
+        default=None,
+        help="search loop closures every N graph nodes (default: SlamParams, every node)",
+    )
+    parser.add_argument(
+        "--no-match-filtered",
+        action="store_true",
+        help="do not scan-match the scans the motion filter drops (faster; odometry between nodes)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -102,9 +114,15 @@ def run(args: argparse.Namespace) -> int:
     from symloc.figures.slam import map_trajectory_figure, slam_summary_figure
     from symloc.geometry import compose, inverse
     from symloc.slam.runs import run_carmen, run_simulated
+    from symloc.slam.slam import SlamParams
 
     a1, a2, a3, a4 = (float(a) for a in args.alphas)
     alphas = (a1, a2, a3, a4)
+    params = SlamParams()
+    if args.loop_every is not None:
+        params = dataclasses.replace(params, loop_every=args.loop_every)
+    if args.no_match_filtered:
+        params = dataclasses.replace(params, match_filtered_scans=False)
     print_config(
         "slam",
         {
@@ -114,13 +132,19 @@ def run(args: argparse.Namespace) -> int:
             "alphas (rot/rot, rot/trans, trans/trans, trans/rot)": alphas,
             "max_scans": args.max_scans,
             "laps": args.laps,
+            "loop_every": params.loop_every,
+            "match_filtered_scans": params.match_filtered_scans,
         },
     )
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
     for k, world in enumerate(args.worlds):
         r = run_simulated(
-            world, alphas=alphas, rng=args.seed + _world_index(world, k), laps=args.laps
+            world,
+            alphas=alphas,
+            rng=args.seed + _world_index(world, k),
+            laps=args.laps,
+            params=params,
         )
         s = r.summary()
         rows.append(s)
@@ -147,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
                     alphas=alphas,
                     rng=args.seed + 100 + (CARMEN_LOGS.index(name) if name in CARMEN_LOGS else k),
                     max_scans=args.max_scans,
+                    params=params,
                 )
                 s = r.summary()
                 rows.append(s)
