@@ -141,9 +141,11 @@ def rotational_order(
         m = n // k
         ang = 2.0 * math.pi / k
         cs, sn = math.cos(ang), math.sin(ang)
-        rot = np.column_stack([cs * rel[:, 0] - sn * rel[:, 1], sn * rel[:, 0] + cs * rel[:, 1]])
-        disp = np.hypot(*(rot - rel[(np.arange(n) + m) % n]).T)
-        excess = float(np.max(disp / tolerance[k - 1]))
+        nxt = rel[(np.arange(n) + m) % n]
+        disp = np.hypot(
+            cs * rel[:, 0] - sn * rel[:, 1] - nxt[:, 0], sn * rel[:, 0] + cs * rel[:, 1] - nxt[:, 1]
+        )
+        excess = float(np.maximum.reduce(disp / tolerance[k - 1]))
         if excess <= 1.0:
             return k, disp
         if best is None or excess < best[0]:
@@ -268,7 +270,7 @@ def _judge_closed(
     m = pts.shape[0]
     cen = _centroid_of(pts, method)
     # standard deviation of the centroid from the point noise (random part only)
-    sigma_c = 2.0 * math.sqrt(float(np.mean(sig * sig)) / m)
+    sigma_c = 2.0 * math.sqrt(float(np.add.reduce(sig * sig) / m) / m)
     k = cfg.k_sigma
     common = {**common, "centroid": cen}
 
@@ -277,10 +279,10 @@ def _judge_closed(
     if np.isfinite(radius):
         d_fit = np.hypot(*(pts - c_fit).T) - radius
         # the algebraic fit is close to the geometric one for a circle; only refine candidates
-        if float(np.max(np.abs(d_fit) / tol)) <= 3.0:
+        if float(np.maximum.reduce(np.abs(d_fit) / tol)) <= 3.0:
             c_fit, radius = fit_circle(pts, refine=2)
             d_fit = np.hypot(*(pts - c_fit).T) - radius
-        if np.isfinite(radius) and float(np.max(np.abs(d_fit) / tol)) <= 1.0:
+        if np.isfinite(radius) and float(np.maximum.reduce(np.abs(d_fit) / tol)) <= 1.0:
             r_c = np.hypot(*(pts - cen).T)
             spread = np.abs(r_c - float(np.mean(r_c)))
             tol_c = tol + 2.0 * k * sigma_c + cfg.model_tolerance
@@ -350,7 +352,7 @@ def _judge_closed(
         rolled_tol[lines.stops - 1], rolled_tol[lines.starts[(np.arange(n_lines) + 1) % n_lines]]
     )
     corners = adjacent_corners(lines, tolerance=end_tol)
-    if not np.all(corners.seen):
+    if not corners.seen.all():
         bad = int(np.flatnonzero(~corners.seen)[0])
         a, b = (int(v) for v in corners.pairs[bad])
         return _report(
@@ -365,8 +367,10 @@ def _judge_closed(
     n = v.shape[0]
     # corner standard deviation from the two line fits
     a_idx, b_idx = corners.pairs[:, 0], corners.pairs[:, 1]
-    t_a = np.sum((v - lines.centers[a_idx]) * lines.directions[a_idx], axis=1)
-    t_b = np.sum((v - lines.centers[b_idx]) * lines.directions[b_idx], axis=1)
+    va = (v - lines.centers[a_idx]) * lines.directions[a_idx]
+    vb = (v - lines.centers[b_idx]) * lines.directions[b_idx]
+    t_a = va[:, 0] + va[:, 1]
+    t_b = vb[:, 0] + vb[:, 1]
     s_a = np.hypot(sig_off[a_idx], t_a * sig_ang[a_idx])
     s_b = np.hypot(sig_off[b_idx], t_b * sig_ang[b_idx])
     sig_v = np.hypot(s_a, s_b) / np.maximum(np.abs(np.sin(corners.turn)), 1e-3)
@@ -421,10 +425,10 @@ def _judge_closed(
         regular=regular,
         center=center,
         gv_distance=float(np.mean(dist)) if regular or kind == "rectangle" else float(dist.max()),
-        residual=float(np.max(disp_ref)),
+        residual=float(np.maximum.reduce(disp_ref)),
         reason=f"{what}: rotating the {n} corners by 360/{order} deg about the {method}"
         f" centroid maps them onto each other within tolerance",
-        tolerance=float(np.max(tol_k[order - 1])),
+        tolerance=float(np.maximum.reduce(tol_k[order - 1])),
         axis_angle=axis if kind == "rectangle" else math.nan,
         **common,  # type: ignore[arg-type]
     )
