@@ -14,9 +14,13 @@ For each log in ``../shared/data/carmen/`` (intel, aces, freiburg-079):
    uniform particle set over the map's free cells and runs for up to ``--window`` scans. A
    start converges when the estimate comes within 0.3 m and 10 degrees of the corrected pose
    and stays there for the rest of the window; we report how often, after how many scans /
-   metres, and whether the filter ever reported a *confident wrong* pose: a single
-   well-weighted hypothesis (``n_hypotheses == 1``) with position std < 0.3 m and heading std
-   < 15 degrees while more than 1 m or 30 degrees off.
+   metres, and whether the filter ever reported a *confident wrong* pose: confident in the
+   sense of :mod:`symloc.mcl.confidence` (one dominant tight hypothesis whose scan agrees with
+   the map, sustained over 3 updates) while more than 1 m or 30 degrees off
+   (``confident_wrong``), or merely outside the 0.3 m / 10 degree tolerance
+   (``confident_outside_tolerance``). The previous ad-hoc definition (a single well-weighted
+   hypothesis, ``n_hypotheses == 1``, with position std < 0.3 m and heading std < 15 degrees)
+   is still counted as ``*_covariance_only`` for comparison.
 """
 
 from __future__ import annotations
@@ -128,7 +132,12 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
     n = stop - start
     est = np.empty((n, 3))
     conf = np.zeros(n, dtype=bool)
+    conf_cov = np.zeros(n, dtype=bool)
     nh = np.zeros(n, dtype=np.int64)
+    share = np.zeros(n)
+    std = np.zeros((n, 2))
+    cons = np.full(n, np.nan)
+    checks = np.zeros(n, dtype=bool)
     last_est: FloatArray | None = None
     last_odom: FloatArray = odom[start]
     for k, i in enumerate(range(start, stop)):
@@ -137,11 +146,25 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
             last_est, last_odom = res.estimate, odom[i]
         # nav2's map->odom: the last estimate moved by the odometry since that update
         est[k] = compose(last_est, compose(inverse(last_odom), odom[i]))
-        cov = res.covariance
-        sxy = math.sqrt(max(float(np.linalg.eigvalsh(cov[:2, :2]).max()), 0.0))
-        conf[k] = res.n_hypotheses == 1 and sxy < 0.3 and cov[2, 2] < math.radians(15) ** 2
+        c = res.confidence
+        conf[k] = c.confident
+        checks[k] = c.checks_pass
+        share[k] = c.weight_share
+        std[k] = c.std_xy, c.std_theta
+        cons[k] = c.scan_consistency
+        # the previous ad-hoc definition, kept for comparison
+        conf_cov[k] = res.n_hypotheses == 1 and c.std_xy < 0.3 and c.std_theta < math.radians(15)
         nh[k] = res.n_hypotheses
-    return {"estimate": est, "confident": conf, "n_hypotheses": nh}
+    return {
+        "estimate": est,
+        "confident": conf,
+        "confident_covariance_only": conf_cov,
+        "checks_pass": checks,
+        "weight_share": share,
+        "std": std,
+        "scan_consistency": cons,
+        "n_hypotheses": nh,
+    }
 
 
 @dataclass
@@ -187,8 +210,12 @@ def global_localization(
     starts: int,
     window: int,
     progress: bool = True,
+    trace: list[dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """Global localization from ``starts`` random scans; see the module docstring."""
+    """Global localization from ``starts`` random scans; see the module docstring.
+
+    With ``trace`` (a list) each start's per-scan errors and confidence terms are appended.
+    """
     from tqdm import tqdm
 
     from symloc.mcl import Amcl
@@ -213,6 +240,8 @@ def global_localization(
         conv_at = 0 if bad.size == 0 else int(bad[-1] + 1)
         converged = conv_at < len(ok)
         gross = (dxy > 1.0) | (dth > math.radians(30.0))
+        cc = out["confident_covariance_only"]
+        first_conf = np.flatnonzero(out["confident"])
         path = np.concatenate(
             [[0.0], np.cumsum(np.hypot(*np.diff(data.truth[s:stop, :2], axis=0).T))]
         )
@@ -230,9 +259,18 @@ def global_localization(
                 else None,
                 "confident_wrong_scans": int(np.count_nonzero(out["confident"] & gross)),
                 "confident_outside_tolerance_scans": int(np.count_nonzero(out["confident"] & ~ok)),
+                "confident_scans": int(np.count_nonzero(out["confident"])),
+                "scans_to_confident": int(first_conf[0]) if first_conf.size else None,
+                "confident_at_end": bool(out["confident"][-1]),
+                "confident_wrong_scans_covariance_only": int(np.count_nonzero(cc & gross)),
+                "confident_outside_tolerance_scans_covariance_only": int(
+                    np.count_nonzero(cc & ~ok)
+                ),
                 "final_error_m": float(dxy[-1]),
             }
         )
+        if trace is not None:
+            trace.append({"start_scan": int(s), "dxy": dxy, "dth": dth, **out})
     conv = [r for r in runs if r["converged"]]
     return {
         "starts": len(runs),
@@ -246,6 +284,24 @@ def global_localization(
         else None,
         "runs_with_confident_wrong": int(sum(r["confident_wrong_scans"] > 0 for r in runs)),
         "confident_wrong_scans": sum(int(r["confident_wrong_scans"]) for r in runs),
+        "runs_with_confident_outside_tolerance": int(
+            sum(r["confident_outside_tolerance_scans"] > 0 for r in runs)
+        ),
+        "runs_confident": int(sum(r["confident_scans"] > 0 for r in runs)),
+        "runs_confident_at_end": int(sum(r["confident_at_end"] for r in runs)),
+        "runs_converged_and_confident_at_end": int(
+            sum(r["confident_at_end"] and r["converged"] for r in runs)
+        ),
+        "median_scans_to_confident": float(
+            np.median(
+                [r["scans_to_confident"] for r in runs if r["scans_to_confident"] is not None]
+            )
+        )
+        if any(r["scans_to_confident"] is not None for r in runs)
+        else None,
+        "runs_with_confident_wrong_covariance_only": int(
+            sum(r["confident_wrong_scans_covariance_only"] > 0 for r in runs)
+        ),
         "runs": runs,
     }
 

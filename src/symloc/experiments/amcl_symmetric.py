@@ -11,12 +11,21 @@ classified by the filter's estimate (the heaviest cluster):
   the room's rotational symmetry about its centre (k = order of the room);
 * ``not_converged``: anything else.
 
-``confident_wrong`` counts the trials whose estimate is not correct while the covariance the
-filter reports for it is small (position std < 0.3 m and heading std <
-15 deg); ``confident_wrong_nav2`` does the same with the covariance of the whole
-particle set, which is what nav2_amcl publishes. With a room of order k, AMCL can only pick
-one of k equally likely poses: about 1/k of the trials should be correct, and the wrong ones
-are confidently wrong.
+``confident_wrong`` counts the trials whose estimate is not correct while the filter says it
+is confident at the end, in the one sense of :mod:`symloc.mcl.confidence` (one dominant tight
+hypothesis, the scan agrees with the map, sustained over 3 updates, and no rival place in the
+map explains the recent scans as well). Columns kept for comparison:
+``confident_wrong_without_rival_check`` (checks 1-4 of that definition only: what the filter
+alone can know), ``confident_wrong_covariance_only`` (the earlier ad-hoc test: the heaviest
+cluster's own covariance has position std < 0.3 m and heading std < 15 deg) and
+``confident_wrong_nav2`` (the same test on the covariance of the whole particle set, which is
+what nav2_amcl publishes). ``ambiguous`` counts trials whose final verdict is "ambiguous
+place" (the rival search found another pose, typically the symmetric copy).
+
+With a room of order k, AMCL can only pick one of k equally likely poses: about 1/k of the
+trials should be correct. The scan agrees perfectly with the map at a symmetric copy, so
+checks 1-4 cannot tell it from the truth and the filter alone is confidently wrong; only the
+global rival search (check 5) sees that the place is ambiguous.
 """
 
 from __future__ import annotations
@@ -54,8 +63,11 @@ class TrialResult:
     std_theta_set: float
     n_hypotheses: int
     weight: float
-    particles: FloatArray = field(repr=False)
-    weights: FloatArray = field(repr=False)
+    confident: bool = False
+    confident_without_rival_check: bool = False
+    confidence_reason: str = ""
+    particles: FloatArray = field(repr=False, default_factory=lambda: np.zeros((0, 3)))
+    weights: FloatArray = field(repr=False, default_factory=lambda: np.zeros(0))
 
 
 def symmetric_images(pose: FloatArray, center: FloatArray, order: int) -> FloatArray:
@@ -163,6 +175,8 @@ def run_trial(
     outcome, j = classify(res.estimate, images, tol_xy, tol_theta)
     sxy, sth = _std_from_cov(res.covariance)
     sxy_set, sth_set = _std_from_cov(_set_covariance(res.particles, res.weights))
+    conf = res.confidence
+    hold = amcl.confidence_config.hold_updates
     return TrialResult(
         room=room.name,
         true_pose=true,
@@ -175,6 +189,11 @@ def run_trial(
         std_theta_set=sth_set,
         n_hypotheses=res.n_hypotheses,
         weight=res.weight,
+        confident=bool(conf is not None and conf.confident),
+        confident_without_rival_check=bool(
+            conf is not None and conf.checks_pass and conf.streak >= hold
+        ),
+        confidence_reason="" if conf is None else conf.reason,
         particles=np.array(res.particles),
         weights=np.array(res.weights),
     )
@@ -198,7 +217,11 @@ def run_room(
     confident_deg: float = 15.0,
     progress: bool = True,
 ) -> tuple[dict[str, Any], list[TrialResult], Any]:
-    """Run ``trials`` trials in one room; returns (summary dict, trials, grid)."""
+    """Run ``trials`` trials in one room; returns (summary dict, trials, grid).
+
+    ``confident_xy`` / ``confident_deg`` only define the legacy ``*_covariance_only`` and
+    ``*_nav2`` columns; ``confident_wrong`` uses :mod:`symloc.mcl.confidence`.
+    """
     from tqdm import tqdm
 
     from symloc.mcl import AmclParams
@@ -228,7 +251,9 @@ def run_room(
                 tol_theta=tol_th,
             )
         )
-    conf = [t.std_xy < confident_xy and t.std_theta < math.radians(confident_deg) for t in out]
+    conf = [t.confident for t in out]
+    conf_norival = [t.confident_without_rival_check for t in out]
+    conf_cov = [t.std_xy < confident_xy and t.std_theta < math.radians(confident_deg) for t in out]
     conf_set = [
         t.std_xy_set < confident_xy and t.std_theta_set < math.radians(confident_deg) for t in out
     ]
@@ -244,8 +269,18 @@ def run_room(
         "symmetric_copy": sum(t.outcome == "symmetric_copy" for t in out),
         "not_converged": sum(t.outcome == "not_converged" for t in out),
         "confident_wrong": int(sum(c and w for c, w in zip(conf, wrong, strict=True))),
+        "confident_wrong_without_rival_check": int(
+            sum(c and w for c, w in zip(conf_norival, wrong, strict=True))
+        ),
+        "confident_wrong_covariance_only": int(
+            sum(c and w for c, w in zip(conf_cov, wrong, strict=True))
+        ),
         "confident_wrong_nav2": int(sum(c and w for c, w in zip(conf_set, wrong, strict=True))),
         "confident_correct": int(sum(c and not w for c, w in zip(conf, wrong, strict=True))),
+        "confident_correct_without_rival_check": int(
+            sum(c and not w for c, w in zip(conf_norival, wrong, strict=True))
+        ),
+        "ambiguous": sum(t.confidence_reason.startswith("ambiguous place") for t in out),
     }
     wrong_t = [t for t in out if t.outcome != "correct"]
     summary["correct_rate"] = summary["correct"] / n if n else 0.0
@@ -331,7 +366,10 @@ def run(args: argparse.Namespace) -> int:
             "odometry noise alphas": args.odom_alpha,
             "amcl": f"nav2 defaults except max/min particles {params.max_particles}/"
             f"{params.min_particles}, {params.laser_model_type}, alpha1..4 = {params.alpha1}",
-            "correct": "within 0.3 m and 10 deg; confident: std < 0.3 m and < 15 deg",
+            "correct": "within 0.3 m and 10 deg",
+            "confident": "symloc.mcl.confidence defaults (dominant tight hypothesis, scan"
+            " consistency, 3-update hysteresis, no rival place); legacy columns: std < 0.3 m"
+            " and < 15 deg of the cluster (cov only) / of the whole set (nav2)",
         },
     )
     rng = np.random.default_rng(args.seed)
@@ -354,7 +392,8 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(
         f"{'room':<10} {'k':>2} {'trials':>6} {'correct':>8} {'1/k':>5} {'sym.copy':>8}"
-        f" {'not conv':>8} {'conf.wrong':>10} {'(nav2 cov)':>10} {'wrong std xy/deg':>17}"
+        f" {'not conv':>8} {'conf.wrong':>10} {'(no rival)':>10} {'(cov only)':>10}"
+        f" {'(nav2 cov)':>10} {'ambiguous':>9} {'conf.corr':>9} {'wrong std xy/deg':>17}"
     )
     for s in summaries:
         sxy = s["wrong_std_xy_median_m"]
@@ -363,7 +402,9 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"{s['room']:<10} {s['order']:>2} {s['trials']:>6} {s['correct_rate']:>8.2f}"
             f" {s['expected_correct_rate']:>5.2f} {s['symmetric_copy']:>8} {s['not_converged']:>8}"
-            f" {s['confident_wrong']:>10} {s['confident_wrong_nav2']:>10} {std_s:>17}"
+            f" {s['confident_wrong']:>10} {s['confident_wrong_without_rival_check']:>10}"
+            f" {s['confident_wrong_covariance_only']:>10} {s['confident_wrong_nav2']:>10}"
+            f" {s['ambiguous']:>9} {s['confident_correct']:>9} {std_s:>17}"
         )
     from symloc.figures.mcl import amcl_symmetric_figure
 

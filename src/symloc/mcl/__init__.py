@@ -16,6 +16,7 @@ from symloc.mcl.confidence import (
     scan_consistency,
 )
 from symloc.mcl.params import AmclParams
+from symloc.mcl.rival_search import RivalReport, find_rival
 
 __all__ = [
     "Amcl",
@@ -26,8 +27,10 @@ __all__ = [
     "ConfidenceConfig",
     "Hypothesis",
     "NotInitializedError",
+    "RivalReport",
     "ScanConsistency",
     "assess",
     "cluster_particles",
+    "find_rival",
     "scan_consistency",
 ]

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, DataFormatError, SymlocError
-from symloc.geometry import wrap_angle
+from symloc.geometry import relative, transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField, distance_field
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.beam_model import beam_model_weights
@@ -54,6 +54,7 @@ from symloc.mcl.motion_model import sample_motion_model_odometry
 from symloc.mcl.params import AmclParams
 from symloc.mcl.recovery import FreeSpaceSampler, RecoveryState
 from symloc.mcl.resampling import low_variance_resample
+from symloc.mcl.rival_search import RivalReport, find_rival, padded_field
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
@@ -130,6 +131,7 @@ class _Counters:
     n_scans_skipped: int = 0
     n_resamples: int = 0
     n_injected: int = 0
+    n_rival_searches: int = 0
     skip_reasons: list[str] = field(default_factory=list)
 
 
@@ -182,6 +184,8 @@ class Amcl:
         if not isinstance(self.confidence_config, ConfidenceConfig):
             raise ConfigurationError("confidence_config: expected a ConfidenceConfig")
         self._confidence: Confidence | None = None
+        self._evidence: list[tuple[FloatArray, FloatArray]] = []
+        self._rival_field: DistanceField | None = None
         tol = self.confidence_config.consistency_sigmas * p.sigma_hit
         # The scan check needs distances beyond its tolerance: a wider field if the map's is not.
         self._consistency_field = (
@@ -228,6 +232,7 @@ class Amcl:
         self._resample_count = 0
         self.recovery.reset()
         self._confidence = None
+        self._evidence = []
 
     # ----------------------------------------------------------- initialise
     def initialize_global(self) -> None:
@@ -309,10 +314,38 @@ class Amcl:
                 laser_max_range=self.params.laser_max_range,
                 laser_min_range=self.params.laser_min_range,
             )
-        self._confidence = assess(
-            res, cons, self.confidence_config, previous=self._confidence, odom=pose
+        cfg = self.confidence_config
+        conf = assess(res, cons, cfg, previous=self._confidence, odom=pose)
+        if cons is not None:
+            if not conf.checks_pass:
+                self._evidence.clear()
+            elif cons.points is not None:
+                self._evidence.append((conf.estimate, cons.points))
+                del self._evidence[: -cfg.evidence_updates]
+        if conf.rival_due:
+            rival = self._rival_search(conf.estimate)
+            conf = assess(res, cons, cfg, previous=self._confidence, odom=pose, rival=rival)
+            self.counters.n_rival_searches += 1
+        self._confidence = conf
+        return replace(res, confidence=conf)
+
+    def _rival_search(self, estimate: FloatArray) -> RivalReport:
+        """Check 5 of :mod:`symloc.mcl.confidence` on the scans of the current streak."""
+        cfg = self.confidence_config
+        pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
+        points = np.concatenate(pts) if pts else np.zeros((0, 2))
+        if self._rival_field is None:
+            self._rival_field = padded_field(self.grid, self._consistency_field.max_dist)
+        return find_rival(
+            self._rival_field,
+            points,
+            estimate,
+            tol=cfg.rival_tolerance_sigmas * self.params.sigma_hit,
+            min_distance=cfg.rival_min_distance,
+            min_angle=cfg.rival_min_angle,
+            margin=cfg.rival_margin,
+            max_points=cfg.rival_max_points,
         )
-        return replace(res, confidence=self._confidence)
 
     def confidence(self) -> Confidence | None:
         """The confidence verdict after the last :meth:`update` (None before the first one).

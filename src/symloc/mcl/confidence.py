@@ -13,14 +13,14 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    the experiments call a pose correct, so the 2-sigma circle lies inside it; 8 degrees is the
    threshold the localizer used before this module existed. A heading error that large still
    moves a beam end point at 5 m by 0.7 m, which check 3 sees.
-3. **The scan agrees with the map at the estimate**: placing the current scan at the
-   estimated pose, at least ``min_scan_consistency`` (default 0.8) of its valid returning
-   beams end within ``consistency_sigmas * sigma_hit`` (default 2 x 0.2 m = 0.4 m) of an
-   occupied cell of the map's distance field (:func:`scan_consistency`). If the laser model's
-   noise ``sigma_hit`` were right, about 95 % of the beams at the true pose would pass; the
-   margin down to 80 % absorbs people, glass and map errors. A wrong pose in a real,
-   non-symmetric building lets many beams end in free space or behind walls and fails. Fewer
-   than ``min_beams`` valid beams is not evidence: not confident.
+3. **The scan agrees with the map at the estimate**: the estimate lies in a free cell of the
+   map (a robot cannot stand inside a wall or in space the map never observed), and placing
+   the current scan at the estimated pose, at least ``min_scan_consistency`` (default 0.9) of
+   its valid returning beams end within ``consistency_sigmas * sigma_hit`` (default 2 x 0.2 m
+   = 0.4 m) of an occupied cell of the map's distance field (:func:`scan_consistency`). If
+   the laser model's noise ``sigma_hit`` were right, about 95 % of the beams at the true pose
+   would pass; the margin down to 90 % absorbs people, glass and map errors. Fewer than
+   ``min_beams`` valid beams is not evidence: not confident.
 4. **Sustained (hysteresis)**: checks 1-3 passed at each of the last ``hold_updates``
    (default 3) consecutive filter updates that integrated a scan, and between those updates
    the estimate moved as the odometry says (within ``max_jump_xy`` = 0.5 m and
@@ -28,14 +28,28 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    from one hypothesis to another restarts the count. A call that did not integrate a scan
    (the robot moved less than ``update_min_d``) keeps the previous verdict; a failed check
    drops confidence at once.
+5. **No rival place** (``rival_check``, default on): checks 1-4 can all pass on a wrong place
+   that looks locally like the right one (a stretch of corridor, two identical offices): the
+   particles at the right place died, so the filter cannot know. Once checks 1-4 hold, the
+   scans of the current streak (up to ``evidence_updates`` = 10 updates, chained by the
+   filter's own estimates into the robot's current frame) are matched against the *whole map*
+   (:func:`symloc.mcl.rival_search.find_rival`: a correlative search over every free cell and
+   heading with a provable upper bound, then refinement). If a pose farther than
+   ``rival_min_distance`` = 1 m or ``rival_min_angle`` = 30 degrees from the estimate
+   explains the evidence within ``rival_margin`` = 0.05 of the estimate's score (fraction of
+   points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
+   ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
+   more evidence. Once the place is unique, the verdict holds for the rest of the streak.
 
-What this cannot catch: in a truly symmetric room a symmetric copy of the true pose matches
-the scan perfectly and forms a single tight cluster once the other copies die out, so AMCL
-is *confident* there and wrong; telling the copies apart is the localizer's job (vision).
+In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
+checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the
+place is ambiguous (the rival it reports *is* the symmetric copy). With ``rival_check=False``
+the definition is what a nav2 user can get from the filter alone, and AMCL is then confidently
+wrong in symmetric rooms; telling the copies apart is the localizer's job (vision).
 
 Use :meth:`symloc.mcl.Amcl.confidence` (the filter tracks it along its updates; also
-``AmclResult.confidence``), or :func:`assess` with :func:`scan_consistency` for hand-fed
-results.
+``AmclResult.confidence``), or :func:`assess` with :func:`scan_consistency` (and
+:func:`~symloc.mcl.rival_search.find_rival`) for hand-fed results.
 """
 
 from __future__ import annotations
@@ -48,9 +62,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, relative, wrap_angle
+from symloc.geometry import compose, relative, transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
+from symloc.mcl.rival_search import RivalReport
 from symloc.scan import LaserScan
 
 __all__ = [
@@ -63,6 +78,8 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+_INT_FIELDS = ("min_beams", "hold_updates", "evidence_updates", "rival_recheck", "rival_max_points")
 
 
 @dataclass(frozen=True)
@@ -91,17 +108,41 @@ class ConfidenceConfig:
         by the odometry, before the hysteresis count restarts.
     max_jump_theta : float
         Same for the heading [rad], in (0, pi].
+    rival_check : bool
+        Run check 5 (global search for a rival place).
+    rival_tolerance_sigmas : float
+        Point-to-obstacle tolerance of the rival search in units of ``sigma_hit`` (> 0).
+    rival_margin : float
+        A rival scoring within this of the estimate makes the place ambiguous, in [0, 1).
+    rival_min_distance : float
+        A rival lies farther than this [m] (> 0) ...
+    rival_min_angle : float
+        ... or is turned more than this [rad], in (0, pi].
+    evidence_updates : int
+        Scans (>= 1) of the current streak used as evidence for the rival search.
+    rival_recheck : int
+        Updates (>= 1) to wait before searching again after an ambiguous answer.
+    rival_max_points : int
+        Evidence points (>= 10) the rival search uses (evenly sub-sampled).
     """
 
     min_weight_share: float = 0.9
     max_xy_std: float = 0.15
     max_theta_std: float = math.radians(8.0)
     consistency_sigmas: float = 2.0
-    min_scan_consistency: float = 0.8
+    min_scan_consistency: float = 0.9
     min_beams: int = 10
     hold_updates: int = 3
     max_jump_xy: float = 0.5
     max_jump_theta: float = math.radians(20.0)
+    rival_check: bool = True
+    rival_tolerance_sigmas: float = 1.0
+    rival_margin: float = 0.05
+    rival_min_distance: float = 1.0
+    rival_min_angle: float = math.radians(30.0)
+    evidence_updates: int = 10
+    rival_recheck: int = 5
+    rival_max_points: int = 100
 
     def __post_init__(self) -> None:
         def need(ok: bool, name: str, what: str) -> None:
@@ -112,7 +153,9 @@ class ConfidenceConfig:
 
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name in ("min_beams", "hold_updates"):
+            if f.name == "rival_check":
+                need(isinstance(v, (bool, np.bool_)), f.name, "a bool")
+            elif f.name in _INT_FIELDS:
                 need(
                     isinstance(v, (int, np.integer)) and not isinstance(v, bool),
                     f.name,
@@ -139,6 +182,13 @@ class ConfidenceConfig:
         need(self.hold_updates >= 1, "hold_updates", "an integer >= 1")
         need(self.max_jump_xy > 0.0, "max_jump_xy", "a value > 0 m")
         need(0.0 < self.max_jump_theta <= math.pi, "max_jump_theta", "a value in (0, pi] rad")
+        need(self.rival_tolerance_sigmas > 0.0, "rival_tolerance_sigmas", "a value > 0")
+        need(0.0 <= self.rival_margin < 1.0, "rival_margin", "a value in [0, 1)")
+        need(self.rival_min_distance > 0.0, "rival_min_distance", "a value > 0 m")
+        need(0.0 < self.rival_min_angle <= math.pi, "rival_min_angle", "a value in (0, pi] rad")
+        need(self.evidence_updates >= 1, "evidence_updates", "an integer >= 1")
+        need(self.rival_recheck >= 1, "rival_recheck", "an integer >= 1")
+        need(self.rival_max_points >= 10, "rival_max_points", "an integer >= 10")
 
 
 @dataclass(frozen=True, slots=True)
@@ -154,11 +204,17 @@ class ScanConsistency:
         Valid returning beams considered.
     tolerance : float
         Distance [m] used (``consistency_sigmas * sigma_hit``).
+    pose_free : bool
+        The pose lies in a free cell of the map.
+    points : ndarray of shape (n_beams, 2) or None
+        The beams' end points in the robot frame [m] (evidence for the rival search).
     """
 
     fraction: float
     n_beams: int
     tolerance: float
+    pose_free: bool = True
+    points: FloatArray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -168,11 +224,11 @@ class Confidence:
     Attributes
     ----------
     confident : bool
-        All checks passed for ``hold_updates`` consecutive updates.
+        All checks passed (see the module docstring).
     reason : str
         Why (the first failed check, or a summary when confident).
     checks_pass : bool
-        Checks 1-3 (and the jump check) passed at this update.
+        Checks 1-3 and the jump check passed at this update.
     streak : int
         Consecutive scan-integrating updates at which they passed (0 after a failure).
     weight_share : float
@@ -189,6 +245,15 @@ class Confidence:
         The assessed estimate (map frame).
     odom : ndarray of shape (3,) or None
         The odometry pose at that update (for the jump check of the next one).
+    unique : bool
+        Check 5 found no rival place during the current streak (or is switched off).
+    rival_due : bool
+        Checks 1-4 pass but the place has not been shown unique, and a rival search is due
+        now: the caller should run it and assess again with its report.
+    rival_streak : int
+        Streak value at the last rival search of this streak (0: none yet).
+    rival : RivalReport or None
+        The last rival search of this streak.
     """
 
     confident: bool
@@ -202,6 +267,10 @@ class Confidence:
     n_beams: int
     estimate: FloatArray
     odom: FloatArray | None = None
+    unique: bool = False
+    rival_due: bool = False
+    rival_streak: int = 0
+    rival: RivalReport | None = None
 
 
 def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
@@ -262,13 +331,19 @@ def scan_consistency(
         laser_max_range=laser_max_range,
         laser_min_range=laser_min_range,
     )
+    grid = field.grid
+    cell = grid.world_to_cell(p[None, :2])
+    free = bool(grid.in_bounds(cell)[0]) and bool(grid.free_mask[cell[0, 0], cell[0, 1]])
     r, a = beams.ranges[beams.hit], beams.angles[beams.hit]
     if r.size == 0:
-        return ScanConsistency(0.0, 0, tol)
-    lp = compose(p, np.asarray(laser_pose, dtype=np.float64))
-    pts = np.column_stack([lp[0] + r * np.cos(lp[2] + a), lp[1] + r * np.sin(lp[2] + a)])
-    d = field.lookup(pts)
-    return ScanConsistency(float(np.count_nonzero(d <= tol)) / r.size, int(r.size), tol)
+        return ScanConsistency(0.0, 0, tol, free, np.zeros((0, 2)))
+    lpose = np.asarray(laser_pose, dtype=np.float64)
+    local = np.column_stack([r * np.cos(a), r * np.sin(a)])
+    robot_pts = transform_points(lpose, local)
+    world = transform_points(p, robot_pts)
+    d = field.lookup(world)
+    frac = float(np.count_nonzero(d <= tol)) / r.size
+    return ScanConsistency(frac, int(r.size), tol, free, robot_pts)
 
 
 def assess(
@@ -278,6 +353,7 @@ def assess(
     *,
     previous: Confidence | None = None,
     odom: ArrayLike | None = None,
+    rival: RivalReport | None = None,
 ) -> Confidence:
     """Assess one filter result; chain ``previous`` for the hysteresis.
 
@@ -294,6 +370,8 @@ def assess(
         The verdict of the previous call on the same filter (None after an initialisation).
     odom : array of shape (3,), optional
         Odometry pose of this update; with ``previous.odom`` it enables the jump check.
+    rival : RivalReport, optional
+        A rival search for this update (run it when a first call returned ``rival_due``).
 
     Returns
     -------
@@ -312,24 +390,6 @@ def assess(
     frac = math.nan if consistency is None else float(consistency.fraction)
     nb = 0 if consistency is None else int(consistency.n_beams)
 
-    def verdict(ok: bool, streak: int, reason: str, **kw: Any) -> Confidence:
-        confident = ok and streak >= cfg.hold_updates
-        if ok and not confident:
-            reason = f"checks pass for {streak} of {cfg.hold_updates} updates"
-        return Confidence(
-            confident=confident,
-            reason=reason,
-            checks_pass=ok,
-            streak=streak,
-            weight_share=share,
-            std_xy=sxy,
-            std_theta=sth,
-            scan_consistency=frac,
-            n_beams=nb,
-            estimate=kw.get("estimate", est),
-            odom=kw.get("odom", od),
-        )
-
     no_scan = not bool(getattr(result, "updated", True)) or bool(
         getattr(result, "sensor_skipped", False)
     )
@@ -347,41 +407,106 @@ def assess(
             previous.n_beams,
             previous.estimate,
             previous.odom,
+            previous.unique,
+            False,
+            previous.rival_streak,
+            previous.rival,
         )
+
+    def fail(reason: str) -> Confidence:
+        return Confidence(False, reason, False, 0, share, sxy, sth, frac, nb, est, od)
+
     if no_scan:
-        return verdict(False, 0, "no scan integrated since initialisation")
-    reason = ""
+        return fail("no scan integrated since initialisation")
     if share < cfg.min_weight_share:
-        reason = f"no dominant hypothesis: heaviest holds {share:.2f} < {cfg.min_weight_share:.2f}"
-    elif sxy > cfg.max_xy_std or sth > cfg.max_theta_std:
-        reason = (
+        return fail(
+            f"no dominant hypothesis: heaviest holds {share:.2f} < {cfg.min_weight_share:.2f}"
+        )
+    if sxy > cfg.max_xy_std or sth > cfg.max_theta_std:
+        return fail(
             f"hypothesis too wide: std {sxy:.3f} m / {math.degrees(sth):.1f} deg (limits"
             f" {cfg.max_xy_std:.3f} m / {math.degrees(cfg.max_theta_std):.1f} deg)"
         )
-    elif consistency is None:
-        reason = "scan consistency not measured"
-    elif nb < cfg.min_beams:
-        reason = f"too few valid beams for the scan check ({nb} < {cfg.min_beams})"
-    elif frac < cfg.min_scan_consistency:
-        reason = (
+    if consistency is None:
+        return fail("scan consistency not measured")
+    if not consistency.pose_free:
+        return fail("the estimate is not in a free cell of the map")
+    if nb < cfg.min_beams:
+        return fail(f"too few valid beams for the scan check ({nb} < {cfg.min_beams})")
+    if frac < cfg.min_scan_consistency:
+        return fail(
             f"scan disagrees with the map: {frac:.2f} of beams within"
             f" {consistency.tolerance:.2f} m of an obstacle (< {cfg.min_scan_consistency:.2f})"
         )
-    elif previous is not None and previous.odom is not None and od is not None:
+    if previous is not None and previous.odom is not None and od is not None:
         pred = compose(previous.estimate, relative(previous.odom, od))
         jxy = float(np.hypot(*(est[:2] - pred[:2])))
         jth = abs(float(wrap_angle(est[2] - pred[2])))
         if jxy > cfg.max_jump_xy or jth > cfg.max_jump_theta:
-            reason = (
+            return fail(
                 f"estimate jumped {jxy:.2f} m / {math.degrees(jth):.1f} deg from the"
                 " odometry prediction"
             )
-    if reason:
-        return verdict(False, 0, reason)
-    streak = 1 + (previous.streak if previous is not None and previous.checks_pass else 0)
-    return verdict(
-        True,
-        streak,
-        f"confident: share {share:.2f}, std {sxy:.3f} m / {math.degrees(sth):.1f} deg,"
-        f" scan {frac:.2f} of {nb} beams, {streak} updates",
+    same = previous is not None and previous.checks_pass
+    streak = 1 + (previous.streak if same else 0)  # type: ignore[union-attr]
+    unique = not cfg.rival_check or (same and previous.unique)  # type: ignore[union-attr]
+    rival_streak = previous.rival_streak if same else 0  # type: ignore[union-attr]
+    last_rival = previous.rival if same else None  # type: ignore[union-attr]
+    summary = (
+        f"share {share:.2f}, std {sxy:.3f} m / {math.degrees(sth):.1f} deg,"
+        f" scan {frac:.2f} of {nb} beams, {streak} updates"
     )
+
+    def ok(confident: bool, reason: str, **kw: Any) -> Confidence:
+        return Confidence(
+            confident,
+            reason,
+            True,
+            streak,
+            share,
+            sxy,
+            sth,
+            frac,
+            nb,
+            est,
+            od,
+            kw.get("unique", unique),
+            kw.get("rival_due", False),
+            kw.get("rival_streak", rival_streak),
+            kw.get("rival", last_rival),
+        )
+
+    if streak < cfg.hold_updates:
+        return ok(False, f"checks pass for {streak} of {cfg.hold_updates} updates")
+    if unique:
+        return ok(True, f"confident: {summary}")
+    if rival is not None:
+        if not rival.ambiguous:
+            return ok(
+                True,
+                f"confident: {summary}; unique (best rival {rival.rival_score:.2f} vs"
+                f" {rival.estimate_score:.2f})",
+                unique=True,
+                rival_streak=streak,
+                rival=rival,
+            )
+        where = (
+            ""
+            if rival.rival_pose is None
+            else f" at ({rival.rival_pose[0]:.2f}, {rival.rival_pose[1]:.2f},"
+            f" {math.degrees(rival.rival_pose[2]):.0f} deg)"
+        )
+        return ok(
+            False,
+            f"ambiguous place: a rival pose{where} explains the scans"
+            f" {rival.rival_score:.2f} vs {rival.estimate_score:.2f}",
+            rival_streak=streak,
+            rival=rival,
+        )
+    due = rival_streak == 0 or streak - rival_streak >= cfg.rival_recheck
+    reason = (
+        "rival search due"
+        if due
+        else f"ambiguous place (searched {streak - rival_streak} updates ago)"
+    )
+    return ok(False, reason, rival_due=due)
