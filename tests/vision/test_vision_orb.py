@@ -59,3 +59,17 @@ def test_errors() -> None:
         to_grey_uint8(np.full((4, 4), np.nan))
     with pytest.raises(DataFormatError, match="mask: expected shape"):
         OrbExtractor().extract(np.zeros((8, 8), np.uint8), mask=np.ones((4, 4)))
+
+
+def test_threads_setting_is_restored_and_does_not_change_features() -> None:
+    import cv2
+
+    img = cv2.resize(skimage.data.astronaut(), (640, 480))
+    before = cv2.getNumThreads()
+    one = OrbExtractor(OrbSettings(threads=1)).extract(img)
+    assert cv2.getNumThreads() == before
+    default = OrbExtractor(OrbSettings(threads=0)).extract(img)
+    np.testing.assert_array_equal(one.descriptors, default.descriptors)
+    np.testing.assert_array_equal(one.points, default.points)
+    with pytest.raises(ConfigurationError, match="threads: expected an integer >= 0"):
+        OrbSettings(threads=-1)

@@ -52,6 +52,11 @@ class OrbSettings:
         FAST corner threshold (intensity difference, 0..255).
     score_type : str
         ``"harris"`` or ``"fast"`` keypoint ranking.
+    threads : int
+        OpenCV threads during one extraction (restored afterwards); 0 keeps OpenCV's setting.
+        ORB on a 640 x 480 image gains nothing from a second thread even on an idle machine
+        (fastest runs 2.7 ms either way) and loses under load (median 10.3 ms with 2 threads
+        against 7.7 ms with 1 on a 2-core machine at load 6; ``benchmarks/bench_vision.py``).
     """
 
     n_features: int = 500
@@ -63,8 +68,11 @@ class OrbSettings:
     patch_size: int = 31
     fast_threshold: int = 20
     score_type: str = "harris"
+    threads: int = 1
 
     def __post_init__(self) -> None:
+        if int(self.threads) != self.threads or self.threads < 0:
+            raise ConfigurationError(f"threads: expected an integer >= 0, got {self.threads}")
         if int(self.n_features) != self.n_features or self.n_features < 1:
             raise ConfigurationError(f"n_features: expected an integer >= 1, got {self.n_features}")
         if not (np.isfinite(self.scale_factor) and self.scale_factor > 1.0):
@@ -254,7 +262,16 @@ class OrbExtractor:
             if m.shape != grey.shape:
                 raise DataFormatError(f"mask: expected shape {grey.shape}, got {m.shape}")
             cv_mask = (m != 0).astype(np.uint8) * 255
-        keypoints, descriptors = self._orb.detectAndCompute(grey, cv_mask)
+        threads = int(self.settings.threads)
+        previous = cv2.getNumThreads()
+        if threads and threads != previous:
+            cv2.setNumThreads(threads)
+            try:
+                keypoints, descriptors = self._orb.detectAndCompute(grey, cv_mask)
+            finally:
+                cv2.setNumThreads(previous)
+        else:
+            keypoints, descriptors = self._orb.detectAndCompute(grey, cv_mask)
         if descriptors is None or len(keypoints) == 0:
             return OrbFeatures.empty(size)
         n = len(keypoints)
