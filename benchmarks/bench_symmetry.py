@@ -4,7 +4,10 @@ Scans: the paper's 15 m scanner (360 beams, PAPER_15M) and the RPLIDAR A2 (800 b
 a regular hexagon (G-V 5 m, the polygon path: split-and-merge, corners, rotation test), a
 round room (G-V 5 m, the circle path) and a square with a box (the asymmetric path), from 32
 positions with random headings. Also times the paper's Algorithm 1 as written. Prints median
-wall and CPU time per call [ms]. Target (issue 3): under 1 ms.
+wall and CPU time per call [ms], and the mean number of Python-level function calls (Python and
+C, NumPy's included) per judgement, which does not depend on the machine's load: on a small
+scan the judgement's cost is mostly the per-call overhead of NumPy. Target (issue 3): under
+1 ms.
 
 Run: ``python benchmarks/bench_symmetry.py [--repeats R] [--seed S]``
 """
@@ -12,6 +15,7 @@ Run: ``python benchmarks/bench_symmetry.py [--repeats R] [--seed S]``
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Callable
 
@@ -39,6 +43,26 @@ def median_ms(fn: Callable[[int], object], repeats: int) -> tuple[float, float]:
     return float(np.median(wall) * 1e3), float(np.median(cpu) * 1e3)
 
 
+def calls_per_call(fn: Callable[[int], object], n: int) -> float:
+    """Mean number of Python and C function calls made by ``fn(i)``, i = 0..n-1."""
+    for i in range(n):
+        fn(i)  # warm-up: first calls import and cache
+    count = 0
+
+    def prof(_frame: object, event: str, _arg: object) -> None:
+        nonlocal count
+        if event in ("call", "c_call"):
+            count += 1
+
+    sys.setprofile(prof)
+    try:
+        for i in range(n):
+            fn(i)
+    finally:
+        sys.setprofile(None)
+    return count / n
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=300, help="timed calls per figure")
@@ -51,7 +75,7 @@ def main() -> None:
         "circle": build_room("circle", 5.0, lab=False),
         "square+box": build_room("square", 5.0, lab=False, furniture=1, rng=args.seed),
     }
-    print(f"{'scan':<26} {'room':<11} {'verdict':<22} {'wall ms':>8} {'cpu ms':>8}")
+    print(f"{'scan':<26} {'room':<11} {'verdict':<22} {'wall ms':>8} {'cpu ms':>8} {'calls':>7}")
     for preset in (PAPER_15M, RPLIDAR_A2):
         cfg = SymmetryConfig.from_lidar(preset)
         for name, room in rooms.items():
@@ -62,11 +86,11 @@ def main() -> None:
             ]
             verdict = judge_symmetry(scans[0], config=cfg)
             label = f"{verdict.kind} k={verdict.order}"
-            wall, cpu = median_ms(
-                lambda i, s=scans, c=cfg: judge_symmetry(s[i % len(s)], config=c), args.repeats
-            )
+            fn = lambda i, s=scans, c=cfg: judge_symmetry(s[i % len(s)], config=c)  # noqa: E731
+            wall, cpu = median_ms(fn, args.repeats)
+            calls = calls_per_call(fn, len(scans))
             beams = f"{preset.name} ({preset.n_beams} beams)"
-            print(f"{beams:<26} {name:<11} {label:<22} {wall:>8.3f} {cpu:>8.3f}")
+            print(f"{beams:<26} {name:<11} {label:<22} {wall:>8.3f} {cpu:>8.3f} {calls:>7.0f}")
         wall, cpu = median_ms(
             lambda i, s=scans, c=cfg: algorithm1(s[i % len(s)], n=4, config=c), args.repeats
         )
