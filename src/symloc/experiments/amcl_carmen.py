@@ -379,12 +379,14 @@ def run(args: argparse.Namespace) -> int:
             f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1,"
             f" global likelihood exponent {glob_p.laser_likelihood_exponent}",
             "global": f"{args.starts} starts x up to {args.window} scans; converged = within"
-            " 0.3 m / 10 deg to the end; confident wrong = 1 hypothesis, std < 0.3 m / 15 deg,"
-            " error > 1 m or 30 deg",
+            " 0.3 m / 10 deg to the end; confident = symloc.mcl.confidence defaults"
+            " (dominant tight hypothesis, scan consistency, 3-update hysteresis, no rival"
+            " place); wrong = error > 1 m or 30 deg",
         },
     )
     results = []
     fig_logs = []
+    global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others
         idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
@@ -406,15 +408,29 @@ def run(args: argparse.Namespace) -> int:
             f" odometry alone {tr['odometry_only_mean_error_m']:.2f} m mean"
         )
         if not args.skip_global:
+            trace: list[dict[str, Any]] = []
             gl = global_localization(
-                data, glob_p, alphas, rng_global, starts=args.starts, window=args.window
+                data,
+                glob_p,
+                alphas,
+                rng_global,
+                starts=args.starts,
+                window=args.window,
+                trace=trace,
             )
+            global_traces.append({"name": name, "trace": trace})
             entry["global"] = gl
             print(
                 f"{name}: global {gl['converged']}/{gl['starts']} converged, median"
                 f" {gl['median_scans_to_converge']} scans / {gl['median_metres_to_converge']} m;"
                 f" runs with a confident wrong pose: {gl['runs_with_confident_wrong']}"
-                f" ({gl['confident_wrong_scans']} scans)"
+                f" ({gl['confident_wrong_scans']} scans), confident outside 0.3 m / 10 deg:"
+                f" {gl['runs_with_confident_outside_tolerance']};"
+                f" confident at the end: {gl['runs_confident_at_end']}"
+                f" ({gl['runs_converged_and_confident_at_end']} of them converged),"
+                f" median {gl['median_scans_to_confident']} scans to the first confident one;"
+                f" old covariance-only definition: {gl['runs_with_confident_wrong_covariance_only']}"
+                " runs confident wrong"
             )
         results.append(entry)
         fig_logs.append(
@@ -424,5 +440,10 @@ def run(args: argparse.Namespace) -> int:
 
     fig = amcl_carmen_figure(fig_logs, args.out / "amcl_carmen.png")
     print(f"wrote {fig}")
+    if global_traces:
+        from symloc.figures.mcl import amcl_global_confidence_figure
+
+        fig = amcl_global_confidence_figure(global_traces, args.out / "amcl_carmen_global.png")
+        print(f"wrote {fig}")
     write_json(args.json, {"seed": args.seed, "logs": results})
     return 0

@@ -8,7 +8,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["amcl_carmen_figure", "amcl_symmetric_figure", "draw_amcl_state"]
+__all__ = [
+    "amcl_carmen_figure",
+    "amcl_global_confidence_figure",
+    "amcl_symmetric_figure",
+    "draw_amcl_state",
+]
 
 
 def _arrow(ax: Any, pose: np.ndarray, color: str, label: str, length: float = 0.5) -> None:
@@ -139,6 +144,53 @@ def amcl_carmen_figure(
         ax.set_xlabel("time [s]")
         ax.set_ylabel("position error [m]", color="b")
         ax.set_title(f"tracking: mean {err.mean():.3f} m, {np.degrees(dth).mean():.2f} deg")
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def amcl_global_confidence_figure(
+    logs: Sequence[Mapping[str, Any]],
+    path: Path,
+) -> Path:
+    """Global localization from random starts: position error per scan, confident scans bold.
+
+    Each entry holds ``name`` and ``trace``: a list of runs, each with ``dxy (S,)`` [m] and
+    ``confident (S,)`` and ``confident_covariance_only (S,)`` bool arrays.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(logs)
+    fig, axes = plt.subplots(2, n, figsize=(5.0 * n, 7.5), squeeze=False, sharey=True)
+    for i, lg in enumerate(logs):
+        for row, key, title in (
+            (0, "confident", "symloc confidence"),
+            (1, "confident_covariance_only", "old: 1 hypothesis, std < 0.3 m / 15 deg"),
+        ):
+            ax = axes[row, i]
+            n_bad = 0
+            for run in lg["trace"]:
+                e = np.maximum(np.asarray(run["dxy"]), 1e-3)
+                c = np.asarray(run[key], dtype=bool)
+                k = np.arange(e.size)
+                ax.plot(k, e, "-", color="0.7", lw=0.6)
+                wrong = c & (e > 1.0)
+                n_bad += int(wrong.any())
+                ax.plot(k, np.where(c & ~wrong, e, np.nan), "-", color="tab:blue", lw=2.0)
+                ax.plot(k, np.where(wrong, e, np.nan), "-", color="tab:red", lw=2.0)
+            ax.axhline(1.0, color="k", ls="--", lw=0.8)
+            ax.axhline(0.3, color="k", ls=":", lw=0.8)
+            ax.set_yscale("log")
+            ax.set_title(f"{lg['name']}: {title}\n{n_bad} runs confident > 1 m off", fontsize=9)
+            ax.set_xlabel("scans since the uniform start")
+            if i == 0:
+                ax.set_ylabel("position error [m] (bold: confident; red: > 1 m off)")
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
