@@ -153,3 +153,16 @@ def test_real_intel_log_every_20th_scan_never_claims_symmetry_strictly() -> None
     # 180-degree scans: the strict judgement must not claim anything
     assert intel["strict"] == {"unknown": 46}
     assert sum(intel["partial"].values()) == 46
+
+
+def test_corridor_like_diagnostic() -> None:
+    from symloc.experiments.symmetry_carmen import corridor_like
+
+    assert corridor_like(scan_lines(_front_scan(_hallway(tilt=0.05))))
+    a = -math.pi / 2 + math.pi * np.arange(180) / 180
+    room = 2.0 / np.maximum(np.abs(np.cos(a)), np.abs(np.sin(a)))  # front half of a square
+    assert not corridor_like(scan_lines(_front_scan(room)))
+    # one long wall only (the robot faces along a wall, open space on the other side)
+    one = _hallway()
+    one[: one.size // 2] = 81.91
+    assert not corridor_like(scan_lines(_front_scan(one)))

@@ -12,9 +12,11 @@ front scans (SICK LMS), so no scan shows a whole room. Each scan is judged twice
 Printed per log: the count of each verdict kind for both, the count of scans judged
 symmetric, and the reasons grouped by the test that decided. Figures: the scans judged
 symmetric (up to ``--examples`` per log, spread over the log) with their fitted lines, centre
-and axis, so a person can check whether they are real corridors or false positives; and a
-seeded random sample of the other verdicts, to check that the judgement does not miss obvious
-symmetric places.
+and axis, so a person can check whether they are real corridors or false positives; a seeded
+random sample of the scans that look like corridors (:func:`corridor_like`, a diagnostic: the
+two longest walls parallel, one on each side) with the verdict on each; and a seeded random
+sample of the other verdicts, to check that the judgement does not miss obvious symmetric
+places.
 
 The range noise is the SICK LMS data-sheet figure (``--range-sigma``, default 0.01 m: the
 logs are in centimetre mode); nothing is tuned to the logs.
@@ -37,7 +39,14 @@ from symloc._checks import as_rng
 from symloc.errors import ConfigurationError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
-__all__ = ["CARMEN_LOGS", "find_carmen_dir", "reason_tag", "register", "run_symmetry_carmen"]
+__all__ = [
+    "CARMEN_LOGS",
+    "corridor_like",
+    "find_carmen_dir",
+    "reason_tag",
+    "register",
+    "run_symmetry_carmen",
+]
 
 CARMEN_LOGS = ("intel", "aces", "freiburg-079")
 
@@ -75,6 +84,30 @@ def reason_tag(reason: str) -> str:
         if key in low:
             return tag
     return "other"
+
+
+def corridor_like(lines: Any, *, min_length: float = 2.0, max_angle_deg: float = 3.0) -> bool:
+    """Whether the two longest walls of a scan look like a corridor around the sensor.
+
+    A diagnostic, not a judgement: the two longest lines (of at least 3 points and
+    ``min_length`` [m]) are parallel within ``max_angle_deg`` and on either side of the sensor.
+    Used to find the scans a person would call "in a corridor" and show what the judgement
+    says about them.
+    """
+    ok = (lines.n_points >= 3) & (
+        np.hypot(*(lines.segments[:, 1] - lines.segments[:, 0]).T) >= min_length
+    )
+    if int(ok.sum()) < 2:
+        return False
+    seg = lines.segments[ok]
+    length = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+    i, j = np.argsort(length)[-2:]
+    d = seg[[i, j], 1] - seg[[i, j], 0]
+    d /= np.hypot(d[:, 0], d[:, 1])[:, None]
+    if abs(float(d[0, 0] * d[1, 0] + d[0, 1] * d[1, 1])) < np.cos(np.radians(max_angle_deg)):
+        return False
+    nrm = np.array([-d[0, 1], d[0, 0]])
+    return bool(float(seg[i, 0] @ nrm) * float(seg[j, 0] @ nrm) < 0)
 
 
 def run_symmetry_carmen(
@@ -116,7 +149,7 @@ def run_symmetry_carmen(
         When a log file is missing.
     """
     from symloc.io.carmen import read_carmen
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
+    from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
 
     if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1:
         raise ConfigurationError(f"stride: expected an integer >= 1, got {stride!r}")
@@ -135,6 +168,8 @@ def run_symmetry_carmen(
         reasons: Counter[str] = Counter()
         kind_idx: dict[str, list[int]] = {}
         sym_idx: list[int] = []
+        corridor_idx: list[int] = []
+        corridor_kinds: Counter[str] = Counter()
         n_strict_sym = 0
         t0 = time.process_time()
         for i in tqdm(picked, desc=name, disable=not progress, file=sys.stderr, leave=False):
@@ -148,6 +183,9 @@ def run_symmetry_carmen(
             kind_idx.setdefault(r_p.kind, []).append(i)
             if r_p.symmetric:
                 sym_idx.append(i)
+            if corridor_like(scan_lines(scan, partial_cfg)):
+                corridor_idx.append(i)
+                corridor_kinds[f"{r_p.kind}: {reason_tag(r_p.reason)}"] += 1
         n = len(picked)
         out["logs"][name] = {
             "path": str(path),
@@ -161,6 +199,9 @@ def run_symmetry_carmen(
             "partial_reasons": dict(reasons.most_common()),
             "symmetric_indices": sym_idx,
             "kind_indices": kind_idx,
+            "corridor_like": len(corridor_idx),
+            "corridor_indices": corridor_idx,
+            "corridor_verdicts": dict(corridor_kinds.most_common()),
             "ms_per_scan": 1e3 * (time.process_time() - t0) / max(n, 1) / 2.0,
         }
     return out
@@ -201,8 +242,29 @@ def _figures(
                 other_items.append(
                     (scan, rep, scan_lines(scan, cfg), f"{name} scan {i}: {reason_tag(rep.reason)}")
                 )
+    corridor_items: list[tuple[Any, Any, Any, str]] = []
+    for name, res in result["logs"].items():
+        idx = res["corridor_indices"]
+        if not idx:
+            continue
+        log = read_carmen(res["path"])
+        cfg = SymmetryConfig(partial_view=True)
+        pick = sorted(rng.choice(idx, size=min(4, len(idx)), replace=False).tolist())
+        for i in pick:
+            scan = log.scans[i].scan
+            rep = judge_symmetry(scan, config=cfg)
+            corridor_items.append(
+                (scan, rep, scan_lines(scan, cfg), f"{name} scan {i}: {reason_tag(rep.reason)}")
+            )
     n_sym = sum(r["partial_symmetric"] for r in result["logs"].values())
+    n_cor = sum(r["corridor_like"] for r in result["logs"].values())
     return [
+        plot_judgement_grid(
+            corridor_items,
+            out / "symmetry_carmen_corridors.png",
+            title=f"CARMEN: corridor-like views ({n_cor} scans: two longest walls parallel, one"
+            " on each side) and the judgement's verdict (partial_view=True), random sample",
+        ),
         plot_judgement_grid(
             sym_items,
             out / "symmetry_carmen_symmetric.png",
@@ -259,6 +321,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"  {name} ({res['beams']} beams, {res['ms_per_scan']:.2f} ms CPU per judgement):")
         for tag, c in res["partial_reasons"].items():
             print(f"    {c:>6}  {tag}")
+        print(
+            f"    corridor-like views (diagnostic, two longest walls parallel on either side):"
+            f" {res['corridor_like']}, judged: {res['corridor_verdicts']}"
+        )
         if res["symmetric_indices"]:
             shown = res["symmetric_indices"][:20]
             print(f"    symmetric scans (first {len(shown)}): {shown}")
