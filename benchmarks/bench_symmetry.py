@@ -86,7 +86,9 @@ def main() -> None:
             ]
             verdict = judge_symmetry(scans[0], config=cfg)
             label = f"{verdict.kind} k={verdict.order}"
-            fn = lambda i, s=scans, c=cfg: judge_symmetry(s[i % len(s)], config=c)  # noqa: E731
+            fn: Callable[[int], object] = lambda i, s=scans, c=cfg: judge_symmetry(  # noqa: E731
+                s[i % len(s)], config=c
+            )
             wall, cpu = median_ms(fn, args.repeats)
             calls = calls_per_call(fn, len(scans))
             beams = f"{preset.name} ({preset.n_beams} beams)"
