@@ -21,6 +21,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from symloc.scan import LaserScan
 from symloc.sim.lidar import PAPER_15M, RPLIDAR_A2, simulate_scan
 from symloc.sim.rooms import build_room
 from symloc.symmetry import SymmetryConfig, algorithm1, judge_symmetry
@@ -63,6 +64,15 @@ def calls_per_call(fn: Callable[[int], object], n: int) -> float:
     return count / n
 
 
+def _judge_nth(scans: list[LaserScan], cfg: SymmetryConfig) -> Callable[[int], object]:
+    """``fn(i)`` judging scan ``i`` modulo the number of scans."""
+
+    def fn(i: int) -> object:
+        return judge_symmetry(scans[i % len(scans)], config=cfg)
+
+    return fn
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=300, help="timed calls per figure")
@@ -86,9 +96,7 @@ def main() -> None:
             ]
             verdict = judge_symmetry(scans[0], config=cfg)
             label = f"{verdict.kind} k={verdict.order}"
-            fn: Callable[[int], object] = lambda i, s=scans, c=cfg: judge_symmetry(  # noqa: E731
-                s[i % len(s)], config=c
-            )
+            fn = _judge_nth(scans, cfg)
             wall, cpu = median_ms(fn, args.repeats)
             calls = calls_per_call(fn, len(scans))
             beams = f"{preset.name} ({preset.n_beams} beams)"
