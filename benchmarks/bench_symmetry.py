@@ -73,6 +73,15 @@ def _judge_nth(scans: list[LaserScan], cfg: SymmetryConfig) -> Callable[[int], o
     return fn
 
 
+def _algorithm1_nth(scans: list[LaserScan], cfg: SymmetryConfig) -> Callable[[int], object]:
+    """``fn(i)`` running the paper's Algorithm 1 (n = 4) on scan ``i`` modulo the count."""
+
+    def fn(i: int) -> object:
+        return algorithm1(scans[i % len(scans)], n=4, config=cfg)
+
+    return fn
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=300, help="timed calls per figure")
@@ -101,9 +110,7 @@ def main() -> None:
             calls = calls_per_call(fn, len(scans))
             beams = f"{preset.name} ({preset.n_beams} beams)"
             print(f"{beams:<26} {name:<11} {label:<22} {wall:>8.3f} {cpu:>8.3f} {calls:>7.0f}")
-        wall, cpu = median_ms(
-            lambda i, s=scans, c=cfg: algorithm1(s[i % len(s)], n=4, config=c), args.repeats
-        )
+        wall, cpu = median_ms(_algorithm1_nth(scans, cfg), args.repeats)
         print(
             f"{beams:<26} {'square+box':<11} {'Algorithm 1 (paper)':<22} {wall:>8.3f} {cpu:>8.3f}"
         )
