@@ -166,3 +166,30 @@ def test_corridor_like_diagnostic() -> None:
     one = _hallway()
     one[: one.size // 2] = 81.91
     assert not corridor_like(scan_lines(_front_scan(one)))
+
+
+def test_narrow_no_return_gap_in_a_wall_is_a_dropout_not_a_door() -> None:
+    # full scan from the centre of a 4 m square, a few no-return beams in the wall at x = 2
+    n = 720
+    a = -math.pi + 2 * math.pi * np.arange(n) / n
+    r = 2.0 / np.maximum(np.abs(np.cos(a)), np.abs(np.sin(a)))
+    scan = LaserScan(-math.pi, 2 * math.pi / n, 0.1, 12.0, r)
+    k = int(np.argmin(np.abs(a)))  # bearing 0: the wall at x = 2 m, beams 1 cm apart there
+    narrow = r.copy()
+    narrow[k : k + 6] = np.inf  # ~0.1 m: a dark patch, not a door
+    rep = judge_symmetry(scan.with_ranges(narrow))
+    assert rep.kind == "unknown"
+    assert "sensor dropouts, not doors" in rep.reason
+    wide = r.copy()
+    wide[k - 12 : k + 12] = np.inf  # ~0.42 m: still under min_door_width = 0.5 m
+    assert "opening" not in judge_symmetry(scan.with_ranges(wide)).reason
+    door = r.copy()
+    door[k - 12 : k + 12] = np.inf
+    rep = judge_symmetry(scan.with_ranges(door), config=SymmetryConfig(min_door_width=0.3))
+    assert rep.kind == "asymmetric"
+    assert "an opening 0.4" in rep.reason
+
+
+def test_min_door_width_validation() -> None:
+    with pytest.raises(ConfigurationError, match="min_door_width: expected < max_door_width"):
+        SymmetryConfig(min_door_width=2.5)

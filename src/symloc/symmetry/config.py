@@ -63,6 +63,10 @@ class SymmetryConfig:
     max_door_width : float
         A gap in a wall up to this wide [m] is reported as an opening (door) that breaks the
         symmetry, rather than as a wall beyond range (> 0).
+    min_door_width : float
+        A gap in a straight wall narrower than this [m] is a run of sensor dropouts (a dark,
+        shiny or glass patch that returned nothing), not a door (>= 0, < max_door_width).
+        Default 0.5 m, below the narrowest doorways.
     partial_view : bool
         Judge scans whose field of view is under 360 degrees for the one symmetric pattern a
         partial view can show: a hallway (two long parallel walls on either side whose far
@@ -84,6 +88,7 @@ class SymmetryConfig:
     max_polygon_sides: int = 16
     min_angle_tolerance: float = math.radians(0.5)
     max_door_width: float = 2.0
+    min_door_width: float = 0.5
     partial_view: bool = False
 
     def __post_init__(self) -> None:
@@ -127,6 +132,16 @@ class SymmetryConfig:
             check_in_range(self.min_angle_tolerance, "min_angle_tolerance", 1e-9, math.pi / 4),
         )
         set_(self, "max_door_width", check_positive(self.max_door_width, "max_door_width"))
+        set_(
+            self,
+            "min_door_width",
+            check_positive(self.min_door_width, "min_door_width", allow_zero=True),
+        )
+        if self.min_door_width >= self.max_door_width:
+            raise ConfigurationError(
+                f"min_door_width: expected < max_door_width ({self.max_door_width} m), got"
+                f" {self.min_door_width}"
+            )
         if not isinstance(self.partial_view, (bool, np.bool_)):
             raise ConfigurationError(f"partial_view: expected a bool, got {self.partial_view!r}")
         set_(self, "partial_view", bool(self.partial_view))

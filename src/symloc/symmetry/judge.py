@@ -522,6 +522,7 @@ def _judge_open(
     # --- a narrow opening in a straight wall: a door ---
     # (the middle of a straight wall is nearer than its ends, so a gap between two collinear
     # pieces of wall is never the sensor's range limit)
+    dropouts: list[float] = []
     # (with a partial view, the last run and the first are not neighbours)
     for r in range(runs.shape[0] - 1 if partial else runs.shape[0]):
         r2 = (r + 1) % runs.shape[0]
@@ -537,6 +538,9 @@ def _judge_open(
         r_end = float(np.hypot(*pts[end]))
         r_nxt = float(np.hypot(*pts[nxt]))
         at_limit = max(r_end, r_nxt) >= scan.range_max - float(cfg.point_tolerance(scan.range_max))
+        if width < cfg.min_door_width and on_a and on_b and not at_limit:
+            dropouts.append(width)
+            continue
         if width <= cfg.max_door_width and on_a and on_b and not at_limit:
             gap_beams = int((indices[nxt] - indices[end]) % n_beams) - 1
             return _report(
@@ -547,18 +551,24 @@ def _judge_open(
                 **common,
             )
     no_ret = int(np.count_nonzero(scan.no_return_mask))
+    drop = (
+        f"; {len(dropouts)} gap(s) in straight walls narrower than min_door_width="
+        f"{cfg.min_door_width:g} m (widest {max(dropouts):.2f} m) are sensor dropouts, not doors"
+        if dropouts
+        else ""
+    )
     if partial:
         return _report(
             "unknown",
             f"partial view of {fov:.0f} deg in {runs.shape[0]} runs of wall and {int(npts.size)}"
             " lines: not a hallway (two long parallel walls on either side), and nothing else"
-            " can be judged without seeing the whole room",
+            f" can be judged without seeing the whole room{drop}",
             **common,
         )
     return _report(
         "unknown",
         f"the contour is open in {runs.shape[0]} places ({no_ret} beams with no return within"
         f" {scan.range_max:g} m, {n_missing - no_ret} invalid): walls beyond the sensor's range"
-        " or a long dropout, so the room cannot be judged",
+        f" or a long dropout, so the room cannot be judged{drop}",
         **common,
     )
