@@ -138,6 +138,7 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
     std = np.zeros((n, 2))
     cons = np.full(n, np.nan)
     checks = np.zeros(n, dtype=bool)
+    reasons: list[str] = []
     last_est: FloatArray | None = None
     last_odom: FloatArray = odom[start]
     for k, i in enumerate(range(start, stop)):
@@ -149,6 +150,7 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
         c = res.confidence
         conf[k] = c.confident
         checks[k] = c.checks_pass
+        reasons.append(c.reason)
         share[k] = c.weight_share
         std[k] = c.std_xy, c.std_theta
         cons[k] = c.scan_consistency
@@ -164,6 +166,7 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
         "std": std,
         "scan_consistency": cons,
         "n_hypotheses": nh,
+        "reason": reasons,
     }
 
 

@@ -32,14 +32,15 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    that looks locally like the right one (a stretch of corridor, two identical offices): the
    particles at the right place died, so the filter cannot know. Once checks 1-4 hold, the
    scans of the current streak (up to ``evidence_updates`` = 10 updates, chained by the
-   filter's own estimates into the robot's current frame) are matched against the *whole map*
+   odometry into the robot's current frame) are matched against the *whole map*
    (:func:`symloc.mcl.rival_search.find_rival`: a correlative search over every free cell and
    heading with a provable upper bound, then refinement). If a pose farther than
    ``rival_min_distance`` = 1 m or ``rival_min_angle`` = 30 degrees from the estimate
    explains the evidence within ``rival_margin`` = 0.05 of the estimate's score (fraction of
    points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
    ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
-   more evidence. Once the place is unique, the verdict holds for the rest of the streak.
+   more evidence. Uniqueness must be proven: if the search's bound leaves more candidate
+   places than it can check, the place counts as ambiguous. Once the place is unique, the verdict holds for the rest of the streak.
 
 In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
 checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the

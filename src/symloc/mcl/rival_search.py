@@ -16,12 +16,14 @@ because the particles there died. This module answers that question directly, fr
    angle_step / 2``; the distance field is 1-Lipschitz, so testing each point against ``tol``
    plus that bound gives an upper bound of the score in the lattice cell: no place that
    explains the evidence can be missed.
-3. **Refinement**: the coarse candidates farther than ``min_distance`` or ``min_angle`` from
-   the estimate whose bound reaches ``estimate score - margin`` (at most ``max_refine`` of
-   them, best first) are refined on a fine lattice (one map cell, 1 degree) over their lattice
-   cell; so is the estimate itself.
+3. **Branch and bound**: the lattice cells farther than ``min_distance`` or ``min_angle``
+   from the estimate whose bound reaches ``estimate score - margin`` are split into 3 x 3 x 3
+   children with a three times tighter bound, and again, until a cell is about one map cell
+   wide; the survivors are refined on a one-cell, 1-degree lattice; so is the estimate.
 4. The evidence is **ambiguous** when a refined rival scores at least the refined estimate's
-   score minus ``margin``.
+   score minus ``margin``, or when more than ``max_candidates`` cells survive a level (or
+   ``max_refine`` the last one): uniqueness is only claimed when every place the bound could
+   not exclude was checked (weak evidence, such as a bare corridor, is ambiguous by design).
 
 The map is searched through :func:`padded_field`: its grid with a border of unknown cells,
 so that end points that fall just off the map (a map whose walls touch its edge) still read
@@ -65,7 +67,8 @@ class RivalReport:
     estimate_score : float
         Best fine score near the estimate (0..1).
     rival_score : float
-        Best fine score of a rival (0 when no candidate was refined).
+        Best fine score of a rival (0 when none; the coarse upper bound when there were
+        more than ``max_refine`` candidates).
     rival_pose : ndarray of shape (3,) or None
         That rival's pose (map frame).
     n_candidates : int
@@ -176,7 +179,8 @@ def find_rival(
     min_angle: float = math.radians(30.0),
     margin: float = 0.1,
     max_points: int = 80,
-    max_refine: int = 100,
+    max_refine: int = 3000,
+    max_candidates: int = 40000,
 ) -> RivalReport:
     """Search the whole map for a pose that explains ``points`` as well as ``estimate``.
 
@@ -196,8 +200,12 @@ def find_rival(
         A rival lies farther than this [m] or turned more than this [rad] from the estimate.
     margin : float
         A rival within this score of the estimate's makes the evidence ambiguous.
-    max_points, max_refine : int
-        Caps on evidence points and refined candidates.
+    max_points : int
+        Cap on evidence points.
+    max_refine : int
+        Most final cells refined exactly; more is reported as ambiguous.
+    max_candidates : int
+        Most lattice cells split at one branch-and-bound level; more is ambiguous.
 
     Returns
     -------
@@ -253,8 +261,29 @@ def find_rival(
     n_cand = int(cp.shape[0])
     if n_cand == 0:
         return RivalReport(False, est_score, 0.0, None, 0, m)
-    order = np.argsort(-cs, kind="stable")[:max_refine]
-    bp, bs = _refine(field, cp[order], pts, tol, stride * res / 2.0, da / 2.0)
+    # Branch and bound: split each surviving lattice cell into 3 x 3 x 3 children with a
+    # three times tighter bound, until the cells are about one map cell wide.
+    h_xy, h_a = stride * res / 2.0, da / 2.0
+    while h_xy > res:
+        if cp.shape[0] > max_candidates:
+            # Too many places the bound cannot exclude: uniqueness is not proven.
+            j = int(cs.argmax())
+            return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+        h_xy, h_a = h_xy / 3.0, h_a / 3.0
+        o = np.array([-2.0, 0.0, 2.0])
+        gx, gy, ga = np.meshgrid(o * h_xy, o * h_xy, o * h_a, indexing="ij")
+        offs = np.column_stack([gx.ravel(), gy.ravel(), ga.ravel()])
+        kids = (cp[:, None, :] + offs[None, :, :]).reshape(-1, 3)
+        bound = tol + math.sqrt(2.0) * h_xy + rng_pts * h_a + res
+        sc = match_scores(field, kids, pts, bound)
+        keep = (sc >= threshold) & _far(kids, est, min_distance - h_xy, min_angle - h_a)
+        cp, cs = kids[keep], sc[keep]
+        if cp.shape[0] == 0:
+            return RivalReport(False, est_score, 0.0, None, n_cand, m)
+    if cp.shape[0] > max_refine:
+        j = int(cs.argmax())
+        return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+    bp, bs = _refine(field, cp, pts, tol, h_xy, h_a)
     ok = _far(bp, est, min_distance, min_angle)
     if not ok.any():
         return RivalReport(False, est_score, 0.0, None, n_cand, m)
