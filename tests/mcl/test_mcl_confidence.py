@@ -178,7 +178,9 @@ def test_rival_check_gates_confidence():
     prev = None
     for _ in range(2):
         prev = assess(_result(), GOOD, cfg, previous=prev)
+    assert not prev.locally_confident
     c3 = assess(_result(), GOOD, cfg, previous=prev)
+    assert c3.locally_confident
     assert c3.rival_due
     assert not c3.confident
     assert c3.checks_pass
@@ -205,6 +207,7 @@ def test_rival_check_gates_confidence():
     c7 = assess(_result(), ScanConsistency(0.1, 150, 0.4, True), cfg, previous=c6)
     c8 = assess(_result(), GOOD, cfg, previous=c7)
     assert not c7.unique
+    assert not c7.locally_confident
     assert not c8.unique
 
 

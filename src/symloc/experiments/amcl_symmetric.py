@@ -176,7 +176,6 @@ def run_trial(
     sxy, sth = _std_from_cov(res.covariance)
     sxy_set, sth_set = _std_from_cov(_set_covariance(res.particles, res.weights))
     conf = res.confidence
-    hold = amcl.confidence_config.hold_updates
     return TrialResult(
         room=room.name,
         true_pose=true,
@@ -190,9 +189,7 @@ def run_trial(
         n_hypotheses=res.n_hypotheses,
         weight=res.weight,
         confident=bool(conf is not None and conf.confident),
-        confident_without_rival_check=bool(
-            conf is not None and conf.checks_pass and conf.streak >= hold
-        ),
+        confident_without_rival_check=bool(conf is not None and conf.locally_confident),
         confidence_reason="" if conf is None else conf.reason,
         particles=np.array(res.particles),
         weights=np.array(res.weights),

@@ -255,6 +255,10 @@ class Confidence:
         Streak value at the last rival search of this streak (0: none yet).
     rival : RivalReport or None
         The last rival search of this streak.
+    locally_confident : bool
+        Checks 1-4 hold (the filter tracks a pose that fits the map, sustained) whatever
+        check 5 says: the verdict for a caller that resolves place ambiguity itself (the
+        localizer, after vision picked the symmetric copy), and what a nav2 user could get.
     """
 
     confident: bool
@@ -272,6 +276,7 @@ class Confidence:
     rival_due: bool = False
     rival_streak: int = 0
     rival: RivalReport | None = None
+    locally_confident: bool = False
 
 
 def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
@@ -412,6 +417,7 @@ def assess(
             False,
             previous.rival_streak,
             previous.rival,
+            previous.locally_confident,
         )
 
     def fail(reason: str) -> Confidence:
@@ -475,6 +481,7 @@ def assess(
             kw.get("rival_due", False),
             kw.get("rival_streak", rival_streak),
             kw.get("rival", last_rival),
+            streak >= cfg.hold_updates,
         )
 
     if streak < cfg.hold_updates:
