@@ -44,9 +44,12 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
 
 In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
 checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the
-place is ambiguous (the rival it reports *is* the symmetric copy). With ``rival_check=False``
-the definition is what a nav2 user can get from the filter alone, and AMCL is then confidently
-wrong in symmetric rooms; telling the copies apart is the localizer's job (vision).
+place is ambiguous (the rival it reports *is* the symmetric copy). ``Confidence.
+locally_confident`` (checks 1-4 only, also what ``rival_check=False`` makes ``confident``) is
+what a nav2 user can get from the filter alone, and by it AMCL is confidently wrong in
+symmetric rooms; telling the copies apart is the localizer's job (vision). A caller that has
+resolved the ambiguity itself (the localizer after vision picked the copy) should track with
+``locally_confident``; a caller that claims a pose from AMCL alone should use ``confident``.
 
 Use :meth:`symloc.mcl.Amcl.confidence` (the filter tracks it along its updates; also
 ``AmclResult.confidence``), or :func:`assess` with :func:`scan_consistency` (and
