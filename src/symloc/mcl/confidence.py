@@ -40,13 +40,14 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
    ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
    more evidence. Uniqueness must be proven: if the search's bound leaves more candidate
-   places than it can check, the place counts as ambiguous. Once the place is unique, the verdict holds for the rest of the streak.
+   places than it can check, the place counts as ambiguous. Once the place is unique, the
+   verdict holds for the rest of the streak.
 
 In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
 checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the
-place is ambiguous (the rival it reports *is* the symmetric copy). ``Confidence.
-locally_confident`` (checks 1-4 only, also what ``rival_check=False`` makes ``confident``) is
-what a nav2 user can get from the filter alone, and by it AMCL is confidently wrong in
+place is ambiguous (the rival it reports *is* the symmetric copy).
+``Confidence.locally_confident`` (checks 1-4 only; with ``rival_check=False`` it equals
+``confident``) is what a nav2 user can get from the filter alone, and by it AMCL is confidently wrong in
 symmetric rooms; telling the copies apart is the localizer's job (vision). A caller that has
 resolved the ambiguity itself (the localizer after vision picked the copy) should track with
 ``locally_confident``; a caller that claims a pose from AMCL alone should use ``confident``.
