@@ -79,3 +79,49 @@ def test_tracking_on_the_start_of_the_aces_log():
     res = tracking(_LogData("aces", short, grid, truth), p, (0.01,) * 4, 0)
     assert res["mean_error_m"] < 0.2
     assert res["odometry_only_mean_error_m"] > res["mean_error_m"]
+
+
+@pytest.mark.shared_data
+def test_global_localization_reports_the_confidence_columns():
+    folder = find_carmen_dir()
+    if folder is None or not (folder / "intel-corrected.log.gz").is_file():
+        pytest.skip("CARMEN logs not found (../shared/data/carmen or SYMLOC_SHARED_DATA)")
+    from symloc.experiments.amcl_carmen import _LogData, build_map, global_localization
+    from symloc.io.carmen import read_carmen
+    from symloc.mcl import AmclParams
+
+    log = read_carmen(folder / "intel-corrected.log.gz")
+    short = SimpleNamespace(scans=log.scans[:60], stamps=log.stamps[:60])
+    grid = build_map(short)
+    truth = log.laser_poses[:60].copy()
+    truth[:, 2] = wrap_angle(truth[:, 2])
+    p = AmclParams(
+        laser_model_type="likelihood_field_prob",
+        max_particles=3000,
+        min_particles=300,
+        laser_max_range=49.9,
+        alpha1=0.01,
+        alpha2=0.01,
+        alpha3=0.01,
+        alpha4=0.01,
+    )
+    trace: list = []
+    gl = global_localization(
+        _LogData("intel", short, grid, truth),
+        p,
+        (0.01,) * 4,
+        1,
+        starts=2,
+        window=20,
+        progress=False,
+        trace=trace,
+    )
+    assert gl["starts"] == 2
+    assert len(trace) == 2
+    assert 0 <= gl["runs_confident_at_end"] <= 2
+    for run, tr in zip(gl["runs"], trace, strict=True):
+        c = tr["confident"]
+        assert run["confident_scans"] == int(c.sum())
+        if c.any():
+            assert run["max_error_while_confident_m"] == pytest.approx(float(tr["dxy"][c].max()))
+        assert len(tr["reason"]) == len(c)

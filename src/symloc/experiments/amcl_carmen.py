@@ -263,6 +263,14 @@ def global_localization(
                 "confident_wrong_scans": int(np.count_nonzero(out["confident"] & gross)),
                 "confident_outside_tolerance_scans": int(np.count_nonzero(out["confident"] & ~ok)),
                 "confident_scans": int(np.count_nonzero(out["confident"])),
+                "max_error_while_confident_m": float(dxy[out["confident"]].max())
+                if out["confident"].any()
+                else None,
+                "max_heading_error_while_confident_deg": float(
+                    np.degrees(dth[out["confident"]].max())
+                )
+                if out["confident"].any()
+                else None,
                 "scans_to_confident": int(first_conf[0]) if first_conf.size else None,
                 "confident_at_end": bool(out["confident"][-1]),
                 "confident_wrong_scans_covariance_only": int(np.count_nonzero(cc & gross)),
@@ -291,6 +299,14 @@ def global_localization(
             sum(r["confident_outside_tolerance_scans"] > 0 for r in runs)
         ),
         "runs_confident": int(sum(r["confident_scans"] > 0 for r in runs)),
+        "max_error_while_confident_m": max(
+            (r["max_error_while_confident_m"] for r in runs if r["confident_scans"]),
+            default=None,
+        ),
+        "max_heading_error_while_confident_deg": max(
+            (r["max_heading_error_while_confident_deg"] for r in runs if r["confident_scans"]),
+            default=None,
+        ),
         "runs_confident_at_end": int(sum(r["confident_at_end"] for r in runs)),
         "runs_converged_and_confident_at_end": int(
             sum(r["confident_at_end"] and r["converged"] for r in runs)
@@ -428,7 +444,9 @@ def run(args: argparse.Namespace) -> int:
                 f" {gl['median_scans_to_converge']} scans / {gl['median_metres_to_converge']} m;"
                 f" runs with a confident wrong pose: {gl['runs_with_confident_wrong']}"
                 f" ({gl['confident_wrong_scans']} scans), confident outside 0.3 m / 10 deg:"
-                f" {gl['runs_with_confident_outside_tolerance']};"
+                f" {gl['runs_with_confident_outside_tolerance']} (largest error while confident"
+                f" {gl['max_error_while_confident_m']} m /"
+                f" {gl['max_heading_error_while_confident_deg']} deg);"
                 f" confident at the end: {gl['runs_confident_at_end']}"
                 f" ({gl['runs_converged_and_confident_at_end']} of them converged),"
                 f" median {gl['median_scans_to_confident']} scans to the first confident one;"
