@@ -102,6 +102,9 @@ def demo_figure(story: Any, path: Path) -> Path:
     ax = fig.add_subplot(gs[0, 1])
     map_axes(ax, f"plain AMCL: {story.amcl_summary}")
     p = story.amcl_particles
+    apath = getattr(story, "amcl_path", None)
+    if apath is not None and len(apath) > 1:
+        ax.plot(apath[:, 0], apath[:, 1], color="tab:olive", lw=0.6, alpha=0.7, label="drive")
     ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3)
     arrow(ax, story.amcl_true_pose, "g", "true pose")
     if story.amcl_estimate is not None:

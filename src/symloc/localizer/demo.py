@@ -43,6 +43,7 @@ class DemoStory:
     query_image: NDArray[np.uint8] | None
     matched_image: NDArray[np.uint8] | None
     match_label: str
+    amcl_path: FloatArray | None = None
 
 
 @dataclass
@@ -175,7 +176,10 @@ def run_demo(
         amcl_particles=arun.particles,
         amcl_true_pose=arun.true_pose,
         amcl_estimate=arun.estimate,
-        amcl_summary=f"{arun.outcome.grade}, weight {arun.weight:.2f}",
+        amcl_summary=(
+            f"{arun.outcome.grade}, {'confident' if arun.converged else 'not confident'}, "
+            f"weight {arun.weight:.2f}"
+        ),
         particles_before=loc.particles_before_decision,
         candidates=candidates,
         path=np.asarray(srun.episode.path),
@@ -185,5 +189,6 @@ def run_demo(
         query_image=query,
         matched_image=matched,
         match_label=label,
+        amcl_path=arun.path,
     )
     return DemoResult(room, seed, scen, arun, srun, story, timings)

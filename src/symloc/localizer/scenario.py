@@ -517,7 +517,8 @@ def run_plain_amcl(
     (:class:`~symloc.localizer.explore.ExploreDrive`, the same kind as
     ``symloc experiment amcl-symmetric``); ``"spin"`` turns on the spot at ``w`` [rad/s].
 
-    AMCL counts as confident by :func:`amcl_confident` (the project's one definition).
+    AMCL counts as confident by :func:`amcl_confident` (the project's one definition,
+    ``locally_confident``: what nav2's filter alone can tell its user).
     """
     from symloc.mcl import Amcl
 
@@ -572,13 +573,19 @@ def run_plain_amcl(
 
 
 def amcl_confident(result: Any) -> tuple[bool, str]:
-    """Whether an AMCL result is confident and why: the project's one definition,
-    :mod:`symloc.mcl.confidence` (``AmclResult.confidence``: one dominant tight hypothesis whose
-    scan agrees with the map, sustained over 3 updates)."""
+    """Whether plain AMCL's result is confident the way a nav2 user can know, and why.
+
+    The project's one definition, :mod:`symloc.mcl.confidence`, in its
+    ``locally_confident`` form (checks 1-4: one dominant tight hypothesis whose scan agrees
+    with the map, sustained): that is what the filter alone gives a nav2 user. Its check 5
+    (a search of the whole map for a rival pose) is symloc's own addition and is used by the
+    localizer before it claims a pose from AMCL alone; the reason string reports it too.
+    """
     conf = result.confidence
     if conf is None:
         return False, "no confidence verdict"
-    return bool(conf.confident), str(conf.reason)
+    local = bool(getattr(conf, "locally_confident", conf.confident))
+    return local, str(conf.reason)
 
 
 def _order(scen: Scenario) -> int:
