@@ -88,12 +88,28 @@ def amcl_symmetric_figure(
     sym = np.array([s["symmetric_copy"] for s in summaries]) / tot
     nc = np.array([s["not_converged"] for s in summaries]) / tot
     cw = np.array([s["confident_wrong"] for s in summaries]) / tot
-    ax.bar(x - 0.3, corr, 0.2, label="correct")
-    ax.bar(x - 0.1, sym, 0.2, label="symmetric copy")
-    ax.bar(x + 0.1, nc, 0.2, label="not converged")
-    ax.bar(x + 0.3, cw, 0.2, label="confident & wrong")
+    # Confident & wrong under weaker definitions (symloc.mcl.confidence without the rival
+    # search; the old covariance-only test), when the summaries carry them.
+    extra = [
+        (key, label, color)
+        for key, label, color in (
+            ("confident_wrong_without_rival_check", "conf. & wrong, no rival check", "tab:pink"),
+            ("confident_wrong_covariance_only", "conf. & wrong, covariance only", "tab:gray"),
+        )
+        if all(key in s for s in summaries)
+    ]
+    nb = 4 + len(extra)
+    wb = 0.8 / nb
+    off = (np.arange(nb) - (nb - 1) / 2.0) * wb
+    ax.bar(x + off[0], corr, wb, label="correct")
+    ax.bar(x + off[1], sym, wb, label="symmetric copy")
+    ax.bar(x + off[2], nc, wb, label="not converged")
+    ax.bar(x + off[3], cw, wb, label="confident & wrong", color="tab:red")
+    for j, (key, label, color) in enumerate(extra):
+        v = np.array([s[key] for s in summaries]) / tot
+        ax.bar(x + off[4 + j], v, wb, label=label, color=color)
     ax.plot(
-        x - 0.3, [s["expected_correct_rate"] for s in summaries], "k_", ms=18, mew=2, label="1/k"
+        x + off[0], [s["expected_correct_rate"] for s in summaries], "k_", ms=12, mew=2, label="1/k"
     )
     ax.set_xticks(x, names)
     ax.set_ylim(0, 1)
