@@ -403,8 +403,8 @@ def run(args: argparse.Namespace) -> int:
             " place); wrong = error > 1 m or 30 deg",
         },
     )
-    results = []
-    fig_logs = []
+    results: list[dict[str, Any]] = []
+    fig_logs: list[dict[str, Any]] = []
     global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others

@@ -135,10 +135,13 @@ def match_scores(
     return out
 
 
-def _far(poses: FloatArray, est: FloatArray, min_distance: float, min_angle: float) -> NDArray:
+def _far(
+    poses: FloatArray, est: FloatArray, min_distance: float, min_angle: float
+) -> NDArray[np.bool_]:
     dxy = np.hypot(poses[:, 0] - est[0], poses[:, 1] - est[1])
     dth = np.abs(wrap_angle(poses[:, 2] - est[2]))
-    return (dxy > min_distance) | (dth > min_angle)
+    out: NDArray[np.bool_] = (dxy > min_distance) | (dth > min_angle)
+    return out
 
 
 def _refine(
