@@ -86,8 +86,9 @@ class DemoResult:
                 "plain AMCL: confidence",
                 f"cluster weight {a.weight:.2f}, std {100 * a.xy_std:.1f} cm / "
                 f"{math.degrees(a.theta_std):.1f} deg: "
-                f"{'confident' if a.converged else 'not confident'} "
-                f"(symloc.mcl.confidence: {a.confidence_reason})",
+                f"{'confident' if a.converged else 'not confident'} by the filter alone "
+                f"(what nav2 can tell; symloc.mcl.confidence with its rival search says: "
+                f"{a.confidence_reason})",
             ),
             (
                 "plain AMCL: verdict",
