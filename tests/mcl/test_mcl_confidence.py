@@ -203,6 +203,7 @@ def test_rival_check_gates_confidence():
     assert "unique" in c5.reason
     c6 = assess(_result(), GOOD, cfg, previous=c5)
     assert c6.confident
+    assert c6.rival_searches == 2
     assert not c6.rival_due
     c7 = assess(_result(), ScanConsistency(0.1, 150, 0.4, True), cfg, previous=c6)
     c8 = assess(_result(), GOOD, cfg, previous=c7)
@@ -360,3 +361,19 @@ def test_amcl_exposes_confidence_and_keeps_its_outputs():
 def test_amcl_rejects_a_bad_confidence_config():
     with pytest.raises(ConfigurationError, match="confidence_config: expected a ConfidenceConfig"):
         Amcl(asymmetric_room(), confidence_config={"hold_updates": 2})  # type: ignore[arg-type]
+
+
+def test_rival_searches_back_off_while_ambiguous():
+    cfg = ConfidenceConfig(rival_recheck=2)
+    amb = RivalReport(True, 0.98, 0.98, np.array([1.0, 1.0, 0.0]), 4, 80)
+    prev = None
+    searched_at = []
+    for k in range(1, 20):
+        c = assess(_result(), GOOD, cfg, previous=prev)
+        if c.rival_due:
+            c = assess(_result(), GOOD, cfg, previous=prev, rival=amb)
+            searched_at.append(k)
+        prev = c
+    assert searched_at == [3, 5, 9, 17]  # waits 2, 4, 8 updates
+    assert not prev.confident
+    assert prev.locally_confident

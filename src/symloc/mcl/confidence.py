@@ -39,7 +39,8 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    explains the evidence within ``rival_margin`` = 0.05 of the estimate's score (fraction of
    points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
    ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
-   more evidence. Uniqueness must be proven: if the search's bound leaves more candidate
+   more evidence (then 10, 20, ...: a symmetric room stays ambiguous, and each search costs
+   up to about a second on a building-sized map). Uniqueness must be proven: if the search's bound leaves more candidate
    places than it can check, the place counts as ambiguous. Once the place is unique, the
    verdict holds for the rest of the streak.
 
@@ -126,7 +127,8 @@ class ConfidenceConfig:
     evidence_updates : int
         Scans (>= 1) of the current streak used as evidence for the rival search.
     rival_recheck : int
-        Updates (>= 1) to wait before searching again after an ambiguous answer.
+        Updates (>= 1) to wait before searching again after the first ambiguous answer;
+        doubled after each further one in the same streak.
     rival_max_points : int
         Evidence points (>= 10) the rival search uses (evenly sub-sampled).
     """
@@ -259,6 +261,8 @@ class Confidence:
         Streak value at the last rival search of this streak (0: none yet).
     rival : RivalReport or None
         The last rival search of this streak.
+    rival_searches : int
+        Rival searches run during the current streak.
     locally_confident : bool
         Checks 1-4 hold (the filter tracks a pose that fits the map, sustained) whatever
         check 5 says: the verdict for a caller that resolves place ambiguity itself (the
@@ -281,6 +285,7 @@ class Confidence:
     rival_streak: int = 0
     rival: RivalReport | None = None
     locally_confident: bool = False
+    rival_searches: int = 0
 
 
 def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
@@ -422,6 +427,7 @@ def assess(
             previous.rival_streak,
             previous.rival,
             previous.locally_confident,
+            previous.rival_searches,
         )
 
     def fail(reason: str) -> Confidence:
@@ -463,6 +469,7 @@ def assess(
     unique = not cfg.rival_check or (same and previous.unique)  # type: ignore[union-attr]
     rival_streak = previous.rival_streak if same else 0  # type: ignore[union-attr]
     last_rival = previous.rival if same else None  # type: ignore[union-attr]
+    n_searches = previous.rival_searches if same else 0  # type: ignore[union-attr]
     summary = (
         f"share {share:.2f}, std {sxy:.3f} m / {math.degrees(sth):.1f} deg,"
         f" scan {frac:.2f} of {nb} beams, {streak} updates"
@@ -486,6 +493,7 @@ def assess(
             kw.get("rival_streak", rival_streak),
             kw.get("rival", last_rival),
             streak >= cfg.hold_updates,
+            n_searches + (1 if "rival" in kw else 0),
         )
 
     if streak < cfg.hold_updates:
@@ -515,7 +523,9 @@ def assess(
             rival_streak=streak,
             rival=rival,
         )
-    due = rival_streak == 0 or streak - rival_streak >= cfg.rival_recheck
+    # Back off: wait rival_recheck, then 2x, 4x ... updates (a symmetric room stays ambiguous).
+    wait = cfg.rival_recheck * 2 ** max(n_searches - 1, 0)
+    due = rival_streak == 0 or streak - rival_streak >= wait
     reason = (
         "rival search due"
         if due
