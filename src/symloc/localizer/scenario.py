@@ -177,9 +177,8 @@ class Scenario:
         """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
         from symloc.mcl import AmclParams
 
-        return AmclParams(
-            **dict.fromkeys(("alpha1", "alpha2", "alpha3", "alpha4"), self.odom_alpha)
-        )
+        a = self.odom_alpha
+        return AmclParams(alpha1=a, alpha2=a, alpha3=a, alpha4=a)
 
     def scan_at(self, rng: np.random.Generator) -> Any:
         from symloc.sim.lidar import simulate_scan
@@ -272,7 +271,10 @@ def build_scenario(
         amcl_params=AmclParams(
             max_particles=max_particles,
             min_particles=500,
-            **dict.fromkeys(("alpha1", "alpha2", "alpha3", "alpha4"), ODOM_ALPHA),
+            alpha1=ODOM_ALPHA,
+            alpha2=ODOM_ALPHA,
+            alpha3=ODOM_ALPHA,
+            alpha4=ODOM_ALPHA,
         ),
         workdir=wd,
         notes=[MAP_SOURCE],
