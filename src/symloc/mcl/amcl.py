@@ -423,22 +423,7 @@ class Amcl:
         parts = self.particles
         w_prev = self.weights
         report = None
-        if p.laser_model_type == "likelihood_field":
-            factor = likelihood_field_weights(
-                self.field,
-                parts,
-                beams,
-                z_hit=p.z_hit,
-                z_rand=p.z_rand,
-                sigma_hit=p.sigma_hit,
-                laser_pose=laser_pose,
-            )
-            if p.laser_likelihood_exponent != 1.0:
-                factor **= p.laser_likelihood_exponent
-            w = w_prev * factor
-            total = float(w.sum())
-            w_avg = total / w.size
-        elif p.laser_model_type == "likelihood_field_prob":
+        if p.laser_model_type == "likelihood_field_prob":
             logf, report = likelihood_field_prob_log_weights(
                 self.field,
                 parts,
@@ -458,18 +443,29 @@ class Amcl:
             total = float(w.sum())
             w_avg = total * float(np.exp(shift)) / w.size  # may underflow to 0: then ignored
         else:
-            factor = beam_model_weights(
-                self.grid,
-                parts,
-                beams,
-                z_hit=p.z_hit,
-                z_short=p.z_short,
-                z_max=p.z_max,
-                z_rand=p.z_rand,
-                sigma_hit=p.sigma_hit,
-                lambda_short=p.lambda_short,
-                laser_pose=laser_pose,
-            )
+            if p.laser_model_type == "likelihood_field":
+                factor = likelihood_field_weights(
+                    self.field,
+                    parts,
+                    beams,
+                    z_hit=p.z_hit,
+                    z_rand=p.z_rand,
+                    sigma_hit=p.sigma_hit,
+                    laser_pose=laser_pose,
+                )
+            else:
+                factor = beam_model_weights(
+                    self.grid,
+                    parts,
+                    beams,
+                    z_hit=p.z_hit,
+                    z_short=p.z_short,
+                    z_max=p.z_max,
+                    z_rand=p.z_rand,
+                    sigma_hit=p.sigma_hit,
+                    lambda_short=p.lambda_short,
+                    laser_pose=laser_pose,
+                )
             if p.laser_likelihood_exponent != 1.0:
                 factor **= p.laser_likelihood_exponent
             w = w_prev * factor
