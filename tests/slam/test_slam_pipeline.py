@@ -63,6 +63,34 @@ def test_run_slam_validates_inputs(room: np.ndarray) -> None:
         SubmapParams(scans_per_submap=1)
     with pytest.raises(ConfigurationError, match=r"intra_sigmas\[2\]: expected a value > 0"):
         PoseGraphParams(intra_sigmas=(0.1, 0.1, 0.0))
+    with pytest.raises(ConfigurationError, match="loop_resample_distance: expected a value >= 0"):
+        SlamParams(loop_resample_distance=-1.0)
+    with pytest.raises(
+        ConfigurationError, match="loop_constrained_distance: expected a value >= 0"
+    ):
+        SlamParams(loop_constrained_distance=-0.5)
+
+
+def test_loop_sampling_searches_less_and_still_closes_the_loop(room: np.ndarray) -> None:
+    truth = np.vstack([_loop_path(60), _loop_path(60)[:20]])
+    rng = np.random.default_rng(3)
+    scans = [make_scan(room, p, rng) for p in truth]
+    odom = noisy_odometry(truth, (0.04, 0.01, 0.01, 0.04), rng=5)
+    base = {"submap": SubmapParams(scans_per_submap=10), "optimize_every": 10}
+    every = run_slam(
+        scans,
+        odom,
+        SlamParams(**base, loop_resample_distance=0.0, loop_constrained_distance=0.0),
+        progress=False,
+    )
+    sampled = run_slam(
+        scans,
+        odom,
+        SlamParams(**base, loop_resample_distance=1.0, loop_constrained_distance=3.0),
+        progress=False,
+    )
+    assert 0 < len(sampled.loop_closures) < len(every.loop_closures)
+    assert ate(truth, sampled.poses).rmse < 0.05
 
 
 def _graph_error(huber_k: float) -> float:

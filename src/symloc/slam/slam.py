@@ -6,9 +6,13 @@ For every scan (Hess et al. 2016 structure, with Olson's correlative matcher):
 2. **Match** it against the oldest active submap (:func:`match_scan`, real-time window) and
    insert it into the active submaps (:class:`ActiveSubmaps`).
 3. **Graph**: add the node, its intra-submap constraints and the odometry constraint.
-4. **Loop closure** (every ``loop_every`` nodes): match the scan against each finished older
-   submap whose predicted distance is below ``loop_search_distance`` with a wide window; a
-   score >= ``loop_min_score`` adds a robust loop constraint.
+4. **Loop closure** (every ``loop_every`` nodes): match the scan against the nearest finished
+   older submaps whose predicted distance is below ``loop_search_distance`` with a wide window;
+   a score >= ``loop_min_score`` adds a robust loop constraint. Loop constraints are sampled
+   along the trajectory, as Cartographer samples them (its ``sampling_ratio``) but by
+   distance: a submap is searched again only after the robot travelled
+   ``loop_resample_distance`` since its last search, and ``loop_constrained_distance`` after
+   a search that found a loop (the submap is then well constrained to the recent nodes).
 5. **Optimise** with Levenberg-Marquardt every ``optimize_every`` nodes when new loop
    constraints arrived, and once at the end.
 
@@ -87,6 +91,11 @@ class SlamParams:
         The newest finished submaps skipped by the loop search (they are local matches).
     loop_max_candidates : int
         At most this many submaps (the nearest) are matched per searched node.
+    loop_resample_distance : float
+        Trajectory length [m] the robot must travel after a loop search of a submap before
+        that submap is searched again (0: search it at every searched node).
+    loop_constrained_distance : float
+        Same after a search of the submap that found a loop closure (0: no extra wait).
     optimize_every : int
         Nodes between optimisations when new loop closures arrived.
     map_resolution : float
@@ -132,6 +141,8 @@ class SlamParams:
     loop_min_score: float = 0.6
     loop_skip_submaps: int = 1
     loop_max_candidates: int = 4
+    loop_resample_distance: float = 1.0
+    loop_constrained_distance: float = 3.0
     optimize_every: int = 20
     map_resolution: float = 0.05
     table_cache: int = 40
@@ -146,6 +157,12 @@ class SlamParams:
         )
         check_positive(self.motion_filter_angle, "SlamParams.motion_filter_angle", allow_zero=True)
         check_positive(self.map_resolution, "SlamParams.map_resolution")
+        check_positive(
+            self.loop_resample_distance, "SlamParams.loop_resample_distance", allow_zero=True
+        )
+        check_positive(
+            self.loop_constrained_distance, "SlamParams.loop_constrained_distance", allow_zero=True
+        )
         if not 0.0 <= self.retry_below <= 1.0:
             raise ConfigurationError(
                 f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
@@ -278,6 +295,8 @@ def run_slam(
     n_retries = 0
     submap_centres: dict[int, FloatArray] = {}
     node_scans: list[int] = []
+    travel = 0.0  # trajectory length [m] of the nodes (front-end poses)
+    next_search: dict[int, float] = {}  # submap -> travel from which it is searched again
 
     bar = tqdm(total=n, desc=desc, unit="scan", disable=not progress, leave=False)
     for i in range(n):
@@ -331,6 +350,7 @@ def run_slam(
         if k > 0:
             prev = node_scans[-2]
             graph.add_odometry(k - 1, k, relative(odom[prev], odom[i]))
+            travel += float(np.hypot(*(local[i, :2] - local[prev, :2])))
         timings["frontend"] += time.perf_counter() - t0
 
         # loop closures against older finished submaps
@@ -342,6 +362,8 @@ def run_slam(
             node_g = compose(global_from_local, local[i])
             candidates = []
             for sm in finished:
+                if travel < next_search.get(sm.index, -math.inf):
+                    continue  # sampled: searched (or constrained) too recently
                 if sm.index not in submap_centres:
                     submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
                 init = relative(graph.submap_pose(sm.index), node_g)
@@ -353,9 +375,12 @@ def run_slam(
                 sm = active.submaps[j]
                 cache.touch(sm)
                 res = match_scan(sm.table(), pts, init, prm.loop_csm)
-                if res.score >= prm.loop_min_score:
+                found = res.score >= prm.loop_min_score
+                if found:
                     graph.add_loop(sm.index, k, res.pose)
                     pending_loops += 1
+                wait = prm.loop_constrained_distance if found else prm.loop_resample_distance
+                next_search[sm.index] = travel + wait
         timings["loop_search"] += time.perf_counter() - t1
 
         if pending_loops and (k + 1) % prm.optimize_every == 0:
