@@ -395,6 +395,9 @@ def _split(
         seg_i = np.array([0], dtype=np.intp)
         seg_j = np.array([m - 1], dtype=np.intp)
     cs = mom.cs
+    # contiguous coordinate columns: gathering from them is much cheaper than from rows of p
+    px = np.ascontiguousarray(p[:, 0])
+    py = np.ascontiguousarray(p[:, 1])
     new_cuts = []
     while seg_i.size:
         keep = seg_j - seg_i >= 2
@@ -403,40 +406,49 @@ def _split(
             if seg_i.size == 0:
                 break
         n_in = seg_j - seg_i - 1
-        ends = np.cumsum(n_in)
+        ends = n_in.cumsum()
         first = ends - n_in
-        sid = np.arange(seg_i.size).repeat(n_in)
-        idx = np.arange(int(ends[-1])) - (first - seg_i - 1)[sid]
-        pi = p[idx]
+        idx = np.arange(int(ends[-1])) - (first - seg_i - 1).repeat(n_in)
+        xi = px[idx]
+        yi = py[idx]
         ti = tol[idx]
         # the segment's own line decides whether it is one wall (interior points: the moment
         # sums of [seg_i + 1, seg_j) never wrap)
         nx, ny, off = _normals_offsets(cs[:, seg_j] - cs[:, seg_i + 1])
-        res = np.abs(pi[:, 0] * nx[sid] + pi[:, 1] * ny[sid] - off[sid]) / ti
+        res = np.abs(xi * nx.repeat(n_in) + yi * ny.repeat(n_in) - off.repeat(n_in)) / ti
         bent = np.maximum.reduceat(res, first) > 1.0
-        if not bent.any():
-            break
-        a = p[seg_i]
-        d = p[seg_j] - a
-        length = np.hypot(d[:, 0], d[:, 1])
-        q = pi - a[sid]
-        ds = d[sid]
-        cross = np.abs(ds[:, 0] * q[:, 1] - ds[:, 1] * q[:, 0])
+        if not bent.all():
+            if not bent.any():
+                break
+            # only the bent segments are cut: keep their points
+            sel = bent.repeat(n_in)
+            idx, xi, yi, ti = idx[sel], xi[sel], yi[sel], ti[sel]
+            seg_i, seg_j, n_in = seg_i[bent], seg_j[bent], n_in[bent]
+            ends = n_in.cumsum()
+            first = ends - n_in
+        # cut at the interior point farthest from the chord
+        ax, ay = px[seg_i], py[seg_i]
+        dx, dy = px[seg_j] - ax, py[seg_j] - ay
+        length = np.hypot(dx, dy)
+        qx = xi - ax.repeat(n_in)
+        qy = yi - ay.repeat(n_in)
+        cross = np.abs(dx.repeat(n_in) * qy - dy.repeat(n_in) * qx)
         safe = length > 1e-12
         if safe.all():
-            dist = cross / length[sid]
+            dist = cross / length.repeat(n_in)
         else:
             dist = np.where(
-                safe[sid], cross / np.where(safe, length, 1.0)[sid], np.hypot(q[:, 0], q[:, 1])
+                safe.repeat(n_in),
+                cross / np.where(safe, length, 1.0).repeat(n_in),
+                np.hypot(qx, qy),
             )
         ratio = dist / ti
         best = np.maximum.reduceat(ratio, first)
-        split = (best > 1.0) & bent
+        split = best > 1.0
         if not split.any():
             break
         # first index of each segment's maximum
-        is_best = ratio == best[sid]
-        cand = np.where(is_best, np.arange(idx.size), idx.size)
+        cand = np.where(ratio == best.repeat(n_in), np.arange(idx.size), idx.size)
         arg = np.minimum.reduceat(cand, first)
         k = idx[arg[split]]
         new_cuts.append(k)
