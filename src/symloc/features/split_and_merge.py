@@ -303,6 +303,9 @@ class _Moments:
         np.multiply(y, y, out=cols[4, 1:])
         np.multiply(x, y, out=cols[5, 1:])
         self.cs = np.cumsum(cols, axis=1)
+        # contiguous copies of the coordinates: gathering from them is cheaper than from p
+        self.px = cols[1, 1:]
+        self.py = cols[2, 1:]
 
     def sums(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
         """Moment sums (6, K) of the ranges [a, b); ``b`` may exceed M (wraps to the start)."""
@@ -360,13 +363,19 @@ def _pair_excess(
     a, b = a_all[cand], b_all[cand]
     nx, ny, off = _normals_offsets(s[:, cand])
     lengths = b - a
-    rep = np.arange(cand.size).repeat(lengths)
-    ends = np.cumsum(lengths)
+    ends = lengths.cumsum()
     first = ends - lengths
-    pos = np.arange(int(ends[-1])) - (first - a)[rep]
+    pos = np.arange(int(ends[-1])) - (first - a).repeat(lengths)
     if closed:
         pos %= m
-    res = np.abs(p[pos, 0] * nx[rep] + p[pos, 1] * ny[rep] - off[rep]) / tol[pos]
+    res = (
+        np.abs(
+            mom.px[pos] * nx.repeat(lengths)
+            + mom.py[pos] * ny.repeat(lengths)
+            - off.repeat(lengths)
+        )
+        / tol[pos]
+    )
     out = np.maximum.reduceat(res, first)
     out[lengths <= 2] = 0.0
     out_all[cand] = out
@@ -492,12 +501,20 @@ def _absorbable(
     nxt = (cand + 1) % n_l
     lengths = sp[cand] - st[cand]
     first = np.concatenate(([0], np.cumsum(lengths)[:-1]))
-    rep = np.arange(cand.size).repeat(lengths)
     pos = np.arange(int(lengths.sum())) - (first - st[cand]).repeat(lengths)
-    q = p[pos]
+    qx = mom.px[pos]
+    qy = mom.py[pos]
     tq = tol[pos]
-    bad_prev = np.abs(q[:, 0] * nrm[prev[rep], 0] + q[:, 1] * nrm[prev[rep], 1] - off[prev[rep]])
-    bad_next = np.abs(q[:, 0] * nrm[nxt[rep], 0] + q[:, 1] * nrm[nxt[rep], 1] - off[nxt[rep]])
+    bad_prev = np.abs(
+        qx * nrm[prev, 0].repeat(lengths)
+        + qy * nrm[prev, 1].repeat(lengths)
+        - off[prev].repeat(lengths)
+    )
+    bad_next = np.abs(
+        qx * nrm[nxt, 0].repeat(lengths)
+        + qy * nrm[nxt, 1].repeat(lengths)
+        - off[nxt].repeat(lengths)
+    )
     bp = np.concatenate(([0], np.cumsum(bad_prev > tq)))
     bn = np.concatenate(([0], np.cumsum(bad_next > tq)))
     # split s (0..n) of piece c: points [0, s) to prev, [s, n) to next; with n + 1 choices
@@ -769,8 +786,11 @@ def split_and_merge(
     # residuals per line (one pass over all points)
     n_pts = (sp - st).astype(np.intp)
     owner = np.arange(st.size).repeat(n_pts)
-    nrm_o = normals[owner]
-    res = p[:, 0] * nrm_o[:, 0] + p[:, 1] * nrm_o[:, 1] - offsets[owner]
+    res = (
+        mom.px * normals[:, 0].repeat(n_pts)
+        + mom.py * normals[:, 1].repeat(n_pts)
+        - offsets.repeat(n_pts)
+    )
     rms = np.sqrt(np.bincount(owner, res * res, minlength=st.size) / np.maximum(n_pts, 1))
     max_excess = np.maximum.reduceat(np.abs(res) / tol, st)
     f_c = first - centers
