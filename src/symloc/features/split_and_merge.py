@@ -129,17 +129,20 @@ def _tls_from_moments(
     return c, d, nrm, off, np.maximum(half_tr + disc, 0.0)
 
 
+# rows of the means whose products are subtracted from the second moments: mx mx, my my, mx my
+_MEAN_A = np.array([0, 1, 0])
+_MEAN_B = np.array([0, 1, 1])
+
+
 def _normals_offsets(s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """TLS normals (x, y components) and offsets from summed moments ``s`` (6, K).
 
     The same arithmetic as :func:`_tls_from_moments`, without the centres, directions and
     spread that the split and merge tests do not need.
     """
-    n = np.maximum(s[0], 1.0)
-    mx, my = s[1] / n, s[2] / n
-    cxx = s[3] / n - mx * mx
-    cyy = s[4] / n - my * my
-    cxy = s[5] / n - mx * my
+    q = s[1:] / np.maximum(s[0], 1.0)  # means of x, y, xx, yy, xy
+    mx, my = q[0], q[1]
+    cxx, cyy, cxy = q[2:] - q[_MEAN_A] * q[_MEAN_B]
     theta = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
     cos_t, sin_t = np.cos(theta), np.sin(theta)
     return -sin_t, cos_t, -sin_t * mx + cos_t * my
@@ -294,18 +297,20 @@ class _Moments:
     def __init__(self, p: FloatArray) -> None:
         m = p.shape[0]
         x, y = p[:, 0], p[:, 1]
-        cols = np.empty((6, m + 1))
+        cols = np.empty((5, m + 1))
         cols[:, 0] = 0.0
-        cols[0, 1:] = 1.0
-        cols[1, 1:] = x
-        cols[2, 1:] = y
-        np.multiply(x, x, out=cols[3, 1:])
-        np.multiply(y, y, out=cols[4, 1:])
-        np.multiply(x, y, out=cols[5, 1:])
-        self.cs = np.cumsum(cols, axis=1)
+        cols[0, 1:] = x
+        cols[1, 1:] = y
+        np.multiply(x, x, out=cols[2, 1:])
+        np.multiply(y, y, out=cols[3, 1:])
+        np.multiply(x, y, out=cols[4, 1:])
+        cs = np.empty((6, m + 1))
+        cs[0] = np.arange(m + 1)  # the running count (exact, as a running sum of ones is)
+        np.cumsum(cols, axis=1, out=cs[1:])
+        self.cs = cs
         # contiguous copies of the coordinates: gathering from them is cheaper than from p
-        self.px = cols[1, 1:]
-        self.py = cols[2, 1:]
+        self.px = cols[0, 1:]
+        self.py = cols[1, 1:]
 
     def sums(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
         """Moment sums (6, K) of the ranges [a, b); ``b`` may exceed M (wraps to the start)."""
