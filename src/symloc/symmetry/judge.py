@@ -276,7 +276,14 @@ def _judge_closed(
 
     # --- circle: every point on one circle, and equally far from the centroid ---
     c_fit, radius = fit_circle(pts, refine=0)
-    if np.isfinite(radius):
+    maybe_circle = bool(np.isfinite(radius))
+    if maybe_circle:
+        # a polygon misses the circle by far: when every 8th point already misses it by more
+        # than the refinement bound, the full test below fails too (the same values on a
+        # subset; the margin keeps the two decisions equal whatever the last bit)
+        d_sub = np.hypot(*(pts[::8] - c_fit).T) - radius
+        maybe_circle = not float(np.maximum.reduce(np.abs(d_sub) / tol[::8])) > 3.0 + 1e-9
+    if maybe_circle:
         d_fit = np.hypot(*(pts - c_fit).T) - radius
         # the algebraic fit is close to the geometric one for a circle; only refine candidates
         if float(np.maximum.reduce(np.abs(d_fit) / tol)) <= 3.0:
