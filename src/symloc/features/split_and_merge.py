@@ -774,7 +774,8 @@ def split_and_merge(
         p, tol, st, sp, closed=closed, max_points=max(2 * min_points, 32), mom=mom
     )
     if st.size != n_before:
-        mom = _Moments(p)
+        if extra:
+            mom = _Moments(p)  # the points were re-rolled (otherwise they, and mom, are the same)
         p, tol, st, sp, shift, mom = _refine_boundaries(p, tol, st, sp, closed=closed, mom=mom)
         roll = (roll + extra + shift) % m
     centers, dirs, normals, offsets, var_along = mom.fit(st, sp)
