@@ -80,9 +80,16 @@ def register(subparsers: Any) -> None:
         help="search loop closures every N graph nodes (default: SlamParams, every node)",
     )
     parser.add_argument(
-        "--no-match-filtered",
-        action="store_true",
-        help="do not scan-match the scans the motion filter drops (faster; odometry between nodes)",
+        "--match-filtered",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="also scan-match the scans the motion filter drops (default: SlamParams, off)",
+    )
+    parser.add_argument(
+        "--loop-resample",
+        type=float,
+        default=None,
+        help="travel [m] before a submap is searched for loops again (default: SlamParams)",
     )
     parser.set_defaults(func=run)
 
@@ -121,8 +128,10 @@ def run(args: argparse.Namespace) -> int:
     params = SlamParams()
     if args.loop_every is not None:
         params = dataclasses.replace(params, loop_every=args.loop_every)
-    if args.no_match_filtered:
-        params = dataclasses.replace(params, match_filtered_scans=False)
+    if args.match_filtered is not None:
+        params = dataclasses.replace(params, match_filtered_scans=args.match_filtered)
+    if args.loop_resample is not None:
+        params = dataclasses.replace(params, loop_resample_distance=args.loop_resample)
     print_config(
         "slam",
         {
@@ -134,6 +143,8 @@ def run(args: argparse.Namespace) -> int:
             "laps": args.laps,
             "loop_every": params.loop_every,
             "match_filtered_scans": params.match_filtered_scans,
+            "loop_resample_distance": params.loop_resample_distance,
+            "loop_constrained_distance": params.loop_constrained_distance,
         },
     )
     rows: list[dict[str, Any]] = []

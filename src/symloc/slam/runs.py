@@ -90,6 +90,8 @@ class SlamRun:
             "rpe_trans_rmse_m": self.rpe.trans_rmse,
             "rpe_rot_rmse_deg": math.degrees(self.rpe.rot_rmse),
             "loop_closures": len(r.loop_closures),
+            "loop_searches": r.n_loop_searches,
+            "retries": r.n_retries,
             "submaps": r.n_submaps,
             "cpu_s": r.timings["total_cpu"],
             "wall_s": r.timings["total"],

@@ -6,8 +6,9 @@ For every scan (Hess et al. 2016 structure, with Olson's correlative matcher):
 2. **Match** it against the oldest active submap (:func:`match_scan`, real-time window) and
    insert it into the active submaps (:class:`ActiveSubmaps`).
 3. **Graph**: add the node, its intra-submap constraints and the odometry constraint.
-4. **Loop closure** (every ``loop_every`` nodes): match the scan against the nearest finished
-   older submaps whose predicted distance is below ``loop_search_distance`` with a wide window;
+4. **Loop closure** (every ``loop_every`` nodes): match the scan against the
+   ``loop_max_candidates`` nearest finished older submaps whose predicted distance is below
+   ``loop_search_distance`` with a wide window;
    a score >= ``loop_min_score`` adds a robust loop constraint. Loop constraints are sampled
    along the trajectory, as Cartographer samples them (its ``sampling_ratio``) but by
    distance: a submap is searched again only after the robot travelled
@@ -135,17 +136,17 @@ class SlamParams:
     voxel: float = 0.05
     motion_filter_distance: float = 0.2
     motion_filter_angle: float = math.radians(10.0)
-    match_filtered_scans: bool = True
+    match_filtered_scans: bool = False
     loop_every: int = 1
     loop_search_distance: float = 10.0
     loop_min_score: float = 0.6
     loop_skip_submaps: int = 1
     loop_max_candidates: int = 4
-    loop_resample_distance: float = 1.0
-    loop_constrained_distance: float = 3.0
+    loop_resample_distance: float = 3.0
+    loop_constrained_distance: float = 6.0
     optimize_every: int = 20
     map_resolution: float = 0.05
-    table_cache: int = 40
+    table_cache: int = 80
 
     def __post_init__(self) -> None:
         check_positive(self.max_range, "SlamParams.max_range")
@@ -210,6 +211,8 @@ class SlamResult:
         Scans whose real-time match was retried with the wide window.
     graph : PoseGraph or None
         The final pose graph (factors and optimised values).
+    n_loop_searches : int
+        Loop-closure scan matches run (node, submap pairs searched).
     """
 
     poses: FloatArray
@@ -223,6 +226,7 @@ class SlamResult:
     n_optimizations: int
     n_retries: int = 0
     graph: PoseGraph | None = None
+    n_loop_searches: int = 0
 
 
 def scan_points(scan: LaserScan, max_range: float, voxel: float) -> FloatArray:
@@ -293,6 +297,7 @@ def run_slam(
     pending_loops = 0
     n_opt = 0
     n_retries = 0
+    n_loop_searches = 0
     submap_centres: dict[int, FloatArray] = {}
     node_scans: list[int] = []
     travel = 0.0  # trajectory length [m] of the nodes (front-end poses)
@@ -362,8 +367,6 @@ def run_slam(
             node_g = compose(global_from_local, local[i])
             candidates = []
             for sm in finished:
-                if travel < next_search.get(sm.index, -math.inf):
-                    continue  # sampled: searched (or constrained) too recently
                 if sm.index not in submap_centres:
                     submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
                 init = relative(graph.submap_pose(sm.index), node_g)
@@ -372,9 +375,12 @@ def run_slam(
                     candidates.append((dist, sm.index, init))
             candidates.sort(key=lambda c: c[0])
             for _, j, init in candidates[: prm.loop_max_candidates]:
+                if travel < next_search.get(j, -math.inf):
+                    continue  # sampled: searched (or constrained) too recently
                 sm = active.submaps[j]
                 cache.touch(sm)
                 res = match_scan(sm.table(), pts, init, prm.loop_csm)
+                n_loop_searches += 1
                 found = res.score >= prm.loop_min_score
                 if found:
                     graph.add_loop(sm.index, k, res.pose)
@@ -429,5 +435,6 @@ def run_slam(
         timings=timings,
         n_optimizations=n_opt,
         n_retries=n_retries,
+        n_loop_searches=n_loop_searches,
         graph=graph,
     )
