@@ -77,7 +77,7 @@ def register(subparsers: Any) -> None:
         "--loop-every",
         type=int,
         default=None,
-        help="search loop closures every N graph nodes (default: SlamParams, every node)",
+        help="search loop closures every N graph nodes (default: SlamParams, every node, sampled)",
     )
     parser.add_argument(
         "--match-filtered",
