@@ -91,6 +91,12 @@ def register(subparsers: Any) -> None:
         default=None,
         help="travel [m] before a submap is searched for loops again (default: SlamParams)",
     )
+    parser.add_argument(
+        "--loop-constrained",
+        type=float,
+        default=None,
+        help="travel [m] before a submap with a found loop is searched again (default: SlamParams)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -132,6 +138,8 @@ def run(args: argparse.Namespace) -> int:
         params = dataclasses.replace(params, match_filtered_scans=args.match_filtered)
     if args.loop_resample is not None:
         params = dataclasses.replace(params, loop_resample_distance=args.loop_resample)
+    if args.loop_constrained is not None:
+        params = dataclasses.replace(params, loop_constrained_distance=args.loop_constrained)
     print_config(
         "slam",
         {
