@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["add_common_arguments", "print_config", "write_json"]
+__all__ = ["CARMEN_LOGS", "add_common_arguments", "find_carmen_dir", "print_config", "write_json"]
+
+#: The real laser logs in ``../shared/data/carmen`` (see its README).
+CARMEN_LOGS = ("intel", "aces", "freiburg-079")
 
 
 def add_common_arguments(parser: Any, *, default_seed: int = 0) -> None:
@@ -35,3 +39,14 @@ def write_json(path: Path | None, data: Mapping[str, Any]) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(data, indent=2, default=float) + "\n")
     print(f"wrote {path}")
+
+
+def find_carmen_dir() -> Path | None:
+    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
+    env = os.environ.get("SYMLOC_SHARED_DATA")
+    cands = [Path(env) / "carmen"] if env else []
+    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
+    for c in cands:
+        if c.is_dir():
+            return c.resolve()
+    return None

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +35,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import CARMEN_LOGS as LOG_NAMES
+from symloc.experiments._common import (
+    add_common_arguments,
+    find_carmen_dir,
+    print_config,
+    write_json,
+)
 from symloc.geometry import compose, inverse, wrap_angle
 
 __all__ = [
@@ -51,19 +56,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-LOG_NAMES = ("intel", "aces", "freiburg-079")
-
-
-def find_carmen_dir() -> Path | None:
-    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    cands = [Path(env) / "carmen"] if env else []
-    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
-    for c in cands:
-        if c.is_dir():
-            return c.resolve()
-    return None
 
 
 def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> Any:

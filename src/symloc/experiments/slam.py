@@ -21,27 +21,19 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import sys
 from pathlib import Path
 from typing import Any
 
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    CARMEN_LOGS,
+    add_common_arguments,
+    find_carmen_dir,
+    print_config,
+    write_json,
+)
 
 __all__ = ["CARMEN_LOGS", "find_carmen_dir", "register", "run"]
-
-CARMEN_LOGS = ("intel", "aces", "freiburg-079")
-
-
-def find_carmen_dir() -> Path | None:
-    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    cands = [Path(env) / "carmen"] if env else []
-    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
-    for c in cands:
-        if c.is_dir():
-            return c.resolve()
-    return None
 
 
 def register(subparsers: Any) -> None:

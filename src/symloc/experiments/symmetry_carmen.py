@@ -25,7 +25,6 @@ logs are in centimetre mode); nothing is tuned to the logs.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from collections import Counter
@@ -37,7 +36,13 @@ from tqdm import tqdm
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    CARMEN_LOGS,
+    add_common_arguments,
+    find_carmen_dir,
+    print_config,
+    write_json,
+)
 
 __all__ = [
     "CARMEN_LOGS",
@@ -48,7 +53,6 @@ __all__ = [
     "run_symmetry_carmen",
 ]
 
-CARMEN_LOGS = ("intel", "aces", "freiburg-079")
 
 #: Reason tags by the phrase that starts (or marks) the judgement's reason.
 _TAGS = (
@@ -64,17 +68,6 @@ _TAGS = (
     ("circle", "circle test"),
     ("failed on this scan", "judgement failed"),
 )
-
-
-def find_carmen_dir() -> Path | None:
-    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    cands = [Path(env) / "carmen"] if env else []
-    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
-    for c in cands:
-        if c.is_dir():
-            return c.resolve()
-    return None
 
 
 def reason_tag(reason: str) -> str:
