@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = ["demo_figure", "localization_figure", "table2_figure"]
 
 
@@ -57,11 +59,7 @@ def table2_figure(results: Sequence[Any], path: Path) -> Path:
         ax2.legend(loc="upper right", fontsize=7)
     fig.suptitle("Table 2: Algorithm 2 (go to the centre) from many start positions")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def demo_figure(story: Any, path: Path) -> Path:
@@ -144,11 +142,7 @@ def demo_figure(story: Any, path: Path) -> Path:
     ax.axis("off")
     fig.suptitle(story.title)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=72)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=72)
 
 
 def localization_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
@@ -197,8 +191,4 @@ def localization_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path:
     handles, labels_ = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels_, loc="lower center", ncol=4, fontsize=8)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)

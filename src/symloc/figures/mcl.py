@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = [
     "amcl_carmen_figure",
     "amcl_global_confidence_figure",
@@ -117,11 +119,7 @@ def amcl_symmetric_figure(
     ax.set_title(f"plain AMCL, uniform start ({int(tot[0])} trials/room)", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def amcl_carmen_figure(
@@ -161,11 +159,7 @@ def amcl_carmen_figure(
         ax.set_ylabel("position error [m]", color="b")
         ax.set_title(f"tracking: mean {err.mean():.3f} m, {np.degrees(dth).mean():.2f} deg")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=100)
 
 
 def amcl_global_confidence_figure(
@@ -208,8 +202,4 @@ def amcl_global_confidence_figure(
             if i == 0:
                 ax.set_ylabel("position error [m] (bold: confident; red: > 1 m off)")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=100)

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = ["plot_replay"]
 
 _COLOURS = {
@@ -84,8 +86,4 @@ def plot_replay(
         ax2.plot(tracked[:, 0], np.asarray(err) * 100, "g-", lw=0.8)
         ax2.set_ylabel("position error while tracking [cm]", color="tab:green")
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)

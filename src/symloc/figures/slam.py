@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = ["map_trajectory_figure", "slam_summary_figure"]
 
 
@@ -69,12 +71,8 @@ def map_trajectory_figure(
     ax.legend(loc="upper right", fontsize=8)
     if title:
         ax.set_title(title, fontsize=10)
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(out)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path)
 
 
 def slam_summary_figure(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
@@ -101,8 +99,4 @@ def slam_summary_figure(rows: Sequence[dict[str, Any]], path: str | Path) -> Pat
     a2.set_ylabel("data duration / processing time")
     a2.legend(fontsize=8)
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path)

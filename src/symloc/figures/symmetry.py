@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = ["plot_judgement", "plot_judgement_grid", "plot_table1_positions"]
 
 
@@ -82,11 +84,7 @@ def plot_table1_positions(
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0, 1, 0.97))
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def _draw_judgement(ax: Any, scan: Any, report: Any, lines: Any, title: str) -> None:
@@ -146,11 +144,7 @@ def plot_judgement(scan: Any, report: Any, path: str | Path, *, lines: Any = Non
     )
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_judgement_grid(
@@ -183,8 +177,4 @@ def plot_judgement_grid(
         axes[0, 0].legend(fontsize=6, loc="lower left")
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=100)

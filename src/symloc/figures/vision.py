@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.figures._save import save_figure
+
 __all__ = ["keyframes_figure", "matches_figure", "photos_figure", "table3_figure"]
 
 
@@ -46,11 +48,7 @@ def table3_figure(result: Any, path: str | Path) -> Path:
     )
     ax2.legend()
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def keyframes_figure(results: Sequence[Any], path: str | Path) -> Path:
@@ -74,11 +72,7 @@ def keyframes_figure(results: Sequence[Any], path: str | Path) -> Path:
     ax2.set_yscale("log")
     ax2.legend()
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def matches_figure(
@@ -123,11 +117,7 @@ def matches_figure(
             fontsize=9,
         )
     fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=90)
 
 
 def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, Any]] = ()) -> Path:
@@ -183,8 +173,4 @@ def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, A
             ax.imshow(img, cmap="gray" if np.ndim(img) == 2 else None)
             ax.set_title(title, fontsize=8)
             ax.axis("off")
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=100)
