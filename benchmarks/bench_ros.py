@@ -74,7 +74,7 @@ def bench_conversions(repeats: int) -> None:
 
 
 def bench_node_logic(seed: int) -> None:
-    from symloc.io.sim_record import record_sim_run
+    from symloc.bench.sim_record import record_sim_run
     from symloc.ros.params import NodeParams
     from symloc.ros.replay import replay_bag
 

@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from symloc.geometry import compose, relative
+from symloc.sim.odometry_noise import noisy_odometry
 from symloc.slam.correlative_scan_matching import match_scan
-from symloc.slam.odometry_noise import noisy_odometry
 from symloc.slam.slam import SlamParams, run_slam, scan_points
 from symloc.slam.submaps import ActiveSubmaps
 
@@ -42,8 +42,8 @@ def _data(n: int, seed: int) -> tuple[list, np.ndarray, str]:
         scans = lg.scans[:n]
         ref = np.array([s.laser_pose for s in scans])
         return [s.scan for s in scans], noisy_odometry(ref, rng=seed), f"intel (first {len(scans)})"
+    from symloc.bench.exploration import simulate_exploration
     from symloc.sim.rooms import build_room
-    from symloc.slam.exploration import simulate_exploration
 
     run = simulate_exploration(build_room("l_shaped", 4.0, lab=False), rng=seed)
     return run.scans[:n], run.odometry[:n], f"simulated l_shaped (first {min(n, len(run.scans))})"

@@ -25,8 +25,8 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy absent: pip install 'symloc[ros]' to run the ROS tests")
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: symloc[ros]")
 
+from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.grid import OccupancyGrid
-from symloc.io.sim_record import drive_command, prepare_session
 from symloc.localizer import Status
 from symloc.localizer.centering import CenteringConfig
 from symloc.odometry import OdometryReading

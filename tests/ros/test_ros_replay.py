@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from symloc.bench.sim_record import SimRecording, record_sim_run
 from symloc.errors import ConfigurationError
 from symloc.io.rosbag import read_bag
-from symloc.io.sim_record import SimRecording, record_sim_run
 from symloc.ros.params import NodeParams
 from symloc.ros.replay import replay_bag
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from symloc.io.sim_record import record_sim_run
+from symloc.bench.sim_record import record_sim_run
 from symloc.ros.params import NodeParams
 from symloc.ros.replay import replay_bag
 from symloc.vision import VisualMap

@@ -1,4 +1,4 @@
-"""ATE / RPE as evo defines them (symloc.slam.metrics)."""
+"""ATE / RPE as evo defines them (symloc.bench.slam_metrics)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from symloc.bench.slam_metrics import ate, rpe, umeyama_se2
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
-from symloc.slam.metrics import ate, rpe, umeyama_se2
 
 
 def _traj(n: int = 30) -> np.ndarray:

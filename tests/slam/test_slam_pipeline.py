@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 from conftest import make_scan
 
+from symloc.bench.slam_metrics import ate
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, relative
+from symloc.sim.odometry_noise import noisy_odometry
 from symloc.slam import (
     PoseGraph,
     PoseGraphParams,
     SlamParams,
     SubmapParams,
-    ate,
-    noisy_odometry,
     run_slam,
 )
 

@@ -11,10 +11,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from symloc.bench.scan_sources import bag_scan, carmen_scan, room_scan
 from symloc.cli.main import main
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.scan import LaserScan
-from symloc.symmetry.scan_sources import bag_scan, carmen_scan, room_scan
 
 
 def _square_ranges(n: int, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:

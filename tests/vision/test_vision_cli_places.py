@@ -11,10 +11,10 @@ import cv2
 import numpy as np
 import pytest
 
+from symloc.bench.photos import PLACE_PHOTOS, load_scene, view
 from symloc.cli.main import main
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values, read_image
-from symloc.vision.photos import PLACE_PHOTOS, load_scene, view
 
 
 @lru_cache(maxsize=1)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import vision_helpers as helpers
 
+from symloc.bench.keyframes import run_keyframes
+from symloc.bench.table3 import run_table3, wall_headings
 from symloc.cli.main import main
 from symloc.vision.default_vocabulary import DEFAULT_VOCABULARY_PATH, default_vocabulary
-from symloc.vision.keyframes import run_keyframes
-from symloc.vision.table3 import run_table3, wall_headings
 
 
 def test_shipped_vocabulary() -> None:

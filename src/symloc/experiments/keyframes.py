@@ -23,7 +23,7 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symloc.vision.keyframes import run_keyframes
+    from symloc.bench.keyframes import run_keyframes
 
     print_config(
         "keyframes",

@@ -74,9 +74,9 @@ def _selected(names: list[str] | None) -> list[tuple[str, bool]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from symloc.bench.room_trials import run_room_trials
+    from symloc.bench.scenario import MAP_SOURCE
     from symloc.figures.demo import localization_figure
-    from symloc.localizer.scenario import MAP_SOURCE
-    from symloc.localizer.trials import run_room_trials
     from symloc.sim.lidar import PRESETS
 
     rooms = _selected(args.room)

@@ -15,7 +15,7 @@ __all__ = ["register", "run"]
 
 def register(subparsers: Any) -> None:
     """Add ``photos`` to ``symloc experiment``."""
-    from symloc.vision.photos import CONDITIONS, PLACE_PHOTOS
+    from symloc.bench.photos import CONDITIONS, PLACE_PHOTOS
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "photos",
@@ -51,9 +51,9 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from symloc.bench.photos import example_views, run_photos
     from symloc.vision.default_vocabulary import default_vocabulary
     from symloc.vision.orientation import OrientationConfig
-    from symloc.vision.photos import example_views, run_photos
     from symloc.vision.vocabulary import Vocabulary
 
     voc = Vocabulary.load(args.vocabulary) if args.vocabulary else default_vocabulary()

@@ -1,6 +1,6 @@
 """``symloc experiment slam``: laser SLAM in the simulator and on the three CARMEN logs.
 
-Simulator rows (:data:`symloc.slam.runs.SIM_WORLDS`): the paper's 3 m x 3 m square of boards
+Simulator rows (:data:`symloc.bench.slam_runs.SIM_WORLDS`): the paper's 3 m x 3 m square of boards
 inside the lab, an L-shaped room and a hallway; the simulated robot drives ``--laps`` loops
 0.5 m from the walls with the paper's 15 m scanner (360 beams, sigma 10 mm) and odometry
 noise ``--alphas``; reported: ATE RMSE against the ground truth and the fraction of map cells
@@ -38,8 +38,8 @@ __all__ = ["CARMEN_LOGS", "find_carmen_dir", "register", "run"]
 
 def register(subparsers: Any) -> None:
     """Add ``slam`` to ``symloc experiment``."""
-    from symloc.slam.odometry_noise import DEFAULT_ALPHAS
-    from symloc.slam.runs import SIM_WORLDS
+    from symloc.bench.slam_runs import SIM_WORLDS
+    from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "slam", help="laser SLAM: simulated rooms and the CARMEN logs (ATE, RPE, loops, speed)"
@@ -108,7 +108,7 @@ def _row(s: dict[str, Any]) -> str:
 
 
 def _world_index(world: str, k: int) -> int:
-    from symloc.slam.runs import SIM_WORLDS
+    from symloc.bench.slam_runs import SIM_WORLDS
 
     names = list(SIM_WORLDS)
     return names.index(world) if world in names else k
@@ -116,9 +116,9 @@ def _world_index(world: str, k: int) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Run every requested world and log; print a table, write JSON and figures."""
+    from symloc.bench.slam_runs import run_carmen, run_simulated
     from symloc.figures.slam import map_trajectory_figure, slam_summary_figure
     from symloc.geometry import compose, inverse
-    from symloc.slam.runs import run_carmen, run_simulated
     from symloc.slam.slam import SlamParams
 
     a1, a2, a3, a4 = (float(a) for a in args.alphas)

@@ -31,7 +31,7 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symloc.localizer.table2 import run_table2
+    from symloc.bench.table2 import run_table2
     from symloc.sim.lidar import PRESETS
 
     names = args.preset or ["rplidar_a2", "lds01"]

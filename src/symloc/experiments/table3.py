@@ -34,7 +34,7 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symloc.vision.table3 import run_table3
+    from symloc.bench.table3 import run_table3
     from symloc.vision.vocabulary import Vocabulary
 
     voc = Vocabulary.load(args.vocabulary) if args.vocabulary else None

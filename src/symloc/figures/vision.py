@@ -125,7 +125,7 @@ def photos_figure(result: Any, path: str | Path, examples: Sequence[tuple[str, A
 
     Parameters
     ----------
-    result : symloc.vision.photos.PhotosResult
+    result : symloc.bench.photos.PhotosResult
     path : output PNG
     examples : sequence of (title, (H, W[, 3]) uint8 image)
         Shown in a row under the plots (e.g. the stored views and some re-captures).

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from symloc.camera_model import pinhole_matrix
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Decision, Localizer, Place
@@ -60,15 +61,10 @@ class MemoryPlaces:
 
 
 def camera_matrix(params: NodeParams) -> NDArray[np.float64]:
-    """The (3, 3) intrinsics from ``params.camera_intrinsics`` (or the simulator's camera)."""
-    if params.camera_intrinsics:
-        fx, fy, cx, cy = params.camera_intrinsics
-    else:
-        from symloc.sim.camera import Camera
-
-        cam = Camera()
-        fx = fy = cam.focal
-        cx, cy = cam.width / 2.0, cam.height / 2.0
+    """The (3, 3) intrinsics from ``params.camera_intrinsics`` (default: 640 x 480, 65 deg HFOV)."""
+    if not params.camera_intrinsics:
+        return pinhole_matrix()
+    fx, fy, cx, cy = params.camera_intrinsics
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
 

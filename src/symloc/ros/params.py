@@ -197,7 +197,7 @@ class NodeParams:
         if bad:
             raise ConfigurationError(f"symmetry.{bad[0]}: unknown (known: {sorted(known)})")
         if self.lidar_preset:
-            from symloc.sim.lidar import PRESETS
+            from symloc.lidar_spec import PRESETS
 
             return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
         return SymmetryConfig(**self.symmetry)

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from symloc.grid import OccupancyGrid
 from symloc.io.rosbag import BagTopics, bag_topics, read_bag
-from symloc.io.sim_record import TrajectoryPoint
+from symloc.io.tum import TrajectoryPoint
 from symloc.localizer import Estimate
 from symloc.ros.core import LocalizerFactory, NodeCore
 from symloc.ros.params import NodeParams

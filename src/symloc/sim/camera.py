@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
+from symloc.camera_model import DEFAULT_HFOV, focal_from_hfov
 from symloc.errors import ConfigurationError
 from symloc.geometry import as_pose
 from symloc.sim.raycast import RayHits, ray_intersections
@@ -61,7 +62,7 @@ class Camera:
 
     width: int = 640
     height: int = 480
-    hfov: float = math.radians(65.0)
+    hfov: float = DEFAULT_HFOV
     mount_height: float = CAMERA_MOUNT_HEIGHT
     gain: float = 1.0
     noise_sigma: float = 2.0
@@ -98,7 +99,7 @@ class Camera:
     @property
     def focal(self) -> float:
         """Focal length [pixels]."""
-        return (self.width / 2.0) / math.tan(self.hfov / 2.0)
+        return focal_from_hfov(self.width, self.hfov)
 
     @property
     def intrinsics(self) -> NDArray[np.float64]:

@@ -163,7 +163,7 @@ class SymmetryConfig:
 
     @classmethod
     def from_lidar(cls, preset: Any, **overrides: Any) -> SymmetryConfig:
-        """A config for a :class:`symloc.sim.lidar.LidarPreset`.
+        """A config for a :class:`symloc.lidar_spec.LidarPreset`.
 
         The preset's piecewise noise (``sigma_fraction * accuracy_abs`` below
         ``accuracy_break``, ``sigma_fraction * accuracy_rel * r`` beyond) is bounded from above

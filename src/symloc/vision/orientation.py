@@ -24,7 +24,7 @@ at once: the direction with the most homography inliers is taken instead, under 
 of step 3. On real photographs a vocabulary trained on other images gives weak BoW scores (0.02
 to 0.25 for a re-capture of the same view, against 0.91-0.96 in the paper's Table 3), while the
 homography separates the right direction by an order of magnitude (dozens to hundreds of
-inliers against at most about 12 for the other views); see :mod:`symloc.vision.photos`. Scenes
+inliers against at most about 12 for the other views); see :mod:`symloc.bench.photos`. Scenes
 that look alike in two directions still fit both with similar inlier counts and stay
 undetermined.
 
@@ -277,7 +277,7 @@ def rotation_from_correspondences(
     the unit bearing vectors (SVD), alternating with the least-squares ``z``. With 4 degrees of
     freedom instead of the homography's 8, the offset stays accurate when the inliers are few
     or cover a small part of the image (an occluded view), where reading the yaw from a full
-    homography can be off by 10 degrees or more (see :mod:`symloc.vision.photos`).
+    homography can be off by 10 degrees or more (see :mod:`symloc.bench.photos`).
 
     Parameters
     ----------

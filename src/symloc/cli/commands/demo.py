@@ -39,8 +39,8 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from symloc.bench.demo import run_demo
     from symloc.figures.demo import demo_figure
-    from symloc.localizer.demo import run_demo
 
     t0 = time.perf_counter()
     print(

@@ -11,8 +11,8 @@ __all__ = ["register"]
 
 def register(subparsers: Any) -> None:
     """Add ``map`` with its ``build`` sub-command."""
-    from symloc.slam.odometry_noise import DEFAULT_ALPHAS
-    from symloc.slam.runs import SIM_WORLDS
+    from symloc.bench.slam_runs import SIM_WORLDS
+    from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "map", help="build occupancy-grid maps by laser SLAM (map_server YAML + PGM)"
@@ -50,10 +50,10 @@ def register(subparsers: Any) -> None:
 
 
 def _build(args: argparse.Namespace) -> int:
+    from symloc.bench.slam_runs import run_carmen, run_simulated
     from symloc.figures.slam import map_trajectory_figure
     from symloc.geometry import compose, inverse
     from symloc.grid.map_io import save_map
-    from symloc.slam.runs import run_carmen, run_simulated
     from symloc.slam.slam import SlamParams
 
     a1, a2, a3, a4 = (float(a) for a in args.alphas)

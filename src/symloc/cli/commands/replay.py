@@ -61,7 +61,7 @@ def _run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from symloc.io.rosbag import BagTopics
-    from symloc.io.sim_record import write_tum
+    from symloc.io.tum import write_tum
     from symloc.ros.params import NodeParams
     from symloc.ros.replay import replay_bag
 

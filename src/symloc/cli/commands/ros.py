@@ -105,7 +105,7 @@ def add_sim_record_parser(sim_subparsers: Any) -> None:
 def _sim_record(args: argparse.Namespace) -> int:
     import math
 
-    from symloc.io.sim_record import record_sim_run
+    from symloc.bench.sim_record import record_sim_run
 
     print(f"# symloc sim record  seed={args.seed}  room={args.room}  format={args.format}")
     rec = record_sim_run(

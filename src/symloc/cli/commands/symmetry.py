@@ -90,8 +90,8 @@ def _fmt(v: Any) -> str:
 
 
 def _judge(args: argparse.Namespace) -> int:
+    from symloc.bench.scan_sources import bag_scan, carmen_scan, room_scan
     from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
-    from symloc.symmetry.scan_sources import bag_scan, carmen_scan, room_scan
 
     if args.room is not None:
         if args.gv is None or args.pose is None:

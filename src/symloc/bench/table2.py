@@ -17,10 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.localizer.adapters import ReportJudge
+from symloc.localizer.centering import CenteringConfig
 
-from .adapters import ReportJudge
-from .centering import CenteringConfig
-from .simulation import CenteringRun, RobotBody, go_to_centre
+from .episode import CenteringRun, RobotBody, go_to_centre
 
 __all__ = ["Table2Result", "run_table2"]
 

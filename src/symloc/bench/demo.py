@@ -12,9 +12,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.localizer.types import Status
 
 from .scenario import AmclRun, Scenario, SymlocRun, build_scenario, run_plain_amcl, run_symloc
-from .types import Status
 
 __all__ = ["DemoResult", "DemoStory", "run_demo"]
 

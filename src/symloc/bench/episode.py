@@ -25,16 +25,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.geometry import wrap_angle
+from symloc.localizer.centering import CenteringConfig, CentreFilter, centering_command
+from symloc.localizer.types import Estimate, Request, RequestKind, Status, SymmetryJudge
 from symloc.odometry import OdometryReading
-
-from .centering import CenteringConfig, CentreFilter, centering_command
-from .types import Estimate, RequestKind, Status, SymmetryJudge
 
 __all__ = [
     "Body",
     "CenteringRun",
     "Episode",
     "RobotBody",
+    "drive_command",
     "go_to_centre",
     "run_episode",
 ]
@@ -232,24 +232,33 @@ class Episode:
         return self.estimates[-1]
 
 
-def _request_command(
-    est: Estimate, scan: Any, cfg: CenteringConfig, explore_w: float
+def drive_command(
+    status: Status,
+    request: Request | None,
+    scan: Any,
+    centering: Any,
+    explore_w: float = 0.6,
 ) -> tuple[float, float]:
-    req = est.request
-    if req is None:
-        if est.status is Status.LOST:
-            return 0.0, explore_w  # turn on the spot so AMCL sees new scans
-        return 0.0, 0.0
-    if req.kind is RequestKind.GO_TO_CENTRE:
-        cmd = centering_command(req.target, None, scan, cfg)
-        return cmd.v, cmd.w
-    if req.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
-        assert req.angle is not None
+    """Velocity (v [m/s], w [rad/s]) carrying out ``request`` (Algorithm 2's controller).
+
+    Lost with no request: turn on the spot so AMCL sees new scans. Capture: stand still.
+    """
+    if request is None:
+        return (0.0, explore_w) if status is Status.LOST else (0.0, 0.0)
+    if request.kind is RequestKind.GO_TO_CENTRE:
+        cmd = centering_command(request.target, None, scan, centering)
+        return float(cmd.v), float(cmd.w)
+    if request.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
+        angle = float(request.angle or 0.0)
         w = float(
-            np.clip(cfg.angular_gain * req.angle, -cfg.max_angular_speed, cfg.max_angular_speed)
+            np.clip(
+                centering.angular_gain * angle,
+                -centering.max_angular_speed,
+                centering.max_angular_speed,
+            )
         )
         return 0.0, w
-    return 0.0, 0.0  # CAPTURE_IMAGE: stand still
+    return 0.0, 0.0
 
 
 def run_episode(
@@ -296,7 +305,7 @@ def run_episode(
         if est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE:
             image = image_at(body.pose)
             continue
-        v, w = _request_command(est, scan, cfg, explore_w)
+        v, w = drive_command(est.status, est.request, scan, cfg, explore_w)
         before = body.pose
         odom = body.drive(v, w, dt)
         ep.commands.append((v, w))

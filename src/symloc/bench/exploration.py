@@ -21,9 +21,9 @@ from symloc.errors import ConfigurationError, WorldError
 from symloc.geometry import angle_diff
 from symloc.scan import LaserScan
 from symloc.sim.lidar import PAPER_15M, LidarPreset, simulate_scan
+from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room
-from symloc.slam.odometry_noise import DEFAULT_ALPHAS
 
 __all__ = ["ExplorationRun", "exploration_path", "simulate_exploration"]
 

@@ -18,11 +18,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.geometry import angle_diff, compose, wrap_angle
+from symloc.localizer.centering import CenteringConfig
+from symloc.localizer.directions import directions_for
+from symloc.localizer.types import Place, SymmetryJudge
 
-from .centering import CenteringConfig
-from .directions import directions_for
-from .simulation import Body, CenteringRun, ImageFn, ScanFn, go_to_centre
-from .types import Place, SymmetryJudge
+from .episode import Body, CenteringRun, ImageFn, ScanFn, go_to_centre
 
 __all__ = ["MappedPlace", "directions_for", "known_places", "map_place"]
 

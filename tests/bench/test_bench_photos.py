@@ -11,16 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from symloc.errors import ConfigurationError, DataFormatError
-from symloc.vision.default_vocabulary import _sources, default_vocabulary
-from symloc.vision.image_files import place_images_from_files
-from symloc.vision.orb import OrbExtractor
-from symloc.vision.orientation import (
-    OrientationConfig,
-    decide_orientation,
-    rotation_from_correspondences,
-)
-from symloc.vision.photos import (
+from symloc.bench.photos import (
     PLACE_PHOTOS,
     VIEW_K,
     flat_wall,
@@ -29,6 +20,15 @@ from symloc.vision.photos import (
     perturb,
     run_photos,
     view,
+)
+from symloc.errors import ConfigurationError, DataFormatError
+from symloc.vision.default_vocabulary import _sources, default_vocabulary
+from symloc.vision.image_files import place_images_from_files
+from symloc.vision.orb import OrbExtractor
+from symloc.vision.orientation import (
+    OrientationConfig,
+    decide_orientation,
+    rotation_from_correspondences,
 )
 
 
@@ -71,8 +71,8 @@ def test_perturb_conditions() -> None:
 
 
 def test_decisions_on_real_photos(tmp_path: Path) -> None:
+    from symloc.bench.photos import example_views
     from symloc.figures.vision import photos_figure
-    from symloc.vision.photos import example_views
 
     res = run_photos(
         default_vocabulary(),

@@ -30,9 +30,11 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng, check_positive
+from symloc.bench.episode import drive_command
 from symloc.errors import ConfigurationError
 from symloc.io.rosbag import BagFormat, BagWriter
-from symloc.localizer import Estimate, Request, RequestKind, Status
+from symloc.io.tum import TrajectoryPoint, write_tum
+from symloc.localizer import Estimate, Status
 from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.grid_msg import grid_to_fields
@@ -44,23 +46,11 @@ from symloc.ros.scan_msg import scan_to_fields
 __all__ = [
     "SimRecording",
     "SimSession",
-    "TrajectoryPoint",
-    "drive_command",
     "prepare_session",
     "record_sim_run",
-    "write_tum",
 ]
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True, slots=True)
-class TrajectoryPoint:
-    """The localizer's answer at one scan: stamp [s], status, pose (3,) or None."""
-
-    stamp: float
-    status: str
-    pose: FloatArray | None
 
 
 @dataclass
@@ -84,46 +74,6 @@ class SimRecording:
     counts: dict[str, int] = field(default_factory=dict)
     dropped: dict[str, int] = field(default_factory=dict)
     steps: list[str] = field(default_factory=list)
-
-
-def drive_command(
-    status: Status,
-    request: Request | None,
-    scan: Any,
-    centering: Any,
-    explore_w: float = 0.6,
-) -> tuple[float, float]:
-    """Velocity (v [m/s], w [rad/s]) carrying out ``request`` (Algorithm 2's controller).
-
-    Lost with no request: turn on the spot so AMCL sees new scans. Capture: stand still.
-    """
-    from symloc.localizer.centering import centering_command
-
-    if request is None:
-        return (0.0, explore_w) if status is Status.LOST else (0.0, 0.0)
-    if request.kind is RequestKind.GO_TO_CENTRE:
-        cmd = centering_command(request.target, None, scan, centering)
-        return float(cmd.v), float(cmd.w)
-    if request.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):
-        angle = float(request.angle or 0.0)
-        w = float(
-            np.clip(
-                centering.angular_gain * angle,
-                -centering.max_angular_speed,
-                centering.max_angular_speed,
-            )
-        )
-        return 0.0, w
-    return 0.0, 0.0
-
-
-def write_tum(path: Path, rows: list[tuple[float, FloatArray]]) -> None:
-    """Write poses as a TUM trajectory (``t x y z qx qy qz qw``; z = 0), which evo reads."""
-    lines = []
-    for t, p in rows:
-        h = 0.5 * float(p[2])
-        lines.append(f"{t:.9f} {p[0]:.9f} {p[1]:.9f} 0 0 0 {math.sin(h):.12f} {math.cos(h):.12f}")
-    path.write_text("\n".join(lines) + ("\n" if lines else ""))
 
 
 def _save_map(grid: Any, assets: Path) -> Path | None:
@@ -208,8 +158,8 @@ def prepare_session(
     """
     import dataclasses
 
-    from symloc.localizer.scenario import build_scenario
-    from symloc.localizer.simulation import RobotBody
+    from symloc.bench.episode import RobotBody
+    from symloc.bench.scenario import build_scenario
     from symloc.sim.robot import DiffDriveRobot
 
     assets_dir = Path(assets).resolve()  # params.yaml holds absolute paths

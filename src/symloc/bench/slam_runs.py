@@ -1,9 +1,9 @@
 """Complete SLAM runs with their evaluation: a CARMEN log or a simulated exploration.
 
 - :func:`run_carmen`: read a log, make odometry by adding noise to the increments of the
-  corrected poses (:func:`~symloc.slam.odometry_noise.noisy_odometry`, seeded), run SLAM,
+  corrected poses (:func:`~symloc.sim.odometry_noise.noisy_odometry`, seeded), run SLAM,
   and compare with the corrected poses (ATE with SE(2) alignment, RPE over consecutive scans).
-- :func:`run_simulated`: build a room, drive :func:`~symloc.slam.exploration.simulate_exploration`,
+- :func:`run_simulated`: build a room, drive :func:`~symloc.bench.exploration.simulate_exploration`,
   run SLAM and compare with the ground truth (trajectory and rasterised map).
 """
 
@@ -18,9 +18,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
 from symloc.grid.occupancy_grid import OccupancyGrid
-from symloc.slam.metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
-from symloc.slam.odometry_noise import DEFAULT_ALPHAS, noisy_odometry
+from symloc.sim.odometry_noise import DEFAULT_ALPHAS, noisy_odometry
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
 __all__ = ["SIM_WORLDS", "SlamRun", "run_carmen", "run_simulated"]
@@ -166,10 +166,10 @@ def run_simulated(
     progress: bool = True,
 ) -> SlamRun:
     """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`)."""
+    from symloc.bench.exploration import simulate_exploration
     from symloc.errors import ConfigurationError
     from symloc.sim.rasterize import world_to_grid
     from symloc.sim.rooms import build_room
-    from symloc.slam.exploration import simulate_exploration
 
     if world not in SIM_WORLDS:
         raise ConfigurationError(f"world: expected one of {sorted(SIM_WORLDS)}, got {world!r}")

@@ -1,7 +1,7 @@
 """The kidnapped-robot scenario in the simulator: maps, plain AMCL and symloc side by side.
 
 :func:`build_scenario` builds a room inside a lab, its occupancy grid, and the visual map of the
-room (the mapping stage, :func:`~symloc.localizer.mapping.map_place`). :func:`run_plain_amcl`
+room (the mapping stage, :func:`~symloc.bench.mapping_trip.map_place`). :func:`run_plain_amcl`
 kidnaps the robot and runs AMCL with nav2 defaults from a global start while the robot drives a
 seeded collision-free random path;
 :func:`run_symloc` runs the :class:`~symloc.localizer.localizer.Localizer` from the same start.
@@ -28,15 +28,15 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import angle_diff
+from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.centering import CenteringConfig
+from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
+from symloc.localizer.types import Estimate, Status
+from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
 from symloc.odometry import OdometryReading
 
-from .adapters import AmclTracker, GridScorer, ReportJudge
-from .centering import CenteringConfig
-from .localizer import Localizer, LocalizerConfig, rotated_copies
-from .mapping import MappedPlace, map_place
-from .simulation import Episode, RobotBody, run_episode
-from .types import Estimate, Status
-from .vision_store import UNANCHORED_LABEL, VisionPlaceStore
+from .episode import Episode, RobotBody, run_episode
+from .mapping_trip import MappedPlace, map_place
 
 __all__ = [
     "DEFAULT_GV",
@@ -168,7 +168,7 @@ class Scenario:
     def map_symmetries(self) -> list[Any]:
         """Rotational symmetries of the occupancy grid (computed once)."""
         if self._map_symmetries is None:
-            from .map_symmetry import map_symmetries
+            from symloc.localizer.map_symmetry import map_symmetries
 
             self._map_symmetries = map_symmetries(self.grid)
         return self._map_symmetries
@@ -221,8 +221,8 @@ def build_scenario(
     :func:`symloc.sim.rasterize.world_to_grid` and ground-truth poses.
 
     ``gyro`` (SLAM maps only): the mapping robot's odometry takes its heading from a simulated
-    yaw-rate gyro (:class:`~symloc.localizer.gyro.GyroSpec`; ``"default"`` is the Kobuki's
-    :data:`~symloc.localizer.gyro.L3G4200D`, None: wheel odometry only). In a round room, where
+    yaw-rate gyro (:class:`~symloc.sim.gyro.GyroSpec`; ``"default"`` is the Kobuki's
+    :data:`~symloc.sim.gyro.L3G4200D`, None: wheel odometry only). In a round room, where
     laser SLAM cannot observe heading, the stored image headings then come from gyro-odometry
     and are trusted; without a gyro they are stored as heading-from-odometry and never yield a
     claimed pose.
@@ -294,7 +294,7 @@ def build_scenario(
             true_centre=room.center,
         )
     else:
-        from .gyro import L3G4200D
+        from symloc.sim.gyro import L3G4200D
 
         spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
         scen.mapped = _map_with_slam(scen, start, gen, dt, spec)
@@ -333,7 +333,7 @@ def _map_with_slam(
 
     robot: Any = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
     if gyro is not None:
-        from .gyro import GyroOdometryBody, SimulatedGyro
+        from symloc.sim.gyro import GyroOdometryBody, SimulatedGyro
 
         robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
@@ -516,7 +516,7 @@ def run_plain_amcl(
     :meth:`Scenario.plain_amcl_params`, 2000/500 particles, likelihood field, alphas matched to
     the robot), a global start, and the robot driven for
     ``duration`` [s]. ``drive`` ``"explore"`` (default) is a seeded collision-free random drive
-    (:class:`~symloc.localizer.explore.ExploreDrive`, the same kind as
+    (:class:`~symloc.bench.explore.ExploreDrive`, the same kind as
     ``symloc experiment amcl-symmetric``); ``"spin"`` turns on the spot at ``w`` [rad/s].
 
     AMCL counts as confident by :func:`amcl_confident` (the project's one definition,

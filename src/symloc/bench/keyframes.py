@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.table3 import store_place, wall_headings
 from symloc.vision.orb import OrbExtractor
-from symloc.vision.table3 import store_place, wall_headings
 from symloc.vision.visual_map import VisualMap
 from symloc.vision.vocabulary import Vocabulary
 

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from symloc.bench.episode import RobotBody
+from symloc.bench.explore import ExploreConfig, ExploreDrive
 from symloc.errors import ConfigurationError
-from symloc.localizer.explore import ExploreConfig, ExploreDrive
-from symloc.localizer.gyro import L3G4200D, GyroOdometryBody, GyroSpec, SimulatedGyro
-from symloc.localizer.simulation import RobotBody
+from symloc.sim.gyro import L3G4200D, GyroOdometryBody, GyroSpec, SimulatedGyro
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import build_room
 

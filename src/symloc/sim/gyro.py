@@ -97,7 +97,7 @@ class GyroOdometryBody:
     """A body whose odometry takes its heading from a gyro (for the mapping trip).
 
     Wraps anything with ``pose``, ``odom`` and ``drive(v, w, dt)`` (e.g.
-    :class:`~symloc.localizer.simulation.RobotBody`). Each drive step takes the wheel odometry's
+    :class:`~symloc.bench.episode.RobotBody`). Each drive step takes the wheel odometry's
     travelled distance (in the wheels' own increment) and turns the pose by the gyro's measured
     heading change of the true motion; the position integrates along the gyro heading (midpoint).
     The fused odometry starts equal to the wrapped body's odometry.

@@ -11,13 +11,13 @@ pytest.importorskip("symloc.sim.camera", reason="the simulator's camera is not a
 pytest.importorskip("symloc.symmetry", reason="the symmetry judgement is not available")
 pytest.importorskip("symloc.vision.orientation", reason="the orientation decision is missing")
 
-from symloc.localizer.scenario import build_scenario, run_plain_amcl, run_symloc
+from symloc.bench.scenario import build_scenario, run_plain_amcl, run_symloc
 from symloc.localizer.types import Status
 
 
 def test_go_to_centre_in_the_square_stops_near_the_centre_without_hitting_anything():
+    from symloc.bench.episode import RobotBody, go_to_centre
     from symloc.localizer.adapters import ReportJudge
-    from symloc.localizer.simulation import RobotBody, go_to_centre
     from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
     from symloc.sim.robot import DiffDriveRobot
     from symloc.sim.rooms import build_room
