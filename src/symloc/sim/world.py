@@ -7,8 +7,11 @@ not see it; a camera sees it up to that height) and an integer material id that 
 into a colour or a photograph (see :mod:`symloc.sim.textures`).
 
 Material ids: ``MATERIAL_BOARD`` (plain light board), ``MATERIAL_WALL`` (plain painted wall),
-``MATERIAL_FURNITURE`` (plain wood), and ``MATERIAL_PHOTO + k`` for the k-th photograph of
-:data:`symloc.sim.textures.PHOTO_NAMES`.
+``MATERIAL_FURNITURE`` (plain wood), ``MATERIAL_GLASS`` (a glass panel: the lidar's beam mostly
+passes through it or returns nothing, the camera sees through it), ``MATERIAL_DARK`` (a dark,
+low-reflectivity surface: the lidar often gets no return from it), ``MATERIAL_PERSON`` (a
+person standing or walking), and ``MATERIAL_PHOTO + k`` for the k-th wall texture of
+:mod:`symloc.sim.textures`.
 """
 
 from __future__ import annotations
@@ -24,7 +27,10 @@ from symloc.errors import WorldError
 
 __all__ = [
     "MATERIAL_BOARD",
+    "MATERIAL_DARK",
     "MATERIAL_FURNITURE",
+    "MATERIAL_GLASS",
+    "MATERIAL_PERSON",
     "MATERIAL_PHOTO",
     "MATERIAL_WALL",
     "World",
@@ -35,6 +41,9 @@ __all__ = [
 MATERIAL_BOARD = 0
 MATERIAL_WALL = 1
 MATERIAL_FURNITURE = 2
+MATERIAL_GLASS = 3
+MATERIAL_DARK = 4
+MATERIAL_PERSON = 5
 MATERIAL_PHOTO = 10
 
 FloatArray = NDArray[np.float64]

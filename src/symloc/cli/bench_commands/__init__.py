@@ -1,0 +1,1 @@
+"""Sub-commands of ``symloc bench``: one module each, discovered (see :func:`register`)."""
