@@ -28,14 +28,29 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import angle_diff
+from symloc.geometry import compose as _compose
+from symloc.geometry import inverse as _inverse
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
+from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
+from symloc.mcl import Amcl, AmclParams
 from symloc.odometry import OdometryReading
+from symloc.sim.camera import Camera
+from symloc.sim.gyro import L3G4200D, GyroOdometryBody, SimulatedGyro
+from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
+from symloc.sim.rooms import Room, build_room, hallway, with_lab
+from symloc.slam import run_slam
+from symloc.symmetry import SymmetryConfig, judge_symmetry
+from symloc.vision import OrbExtractor, VisualMap, Vocabulary
+from symloc.vision.default_vocabulary import default_vocabulary
 
 from .episode import Episode, RobotBody, run_episode
+from .explore import ExploreDrive
 from .mapping_trip import MappedPlace, map_place
 
 __all__ = [
@@ -83,8 +98,6 @@ HEADING_TOL = math.radians(5.0)
 def _vocabulary(rng: np.random.Generator) -> Any:
     """The shipped vocabulary if the vision part provides one, else a small one trained here."""
     try:
-        from symloc.vision.default_vocabulary import default_vocabulary
-
         return default_vocabulary()
     except (ImportError, OSError, SymlocError):
         return _trained_vocabulary()
@@ -101,8 +114,6 @@ def _trained_vocabulary() -> Any:
         return _VOCAB_CACHE["v"]
     import cv2
     from skimage import data
-
-    from symloc.vision import OrbExtractor, Vocabulary
 
     names = [
         "astronaut",
@@ -159,7 +170,6 @@ class Scenario:
 
     def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
         """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
-        from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 
         a = self.odom_alpha
         cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
@@ -168,20 +178,16 @@ class Scenario:
     def map_symmetries(self) -> list[Any]:
         """Rotational symmetries of the occupancy grid (computed once)."""
         if self._map_symmetries is None:
-            from symloc.localizer.map_symmetry import map_symmetries
-
             self._map_symmetries = map_symmetries(self.grid)
         return self._map_symmetries
 
     def plain_amcl_params(self) -> Any:
         """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
-        from symloc.mcl import AmclParams
 
         a = self.odom_alpha
         return AmclParams(alpha1=a, alpha2=a, alpha3=a, alpha4=a)
 
     def scan_at(self, rng: np.random.Generator) -> Any:
-        from symloc.sim.lidar import simulate_scan
 
         return lambda pose: simulate_scan(self.room.world, pose, self.preset, rng)
 
@@ -201,7 +207,7 @@ class Scenario:
 
 
 def build_scenario(
-    room_name: str,
+    room_name: str | Room,
     *,
     textured: bool = True,
     rng: np.random.Generator | int | None = None,
@@ -211,8 +217,17 @@ def build_scenario(
     mapping_start: FloatArray | None = None,
     map_source: str = "slam",
     gyro: Any = "default",
+    explore_laps: float = 0.0,
+    regime: str = "ideal",
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
+
+    ``room_name`` is a name of :data:`symloc.sim.rooms.ROOM_NAMES` (built with
+    :data:`DEFAULT_GV` inside the textured lab), ``"hallway_40m"``, or a ready
+    :class:`~symloc.sim.rooms.Room` (e.g. from a world file or the world generator).
+    ``explore_laps`` > 0 adds a drive along the room's outline after the mapping stage, so that
+    SLAM sees rooms that the trip to the centre does not (concave rooms, furniture).
+    ``regime`` names the sensors of the mapping robot (:func:`symloc.bench.sensors.sensor_setup`).
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
     the centre with Algorithm 2 and stores M images (the mapping stage). ``map_source``
@@ -229,26 +244,21 @@ def build_scenario(
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
-    from symloc.mcl import AmclParams
-    from symloc.sim.camera import Camera
-    from symloc.sim.lidar import RPLIDAR_A2
-    from symloc.sim.rasterize import world_to_grid
-    from symloc.sim.robot import DiffDriveRobot
-    from symloc.sim.rooms import build_room
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
-    from symloc.vision import VisualMap
 
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
-    gv = DEFAULT_GV.get(room_name, 2.0)
-    long_hallway = room_name == LONG_HALLWAY
-    if long_hallway:
-        from symloc.sim.rooms import hallway, with_lab
-
-        room = with_lab(hallway(*LONG_HALLWAY_SIZE, textured=textured), textured=textured)
-        map_source = "raster"  # see the note below
+    if isinstance(room_name, Room):
+        room = room_name
+        room_name = room.name
+        long_hallway = False
     else:
-        room = build_room(room_name, gv, lab=True, textured=textured)
+        gv = DEFAULT_GV.get(room_name, 2.0)
+        long_hallway = room_name == LONG_HALLWAY
+        if long_hallway:
+            room = with_lab(hallway(*LONG_HALLWAY_SIZE, textured=textured), textured=textured)
+            map_source = "raster"  # see the note below
+        else:
+            room = build_room(room_name, gv, lab=True, textured=textured)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
     camera = Camera()
     f = camera.focal
@@ -294,8 +304,6 @@ def build_scenario(
             true_centre=room.center,
         )
     else:
-        from symloc.sim.gyro import L3G4200D
-
         spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
         scen.mapped = _map_with_slam(scen, start, gen, dt, spec)
     if long_hallway:
@@ -325,16 +333,9 @@ def _map_with_slam(
     The odometry starts at the robot's true start pose, so the SLAM map frame is anchored there
     and errors can be graded in world coordinates.
     """
-    from symloc.geometry import compose as _compose
-    from symloc.geometry import inverse as _inverse
-    from symloc.sim.lidar import simulate_scan
-    from symloc.sim.robot import DiffDriveRobot
-    from symloc.slam import run_slam
 
     robot: Any = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
     if gyro is not None:
-        from symloc.sim.gyro import GyroOdometryBody, SimulatedGyro
-
         robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
     odoms: list[FloatArray] = []
@@ -522,9 +523,6 @@ def run_plain_amcl(
     AMCL counts as confident by :func:`amcl_confident` (the project's one definition,
     ``locally_confident``: what nav2's filter alone can tell its user).
     """
-    from symloc.mcl import Amcl
-
-    from .explore import ExploreDrive
 
     if drive not in ("explore", "spin"):
         raise ConfigurationError(f"drive: expected 'explore' or 'spin', got {drive!r}")
@@ -617,7 +615,6 @@ def run_symloc(
     config: LocalizerConfig | None = None,
 ) -> SymlocRun:
     """Kidnap the robot to ``start`` and run the localizer until it settles (or ``max_time``)."""
-    from symloc.mcl import Amcl
 
     tracker = AmclTracker(Amcl(scen.grid, scen.amcl_params, rng))
     loc = Localizer(
