@@ -4,8 +4,9 @@ The tolerance is declared once (:data:`TOLERANCE`: 0.1 m and 5 degrees). A trial
 
 - **confident wrong** if *any* pose published as tracking, at *any* scan, lies outside the
   tolerance (not only the last one);
-- **correct** if it published at least one pose as tracking and every one of them lay inside;
-- **undetermined** if it never published a pose as tracking.
+- **correct** if it published at least one pose as tracking since the trial's start (for a
+  kidnapping: since the robot was carried away) and every pose it ever published lay inside;
+- **undetermined** if it published no pose as tracking since then (and none wrong before).
 
 Each trial also reports the time and distance from its start (or from the kidnapping) to the
 first claim, the fraction of scans tracked, the error while tracking (mean and 95th
@@ -164,8 +165,8 @@ def grade_trial(
     wrong = [
         i for i in claimed if pos_err[i] > tolerance.position or head_err[i] > tolerance.heading
     ]
-    grade = "undetermined" if not claimed else ("confident_wrong" if wrong else "correct")
     after = [i for i in claimed if i >= start]
+    grade = "confident_wrong" if wrong else ("correct" if after else "undetermined")
     t0 = log.t[start] if n > start else math.nan
     d0 = log.distance[start] if n > start else math.nan
     first = after[0] if after else None

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError, SymlocError
+from symloc.errors import ConfigurationError, SymlocError, WorldError
 from symloc.geometry import angle_diff
 from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
@@ -44,14 +44,17 @@ from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room, build_room, hallway, with_lab
+from symloc.sim.world import World
 from symloc.slam import run_slam
 from symloc.symmetry import SymmetryConfig, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 
-from .episode import Episode, RobotBody, run_episode
+from .episode import Episode, RobotBody, drive_waypoints, run_episode
+from .exploration import exploration_path
 from .explore import ExploreDrive
 from .mapping_trip import MappedPlace, map_place
+from .sensors import SensorSetup, sensor_setup
 
 __all__ = [
     "DEFAULT_GV",
@@ -166,7 +169,13 @@ class Scenario:
     slam_seconds: float = 0.0
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
+    #: the sensor regime of the robots (:func:`symloc.bench.sensors.sensor_setup`)
+    regime: str = "ideal"
     _map_symmetries: list[Any] | None = None
+
+    def sensors(self, rng: np.random.Generator, session: str = "query") -> SensorSetup:
+        """One robot's sensors in this scenario's regime, for ``session``."""
+        return sensor_setup(self.regime, self.preset, self.camera, rng, session=session)
 
     def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
         """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
@@ -174,6 +183,27 @@ class Scenario:
         a = self.odom_alpha
         cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
         return RobotBody(DiffDriveRobot(start, cfg, rng, world=self.room.world))
+
+    def world_at(self, t: float) -> World:
+        """What the sensors see at time ``t`` [s]: the static world plus anything moving."""
+        moving = getattr(self.room, "world_at", None)
+        world: World = self.room.world if moving is None else moving(t)
+        return world
+
+    def localizer(
+        self, rng: np.random.Generator, config: LocalizerConfig | None = None
+    ) -> Localizer:
+        """symloc's localizer on this scenario's maps (AMCL with ``amcl_params``)."""
+        tracker = AmclTracker(Amcl(self.grid, self.amcl_params, rng))
+        return Localizer(
+            tracker,
+            self.judge,
+            self.store,
+            config,
+            scorer=GridScorer(self.grid),
+            known_places=self.store.all_places(),
+            map_symmetries=self.map_symmetries(),
+        )
 
     def map_symmetries(self) -> list[Any]:
         """Rotational symmetries of the occupancy grid (computed once)."""
@@ -288,6 +318,7 @@ def build_scenario(
         ),
         workdir=wd,
         notes=[MAP_SOURCE],
+        regime=regime,
     )
     start = mapping_start if mapping_start is not None else scen.random_pose(gen)
     dt = 1.0 / float(preset.scan_rate)
@@ -305,7 +336,7 @@ def build_scenario(
         )
     else:
         spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
-        scen.mapped = _map_with_slam(scen, start, gen, dt, spec)
+        scen.mapped = _map_with_slam(scen, start, gen, dt, spec, explore_laps=explore_laps)
     if long_hallway:
         scen.notes.append(
             f"{room_name}: a {LONG_HALLWAY_SIZE[0]:g} m x {LONG_HALLWAY_SIZE[1]:g} m corridor; "
@@ -323,7 +354,13 @@ def build_scenario(
 
 
 def _map_with_slam(
-    scen: Scenario, start: FloatArray, gen: np.random.Generator, dt: float, gyro: Any = None
+    scen: Scenario,
+    start: FloatArray,
+    gen: np.random.Generator,
+    dt: float,
+    gyro: Any = None,
+    *,
+    explore_laps: float = 0.0,
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -371,13 +408,24 @@ def _map_with_slam(
         dt=dt,
         true_centre=scen.room.center,
     )
+    if explore_laps > 0:
+        try:
+            path = exploration_path(scen.room, margin=0.5)
+        except WorldError as err:
+            scen.notes.append(f"mapping stage: no exploration drive ({err})")
+        else:
+            refused = drive_waypoints(robot, path, laps=explore_laps, dt=dt, on_step=scan_rec)
+            scen.notes.append(
+                f"mapping stage: drove {explore_laps:g} lap(s) along the room outline"
+                + (f" ({refused} waypoints unreachable)" if refused else "")
+            )
     t0 = time.perf_counter()
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
     scen.notes[0] = (
-        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip "
-        f"({scen.slam_seconds:.1f} s); visual map poses: SLAM poses"
+        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "
+        "visual map poses: SLAM poses"
     )
     if mapped is None or not deferred:
         return None
@@ -616,16 +664,7 @@ def run_symloc(
 ) -> SymlocRun:
     """Kidnap the robot to ``start`` and run the localizer until it settles (or ``max_time``)."""
 
-    tracker = AmclTracker(Amcl(scen.grid, scen.amcl_params, rng))
-    loc = Localizer(
-        tracker,
-        scen.judge,
-        scen.store,
-        config,
-        scorer=GridScorer(scen.grid),
-        known_places=scen.store.all_places(),
-        map_symmetries=scen.map_symmetries(),
-    )
+    loc = scen.localizer(rng, config)
     loc.reset_global()
     robot = scen.robot(start, rng)
     ep = run_episode(
