@@ -86,7 +86,12 @@ class RayHits:
 
 
 def ray_intersections(
-    world: World, origins: ArrayLike, angles: ArrayLike, *, min_height: float = 0.0
+    world: World,
+    origins: ArrayLike,
+    angles: ArrayLike,
+    *,
+    min_height: float = 0.0,
+    skip_materials: tuple[int, ...] = (),
 ) -> RayHits:
     """Intersections of rays with every wall and circle taller than ``min_height``.
 
@@ -99,6 +104,8 @@ def ray_intersections(
         World-frame ray directions [rad]; leading dimensions broadcast with ``origins``.
     min_height : float
         Primitives of height <= this [m] are ignored (a lidar mounted above them sees over).
+    skip_materials : tuple of int
+        Primitives of these materials are ignored too (the camera sees through glass).
     """
     o = np.asarray(origins, dtype=np.float64)
     a = np.asarray(angles, dtype=np.float64)
@@ -106,8 +113,12 @@ def ray_intersections(
     oy = o[..., 1][..., None, None]
     dx = np.cos(a)[..., None]
     dy = np.sin(a)[..., None]
-    wk = world.wall_heights > min_height
-    ck = world.circle_heights > min_height
+    wk = np.asarray(world.wall_heights) > min_height
+    ck = np.asarray(world.circle_heights) > min_height
+    if skip_materials:
+        skip = np.asarray(skip_materials, dtype=np.int64)
+        wk &= ~np.isin(np.asarray(world.wall_materials), skip)
+        ck &= ~np.isin(np.asarray(world.circle_materials), skip)
     walls = world.walls[wk]
     circles = world.circles[ck]
     parts_t = []
