@@ -430,11 +430,11 @@ def _vignette(w: int, h: int, v: float) -> NDArray[np.float32]:
 
 def _box_blur_x(img: NDArray[np.float32], length: float) -> NDArray[np.float32]:
     """Horizontal box blur over ``length`` pixels (fractional: the end taps are weighted)."""
-    n = int(math.ceil(length))
+    n = math.ceil(length)
     if n % 2 == 0:
         n += 1
     k = np.zeros(n, dtype=np.float32)
-    full = int(math.floor(length))
+    full = math.floor(length)
     if full % 2 == 0:
         full = max(full - 1, 1)
     c = n // 2

@@ -283,7 +283,7 @@ def _shapes(rng: np.random.Generator, s: int, _photo: PhotoFn) -> Image:
 def _notices(rng: np.random.Generator, s: int, photo: PhotoFn) -> Image:
     cork = (np.array([168, 124, 78]) + rng.integers(-25, 26, 3)).astype(np.int16)
     grain = rng.integers(-18, 19, (s, s, 1), dtype=np.int16)
-    img = np.clip(cork[None, None, :] + grain, 0, 255).astype(np.uint8)
+    img: Image = np.clip(cork[None, None, :] + grain, 0, 255).astype(np.uint8)
     for _ in range(int(rng.integers(5, 15))):
         w = int(s * rng.uniform(0.12, 0.3))
         h = int(s * rng.uniform(0.12, 0.3))
