@@ -419,7 +419,7 @@ def _mixed_pixels(
 ) -> FloatArray:
     """Ranges ``(N,)`` with mixed pixels at depth edges between beams i and i+1 (cyclic)."""
     ok = np.isfinite(true) & ~no_return
-    nxt = np.roll(true, -1)
+    nxt = np.roll(np.where(ok, true, 0.0), -1)
     edge = (
         ok
         & np.roll(ok, -1)
