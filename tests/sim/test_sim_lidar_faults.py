@@ -233,7 +233,9 @@ def test_motion_skew_turns_the_scan_by_the_expected_angle() -> None:
         errs = [
             np.mean(
                 (
-                    simulate_scan(SQUARE, pose + [0, 0, d], EXACT, noise=False).ranges[lo:hi]
+                    simulate_scan(
+                        SQUARE, pose + np.array([0.0, 0.0, d]), EXACT, noise=False
+                    ).ranges[lo:hi]
                     - skewed.ranges[lo:hi]
                 )
                 ** 2

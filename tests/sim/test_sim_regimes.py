@@ -88,7 +88,8 @@ def test_every_figure_has_a_source() -> None:
         rows = regime.describe()
         assert len(rows) >= 20
         for quantity, value, source in rows:
-            assert quantity and value
+            assert quantity
+            assert value
             assert len(source) > 10, (regime.name, quantity)
     md = regimes_markdown()
     assert md.count("| quantity | value | source |") == 3
