@@ -701,13 +701,26 @@ def get_regime(name: str | SensorRegime) -> SensorRegime:
 
 
 def regimes_markdown() -> str:
-    """All regimes' tables in Markdown (the README's section is made from it)."""
-    return "\n\n".join(r.markdown() for r in REGIMES.values())
+    """One Markdown table of every figure in the three regimes, with the sources of the
+    realistic figures and the reasons for the heavy ones (the README's section)."""
+    ideal, real, heavy = (REGIMES[n].describe() for n in ("ideal", "realistic", "heavy"))
+    lines = ["| quantity | ideal | realistic | heavy | source |", "| --- | --- | --- | --- | --- |"]
+    for (q, vi, _), (_, vr, sr), (_, vh, sh) in zip(ideal, real, heavy, strict=True):
+        why = sh.removeprefix("heavy: ")
+        lines.append(f"| {q} | {vi} | {vr} | {vh} | {sr}. Heavy: {why} |")
+    return "\n".join(lines)
 
 
-def main() -> None:
-    """Print every regime's table (``python -m symloc.sim.regimes``)."""
-    print(regimes_markdown())
+def main(argv: list[str] | None = None) -> None:
+    """Print the regimes' table (``python -m symloc.sim.regimes [NAME]``): all three side by
+    side, or one regime with the source of each of its figures."""
+    import sys
+
+    args = sys.argv[1:] if argv is None else argv
+    if args:
+        print(get_regime(args[0]).markdown())
+    else:
+        print(regimes_markdown())
 
 
 if __name__ == "__main__":
