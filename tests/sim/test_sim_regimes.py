@@ -11,7 +11,7 @@ from symloc.errors import ConfigurationError
 from symloc.sim.camera import Camera, CameraConditions
 from symloc.sim.lidar import RPLIDAR_A2, LidarFaults, SimulatedLidar, simulate_scan
 from symloc.sim.regimes import REGIMES, SensorRegime, get_regime, regimes_markdown
-from symloc.sim.robot import RobotConfig
+from symloc.sim.robot import OdometryNoise, RobotConfig
 from symloc.sim.rooms import build_room
 
 
@@ -39,6 +39,8 @@ def test_ideal_is_todays_sensors() -> None:
     ideal = REGIMES["ideal"]
     assert ideal.lidar_faults == LidarFaults()
     assert ideal.robot_config(0) == RobotConfig()
+    alt = OdometryNoise(0.05, 0.05, 0.05, 0.05)
+    assert ideal.robot_config(0, noise=alt) == RobotConfig(noise=alt)
     assert ideal.camera(0) == Camera()
     s = ideal.camera_session(0, "query")
     assert s.conditions(0) == CameraConditions(noise_sigma=2.0)

@@ -242,8 +242,13 @@ class SensorRegime:
         radius: float = 0.177,
         max_v: float = 0.7,
         max_w: float = 3.0,
+        noise: OdometryNoise | None = None,
     ) -> RobotConfig:
-        """One robot's :class:`RobotConfig`: its calibration errors drawn from ``rng``."""
+        """One robot's :class:`RobotConfig`: its calibration errors drawn from ``rng``.
+
+        ``noise`` replaces the regime's zero-mean odometry noise (e.g. a bench that has always
+        used other alphas for its ideal robot); the systematic errors stay the regime's.
+        """
         gen = as_rng(rng)
         o = self.odometry
 
@@ -260,7 +265,7 @@ class SensorRegime:
             radius=radius,
             max_v=max_v,
             max_w=max_w,
-            noise=o.noise,
+            noise=o.noise if noise is None else noise,
             wheel_base=o.wheel_base,
             odom_scale_error=scale,
             odom_rotation_error=rot,
