@@ -138,7 +138,10 @@ def _board(rng: np.random.Generator, s: int, colour: tuple[int, int, int] | None
     img[:] = c
     if rng.random() < 0.4:  # a soft vertical gradient
         g = np.linspace(float(rng.uniform(0.7, 1.0)), float(rng.uniform(0.7, 1.0)), s)
-        img = np.clip(img * g[:, None, None], 0, 255).astype(np.uint8)
+        col = (np.asarray(c, dtype=np.float32)[None, :] * g[:, None].astype(np.float32)).astype(
+            np.uint8
+        )
+        img[:] = col[:, None, :]
     return img
 
 

@@ -211,7 +211,7 @@ class TextureAtlas:
         For each material, all mip levels concatenated (level l is ``(size >> l)^2`` texels);
         material row ``i`` starts at ``i * row_length``.
     packed : ndarray of shape (M * L,), uint32
-        The same texels packed as R, G, B, 0 bytes.
+        The same texels packed as R, G, B, 255 bytes.
     offsets : ndarray of shape (levels,)
         Start of each level inside a material's row.
     """
@@ -227,7 +227,7 @@ class TextureAtlas:
         self.level_sizes = np.array(levels, dtype=np.int64)
         self.offsets = np.concatenate([[0], np.cumsum(self.level_sizes**2)[:-1]]).astype(np.int64)
         total = int(np.sum(self.level_sizes**2))
-        texels = np.empty((len(materials), total, 3), dtype=np.uint8)
+        packed = np.empty(len(materials) * total, dtype=np.uint32)
         for i, m in enumerate(materials):
             img = material_texture(m, self.size)
             for lvl, ls in enumerate(levels):
@@ -236,15 +236,13 @@ class TextureAtlas:
                         cv2.resize(img, (int(ls), int(ls)), interpolation=cv2.INTER_AREA),
                         dtype=np.uint8,
                     )
-                off = self.offsets[lvl]
-                texels[i, off : off + ls * ls] = img.reshape(-1, 3)
-        rgbx = np.zeros((len(materials) * total, 4), dtype=np.uint8)
-        rgbx[:, :3] = texels.reshape(-1, 3)
-        del texels
-        #: the texels packed as one uint32 each (R, G, B, 0 bytes), for 1-D gathers
-        self.packed = rgbx.view(np.uint32).ravel()
+                off = i * total + int(self.offsets[lvl])
+                rgba = cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_RGB2RGBA)
+                packed[off : off + ls * ls] = np.asarray(rgba).view(np.uint32).ravel()
+        #: the texels packed as one uint32 each (R, G, B, 255 bytes), for 1-D gathers
+        self.packed = packed
         #: the same texels as an ``(M * L, 3)`` view (no copy)
-        self.texels = rgbx[:, :3]
+        self.texels = packed.view(np.uint8).reshape(-1, 4)[:, :3]
         self.row_length = total
 
     @property
@@ -277,7 +275,7 @@ class TextureAtlas:
         return np.asarray(self.texels[flat], dtype=np.uint8)
 
 
-@lru_cache(maxsize=4)
+@lru_cache(maxsize=8)
 def texture_atlas(materials: tuple[int, ...], size: int = TEXTURE_SIZE) -> TextureAtlas:
     """A cached :class:`TextureAtlas` for the sorted material ids ``materials``."""
     return TextureAtlas(tuple(sorted(set(materials))), size)
