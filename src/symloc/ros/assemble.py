@@ -96,7 +96,10 @@ def open_places(params: NodeParams) -> Any:
 
         vocab = default_vocabulary()
     return VisionPlaceStore(
-        VisualMap(path, create=params.allow_mapping), vocab, camera_matrix(params)
+        VisualMap(path, create=params.allow_mapping),
+        vocab,
+        camera_matrix(params),
+        dist_coeffs=params.camera_dist_coeffs or None,
     )
 
 
