@@ -39,7 +39,8 @@ from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
 from symloc.mcl import Amcl, AmclParams
-from symloc.odometry import OdometryReading
+from symloc.odometry import OdometryReading, twist_between
+from symloc.scan import deskew
 from symloc.sim.camera import Camera
 from symloc.sim.gyro import L3G4200D, GyroOdometryBody, SimulatedGyro
 from symloc.sim.lidar import RPLIDAR_A2
@@ -403,10 +404,17 @@ def _map_with_slam(
     odoms: list[FloatArray] = []
     truths: list[FloatArray] = []
 
+    last_odom: list[OdometryReading] = []
+
     def scan_rec(pose: FloatArray) -> Any:
-        s = session.scan(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0)), 0.0)
+        odom = robot.odom
+        s = session.scan(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0)), odom.stamp)
+        # the mapping software undoes the lidar's motion skew as the localizer does
+        if last_odom:
+            s = deskew(s, *twist_between(last_odom[-1], odom))
+        last_odom[:] = [odom]
         scans.append(s)
-        odoms.append(np.asarray(robot.odom.pose))
+        odoms.append(np.asarray(odom.pose))
         truths.append(np.asarray(pose, dtype=np.float64))
         return s
 
