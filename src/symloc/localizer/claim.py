@@ -66,7 +66,10 @@ class ClaimConfig:
         (position: the largest axis of the x-y covariance; heading: its std).
     min_inlier_fraction : float
         Share of returning beams that must end within the match's ``inlier_distance`` of an
-        obstacle at the published pose.
+        obstacle at the published pose. On the shared real logs at the reference poses, 0.5
+        % of scans fit worse than 0.41-0.52 (clutter, people, map errors); a scan matched
+        from a wrong place fits better than 0.49-0.73 in 1 % of cases, but then the match
+        had to move it (the ``max_pull`` test).
     max_pull : float
         Largest squared Mahalanobis distance (3 dof) between the carried and the matched pose
         under the carried covariance (16.3 is the chi-square 99.9 % quantile).
@@ -88,13 +91,13 @@ class ClaimConfig:
     tolerance_position: float = 0.1
     tolerance_heading: float = math.radians(5.0)
     gate_sigmas: float = 5.0
-    min_inlier_fraction: float = 0.7
+    min_inlier_fraction: float = 0.5
     max_pull: float = 16.27
     floor_xy: float = 0.01
     floor_theta: float = math.radians(0.3)
     min_carried_xy: float = 0.02
     min_carried_theta: float = math.radians(1.0)
-    patience: int = 10
+    patience: int = 30
     resume_after: int = 2
     min_beams: int = 20
 

@@ -83,8 +83,9 @@ class LocalizerConfig:
     rotate_tolerance : a ROTATE request is done when odometry turned within this [rad].
     flip_patience : consecutive non-symmetric verdicts before the trip to the centre is dropped.
     max_centering_updates : updates allowed for going to the centre and facing.
-    relocalize_after : filter updates without convergence, while lost, before AMCL is spread
-        over the whole map again (a kidnapped robot's particles may all be in the wrong place).
+    relocalize_after : consecutive filter updates, while lost, at which the scan contradicts
+        AMCL's estimate before AMCL is spread over the whole map again (a kidnapped robot's
+        particles may all be in the wrong place, and nav2's filter has no recovery by default).
     allow_mapping : build a visual map for a place that matches nothing (Algorithm 5 step 11).
     reseed_xy_std, reseed_theta_std : smallest spread of the AMCL reseed after a decision.
     decision_xy_std, decision_theta_std : how well a visual decision knows the pose before the
@@ -105,7 +106,7 @@ class LocalizerConfig:
     rotate_tolerance: float = math.radians(3.0)
     flip_patience: int = 5
     max_centering_updates: int = 600
-    relocalize_after: int = 40
+    relocalize_after: int = 100
     allow_mapping: bool = False
     reseed_xy_std: float = 0.03
     reseed_theta_std: float = math.radians(2.0)
@@ -591,16 +592,17 @@ class Localizer:
                 return self._claim(result, scan, "AMCL converged; scan not symmetric")
             return self._lost("AMCL converging", result)
         self._converged_count = 0
-        if result.updated:
-            self._unconverged += 1
+        if result.updated and self.claim_gate is not None:
+            fits = self.claim_gate.check(self._odom_pose, scan).verdict != "withdrawn"
+            self._unconverged = 0 if fits else self._unconverged + 1
         if self._unconverged >= self.config.relocalize_after:
             self.tracker.initialize_global()
             if self.claim_gate is not None:
                 self.claim_gate.reset()
             self._unconverged = 0
             self._note(
-                f"AMCL did not converge in {self.config.relocalize_after} updates: global "
-                "relocalization"
+                f"the scan contradicted AMCL's estimate for {self.config.relocalize_after} "
+                "updates: global relocalization"
             )
             return self._lost("AMCL not converged; relocalizing globally", result)
         return self._lost("AMCL not converged", result)
