@@ -35,6 +35,7 @@ __all__ = [
     "MATERIAL_WALL",
     "World",
     "check_polygon",
+    "points_in_polygon",
     "polygon_walls",
 ]
 
@@ -339,3 +340,22 @@ def polygon_walls(
         p_hi = a + hi * (b - a)
         segs[edge : edge + 1] = [np.concatenate([a, p_lo]), np.concatenate([p_hi, b])]
     return np.array(segs, dtype=np.float64)
+
+
+def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
+    """``(N,)`` True where points ``(N, 2)`` lie inside the polygon ``(V, 2)`` (even-odd rule)."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    v = np.asarray(polygon, dtype=np.float64)
+    a = v[None, :, :]
+    b = np.roll(v, -1, axis=0)[None, :, :]
+    out = np.zeros(p.shape[0], dtype=bool)
+    step = max(1, 2_000_000 // max(1, v.shape[0]))  # bound the (N, V) temporaries
+    for i in range(0, p.shape[0], step):
+        px, py = p[i : i + step, None, 0], p[i : i + step, None, 1]
+        straddle = (a[..., 1] > py) != (b[..., 1] > py)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dx = (b[..., 0] - a[..., 0]) / (b[..., 1] - a[..., 1])
+            x_cross = a[..., 0] + (py - a[..., 1]) * dx
+        crossings = np.count_nonzero(straddle & (px < x_cross), axis=1)
+        out[i : i + step] = (crossings % 2) == 1
+    return out
