@@ -158,19 +158,24 @@ class Room:
     def is_free(self, points: ArrayLike, clearance: float = ROBOT_RADIUS) -> NDArray[np.bool_]:
         """``(N,)`` True where a round robot of radius ``clearance`` [m] fits at points ``(N, 2)``.
 
-        Free means: inside the room outline, at least ``clearance`` from every static wall,
-        circle and furniture outline of any height (a robot collides with a low box the lidar
-        does not see), and not inside a solid obstacle. People are not counted (they move).
+        Free means: inside the room outline and at least ``clearance`` from it (the whole robot
+        is in the room, not half-way through a door), at least ``clearance`` from every static
+        wall, circle and furniture outline of any height (a robot collides with a low box the
+        lidar does not see), and not inside a solid obstacle. People are not counted (they
+        move).
         """
         c = check_positive(clearance, "clearance", allow_zero=True)
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         out = self.contains(p)
+        b = self.boundary
+        outline = World(np.column_stack([b, np.roll(b, -1, axis=0)]))
         step = 20_000
         for i in range(0, p.shape[0], step):
             sl = slice(i, i + step)
             idx = np.flatnonzero(out[sl]) + i
             if idx.size:
-                out[idx] = self.world.distance(p[idx]) >= c
+                q = p[idx]
+                out[idx] = (self.world.distance(q) >= c) & (outline.distance(q) >= c)
         for poly in self.obstacles:
             out &= ~points_in_polygon(p, poly)
         oc = self.obstacle_circles

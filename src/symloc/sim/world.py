@@ -37,6 +37,7 @@ __all__ = [
     "check_polygon",
     "points_in_polygon",
     "polygon_walls",
+    "segments_cross",
 ]
 
 MATERIAL_BOARD = 0
@@ -234,7 +235,7 @@ class World:
         return float(x.min()), float(x.max()), float(y.min()), float(y.max())
 
 
-def _segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
+def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
     """True if closed segments p1-p2 and q1-q2 intersect (touching counts)."""
 
     def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
@@ -292,7 +293,7 @@ def check_polygon(vertices: ArrayLike, name: str = "polygon") -> FloatArray:
         for j in range(i + 1, n):
             if j == i + 1 or (i == 0 and j == n - 1):
                 continue
-            if _segments_cross(v[i], nxt[i], v[j], nxt[j]):
+            if segments_cross(v[i], nxt[i], v[j], nxt[j]):
                 raise WorldError(f"{name}: self-intersecting polygon, edge {i} crosses edge {j}")
     area2 = float(np.sum(v[:, 0] * nxt[:, 1] - nxt[:, 0] * v[:, 1]))
     scale = float(np.max(edge_len)) ** 2
