@@ -10,12 +10,16 @@ point is free is always decided exactly by ``Room.is_free``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
+from skimage import draw
+
+from symloc.sim.symmetry_truth import outline_samples
+from symloc.sim.world import World
 
 __all__ = ["FreeSpace", "free_space_grid"]
 
@@ -96,43 +100,80 @@ class FreeSpace:
 
 
 def free_space_grid(
-    is_free: Callable[[FloatArray], NDArray[np.bool_]],
-    bounds: tuple[float, float, float, float],
+    boundary: ArrayLike,
+    outlines: World,
     *,
+    solids: Sequence[ArrayLike] = (),
+    solid_circles: ArrayLike | None = None,
     resolution: float,
     clearance: float,
     center: ArrayLike,
 ) -> FreeSpace:
-    """Evaluate ``is_free`` on a grid over ``bounds`` = (xmin, xmax, ymin, ymax) [m] and label it.
+    """Rasterise a room and label where a robot of radius ``clearance`` [m] fits.
 
-    ``center`` picks the reachable component (see the module docstring).
+    Parameters
+    ----------
+    boundary : array of shape (V, 2)
+        The room outline [m]; cells whose centres lie outside are blocked.
+    outlines : World
+        Every static primitive (of any height) whose outline the robot must keep clear of.
+    solids : sequence of arrays of shape (K, 2)
+        Filled obstacle footprints [m] (the robot cannot stand inside them).
+    solid_circles : array of shape (C, 3), optional
+        Filled round obstacles ``cx, cy, r`` [m].
+    resolution : float
+        Cell edge [m].
+    clearance : float
+        Robot radius [m].
+    center : array of shape (2,)
+        Picks the reachable component (see the module docstring).
+
+    The distance of a cell to the nearest outline is the Euclidean distance transform of the
+    rasterised outlines (plus the room outline), so it is exact to about one cell.
     """
-    xmin, xmax, ymin, ymax = bounds
-    w = max(1, int(np.ceil((xmax - xmin) / resolution)))
-    h = max(1, int(np.ceil((ymax - ymin) / resolution)))
-    xs = xmin + (np.arange(w) + 0.5) * resolution
-    ys = ymin + (np.arange(h) + 0.5) * resolution
-    gx, gy = np.meshgrid(xs, ys)
-    free = is_free(np.column_stack([gx.ravel(), gy.ravel()])).reshape(h, w)
+    b = np.asarray(boundary, dtype=np.float64)
+    res = float(resolution)
+    xmin, ymin = b.min(axis=0) - 2 * res
+    xmax, ymax = b.max(axis=0) + 2 * res
+    w = max(1, int(np.ceil((xmax - xmin) / res)))
+    h = max(1, int(np.ceil((ymax - ymin) / res)))
+    origin = np.array([xmin, ymin])
+
+    def to_cell(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return (p[:, 1] - ymin) / res - 0.5, (p[:, 0] - xmin) / res - 0.5
+
+    inside = np.zeros((h, w), dtype=bool)
+    rr, cc = to_cell(b)
+    inside[draw.polygon(rr, cc, shape=(h, w))] = True  # type: ignore[no-untyped-call]
+    for poly in solids:
+        pr, pc = to_cell(np.asarray(poly, dtype=np.float64))
+        inside[draw.polygon(pr, pc, shape=(h, w))] = False  # type: ignore[no-untyped-call]
+    circles = (
+        np.zeros((0, 3)) if solid_circles is None else np.asarray(solid_circles).reshape(-1, 3)
+    )
+    for cx, cy, r in circles:
+        cr, ccol = to_cell(np.array([[cx, cy]]))
+        inside[draw.disk((cr[0], ccol[0]), r / res, shape=(h, w))] = False  # type: ignore[no-untyped-call]
+    ring = World(np.column_stack([b, np.roll(b, -1, axis=0)]))
+    pts = np.concatenate([outline_samples(ring, res / 2)[0], outline_samples(outlines, res / 2)[0]])
+    occupied = np.zeros((h, w), dtype=bool)
+    pr, pc = to_cell(pts)
+    ir = np.rint(pr).astype(np.int64)
+    ic = np.rint(pc).astype(np.int64)
+    ok = (ir >= 0) & (ir < h) & (ic >= 0) & (ic < w)
+    occupied[ir[ok], ic[ok]] = True
+    dist = ndimage.distance_transform_edt(~occupied) * res
+    free = inside & (dist >= clearance)
     labels, n = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
     labels = labels.astype(np.int32)
-    grid = FreeSpace(
-        free=free,
-        labels=labels,
-        reachable_label=0,
-        origin=np.array([xmin, ymin]),
-        resolution=float(resolution),
-        clearance=float(clearance),
-    )
-    if n == 0:
-        return grid
-    row, col = grid.cells(np.asarray(center, dtype=np.float64)[None])
+    grid = FreeSpace(free, labels, 0, origin, res, float(clearance))
     main = 0
-    if 0 <= row[0] < h and 0 <= col[0] < w:
-        main = int(labels[row[0], col[0]])
-    if main == 0:
-        sizes = np.bincount(labels.ravel())[1:]
-        main = int(np.argmax(sizes)) + 1
+    if n:
+        row, col = grid.cells(np.asarray(center, dtype=np.float64)[None])
+        if 0 <= row[0] < h and 0 <= col[0] < w:
+            main = int(labels[row[0], col[0]])
+        if main == 0:
+            main = int(np.argmax(np.bincount(labels.ravel())[1:])) + 1
     for arr in (free, labels):
         arr.setflags(write=False)
-    return FreeSpace(free, labels, main, grid.origin, grid.resolution, grid.clearance)
+    return FreeSpace(free, labels, main, origin, res, float(clearance))

@@ -189,21 +189,23 @@ class Room:
     ) -> FreeSpace:
         """The free-space grid for a robot of radius ``clearance`` [m] (computed once, cached).
 
-        ``resolution`` [m] defaults to 5 cm, coarser for very large rooms (at most about 60 000
+        ``resolution`` [m] defaults to 5 cm, coarser for very large rooms (at most about 400 000
         cells).
         """
         c = check_positive(clearance, "clearance", allow_zero=True)
         xmin, ymin = self.boundary.min(axis=0)
         xmax, ymax = self.boundary.max(axis=0)
         if resolution is None:
-            res = max(0.05, math.sqrt((xmax - xmin) * (ymax - ymin) / 60_000.0))
+            res = max(0.05, math.sqrt((xmax - xmin) * (ymax - ymin) / 400_000.0))
         else:
             res = check_positive(resolution, "resolution")
         key = (c, res)
         if key not in self._cache:
             self._cache[key] = free_space_grid(
-                lambda q: self.is_free(q, c),
-                (float(xmin), float(xmax), float(ymin), float(ymax)),
+                self.boundary,
+                self.world,
+                solids=self.obstacles,
+                solid_circles=self.obstacle_circles,
                 resolution=res,
                 clearance=c,
                 center=self.center,

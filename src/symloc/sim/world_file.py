@@ -118,6 +118,7 @@ __all__ = [
     "PersonSpec",
     "RoomSpec",
     "WorldSpec",
+    "corner_points",
     "load_world_file",
     "room_spec",
     "save_world_file",
@@ -813,7 +814,8 @@ def _rot(points: FloatArray, yaw_deg: float) -> FloatArray:
     return np.asarray(points @ rot.T, dtype=np.float64)
 
 
-def _corners(room: RoomSpec) -> FloatArray:
+def corner_points(room: RoomSpec) -> FloatArray:
+    """The corners ``(V, 2)`` [m] of a polygonal room as its walls are numbered (not a circle)."""
     c = np.array(room.center, dtype=np.float64)
     if room.shape == "polygon":
         return np.array(room.polygon, dtype=np.float64)
@@ -871,7 +873,7 @@ def _outline(ctx: _Ctx, room: RoomSpec) -> _Outline:
         ang = -math.pi / 2 + 2 * math.pi * np.arange(_BOUNDARY_VERTICES) / _BOUNDARY_VERTICES
         boundary = np.column_stack([cx + r * np.cos(ang), cy + r * np.sin(ang)])
         return _Outline(np.zeros((0, 2)), boundary, [], [], (cx, cy, r))
-    v = _corners(room)
+    v = corner_points(room)
     n = v.shape[0]
     problem = _polygon_problem(v)
     if problem is not None:
