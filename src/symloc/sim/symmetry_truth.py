@@ -24,7 +24,7 @@ computed from the simulated primitives, never declared by whoever built the room
    within ``tolerance`` (both ways, nearest neighbours through a KD-tree), and so does every
    power of it up to a half turn, the largest such ``k <= max_order``; order 0 (continuous) if two rotations by angles that are not rational
    fractions of a turn both do; order 1 otherwise. Only rotations that move the farthest
-   primitive by at least 50 tolerances (0.5 m at 1 cm) are tested: a smaller rotation slides a
+   primitive by at least 5 tolerances (5 cm at 1 cm) are tested: a smaller rotation slides a
    gently curved outline along itself within the tolerance, so it would "match" anything
    round-ish; finer symmetry than that is continuous within the tolerance, or none.
 
@@ -69,7 +69,7 @@ MAX_ORDER = 256
 # survives both is (within the tolerance) invariant under every rotation.
 _IRRATIONAL_TURNS = (math.sqrt(2.0) - 1.0, (math.sqrt(5.0) - 1.0) / 2.0 - 0.5)
 _PROBES = 256
-_MIN_SHIFT = 50.0
+_MIN_SHIFT = 5.0
 
 
 @dataclass(frozen=True, eq=False)

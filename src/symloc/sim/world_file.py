@@ -525,7 +525,15 @@ class WorldSpec:
         truth = lidar_symmetry(room.world, room.boundary)
         center = truth.center if truth.order != 1 else room.center
         gv = float(np.max(np.hypot(*(room.boundary - center).T)))
-        return replace(room, order=truth.order, symmetry=truth, center=center, gv_distance=gv)
+        shape = lidar_symmetry(_bare_walls(_outline(_Ctx(self.source), self.room))).order
+        return replace(
+            room,
+            order=truth.order,
+            shape_order=shape,
+            symmetry=truth,
+            center=center,
+            gv_distance=gv,
+        )
 
 
 def load_world_file(path: str | Path) -> WorldSpec:
@@ -842,7 +850,10 @@ def _polygon_problem(v: FloatArray) -> tuple[int, str] | None:
         a, b = edge[i - 1], edge[i]
         cross = a[0] * b[1] - a[1] * b[0]
         if abs(cross) <= 1e-9 * lengths[i - 1] * lengths[i] and float(a @ b) < 0:
-            return i, "folds back on the wall before it (a zero-width spike)"
+            return (
+                i,
+                "folds back on the wall before it (a zero-width spike: clockwise or counter-clockwise is ambiguous)",
+            )
     for i in range(n):
         for j in range(i + 2, n):
             if i == 0 and j == n - 1:
@@ -1301,7 +1312,7 @@ _KIND = {
 
 
 def _assemble(spec: WorldSpec) -> Room:
-    """Validate ``spec`` and assemble its Room (order not yet computed: 1, symmetry None)."""
+    """Validate ``spec`` and assemble its Room (orders not yet computed: 1, symmetry None)."""
     ctx = _Ctx(spec.source)
     _check_lab_keys(ctx, spec)
     outline = _outline(ctx, spec.room)
@@ -1324,6 +1335,12 @@ def _assemble(spec: WorldSpec) -> Room:
     if spec.room.in_lab:
         parts.append(_lab_world(ctx, spec, boundary, center))
     world = World.merge(parts)
+    for i, p in enumerate(spec.people):
+        for j in range(1, len(p.path) + (1 if p.loop else 0)):
+            if math.dist(p.path[j - 1], p.path[j % len(p.path)]) < 1e-6:
+                raise ctx.error(
+                    f"people[{i}].path[{j % len(p.path)}]", "repeats the point before it"
+                )
     people = tuple(p.person() for p in spec.people)
     obstacles = tuple(f.footprint() for f in (*spec.furniture, *spec.pillars) if f.kind == "box")
     circles = [
@@ -1332,7 +1349,6 @@ def _assemble(spec: WorldSpec) -> Room:
     regular = spec.room.shape in ("regular", "circle") and not spec.room.chamfer
     if spec.room.shape == "rectangle":
         regular = math.isclose(spec.room.width, spec.room.depth) and not spec.room.chamfer
-    shape_order = lidar_symmetry(bare).order
     room = Room(
         name=spec.name,
         kind=_KIND[spec.room.shape],
@@ -1341,7 +1357,7 @@ def _assemble(spec: WorldSpec) -> Room:
         corners=boundary.copy() if outline.circle is None else np.zeros((0, 2)),
         center=center,
         gv_distance=float(np.max(np.hypot(*(boundary - center).T))),
-        shape_order=shape_order,
+        shape_order=1,
         order=1,
         regular=regular,
         door=any(d.open for d in spec.doors),
