@@ -265,9 +265,17 @@ def rotational_order(
     reach = float(np.max(np.hypot(*(pts - c).T)))
     ratio = min(1.0, _MIN_SHIFT * tol / (2.0 * reach)) if reach > 0 else 1.0
     k_cap = max(2, min(int(max_order), math.floor(math.pi / math.asin(ratio))))
-    for k in range(k_cap, 1, -1):
-        if _is_k_fold(pts, tree, c, k, thr, probe):
-            return k, c
+    # screen every candidate k at once on a few points, then check the survivors in full
+    ks = np.arange(k_cap, 1, -1)
+    few = pts[:: max(1, pts.shape[0] // 32)] - c
+    ang = 2 * np.pi / ks
+    cos, sin = np.cos(ang)[:, None], np.sin(ang)[:, None]
+    rot = np.stack([cos * few[:, 0] - sin * few[:, 1], sin * few[:, 0] + cos * few[:, 1]], axis=-1)
+    d, _ = tree.query(rot.reshape(-1, 2) + c, distance_upper_bound=thr)
+    survivors = ks[np.all(np.isfinite(d.reshape(ks.size, -1)), axis=1)]
+    for k in survivors:
+        if _is_k_fold(pts, tree, c, int(k), thr, probe):
+            return int(k), c
     return 1, c
 
 
