@@ -12,13 +12,22 @@ from symloc.sim.generator import FAMILIES, generate_world
 from symloc.sim.rooms import ROBOT_RADIUS
 from symloc.sim.world_file import load_world_file, save_world_file
 
-SYMMETRIC = {"regular", "circle", "rectangle", "rhombus", "cross", "corridor_short", "corridor_long"}
+SYMMETRIC = {
+    "regular",
+    "circle",
+    "rectangle",
+    "rhombus",
+    "cross",
+    "corridor_short",
+    "corridor_long",
+}
 
 
 def test_family_natures() -> None:
     assert {n for n, f in FAMILIES.items() if f.symmetric} == SYMMETRIC
     for f in FAMILIES.values():
-        assert f.description and f.params
+        assert f.description
+        assert f.params
         assert all(lo < hi for lo, hi in f.params.values())
 
 
@@ -33,7 +42,8 @@ def test_bare_rooms_have_the_family_nature(family: str, tmp_path: Path) -> None:
             assert room.order >= 2
         else:
             assert room.order == 1
-        assert spec.generator == (family, seed) and spec.seed == seed
+        assert spec.generator == (family, seed)
+        assert spec.seed == seed
         assert spec.name == f"{family}-{seed}"
         # a robot fits at the centre of a symmetric room and can sample poses everywhere
         if room.symmetric:
@@ -49,7 +59,8 @@ def test_deterministic_and_seed_dependent() -> None:
     a = generate_world("l_shape", 3, perturb=True)
     b = generate_world("l_shape", 3, perturb=True)
     c = generate_world("l_shape", 4, perturb=True)
-    assert a == b and a != c
+    assert a == b
+    assert a != c
     assert a.to_yaml() == b.to_yaml()
 
 
@@ -67,7 +78,8 @@ def test_perturbed_orders_are_computed() -> None:
         if broke and not symmetric_items:
             assert room.order == 1, spec.description
         assert "perturbed:" in spec.description
-    assert any(o == 1 for o in orders) and any(o >= 3 for o in orders)
+    assert any(o == 1 for o in orders)
+    assert any(o >= 3 for o in orders)
 
 
 def test_corridor_ends_visible_or_not() -> None:
@@ -92,7 +104,8 @@ def test_generated_furniture_apart_and_people_clear() -> None:
             found_furniture = True
         if found_people and found_furniture:
             break
-    assert found_people and found_furniture
+    assert found_people
+    assert found_furniture
 
 
 def test_bad_arguments() -> None:

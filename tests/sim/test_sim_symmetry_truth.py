@@ -39,7 +39,9 @@ def test_regular_ngons_give_n_wherever_they_stand(n: int) -> None:
     assert truth.order == n
     assert np.allclose(truth.center, [3.0, -7.0], atol=1e-9)
     assert truth.gv_distance == pytest.approx(1.5 + 0.5 * n)
-    assert truth.symmetric and not truth.continuous and not truth.open
+    assert truth.symmetric
+    assert not truth.continuous
+    assert not truth.open
 
 
 @pytest.mark.parametrize(
@@ -124,11 +126,13 @@ def test_fine_polygons_are_continuous_and_near_misses_rejected() -> None:
 
 def test_low_boards_let_the_lidar_see_the_lab() -> None:
     room = _world(room={**SQUARE, "wall_height": 0.25}).build()  # below the 0.3 m plane
-    assert room.symmetry is not None and room.symmetry.open
+    assert room.symmetry is not None
+    assert room.symmetry.open
     assert room.order == 2  # the 8 m x 10 m lab around it
     boards = _world(room={**SQUARE, "wall_height": 0.4}).build()
     assert boards.order == 4
-    assert boards.symmetry is not None and not boards.symmetry.open
+    assert boards.symmetry is not None
+    assert not boards.symmetry.open
 
 
 def test_centroid_and_errors() -> None:

@@ -464,9 +464,10 @@ def _furniture(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list
             if all(_apart(f, g, ROBOT_RADIUS * 2 + 0.05) for g in (*items, *spec.pillars)):
                 items.append(f)
                 break
-    tags.append(
-        f"furniture({len(items) - len(spec.furniture)} {'above' if high else 'below'} the lidar plane)"
-    )
+    placed = len(items) - len(spec.furniture)
+    if placed:
+        where = "above" if high else "below"
+        tags.append(f"furniture({placed} {where} the lidar plane)")
     return replace(spec, furniture=tuple(items))
 
 
@@ -573,7 +574,8 @@ def _pillars(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list[s
             if all(_apart(f, g, 2 * ROBOT_RADIUS + 0.05) for g in (*items, *spec.furniture)):
                 items.append(f)
                 break
-    tags.append(f"pillars({len(items) - len(spec.pillars)})")
+    if len(items) > len(spec.pillars):
+        tags.append(f"pillars({len(items) - len(spec.pillars)})")
     return replace(spec, pillars=tuple(items))
 
 
@@ -759,29 +761,36 @@ def generate_world(family: str, seed: int, *, perturb: bool | None = None) -> Wo
 
 
 def _perturb(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
+    """Apply one to three perturbations (at least one that takes, when any can)."""
     count = int(rng.integers(1, 4))
-    kinds = [str(k) for k in rng.choice(PERTURBATIONS, size=count, replace=False)]
+    kinds = [str(k) for k in rng.permutation(PERTURBATIONS)]
+    chosen = kinds[:count]
     # geometry of the room first (corner cuts, doors), then what stands in it
-    order = {k: i for i, k in enumerate(PERTURBATIONS)}
-    kinds.sort(key=lambda k: (k not in ("chamfer", "door"), order[k]))
-    for kind in kinds:
-        if kind == "chamfer":
-            spec = _chamfer(spec, rng, tags)
-        elif kind == "door":
-            spec = _door(spec, rng, tags)
-        else:
-            room = spec.build()
-            step: dict[str, Any] = {
-                "furniture": _furniture,
-                "symmetric_furniture": _symmetric_furniture,
-                "pillars": _pillars,
-                "glass": _glass,
-                "people": _people,
-                "aliasing": _aliasing,
-                "dark": _dark,
-            }
-            spec = step[kind](spec, room, rng, tags)
+    rank = {k: i for i, k in enumerate(PERTURBATIONS)}
+    chosen.sort(key=lambda k: (k not in ("chamfer", "door"), rank[k]))
+    for kind in [*chosen, *kinds[count:]]:
+        if kind not in chosen and tags:
+            break  # the spares only stand in when none of the chosen ones applied
+        spec = _apply(kind, spec, rng, tags)
     return spec
+
+
+def _apply(kind: str, spec: WorldSpec, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
+    if kind == "chamfer":
+        return _chamfer(spec, rng, tags)
+    if kind == "door":
+        return _door(spec, rng, tags)
+    step: dict[str, Any] = {
+        "furniture": _furniture,
+        "symmetric_furniture": _symmetric_furniture,
+        "pillars": _pillars,
+        "glass": _glass,
+        "people": _people,
+        "aliasing": _aliasing,
+        "dark": _dark,
+    }
+    result: WorldSpec = step[kind](spec, spec.build(), rng, tags)
+    return result
 
 
 def _describe(fam: Family, spec: WorldSpec) -> str:
