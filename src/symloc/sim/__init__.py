@@ -1,9 +1,14 @@
 """The embedded simulated world: rooms, lidar, odometry, camera.
 
 Submodules: :mod:`~symloc.sim.world` (``World``), :mod:`~symloc.sim.rooms` (builders, ``Room``,
-``build_room``), :mod:`~symloc.sim.raycast`, :mod:`~symloc.sim.lidar` (presets,
-``simulate_scan``), :mod:`~symloc.sim.rasterize` (``world_to_grid``), :mod:`~symloc.sim.robot`
-(differential drive and odometry noise), :mod:`~symloc.sim.camera` (``Camera``).
+``build_room``), :mod:`~symloc.sim.world_file` (YAML world files: ``WorldSpec``,
+``load_world_file``; the geometry in :mod:`~symloc.sim.world_build`),
+:mod:`~symloc.sim.generator` (``FAMILIES``, ``generate_world``),
+:mod:`~symloc.sim.symmetry_truth` (the true symmetry order, computed from the geometry),
+:mod:`~symloc.sim.people` (people walking), :mod:`~symloc.sim.free_space` (where a robot fits),
+:mod:`~symloc.sim.raycast`, :mod:`~symloc.sim.lidar` (presets, ``simulate_scan``),
+:mod:`~symloc.sim.rasterize` (``world_to_grid``), :mod:`~symloc.sim.robot` (differential drive
+and odometry noise), :mod:`~symloc.sim.camera` (``Camera``).
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ from symloc.sim.raycast import raycast
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import ROOM_NAMES, Room, build_room
 from symloc.sim.world import World
+from symloc.sim.world_file import WorldSpec, load_world_file, save_world_file
 
 __all__ = [
     "LDS01",
@@ -26,7 +32,10 @@ __all__ = [
     "RobotConfig",
     "Room",
     "World",
+    "WorldSpec",
     "build_room",
+    "load_world_file",
     "raycast",
+    "save_world_file",
     "simulate_scan",
 ]
