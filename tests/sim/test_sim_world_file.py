@@ -516,3 +516,12 @@ def test_world_at_moves_people_and_sample_pose() -> None:
     poses = np.array([room.sample_pose(rng) for _ in range(50)])
     assert np.all(room.is_free(poses[:, :2], 0.18))
     assert np.all(np.abs(poses[:, 2]) <= math.pi)
+
+
+def test_the_documented_example_loads(tmp_path: Path) -> None:
+    doc = Path(__file__).resolve().parents[2] / "docs" / "world_files.md"
+    block = doc.read_text().split("```yaml\n")[1].split("```")[0]
+    room = load_world_file(_write(tmp_path, block)).build()
+    assert room.order == 1
+    assert len(room.people) == 2
+    assert room.world_at(3.0).n_circles == room.world.n_circles + 2
