@@ -191,35 +191,60 @@ def _rotate(points: FloatArray, center: FloatArray, angle: float) -> FloatArray:
     return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]]) + center
 
 
-def _maps_onto(
-    pts: FloatArray, tree: cKDTree, center: FloatArray, angle: float, thr: float, probe: FloatArray
-) -> bool:
-    """True if rotating the sample set by ``angle`` lands it on itself (within ``thr``)."""
-    d, _ = tree.query(_rotate(probe, center, angle), distance_upper_bound=thr)
-    if not np.all(np.isfinite(d)):
-        return False
-    rot = _rotate(pts, center, angle)
-    d, _ = tree.query(rot, distance_upper_bound=thr)
-    if not np.all(np.isfinite(d)):
-        return False
-    d, _ = cKDTree(rot).query(pts, distance_upper_bound=thr)
-    return bool(np.all(np.isfinite(d)))
+@dataclass(frozen=True, eq=False)
+class _Matcher:
+    """Does a rotated copy of the world lie on the world, within ``tol``, exactly?
 
-
-def _is_k_fold(
-    pts: FloatArray, tree: cKDTree, center: FloatArray, k: int, thr: float, probe: FloatArray
-) -> bool:
-    """True if every rotation by ``j 2 pi / k`` (j = 1 .. k/2) maps the samples onto themselves.
-
-    Checking the powers, not only ``2 pi / k``, rejects near-misses such as a 16-gon "matching"
-    an 18-fold rotation within the tolerance: the error grows with j for a wrong k.
+    Samples every ``spacing`` along the outlines stand in for the geometry: a point within
+    ``tol`` of a sample is within ``tol`` of the geometry; one farther than
+    ``tol + spacing / 2`` from every sample is farther than ``tol`` from it; only the points in
+    between get an exact distance to the primitives.
     """
-    # every power on the probe points (cheap), then the first and the last on every sample
-    for j in range(1, k // 2 + 1):
-        d, _ = tree.query(_rotate(probe, center, 2 * math.pi * j / k), distance_upper_bound=thr)
+
+    world: World
+    pts: FloatArray
+    tree: cKDTree
+    center: FloatArray
+    tol: float
+    spacing: float
+    probe: FloatArray
+
+    def near(self, points: FloatArray) -> bool:
+        """Cheap necessary test: every point within ``tol + spacing / 2`` of a sample."""
+        d, _ = self.tree.query(points, distance_upper_bound=self.tol + self.spacing / 2 + 1e-9)
+        return bool(np.all(np.isfinite(d)))
+
+    def on(self, points: FloatArray) -> bool:
+        """Exact: every point within ``tol`` of the world's outlines."""
+        d, _ = self.tree.query(points, distance_upper_bound=self.tol + self.spacing / 2 + 1e-9)
         if not np.all(np.isfinite(d)):
             return False
-    return all(_maps_onto(pts, tree, center, 2 * math.pi * j / k, thr, probe) for j in {1, k // 2})
+        unsure = d > self.tol
+        if not np.any(unsure):
+            return True
+        return bool(np.all(self.world.distance(points[unsure]) <= self.tol + 1e-9))
+
+    def maps(self, angle: float) -> bool:
+        """The rotation by ``angle`` maps the world onto itself (both ways)."""
+        if not self.near(_rotate(self.probe, self.center, angle)):
+            return False
+        return self.on(_rotate(self.pts, self.center, angle)) and self.on(
+            _rotate(self.pts, self.center, -angle)
+        )
+
+    def k_fold(self, k: int) -> bool:
+        """Every rotation by ``j 2 pi / k`` (j = 1 .. k/2) maps the world onto itself.
+
+        Checking the powers, not only ``2 pi / k``, rejects near-misses such as a 16-gon
+        "matching" an 18-fold rotation within the tolerance: the error grows with j for a
+        wrong k. Every power is screened on the probe points, the first and the last are
+        checked on every sample.
+        """
+        turns = [2 * math.pi * j / k for j in range(1, k // 2 + 1)]
+        if not all(self.near(_rotate(self.probe, self.center, a)) for a in turns):
+            return False
+        # in full (exactly, both ways) the first power and the one nearest a half turn
+        return all(self.maps(a) for a in {turns[0], turns[-1]})
 
 
 def rotational_order(
@@ -254,10 +279,10 @@ def rotational_order(
     c = outline_centroid(world) if center is None else np.asarray(center, dtype=np.float64)
     spacing = tol / 2.0
     pts, _ = outline_samples(world, spacing)
-    thr = tol + spacing / 2.0 + 1e-9
     tree = cKDTree(pts)
     probe = pts[:: max(1, pts.shape[0] // _PROBES)]
-    if all(_maps_onto(pts, tree, c, 2 * math.pi * f, thr, probe) for f in _IRRATIONAL_TURNS):
+    m = _Matcher(world, pts, tree, c, tol, spacing, probe)
+    if all(m.maps(2 * math.pi * f) for f in _IRRATIONAL_TURNS):
         return 0, c
     # A rotation that moves the farthest point by little more than the tolerance "maps" any
     # gently curved outline onto itself; only rotations that move it by >= _MIN_SHIFT
@@ -271,10 +296,10 @@ def rotational_order(
     ang = 2 * np.pi / ks
     cos, sin = np.cos(ang)[:, None], np.sin(ang)[:, None]
     rot = np.stack([cos * few[:, 0] - sin * few[:, 1], sin * few[:, 0] + cos * few[:, 1]], axis=-1)
-    d, _ = tree.query(rot.reshape(-1, 2) + c, distance_upper_bound=thr)
+    d, _ = tree.query(rot.reshape(-1, 2) + c, distance_upper_bound=tol + spacing / 2 + 1e-9)
     survivors = ks[np.all(np.isfinite(d.reshape(ks.size, -1)), axis=1)]
     for k in survivors:
-        if _is_k_fold(pts, tree, c, int(k), thr, probe):
+        if m.k_fold(int(k)):
             return int(k), c
     return 1, c
 
