@@ -51,6 +51,7 @@ from scipy.spatial import ConvexHull
 from symloc.errors import ConfigurationError, WorldError
 from symloc.sim.rooms import BOARD_HEIGHT, ROBOT_RADIUS, Room
 from symloc.sim.world_file import (
+    TEXTURE_POOL,
     DoorSpec,
     FurnitureSpec,
     GlassSpec,
@@ -658,7 +659,7 @@ def _wall_count(spec: WorldSpec, room: Room) -> int:
 
 def _aliasing(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
     n = _wall_count(spec, room)
-    ids = [int(k) for k in rng.choice(10_000, size=n, replace=False)]
+    ids = [int(k) for k in rng.choice(TEXTURE_POOL, size=n, replace=False)]
     i, j = (int(x) for x in rng.choice(n, size=2, replace=False))
     ids[j] = ids[i]
     tags.append(f"aliasing(walls {i} and {j} show texture {ids[i]})")
@@ -670,7 +671,7 @@ def _dark(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list[str]
         return spec
     n = _wall_count(spec, room)
     textures: list[int | str] = list(spec.lab.textures) or [
-        int(k) for k in rng.choice(10_000, size=n, replace=False)
+        int(k) for k in rng.choice(TEXTURE_POOL, size=n, replace=False)
     ]
     w = int(rng.integers(n))
     textures[w] = "dark"

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from symloc.errors import WorldError
 from symloc.sim.rooms import WALL_HEIGHT, Room, lab
+from symloc.sim.textures import TEXTURE_POOL_SIZE
 from symloc.sim.world import (
     MATERIAL_BOARD,
     MATERIAL_DARK,
@@ -50,8 +51,9 @@ FloatArray = NDArray[np.float64]
 
 LAB_WALL_HEIGHT = 1.0
 """Room walls lower than this [m] are boards and the room stands in a textured lab."""
-TEXTURE_POOL = 10_000
-"""Texture ids drawn from a world's seed lie in ``0 .. TEXTURE_POOL - 1``."""
+TEXTURE_POOL = TEXTURE_POOL_SIZE
+"""Texture ids drawn from a world's seed lie in ``0 .. TEXTURE_POOL - 1`` (the distinct textures of
+:mod:`symloc.sim.textures`)."""
 MATERIALS = {
     "wood": MATERIAL_FURNITURE,
     "plain": MATERIAL_WALL,
