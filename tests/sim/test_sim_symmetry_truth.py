@@ -160,3 +160,12 @@ def test_materials_filter() -> None:
     assert lidar_visible(w).n_walls == 1
     assert lidar_visible(w, glass_visible=True).n_walls == 2
     assert lidar_visible(w).n_circles == 0
+
+
+def test_room_truth_with_opaque_glass() -> None:
+    room = _world(room=SQUARE, glass=[{"from": [0.5, 1.0], "to": [1.5, 1.0]}]).build()
+    assert room.truth() is room.symmetry
+    assert room.truth().order == 4
+    assert room.truth(glass_visible=True).order == 1
+    plain = _world(room=SQUARE).build()
+    assert plain.truth(glass_visible=True).order == 4

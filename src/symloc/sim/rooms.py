@@ -148,6 +148,19 @@ class Room:
     _cache: dict[tuple[float, float], FreeSpace] = field(
         init=False, default_factory=dict, repr=False
     )
+    _truths: dict[bool, SymmetryTruth] = field(init=False, default_factory=dict, repr=False)
+
+    def truth(self, *, glass_visible: bool = False) -> SymmetryTruth:
+        """The true symmetry of what the lidar sees, glass transparent (the default, as
+        :attr:`symmetry` and :attr:`order`) or opaque (a lidar model that sees glass like a
+        wall, e.g. the ``ideal`` sensor regime). Computed once per choice."""
+        if not glass_visible and self.symmetry is not None:
+            return self.symmetry
+        if glass_visible not in self._truths:
+            self._truths[glass_visible] = lidar_symmetry(
+                self.world, self.boundary, glass_visible=glass_visible
+            )
+        return self._truths[glass_visible]
 
     def world_at(self, t: float) -> World:
         """The static world plus the people where they are at time ``t`` [s]."""
