@@ -378,6 +378,25 @@ ERRORS: list[tuple[tuple[Any, ...], Any, str]] = [
         r"people\[0\]\.path\[1\]: repeats the point before it",
     ),
     (("seed",), -3, r"seed: expected an integer in \[0, "),
+    (
+        ("lab",),
+        {"textures": [1, 2, 3, 4], "textured": True},
+        r"lab: expected textures or textured, not both",
+    ),
+    (("lab",), {"textures": []}, r"lab\.textures: expected at least one entry"),
+    (("lab",), {"margin": 2.0}, r"lab\.margin: only used for a room of boards"),
+    (("generator",), {"family": "x"}, r"generator\.seed: missing; this key is required"),
+    (
+        ("pillars",),
+        [{"center": [0, 0], "radius": 0.1, "yaw_deg": 3}],
+        r"pillars\[0\]\.yaw_deg: unknown key for a round pillar",
+    ),
+    (("pillars",), [{"radius": 0.1}], r"pillars\[0\]\.center: missing; this key is required"),
+    (
+        ("people",),
+        [{"path": [[-1.5, -1.0], [-1.5, 1.0]], "loop": "no"}],
+        r"people\[0\]\.loop: expected true or false",
+    ),
     (("name",), 5, r"name: expected a string, got 5"),
 ]
 
@@ -404,6 +423,14 @@ def test_file_level_errors(tmp_path: Path) -> None:
         load_world_file(_write(tmp_path, "- 1\n- 2\n", "list.yaml"))
     with pytest.raises(WorldError, match=r"noroom\.yaml: room: missing; this key is required"):
         load_world_file(_write(tmp_path, "name: x\n", "noroom.yaml"))
+
+
+def test_lab_of_boards_needs_four_walls() -> None:
+    doc = {"name": "b", "room": {"rectangle": {"width": 3, "depth": 2}, "wall_height": 0.4}}
+    with pytest.raises(
+        WorldError, match=r"lab\.textures: a lab has at least 4 walls; expected >= 4"
+    ):
+        WorldSpec.from_dict({**doc, "lab": {"textures": [1, 2, 3]}})
 
 
 def test_round_room_door_errors() -> None:
