@@ -50,6 +50,7 @@ from scipy.spatial import ConvexHull
 
 from symloc.errors import ConfigurationError, WorldError
 from symloc.sim.rooms import BOARD_HEIGHT, ROBOT_RADIUS, Room
+from symloc.sim.world_build import assemble
 from symloc.sim.world_file import (
     TEXTURE_POOL,
     DoorSpec,
@@ -743,9 +744,8 @@ def generate_world(family: str, seed: int, *, perturb: bool | None = None) -> Wo
                 generator=(family, int(seed)),
                 source=f"generate_world({family!r}, {seed})",
             )
-            base = spec.build()
             if do_perturb:
-                spec = _perturb(spec, base, rng, tags)
+                spec = _perturb(spec, rng, tags)
             room = spec.build()
         except WorldError:
             if attempt == _ATTEMPTS - 1:
@@ -761,7 +761,7 @@ def generate_world(family: str, seed: int, *, perturb: bool | None = None) -> Wo
     )
 
 
-def _perturb(spec: WorldSpec, room: Room, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
+def _perturb(spec: WorldSpec, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
     """Apply one to three perturbations (at least one that takes, when any can)."""
     count = int(rng.integers(1, 4))
     kinds = [str(k) for k in rng.permutation(PERTURBATIONS)]
@@ -790,7 +790,9 @@ def _apply(kind: str, spec: WorldSpec, rng: np.random.Generator, tags: list[str]
         "aliasing": _aliasing,
         "dark": _dark,
     }
-    result: WorldSpec = step[kind](spec, spec.build(), rng, tags)
+    # only symmetric furniture needs the order; the rest need the outline and free space
+    room = spec.build() if kind == "symmetric_furniture" else assemble(spec)
+    result: WorldSpec = step[kind](spec, room, rng, tags)
     return result
 
 
