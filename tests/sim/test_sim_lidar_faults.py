@@ -44,7 +44,12 @@ def test_no_faults_draws_the_same_scans_as_simulate_scan() -> None:
         a = simulate_scan(SQUARE, [0.3, -0.2, 0.4], preset, 7)
         b = SimulatedLidar(preset, LidarFaults(), 7).scan(SQUARE, [0.3, -0.2, 0.4])
         assert np.array_equal(a.ranges, b.ranges, equal_nan=True)
-        assert b.time_increment == pytest.approx(1.0 / preset.scan_rate / preset.n_beams)
+        # no simulated skew: every beam from the stamp's pose, and the scan says so
+        assert a.time_increment == b.time_increment == 0.0
+        skewed = SimulatedLidar(preset, LidarFaults(motion_skew=True), 7).scan(
+            SQUARE, [0.3, -0.2, 0.4], twist=(0.2, 0.5)
+        )
+        assert skewed.time_increment == pytest.approx(1.0 / preset.scan_rate / preset.n_beams)
 
 
 def test_raycast_nearest_reports_material_incidence_and_primitive() -> None:

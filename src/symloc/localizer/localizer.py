@@ -31,7 +31,8 @@ from numpy.typing import NDArray
 from symloc._checks import check_in_range, check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, inverse, wrap_angle
-from symloc.odometry import OdometryReading
+from symloc.odometry import OdometryReading, twist_between
+from symloc.scan import LaserScan, deskew
 
 from .centering import CentreFilter
 from .claim import Claim, ClaimGate
@@ -283,6 +284,7 @@ class Localizer:
         self.particles_at_ambiguity: FloatArray | None = None
         #: AMCL's particles just before the visual decision reseeded it (for figures).
         self.particles_before_decision: FloatArray | None = None
+        self._last_odom: OdometryReading | None = None
         self._reset_state()
         self._phase = _Phase.LOST
 
@@ -317,6 +319,11 @@ class Localizer:
         take (a :class:`~symloc.scan.LaserScan`).
         """
         odom_pose = np.asarray(odom.pose, dtype=np.float64)
+        if isinstance(scan, LaserScan) and isinstance(odom, OdometryReading):
+            # a spinning lidar's beams were taken along the last motion: undo it
+            if self._last_odom is not None:
+                scan = deskew(scan, *twist_between(self._last_odom, odom))
+            self._last_odom = odom
         result = self.tracker.update(odom, scan)
         self._jumped = False
         if self.claim_gate is not None and result.updated:

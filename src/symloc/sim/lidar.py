@@ -26,7 +26,8 @@ Time stamps follow sensor_msgs/LaserScan: the scan's ``stamp`` is the acquisitio
 first beam (index 0), beam ``i`` is taken at ``stamp + i * time_increment``, beams in index
 order (counter-clockwise), one revolution per ``1 / scan_rate`` seconds. With motion skew the
 ranges are those a sensor moving with the robot's twist measures; the beam angles stay the
-nominal ones in the sensor frame, as a driver reports them.
+nominal ones in the sensor frame, as a driver reports them. Without it every beam is cast from
+the pose at the stamp, and ``time_increment`` is 0 to say so (an instantaneous scan).
 """
 
 from __future__ import annotations
@@ -125,7 +126,7 @@ def simulate_scan(
         range_max=preset.range_max,
         ranges=ranges,
         stamp=stamp,
-        time_increment=scan_time / preset.n_beams,
+        time_increment=0.0,  # every beam from ``pose``: an instantaneous (unskewed) scan
         scan_time=scan_time,
         frame_id=frame_id,
     )
@@ -404,7 +405,9 @@ class SimulatedLidar:
             range_max=pr.range_max,
             ranges=ranges,
             stamp=float(stamp),
-            time_increment=dt_beam,
+            # without simulated skew the beams are all taken from ``pose``: say so (0), so that a
+            # consumer that undoes skew leaves the scan as it is
+            time_increment=dt_beam if f.motion_skew else 0.0,
             scan_time=scan_time,
             frame_id=frame_id,
         )
