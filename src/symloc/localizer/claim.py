@@ -6,9 +6,12 @@ keep it: between filter updates the estimate is stale, odometry can be wrong dur
 turn, the robot can be carried away, and a particle cloud's spread is not its error. So every
 scan goes through :meth:`ClaimGate.check`:
 
-1. **Carry**: the filter's estimate at its last update (:meth:`ClaimGate.anchor`) is moved to
-   this scan by the odometry since then, its covariance grown by the motion model
-   (:func:`symloc.mcl.motion_model.carry_by_odometry`).
+1. **Carry**: the last confirmed pose (or, before the first, the filter's estimate at its last
+   update, :meth:`ClaimGate.anchor`) is moved to this scan by the odometry since then, its
+   covariance grown by the motion model (:func:`symloc.mcl.motion_model.carry_by_odometry`).
+   Carrying the confirmed pose, not the particle cloud, keeps the uncertainty honest where the
+   laser cannot see: a round room's heading, a corridor's axis grow with every turn and metre
+   as the motion model says, whatever the particles did.
 2. **Confirm with the laser**: the scan is aligned to the map starting from the carried pose,
    with the carried pose as a prior (:func:`symloc.mcl.scan_to_map.match_scan_to_map`): the
    maximum a posteriori pose and its covariance. Where the scan constrains the pose (walls in
@@ -212,6 +215,11 @@ class ClaimGate:
         self._chain = None
 
     @property
+    def anchored(self) -> bool:
+        """True once :meth:`anchor` gave an estimate to carry."""
+        return self._anchor is not None
+
+    @property
     def has_chain(self) -> bool:
         """True when a confirmed pose exists to carry (see :meth:`check_chain`)."""
         return self._chain is not None
@@ -226,22 +234,9 @@ class ClaimGate:
             np.asarray(odom_pose, dtype=np.float64).copy(),
         )
 
-    def check_chain(self, odom_pose: FloatArray, scan: LaserScan) -> Claim:
-        """:meth:`check` with the last *confirmed* pose, carried by odometry, as the prior
-        instead of the filter's estimate: after an anomaly, does the pose continue as the
-        odometry says (a passing occlusion) or not (a kidnapping, a jump)?"""
-        if self._chain is None:
-            return Claim("withheld", None, None, "claim withheld: no confirmed pose to carry")
-        pose, cov, odom0 = self._chain
-        carried, c_cov = carry_by_odometry(
-            pose, cov, odom0, np.asarray(odom_pose, dtype=np.float64), self.alphas
-        )
-        return self._check_at(carried, c_cov, scan)
-
-    @property
-    def anchored(self) -> bool:
-        """True once :meth:`anchor` gave an estimate to carry."""
-        return self._anchor is not None
+    def forget_chain(self) -> None:
+        """Forget the last confirmed pose (tracking ended); the filter's anchor stays."""
+        self._chain = None
 
     def anchor(self, pose: FloatArray, covariance: FloatArray, odom_pose: FloatArray) -> bool:
         """The filter's estimate ``pose`` (3,) with ``covariance`` (3, 3) at odometry pose
@@ -282,7 +277,18 @@ class ClaimGate:
         return scan_points(beams.ranges[beams.hit], beams.angles[beams.hit], self.laser_pose)
 
     def check(self, odom_pose: FloatArray, scan: LaserScan) -> Claim:
-        """Carry, confirm, test and gate (see the module docstring) for one scan."""
+        """Carry, confirm, test and gate (see the module docstring) for one scan.
+
+        The prior is the last *confirmed* pose carried by odometry while there is one (its
+        covariance grows honestly where the laser cannot see: the heading in a round room, the
+        axis of a corridor), else the filter's estimate (:meth:`anchor`).
+        """
+        if self._chain is not None:
+            pose, cov, odom0 = self._chain
+            carried, c_cov = carry_by_odometry(
+                pose, cov, odom0, np.asarray(odom_pose, dtype=np.float64), self.alphas
+            )
+            return self._check_at(carried, c_cov, scan)
         if self._anchor is None:
             return Claim("withheld", None, None, "claim withheld: no filter estimate yet")
         carried, c_cov = self.carried(odom_pose)
