@@ -90,6 +90,11 @@ class ClaimConfig:
         up and relocalizes.
     resume_after : int
         Consecutive scans at which that carried pose must be confirmed again to resume.
+    odometry_alphas : (4,) floats
+        Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
+        grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
+        of heading per metre, two to five times what a calibrated differential drive shows
+        (UMBmark, Borenstein and Feng 1996: 1-2 % after calibration).
     min_beams : int
         Fewer returning beams than this cannot confirm anything (the claim is withheld).
     """
@@ -105,6 +110,7 @@ class ClaimConfig:
     min_carried_xy: float = 0.02
     min_carried_theta: float = math.radians(1.0)
     patience: int = 30
+    odometry_alphas: tuple[float, float, float, float] = (0.0025, 0.0004, 0.0025, 0.0004)
     resume_after: int = 2
     min_beams: int = 20
 
@@ -188,8 +194,11 @@ class ClaimGate:
     field : DistanceField
         The map's surface distance field
         (:func:`~symloc.grid.distance_field.surface_distance_field`).
-    alphas : (4,) floats
-        The filter's odometry noise alpha1..alpha4 (to grow the carried covariance).
+    alphas : (4,) floats, optional
+        The odometry's error model alpha1..alpha4 (Thrun et al. Table 5.6 variances) that grows
+        the carried covariance; default :attr:`ClaimConfig.odometry_alphas`. Pass the robot's
+        own when known; a filter's inflated alphas make the carried pose so uncertain that a
+        kidnapping can hide inside it.
     config : ClaimConfig, optional
     match_config : ScanMatchConfig, optional
     laser_pose : (3,) array
@@ -199,16 +208,16 @@ class ClaimGate:
     def __init__(
         self,
         field: DistanceField,
-        alphas: tuple[float, float, float, float],
+        alphas: tuple[float, float, float, float] | None = None,
         config: ClaimConfig | None = None,
         match_config: ScanMatchConfig | None = None,
         *,
         laser_pose: FloatArray | tuple[float, float, float] = (0.0, 0.0, 0.0),
     ) -> None:
         self.field = field
-        a1, a2, a3, a4 = (float(a) for a in alphas)
-        self.alphas = (a1, a2, a3, a4)
         self.config = config if config is not None else ClaimConfig()
+        a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
+        self.alphas = (a1, a2, a3, a4)
         self.match_config = match_config if match_config is not None else ScanMatchConfig()
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
         self._anchor: tuple[FloatArray, FloatArray, FloatArray] | None = None

@@ -117,7 +117,6 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
     store = places if places is not None else open_places(params)
     known = list(store.all_places()) if hasattr(store, "all_places") else []
     config = dataclasses.replace(params.localizer, allow_mapping=params.allow_mapping)
-    a = params.amcl
     loc = Localizer(
         AmclTracker(amcl),
         ReportJudge(judge_symmetry, config=params.symmetry_config()),
@@ -126,9 +125,7 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
         scorer=GridScorer(grid),
         known_places=known,
         map_symmetries=map_symmetries(grid),
-        claim_gate=ClaimGate(
-            surface_distance_field(grid), (a.alpha1, a.alpha2, a.alpha3, a.alpha4)
-        ),
+        claim_gate=ClaimGate(surface_distance_field(grid)),
     )
     loc.reset_global()
     return loc
