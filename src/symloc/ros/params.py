@@ -90,6 +90,18 @@ class NodeParams:
         Largest gap [s] between a scan and the newest odometry before it is used.
     max_odom_age : float
         How much odometry history [s] is kept for interpolating at scan stamps.
+    max_stamp_jump : float
+        A scan, odometry or image stamp further than this [s] from the node's clock (the last
+        accepted stamp) is dropped, not adopted; three such stamps in a row that agree, from
+        every sensor stream, are a clock jump and become the new time base
+        (:mod:`symloc.ros.guards`).
+    max_odom_speed : float
+        Odometry that moves faster than this [m/s] between readings is dropped; three readings
+        in a row that agree are an odometry reset, which the node absorbs (the localizer sees
+        no motion across it).
+    max_image_pixels : int
+        Camera images of more pixels are refused before decoding (compressed ones by the size
+        their header declares).
     seed : int
         Seed of the filter's random numbers.
     amcl : AmclParams
@@ -125,6 +137,9 @@ class NodeParams:
     accept_map_updates: bool = False
     transform_tolerance: float = 1.0
     max_odom_age: float = 10.0
+    max_stamp_jump: float = 5.0
+    max_odom_speed: float = 10.0
+    max_image_pixels: int = 5_000_000
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
     localizer: LocalizerConfig = field(default_factory=LocalizerConfig)
@@ -171,7 +186,7 @@ class NodeParams:
             raise ConfigurationError(
                 f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"
             )
-        for name in ("transform_tolerance", "max_odom_age"):
+        for name in ("transform_tolerance", "max_odom_age", "max_stamp_jump", "max_odom_speed"):
             v = getattr(self, name)
             if (
                 isinstance(v, bool)
@@ -179,8 +194,12 @@ class NodeParams:
                 or not math.isfinite(v)
                 or v <= 0
             ):
-                raise ConfigurationError(f"{name}: expected a number > 0 s, got {v!r}")
+                unit = "m/s" if name == "max_odom_speed" else "s"
+                raise ConfigurationError(f"{name}: expected a number > 0 {unit}, got {v!r}")
             object.__setattr__(self, name, float(v))
+        px = self.max_image_pixels
+        if isinstance(px, bool) or not isinstance(px, int) or px < 1:
+            raise ConfigurationError(f"max_image_pixels: expected an integer >= 1, got {px!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigurationError(f"seed: expected an integer >= 0, got {self.seed!r}")
         if not isinstance(self.amcl, AmclParams):

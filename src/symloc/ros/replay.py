@@ -79,7 +79,7 @@ def replay_bag(
     for m in messages:
         if m.kind == "scan":
             out = core.add_scan(m.value)
-            if out is not None:
+            if out.used:
                 est = out.estimate
                 trajectory.append(TrajectoryPoint(m.stamp, est.status.value, est.pose))
         elif m.kind == "odom":
@@ -91,9 +91,9 @@ def replay_bag(
                 core.set_map(m.value)
         elif m.kind == "truth":
             truth.append([m.stamp, *m.value.pose])
-        elif m.kind == "initialpose" and core.localizer is not None:
+        elif m.kind == "initialpose":
             pose, cov = m.value
-            core.localizer.set_pose(pose, cov)
+            core.set_initial_pose(pose, cov)
     store = getattr(core.localizer, "places", None)
     if store is not None and hasattr(store, "visual_map"):
         store.visual_map.close()

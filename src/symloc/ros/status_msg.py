@@ -1,6 +1,7 @@
 """The localizer's status and symmetric candidates as ROS messages.
 
-**Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan used): one
+**Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan, used or
+not): one
 ``DiagnosticStatus`` named ``symloc: localization`` whose ``level`` is OK while tracking, WARN
 while ambiguous / going to the centre / deciding, ERROR when lost, and whose ``message`` is
 ``"<status>: <reason>"``. Its ``values`` (key / value strings) are:
@@ -18,9 +19,14 @@ key                 value
 ``request_target``  "x y" [m] of a go_to_centre target in the robot (base) frame
 ``request_angle``   [rad] of a face_direction / rotate request (CCW positive)
 ``stamp``           the scan stamp [s] this status answers
+``scan``            ``used``, or ``dropped`` when the localizer did not take this scan (then
+                    the status is the last one, ``lost`` after a few unused scans in a row,
+                    and ``reason`` says why)
 ``scans_used``      scans given to the localizer so far
 ``dropped``         messages dropped so far (all reasons)
 ``dropped/<why>``   messages dropped for that reason
+``recovered``       recoveries from a stuck state so far (clock jump, odometry reset, ...)
+``recovered/<what>``  recoveries of that kind (:mod:`symloc.ros.core`)
 ==================  ==========================================================================
 
 **Candidates** (``visualization_msgs/MarkerArray`` on ``symloc/candidates``): a DELETEALL
@@ -74,6 +80,8 @@ def status_to_fields(
     frame_id: str,
     scans_used: int,
     dropped: Mapping[str, int],
+    recovered: Mapping[str, int] | None = None,
+    scan_used: bool = True,
 ) -> dict[str, Any]:
     """A diagnostic_msgs/DiagnosticArray field dict describing ``est`` (see module doc)."""
     values: list[tuple[str, str]] = [
@@ -87,10 +95,14 @@ def status_to_fields(
     values += _request_values(est.request)
     values += [
         ("stamp", f"{stamp:.9f}"),
+        ("scan", "used" if scan_used else "dropped"),
         ("scans_used", str(scans_used)),
         ("dropped", str(sum(dropped.values()))),
     ]
     values += [(f"dropped/{k}", str(v)) for k, v in sorted(dropped.items())]
+    rec = recovered or {}
+    values += [("recovered", str(sum(rec.values())))]
+    values += [(f"recovered/{k}", str(v)) for k, v in sorted(rec.items())]
     return {
         "header": header_fields(stamp, frame_id),
         "status": [
