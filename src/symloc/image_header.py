@@ -11,10 +11,22 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError
 
-__all__ = ["HEADER_FORMATS", "ImageHeader", "check_image_size", "image_header"]
+__all__ = [
+    "HEADER_FORMATS",
+    "MAX_PHOTO_PIXELS",
+    "ImageHeader",
+    "check_image_size",
+    "image_header",
+    "read_image_file",
+]
 
 #: The formats whose header :func:`image_header` reads.
 HEADER_FORMATS = ("PNG", "JPEG", "PNM (PGM/PPM/PBM)", "BMP", "TIFF")
@@ -167,3 +179,46 @@ def check_image_size(header: ImageHeader, max_pixels: int, where: str) -> ImageH
             f" = {header.pixels:,} pixels; at most {max_pixels:,} allowed"
         )
     return header
+
+
+#: Default bound on a photo's pixels (50 MP: larger than phone cameras' full resolution).
+MAX_PHOTO_PIXELS = 50_000_000
+
+
+def read_image_file(
+    path: str | Path, *, max_pixels: int = MAX_PHOTO_PIXELS, flags: int | None = None
+) -> NDArray[Any]:
+    """Decode an image file with OpenCV after bounding it by its header.
+
+    ``flags`` are ``cv2.imread`` flags (default ``IMREAD_UNCHANGED``). The file's size and its
+    declared pixels are checked before anything is decoded.
+
+    Raises
+    ------
+    DataFormatError
+        Missing or unreadable file, a header not in :data:`HEADER_FORMATS`, more than
+        ``max_pixels`` pixels, or data OpenCV cannot decode; the message names the file.
+    """
+    import cv2
+
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+        if not p.is_file():
+            raise DataFormatError(f"{p}: not a file")
+        if size > 8 * max_pixels + (1 << 20):
+            raise DataFormatError(
+                f"{p}: {size:,} bytes, more than an image of at most {max_pixels:,} pixels needs"
+            )
+        raw = p.read_bytes()
+    except FileNotFoundError as err:
+        raise DataFormatError(f"{p}: no such image file") from err
+    except OSError as err:
+        raise DataFormatError(f"{p}: cannot read ({err.strerror})") from err
+    check_image_size(image_header(raw, str(p)), max_pixels, str(p))
+    img = cv2.imdecode(
+        np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED if flags is None else flags
+    )
+    if img is None or img.size == 0:
+        raise DataFormatError(f"{p}: OpenCV cannot decode it (truncated or corrupt)")
+    return np.asarray(img)

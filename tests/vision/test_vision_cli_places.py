@@ -119,7 +119,7 @@ def test_place_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     assert main(["vocab", "train", str(train), "--k", "3", "--L", "2", "--out", str(voc)]) == 0
     capsys.readouterr()
     assert main([*add, "--images", *imgs[:2], "--vocabulary", str(voc)]) == 2
-    assert "were made with default" in capsys.readouterr().err
+    assert "were made with the shipped vocabulary" in capsys.readouterr().err
 
 
 def test_image_file_helpers(tmp_path: Path) -> None:
@@ -145,3 +145,28 @@ def test_image_file_helpers(tmp_path: Path) -> None:
         intrinsics_from_values(-1.0, 500.0, 320.0, 240.0)
     with pytest.raises(DataFormatError, match="no such image file"):
         read_image(tmp_path / "nope.png")
+
+
+def test_decide_refuses_another_vocabulary_and_stored_paths(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db, imgs = _setup(tmp_path)  # made with the shipped vocabulary
+    voc = tmp_path / "v.symvoc"
+    train = tmp_path / "train"
+    train.mkdir()
+    for i in range(2):
+        _write(train / f"{i}.png", view(_scenes()[i]))
+    assert main(["vocab", "train", str(train), "--k", "3", "--L", "2", "--out", str(voc)]) == 0
+    capsys.readouterr()
+    decide = ["places", "decide", "--db", str(db), "--place", "1", "--query", imgs[0]]
+    assert main([*decide, "--hfov", "60", "--vocabulary", str(voc)]) == 2
+    assert "were made with the shipped vocabulary, not" in capsys.readouterr().err
+    # a crafted database naming a file as its vocabulary: the path is never opened
+    con = sqlite3.connect(db)
+    con.execute("UPDATE meta SET value = '/etc/passwd' WHERE key = 'vocabulary'")
+    con.commit()
+    con.close()
+    assert main([*decide, "--hfov", "60"]) == 2
+    assert "never opens a path stored in the database" in capsys.readouterr().err
+    assert main([*decide, "--hfov", "60", "--vocabulary", str(voc)]) == 2
+    assert "were made with /etc/passwd, not" in capsys.readouterr().err

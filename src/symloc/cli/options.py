@@ -77,6 +77,7 @@ __all__ = [
     "order_text",
     "positive_float",
     "positive_int",
+    "refuse_overwriting_inputs",
     "write_json",
 ]
 
@@ -346,3 +347,27 @@ def write_json(path: Path, data: Mapping[str, Any]) -> Path:
     text = json.dumps(json_safe(dict(data)), indent=2, sort_keys=True, allow_nan=False)
     path.write_text(text + "\n")
     return path
+
+
+# ----------------------------------------------------------------------- inputs and outputs
+
+
+def refuse_overwriting_inputs(
+    inputs: Mapping[str, Path | None], outputs: Mapping[str, Path | None]
+) -> None:
+    """Nothing is written into a file the command was asked to read: raise
+    :class:`~symloc.errors.ConfigurationError` when an output path is an input path (or, for an
+    output folder, contains one among the files it will write)."""
+    from symloc.errors import ConfigurationError
+
+    ins = {name: Path(p).resolve() for name, p in inputs.items() if p is not None}
+    for out_name, out in outputs.items():
+        if out is None:
+            continue
+        o = Path(out).resolve()
+        for in_name, i in ins.items():
+            if o == i:
+                raise ConfigurationError(
+                    f"{out_name}: {out} is the {in_name} file this command reads; symloc never"
+                    " writes into its input: choose another path"
+                )

@@ -35,7 +35,7 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError
+from symloc.errors import ConfigurationError, SymlocError
 from symloc.experiments._common import (
     CARMEN_LOGS,
     add_common_arguments,
@@ -139,8 +139,8 @@ def run_symmetry_carmen(
     ------
     ConfigurationError
         For a bad stride, noise, or unknown log name.
-    FileNotFoundError
-        When a log file is missing.
+    DataFormatError
+        When a log file is missing or malformed.
     """
     from symloc.io.carmen import read_carmen
     from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
@@ -305,7 +305,7 @@ def _run(args: argparse.Namespace) -> int:
         result = run_symmetry_carmen(
             Path(data), args.logs, range_sigma=args.range_sigma, stride=args.stride
         )
-    except (ConfigurationError, FileNotFoundError) as err:
+    except SymlocError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     kinds = ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")

@@ -28,11 +28,19 @@ def carmen_to_bag(
     Raises
     ------
     DataFormatError
-        The log is malformed (from :func:`symloc.io.carmen.read_carmen`) or ``out`` exists.
+        The log is malformed (from :func:`symloc.io.carmen.read_carmen`), holds no ``FLASER``
+        scan (nothing is written), or ``out`` exists.
     """
+    from symloc.errors import DataFormatError
     from symloc.io.carmen import read_carmen
 
     data = read_carmen(log, range_max=range_max)
+    if not data.scans:
+        seen = ", ".join(f"{k} x{n}" for k, n in data.skipped.most_common(3)) or "nothing"
+        raise DataFormatError(
+            f"{log}: no FLASER scan in it (read {len(data.odometry)} ODOM, skipped {seen});"
+            " not a CARMEN laser log? No bag written"
+        )
     with BagWriter(out, fmt) as bag:
         for s in data.scans:
             bag.write_odometry(OdometryReading(s.odom_pose, s.stamp))

@@ -21,6 +21,10 @@ weights and parents compress about tenfold, while trained binary descriptors are
 Loading is a single read plus ``np.frombuffer`` views, so a 1-million-word vocabulary loads in
 well under a second.
 
+Sizes are bounded before allocation: a file (or a decompressed ``.gz`` text) larger than
+:data:`MAX_VOCABULARY_BYTES` is refused, the node count must fit in the payload that was read,
+and compressed weights are inflated to at most the size the node count implies.
+
 DBoW2 text format (``TemplatedVocabulary::loadFromTextFile``, ORB-SLAM's ``ORBvoc.txt``): a
 header line ``k L scoring weighting``, then one line per node after the root:
 ``parent isLeaf d0 d1 ... d31 weight`` (descriptor bytes as decimal integers).
@@ -28,7 +32,6 @@ header line ``k L scoring weighting``, then one line per node after the root:
 
 from __future__ import annotations
 
-import gzip
 import struct
 import warnings
 import zlib
@@ -41,7 +44,17 @@ from symloc.errors import VocabularyFileError
 from symloc.vision.bow import Scoring, Weighting
 from symloc.vision.vocabulary import Vocabulary
 
-__all__ = ["MAGIC", "load_dbow2_text", "load_vocabulary", "save_dbow2_text", "save_vocabulary"]
+__all__ = [
+    "MAGIC",
+    "MAX_VOCABULARY_BYTES",
+    "load_dbow2_text",
+    "load_vocabulary",
+    "save_dbow2_text",
+    "save_vocabulary",
+]
+
+#: Largest vocabulary file, or decompressed DBoW2 text, read (ORB-SLAM's ORBvoc.txt is 145 MB).
+MAX_VOCABULARY_BYTES = 256 * 2**20
 
 MAGIC = b"SYMLVOC\x00"
 VERSION = 1
@@ -94,18 +107,45 @@ def load_vocabulary(path: str | Path) -> Vocabulary:
         The file is corrupt or truncated; the message names the byte (binary) or line (text).
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()  # one read: far faster than reading a header, then the rest
-    except OSError as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+    data = _read_bounded(path)  # one read: far faster than reading a header, then the rest
     if data[: len(MAGIC)] != MAGIC:
-        if path.suffix == ".gz" or data[:1].isdigit():
+        if path.suffix == ".gz" or data[:2] == b"\x1f\x8b" or data[:1].isdigit():
             return load_dbow2_text(path)
         raise VocabularyFileError(
             f"{path}: byte 0: not a symloc vocabulary (magic {data[:8]!r}, expected {MAGIC!r})"
             " nor a DBoW2 text vocabulary"
         )
     return _parse_native(data, str(path))
+
+
+def _read_bounded(path: Path) -> bytes:
+    """The file's bytes, refusing one larger than :data:`MAX_VOCABULARY_BYTES` unread."""
+    try:
+        size = path.stat().st_size
+        if size > MAX_VOCABULARY_BYTES:
+            raise VocabularyFileError(
+                f"{path}: {size:,} bytes; a vocabulary file is at most"
+                f" {MAX_VOCABULARY_BYTES:,} bytes"
+            )
+        return path.read_bytes()
+    except OSError as err:
+        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+
+
+def _gunzip_bounded(data: bytes, name: str) -> bytes:
+    """Decompress gzip ``data`` to at most :data:`MAX_VOCABULARY_BYTES` (more is refused)."""
+    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    try:
+        out = d.decompress(data, MAX_VOCABULARY_BYTES + 1)
+    except zlib.error as err:
+        raise VocabularyFileError(f"{name}: cannot decompress: {err}") from err
+    if len(out) > MAX_VOCABULARY_BYTES:
+        raise VocabularyFileError(
+            f"{name}: decompresses to more than {MAX_VOCABULARY_BYTES:,} bytes; refused"
+        )
+    if not d.eof:
+        raise VocabularyFileError(f"{name}: gzip data truncated")
+    return out
 
 
 def _parse_native(data: bytes, name: str) -> Vocabulary:
@@ -142,13 +182,20 @@ def _parse_native(data: bytes, name: str) -> Vocabulary:
         raise VocabularyFileError(
             f"{name}: bytes {HEADER_SIZE}..{HEADER_SIZE + plen}: checksum mismatch (corrupt payload)"
         )
+    if n * DESC_BYTES > len(stored):
+        raise VocabularyFileError(
+            f"{name}: byte 32: node count {n} needs {n * DESC_BYTES:,} bytes of descriptors,"
+            f" the payload has {len(stored):,}"
+        )
     head: bytes | memoryview = stored
     desc_buf: bytes | memoryview = stored
     desc_at = 12 * n
     if flags & 1:
         try:
             (nz,) = struct.unpack_from("<Q", stored, 0)
-            head = zlib.decompress(stored[8 : 8 + nz])
+            inflate = zlib.decompressobj()
+            # weights and parents of n nodes are 12 n bytes: inflate no more than that
+            head = inflate.decompress(stored[8 : 8 + nz], 12 * n + 1)
         except (struct.error, zlib.error) as err:
             raise VocabularyFileError(
                 f"{name}: byte {HEADER_SIZE}: cannot decompress weights and parents: {err}"
@@ -201,11 +248,11 @@ def load_dbow2_text(path: str | Path) -> Vocabulary:
         Naming the line (1-based) that is malformed.
     """
     path = Path(path)
+    raw = _read_bounded(path)
+    if path.suffix == ".gz" or raw[:2] == b"\x1f\x8b":
+        raw = _gunzip_bounded(raw, str(path))
     try:
-        raw = gzip.decompress(path.read_bytes()) if path.suffix == ".gz" else path.read_bytes()
         text = raw.decode("ascii")
-    except (OSError, EOFError, gzip.BadGzipFile) as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
     except UnicodeDecodeError as err:
         line = raw[: err.start].count(b"\n") + 1
         raise VocabularyFileError(f"{path}: line {line}: not ASCII text") from err

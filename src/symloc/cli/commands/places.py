@@ -71,22 +71,49 @@ def register(subparsers: Any) -> None:
     r.set_defaults(func=_remove)
 
 
-def _open(db: Path, create: bool = False) -> Any:
+def _open(db: Path, *, create: bool = False, readonly: bool = False) -> Any:
     from symloc.vision.visual_map import VisualMap
 
-    return VisualMap(db, create=create)
+    return VisualMap(db, create=create, readonly=readonly)
 
 
-def _vocabulary(path: Path | None, vmap: Any | None = None) -> tuple[Any, str]:
+def _vocabulary(path: Path | None, vmap: Any, *, option: str = "--vocabulary") -> tuple[Any, str]:
+    """The vocabulary to use with ``vmap`` and its identity to store (``"default"`` or its
+    fingerprint). The map's record says which vocabulary made its BoW vectors; another one is
+    refused. A path is never read from the database (a crafted one could point anywhere)."""
+    from symloc.errors import ConfigurationError
     from symloc.vision.default_vocabulary import default_vocabulary
     from symloc.vision.vocabulary import Vocabulary
 
-    stored = vmap.get_meta("vocabulary") if vmap is not None else None
-    if path is None and stored not in (None, "default"):
-        path = Path(str(stored))
-    if path is None:
-        return default_vocabulary(), "default"
-    return Vocabulary.load(path), str(path.resolve())
+    stored = vmap.get_meta("vocabulary")
+    voc = default_vocabulary() if path is None else Vocabulary.load(path)
+    name = "the shipped vocabulary" if path is None else str(path)
+    ident = voc.fingerprint()
+    if stored is None:
+        return voc, "default" if path is None else ident
+    if stored == "default":
+        want = default_vocabulary().fingerprint()
+    elif stored.startswith("sha256:"):
+        want = stored
+    else:  # maps written before fingerprints: the vocabulary file's path
+        if path is None:
+            raise ConfigurationError(
+                f"{option}: this map's BoW vectors were made with {stored}; give that file"
+                f" (symloc never opens a path stored in the database)"
+            )
+        if Path(stored).resolve() != path.resolve():
+            raise ConfigurationError(
+                f"{option}: this map's BoW vectors were made with {stored}, not {path}"
+            )
+        return voc, stored
+    if ident != want:
+        made = "the shipped vocabulary" if stored == "default" else f"vocabulary {want[:19]}..."
+        hint = "" if path is not None else " (give it with --vocabulary)"
+        raise ConfigurationError(
+            f"{option}: this map's BoW vectors were made with {made}, not {name}"
+            f" ({ident[:19]}...){hint}; scores against another vocabulary mean nothing"
+        )
+    return voc, "default" if stored == "default" else ident
 
 
 def _add(args: argparse.Namespace) -> int:
@@ -99,12 +126,8 @@ def _add(args: argparse.Namespace) -> int:
             "expected a multiple of the order"
         )
     with _open(args.db, create=True) as vmap:
-        voc, voc_name = _vocabulary(args.vocabulary)
+        voc, voc_id = _vocabulary(args.vocabulary, vmap)
         stored = vmap.get_meta("vocabulary")
-        if stored is not None and stored != voc_name:
-            raise ConfigurationError(
-                f"--vocabulary: this map's BoW vectors were made with {stored}, not {voc_name}"
-            )
         images = place_images_from_files(
             args.images,
             voc,
@@ -121,7 +144,10 @@ def _add(args: argparse.Namespace) -> int:
             label=args.label,
         )
         if stored is None:
-            vmap.set_meta("vocabulary", voc_name)
+            vmap.set_meta("vocabulary", voc_id)
+            vmap.set_meta(
+                "vocabulary_file", "shipped" if args.vocabulary is None else str(args.vocabulary)
+            )
     counts = ", ".join(str(len(im.features)) for im in images)
     print(f"added place {pid} to {args.db}: {args.kind}, order {args.order}, G-V {args.gv} m")
     print(f"  {len(images)} directions (ORB keypoints: {counts})")
@@ -129,9 +155,11 @@ def _add(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    with _open(args.db) as vmap:
+    with _open(args.db, readonly=True) as vmap:
         ids = vmap.place_ids()
-        print(f"{args.db}: {len(ids)} place(s), vocabulary {vmap.get_meta('vocabulary')}")
+        voc = vmap.get_meta("vocabulary")
+        made = vmap.get_meta("vocabulary_file") or voc
+        print(f"{args.db}: {len(ids)} place(s), vocabulary {made} ({voc})")
         if ids:
             print(f"{'id':>4}  {'kind':<10}{'order':>6}{'G-V [m]':>9}{'M':>3}  pose (x, y, deg)")
         for pid in ids:
@@ -148,7 +176,7 @@ def _decide(args: argparse.Namespace) -> int:
     from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values, read_image
     from symloc.vision.orientation import decide_orientation
 
-    with _open(args.db) as vmap:
+    with _open(args.db, readonly=True) as vmap:
         place = vmap.place(args.place, with_images=False)
         voc, _ = _vocabulary(args.vocabulary, vmap)
     query = read_image(args.query)
