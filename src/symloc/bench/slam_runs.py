@@ -18,9 +18,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.exploration import simulate_exploration
 from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
+from symloc.errors import ConfigurationError
 from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.io.carmen import read_carmen
 from symloc.sim.odometry_noise import DEFAULT_ALPHAS, noisy_odometry
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.rooms import build_room
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
 __all__ = ["SIM_WORLDS", "SlamRun", "run_carmen", "run_simulated"]
@@ -141,7 +146,6 @@ def run_carmen(
     progress: bool = True,
 ) -> SlamRun:
     """SLAM on a CARMEN log with odometry made from its corrected poses (see module doc)."""
-    from symloc.io.carmen import read_carmen
 
     log = read_carmen(path)
     scans_all = log.scans if max_scans is None else log.scans[:max_scans]
@@ -166,10 +170,6 @@ def run_simulated(
     progress: bool = True,
 ) -> SlamRun:
     """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`)."""
-    from symloc.bench.exploration import simulate_exploration
-    from symloc.errors import ConfigurationError
-    from symloc.sim.rasterize import world_to_grid
-    from symloc.sim.rooms import build_room
 
     if world not in SIM_WORLDS:
         raise ConfigurationError(f"world: expected one of {sorted(SIM_WORLDS)}, got {world!r}")

@@ -427,13 +427,23 @@ def save_map(
     lines = [
         f"image: {image_path.name}",
         f"mode: {mode}",
-        f"resolution: {grid.resolution!r}",
-        f"origin: [{float(o[0])!r}, {float(o[1])!r}, {float(o[2])!r}]",
+        f"resolution: {_yaml_float(grid.resolution)}",
+        f"origin: [{_yaml_float(o[0])}, {_yaml_float(o[1])}, {_yaml_float(o[2])}]",
         "negate: 0",
-        f"occupied_thresh: {occ!r}",
-        f"free_thresh: {free!r}",
+        f"occupied_thresh: {_yaml_float(occ)}",
+        f"free_thresh: {_yaml_float(free)}",
     ]
     if write_size:
         lines += [f"width: {grid.width}", f"height: {grid.height}"]
     yaml_path.write_text("\n".join(lines) + "\n")
     return yaml_path
+
+
+def _yaml_float(value: float) -> str:
+    """``repr`` of a finite float that YAML 1.1 (PyYAML, map_server) reads back as a float:
+    an exponent needs a dot in its mantissa (``1e-300`` would be read as a string)."""
+    text = repr(float(value))
+    mantissa, e, exponent = text.partition("e")
+    if e and "." not in mantissa:
+        return f"{mantissa}.0e{exponent}"
+    return text
