@@ -11,8 +11,7 @@ from symloc.cli.main import main
 
 
 def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = tmp_path / "scene.png"
-    cam = tmp_path / "cam.png"
+    out = tmp_path / "render"
     code = main(
         [
             "sim",
@@ -30,8 +29,6 @@ def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.Captur
             "3",
             "--out",
             str(out),
-            "--image-out",
-            str(cam),
         ]
     )
     assert code == 0
@@ -39,12 +36,13 @@ def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.Captur
     assert "seed=3" in text
     assert "room=hexagon" in text
     assert "360 beams" in text
-    assert out.stat().st_size > 10_000
-    img = cv2.imread(str(cam))
+    assert (out / "scene.png").stat().st_size > 10_000
+    img = cv2.imread(str(out / "camera.png"))
     assert img.shape == (480, 640, 3)
 
 
 def test_sim_render_bad_gv_is_a_clean_error(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    code = main(["sim", "render", "--gv", "0", "--out", str(tmp_path / "x.png")])
-    assert code == 2
-    assert "gv: expected a value > 0" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "render", "--gv", "0", "--out", str(tmp_path / "x")])
+    assert exc.value.code == 2
+    assert "--gv: expected a number > 0, got '0'" in capsys.readouterr().err

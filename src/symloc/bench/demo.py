@@ -155,7 +155,7 @@ def run_demo(
         matched = scen.store.stored_image(place.place_id, int(dec.direction or 0))
         query = srun.episode.images[-1] if srun.episode.images else query
         label = (
-            f"place {place.place_id}, direction {dec.direction} of {place.m}, "
+            f"place {place.place_id}, direction {int(dec.direction or 0) + 1} of {place.m}, "
             f"offset {math.degrees(dec.offset):+.1f} deg"
         )
     fin = srun.episode.final

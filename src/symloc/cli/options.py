@@ -67,17 +67,20 @@ __all__ = [
     "add_lidars",
     "add_out",
     "add_room",
+    "add_rooms",
     "add_seed",
     "add_trials",
     "default_out",
     "direction_text",
     "finite_float",
     "json_safe",
+    "lidar_names",
     "nonnegative_int",
     "order_text",
     "positive_float",
     "positive_int",
     "refuse_overwriting_inputs",
+    "room_names",
     "write_json",
 ]
 
@@ -163,15 +166,36 @@ def _radians(text: str) -> float:
 # ----------------------------------------------------------------------- shared options
 
 
-def add_seed(parser: argparse.ArgumentParser) -> None:
-    """``--seed N``: an integer >= 0, default 0."""
+class _Given(argparse.Action):
+    """Store the value and remember that it was given (``<dest>_given``)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        setattr(namespace, self.dest + "_given", True)
+
+
+def add_seed(parser: argparse.ArgumentParser, *, overrides: str = "") -> None:
+    """``--seed N``: an integer >= 0, default 0.
+
+    ``overrides`` names another source of the seed (``"the --params file's seed"``) that is
+    used unless ``--seed`` is given; ``args.seed_given`` tells which.
+    """
+    default = f"default {DEFAULT_SEED}" if not overrides else f"default {overrides}"
     parser.add_argument(
         "--seed",
         type=nonnegative_int,
         default=DEFAULT_SEED,
+        action=_Given,
         metavar="N",
-        help=f"random seed, an integer >= 0 (default {DEFAULT_SEED}; printed)",
+        help=f"random seed, an integer >= 0 ({default}; printed)",
     )
+    parser.set_defaults(seed_given=False)
 
 
 def default_out(command: str) -> Path:
@@ -266,6 +290,37 @@ def add_room(
     )
 
 
+def add_rooms(
+    parser: argparse.ArgumentParser,
+    *,
+    rooms: Sequence[str],
+    choices: Sequence[str] | None = None,
+    help: str = "rooms to run",
+) -> None:
+    """``--rooms NAME [NAME ...]``: rooms a sweep runs, default ``all`` (the command's
+    ``rooms``); read the value with :func:`room_names`."""
+    allowed = tuple(choices if choices is not None else rooms)
+    parser.add_argument(
+        "--rooms",
+        nargs="+",
+        choices=(*allowed, "all"),
+        default=["all"],
+        metavar="NAME",
+        help=f"{help}: one or more of {', '.join(allowed)}, or all (default all:"
+        f" {', '.join(rooms)})",
+    )
+
+
+def room_names(value: Sequence[str], rooms: Sequence[str]) -> list[str]:
+    """The room names of a ``--rooms`` value (``all`` is ``rooms``; duplicates removed)."""
+    out: list[str] = []
+    for n in value:
+        for m in rooms if n == "all" else (n,):
+            if m not in out:
+                out.append(m)
+    return out
+
+
 def add_trials(parser: argparse.ArgumentParser, *, default: int, what: str = "trials") -> None:
     """``--trials N``: an integer >= 1; ``what`` says what is counted."""
     parser.add_argument(
@@ -284,14 +339,17 @@ def add_angle(
     default: float | None,
     help: str,
     metavar: str = "DEG",
+    dest: str | None = None,
 ) -> None:
     """An angle option: **degrees** at the command line, stored in **radians** for the library.
 
-    ``default`` is in degrees (None: no default).
+    ``default`` is in degrees (None: no default); ``dest`` names the attribute (give one
+    without a ``_deg`` suffix for flags like ``--step-deg``: the value is in radians).
     """
     shown = "" if default is None else f", default {default:g} deg"
     parser.add_argument(
         flag,
+        dest=dest or flag.lstrip("-").replace("-", "_"),
         type=_radians,
         default=None if default is None else math.radians(default),
         metavar=metavar,
@@ -307,11 +365,14 @@ def direction_text(index: int, count: int | None = None) -> str:
     return f"{int(index) + 1}" + ("" if count is None else f" of {int(count)}")
 
 
-def order_text(order: int | None, continuous: bool = False) -> str:
-    """A symmetry order for people: ``inf`` for a circle (the library's order 0 / continuous)."""
+def order_text(order: float | None, continuous: bool = False) -> str:
+    """A symmetry order for people: ``inf`` for a circle (the library's order 0, inf or
+    ``continuous``)."""
     if order is None:
         return "-"
-    return "inf" if continuous or int(order) == 0 else str(int(order))
+    if continuous or order == 0 or math.isinf(order):
+        return "inf"
+    return str(int(order))
 
 
 # ----------------------------------------------------------------------- JSON

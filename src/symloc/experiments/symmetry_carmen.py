@@ -35,6 +35,7 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
+from symloc.cli import options
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.experiments._common import (
     CARMEN_LOGS,
@@ -361,22 +362,27 @@ def register(subparsers: Any) -> None:
         "symmetry-carmen",
         help="symmetry judgement on every scan of the real CARMEN logs (180-degree scans)",
     )
-    add_common_arguments(parser)
+    add_common_arguments(parser, "symmetry-carmen")
     parser.add_argument(
         "--data", type=Path, default=None, metavar="DIR", help="folder of the CARMEN logs"
     )
     parser.add_argument(
         "--logs", nargs="+", choices=CARMEN_LOGS, default=list(CARMEN_LOGS), help="logs to judge"
     )
-    parser.add_argument("--stride", type=int, default=1, help="judge every N-th scan (default 1)")
+    parser.add_argument(
+        "--stride", type=options.positive_int, default=1, help="judge every N-th scan (default 1)"
+    )
     parser.add_argument(
         "--range-sigma",
-        type=float,
+        type=options.positive_float,
         default=0.01,
         help="range noise [m] the tolerances follow from (default 0.01, SICK LMS cm mode)",
     )
     parser.add_argument(
-        "--examples", type=int, default=6, help="symmetric scans per log in the figure"
+        "--examples",
+        type=options.positive_int,
+        default=6,
+        help="symmetric scans per log in the figure",
     )
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figures")
     parser.set_defaults(func=_run)

@@ -41,6 +41,7 @@ def carmen_to_bag(
             f"{log}: no FLASER scan in it (read {len(data.odometry)} ODOM, skipped {seen});"
             " not a CARMEN laser log? No bag written"
         )
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
     with BagWriter(out, fmt) as bag:
         for s in data.scans:
             bag.write_odometry(OdometryReading(s.odom_pose, s.stamp))

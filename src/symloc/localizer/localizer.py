@@ -201,6 +201,11 @@ def symmetry_consistent(
     return count
 
 
+def _people(direction: int | None) -> str:
+    """A direction index (0-based in the library) as people count it (1-based), for logs."""
+    return "?" if direction is None else str(int(direction) + 1)
+
+
 def _cov(xy_std: float, theta_std: float) -> FloatArray:
     return np.diag([xy_std**2, xy_std**2, theta_std**2])
 
@@ -664,8 +669,8 @@ class Localizer:
             self.particles_before_decision = self._last_result.particles
         self.tracker.initialize_pose(pose, cov)
         self._note(
-            f"decided direction {dec.direction} of place {place.place_id} "
-            f"(offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
+            f"decided direction {_people(dec.direction)} of {place.m} of place {place.place_id}"
+            f" (offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
         )
         self._reset_state()
         self._phase = _Phase.TRACKING
@@ -674,14 +679,16 @@ class Localizer:
             pose=pose,
             covariance=cov,
             hypotheses=(Hypothesis(pose=pose, weight=1.0),),
-            reason=f"visual decision: place {place.place_id}, direction {dec.direction}",
+            reason=f"visual decision: place {place.place_id},"
+            f" direction {_people(dec.direction)} of {place.m}",
         )
 
     def _unanchored(self, place: Place, dec: Decision) -> Estimate:
         """A direction was decided, but the place's heading reference is odometry's: no claim."""
         self.last_decision = (place, dec)
         self._note(
-            f"decided direction {dec.direction} of place {place.place_id}, but its stored "
+            f"decided direction {_people(dec.direction)} of {place.m} of place"
+            f" {place.place_id}, but its stored "
             "headings came from odometry (not observable by the laser when it was mapped)"
         )
         return self._settle(

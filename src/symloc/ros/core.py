@@ -96,6 +96,9 @@ class Outputs:
     goal: dict[str, Any] | None = None
     capture: dict[str, Any] | None = None
     used: bool = True
+    #: The tracker's best pose (3,) at this scan, earned or not (for logs such as
+    #: ``replay_scans.tum``; never published as a pose).
+    best_estimate: FloatArray | None = None
 
 
 @dataclass
@@ -590,6 +593,7 @@ class NodeCore:
                 recovered=self.recovered,
             ),
             candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
+            best_estimate=self._best_estimate(),
         )
         particles = self._particles()
         if particles is not None:
@@ -621,6 +625,14 @@ class NodeCore:
                 frame = p.camera_frame_id or p.base_frame_id
                 out.capture = header_fields(stamp, frame)
         return out
+
+    def _best_estimate(self) -> FloatArray | None:
+        last = getattr(getattr(self.localizer, "tracker", None), "last", None)
+        est = getattr(last, "estimate", None)
+        if est is None:
+            return None
+        arr = np.asarray(est, dtype=np.float64).reshape(-1)
+        return arr.copy() if arr.shape == (3,) and np.all(np.isfinite(arr)) else None
 
     def _particles(self) -> FloatArray | None:
         last = getattr(getattr(self.localizer, "tracker", None), "last", None)

@@ -3,7 +3,8 @@
 The bag's messages go through :class:`symloc.ros.core.NodeCore` (the ROS node's own logic) in
 record order: odometry, images and maps are buffered, and every scan is one localizer step with
 the odometry at its stamp and, when the localizer asked for one, the newest image. The result is
-the status and pose at every scan, written as a TUM trajectory (tracked poses only) by the CLI.
+the status, the earned pose and the tracker's best estimate at every scan (``symloc replay``
+writes the earned poses and every scan's estimate as TUM trajectories).
 """
 
 from __future__ import annotations
@@ -81,7 +82,11 @@ def replay_bag(
             out = core.add_scan(m.value)
             if out.used:
                 est = out.estimate
-                trajectory.append(TrajectoryPoint(m.stamp, est.status.value, est.pose))
+                trajectory.append(
+                    TrajectoryPoint(
+                        m.stamp, est.status.value, est.pose, out.best_estimate, est.reason
+                    )
+                )
         elif m.kind == "odom":
             core.add_odometry(m.value)
         elif m.kind == "image":

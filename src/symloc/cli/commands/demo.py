@@ -7,6 +7,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register", "run"]
 
 ROOMS = (
@@ -27,11 +29,9 @@ def register(subparsers: Any) -> None:
         "demo",
         help="kidnapped robot in a symmetric room: plain AMCL vs symloc (table + PNG)",
     )
-    parser.add_argument("--room", choices=ROOMS, default="square", help="room (default square)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (printed)")
-    parser.add_argument(
-        "--out", type=Path, default=Path("symloc-demo"), metavar="DIR", help="output folder"
-    )
+    options.add_room(parser, choices=ROOMS, help="symmetric room inside the lab")
+    options.add_seed(parser)
+    options.add_out(parser, "demo", what="the map, visual map and demo_<room>.png")
     parser.add_argument(
         "--untextured", action="store_true", help="plain lab walls (the camera's failure case)"
     )

@@ -8,6 +8,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register"]
 
 
@@ -22,29 +24,38 @@ def register(subparsers: Any) -> None:
     a = sub.add_parser(
         "add",
         help="store a place from M photos taken at its centre, in clockwise order",
-        description="Photo j looks along heading - j * 360/M degrees (clockwise order, as the "
-        "paper stores them). Creates the database when it does not exist.",
+        description="Photo j (j = 1..M) looks along heading - (j - 1) * 360/M degrees (clockwise"
+        " order, as the paper stores them). Creates the database when it does not exist.",
     )
     a.add_argument("--db", type=Path, required=True, help="visual map database (SQLite)")
-    a.add_argument("--images", type=Path, nargs="+", required=True, metavar="IMG")
+    a.add_argument(
+        "--images",
+        type=Path,
+        nargs="+",
+        required=True,
+        metavar="IMG",
+        help="the M photos, direction 1 first, clockwise",
+    )
     a.add_argument("--kind", default="polygon", help="room kind (square, polygon, circle, ...)")
-    a.add_argument("--order", type=int, required=True, help="symmetry order of the room")
-    a.add_argument("--gv", type=float, required=True, help="G-V distance [m]")
+    a.add_argument(
+        "--order", type=options.positive_int, required=True, help="symmetry order of the room"
+    )
+    a.add_argument("--gv", type=options.nonnegative_float, required=True, help="G-V distance [m]")
     a.add_argument(
         "--pose",
-        type=float,
+        type=options.finite_float,
         nargs=3,
         default=(0.0, 0.0, 0.0),
         metavar=("X", "Y", "THETA_DEG"),
-        help="map pose of the centre [m, m, deg]; THETA is the heading of the first photo",
+        help="map pose of the centre [m, m, deg]; THETA is the heading of direction 1",
     )
-    a.add_argument("--label", default=None)
+    a.add_argument("--label", default=None, help="a name for the place")
     a.add_argument("--vocabulary", type=Path, default=None, help="default: the shipped one")
     a.add_argument("--keep-images", action="store_true", help="also store the pixels (PNG)")
     a.set_defaults(func=_add)
 
     ls = sub.add_parser("list", help="list the stored places")
-    ls.add_argument("--db", type=Path, required=True)
+    ls.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
     ls.set_defaults(func=_list)
 
     d = sub.add_parser(
@@ -54,20 +65,33 @@ def register(subparsers: Any) -> None:
         "beat the second clearly, verifies it with a RANSAC homography and reads the residual "
         "heading offset from it. Exit code 0 when decided, 3 when undetermined or refused.",
     )
-    d.add_argument("--db", type=Path, required=True)
-    d.add_argument("--place", type=int, required=True, help="place id (see 'places list')")
+    d.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
+    d.add_argument(
+        "--place", type=options.positive_int, required=True, help="place id (see 'places list')"
+    )
     d.add_argument("--query", type=Path, required=True, help="query photo")
     cam = d.add_mutually_exclusive_group(required=True)
-    cam.add_argument("--hfov", type=float, help="horizontal field of view [deg]")
     cam.add_argument(
-        "--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"), help="[px]"
+        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
     )
-    d.add_argument("--vocabulary", type=Path, default=None, help="default: the one used by add")
+    cam.add_argument(
+        "--intrinsics",
+        type=options.finite_float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        help="camera intrinsics [px]",
+    )
+    d.add_argument(
+        "--vocabulary",
+        type=Path,
+        default=None,
+        help="the vocabulary the map was made with (default: the shipped one; another is refused)",
+    )
     d.set_defaults(func=_decide)
 
     r = sub.add_parser("remove", help="remove a place and its images")
-    r.add_argument("--db", type=Path, required=True)
-    r.add_argument("--place", type=int, required=True)
+    r.add_argument("--db", type=Path, required=True, help="visual map database")
+    r.add_argument("--place", type=options.positive_int, required=True, help="place id")
     r.set_defaults(func=_remove)
 
 
@@ -191,7 +215,7 @@ def _decide(args: argparse.Namespace) -> int:
     print(f"place {place.id} ({place.kind}, M={place.n_directions}), query {args.query}")
     print(f"status:         {d.status}")
     if d.decided:
-        print(f"direction:      {d.direction}")
+        print(f"direction:      {options.direction_text(d.direction or 0, place.n_directions)}")
         print(f"heading offset: {math.degrees(d.heading_offset):+.2f} deg (CCW positive)")
         print(f"heading:        {math.degrees(d.heading):.2f} deg (map)")
     print(f"scores:         [{scores}]")
