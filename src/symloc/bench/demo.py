@@ -44,6 +44,8 @@ class DemoStory:
     matched_image: NDArray[np.uint8] | None
     match_label: str
     amcl_path: FloatArray | None = None
+    #: ``(xmin, xmax, ymin, ymax)`` [m] of the room's outline (the figure's view).
+    room_box: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -173,6 +175,7 @@ def run_demo(
         grid=scen.grid,
         room_center=np.asarray(scen.room.center),
         room_gv=float(scen.room.gv_distance),
+        room_box=_box(scen.room.boundary),
         kidnap_pose=np.asarray(start),
         amcl_particles=arun.particles,
         amcl_true_pose=arun.true_pose,
@@ -193,3 +196,9 @@ def run_demo(
         amcl_path=arun.path,
     )
     return DemoResult(room, seed, scen, arun, srun, story, timings)
+
+
+def _box(boundary: Any) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` [m] of an outline ``(V, 2)``."""
+    b = np.asarray(boundary, dtype=np.float64).reshape(-1, 2)
+    return (float(b[:, 0].min()), float(b[:, 0].max()), float(b[:, 1].min()), float(b[:, 1].max()))

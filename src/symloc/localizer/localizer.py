@@ -669,7 +669,7 @@ class Localizer:
             self.particles_before_decision = self._last_result.particles
         self.tracker.initialize_pose(pose, cov)
         self._note(
-            f"decided direction {_people(dec.direction)} of {place.m} of place {place.place_id}"
+            f"decided direction {_people(dec.direction)} of {place.m} at place {place.place_id}"
             f" (offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
         )
         self._reset_state()
@@ -687,7 +687,7 @@ class Localizer:
         """A direction was decided, but the place's heading reference is odometry's: no claim."""
         self.last_decision = (place, dec)
         self._note(
-            f"decided direction {_people(dec.direction)} of {place.m} of place"
+            f"decided direction {_people(dec.direction)} of {place.m} at place"
             f" {place.place_id}, but its stored "
             "headings came from odometry (not observable by the laser when it was mapped)"
         )
