@@ -60,6 +60,7 @@ MAP_MODES = ("trinary", "scale", "raw")
 #: Default bound on a map image's pixels (64 Mi: 8192 x 8192 cells, 410 m square at 5 cm).
 MAX_MAP_PIXELS = 64 * 2**20
 _BLOCK_PIXELS = 1 << 20  # pixels converted at a time by image_to_grid
+_MAX_YAML_BYTES = 1 << 20
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,9 +146,16 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     """
     p = Path(path)
     try:
+        if p.stat().st_size > _MAX_YAML_BYTES:
+            raise MapFileError(
+                f"{p}: {p.stat().st_size:,} bytes; a map YAML is a few lines (at most"
+                f" {_MAX_YAML_BYTES:,} bytes read)"
+            )
         text = p.read_text()
     except OSError as err:
         raise MapFileError(f"{p}: cannot read map YAML ({err.strerror})") from err
+    except UnicodeDecodeError as err:
+        raise MapFileError(f"{p}: not a text file (byte {err.start} is not UTF-8)") from err
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as err:

@@ -73,6 +73,8 @@ _WARN_FIRST = 5
 _WARN_EVERY = 100
 #: Scans in a row not used before the status says ``lost`` (localization is not happening).
 STALE_SCANS = 5
+#: Latest stamp a ROS time can carry [s] (``builtin_interfaces/Time.sec`` is an int32).
+MAX_STAMP = float(2**31 - 1)
 
 
 @dataclass
@@ -210,8 +212,11 @@ class NodeCore:
 
     def _time_ok(self, stamp: float, stream: str) -> bool:
         """The time gate (:class:`~symloc.ros.guards.StampGate`) for a scan, odom or image."""
-        if not math.isfinite(stamp):
-            self.drop(f"{stream}: stamp not finite", f"{stamp}")
+        if not (math.isfinite(stamp) and 0.0 <= stamp <= MAX_STAMP):
+            self.drop(
+                f"{stream}: stamp out of range",
+                f"{stamp}: expected 0 .. {MAX_STAMP} s (builtin_interfaces/Time)",
+            )
             return False
         clock = self._clock.clock
         verdict = self._clock.check(stamp, stream)
@@ -553,7 +558,7 @@ class NodeCore:
         """The outputs (a status only) for a scan the localizer did not take (:class:`Outputs`);
         ``stamp`` None: the node's clock."""
         self._unused += 1
-        if stamp is None or not math.isfinite(stamp):
+        if stamp is None or not (math.isfinite(stamp) and 0.0 <= stamp <= MAX_STAMP):
             stamp = self._clock.clock if self._clock.clock is not None else 0.0
         reason, detail = self._last_drop
         why = f"scan not used ({reason}{': ' + detail if detail else ''})"

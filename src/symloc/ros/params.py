@@ -38,6 +38,16 @@ __all__ = ["MODES", "NodeParams"]
 MODES = ("localize", "build_visual_map")
 
 
+def _block(name: str, build: Any) -> Any:
+    """``build()``, with a value of the wrong type reported as a ConfigurationError."""
+    try:
+        return build()
+    except (TypeError, ValueError, OverflowError) as err:
+        if isinstance(err, ConfigurationError):
+            raise
+        raise ConfigurationError(f"{name}: {err}") from err
+
+
 def _topic(value: Any, name: str) -> str:
     if not isinstance(value, str) or not value or any(c.isspace() for c in value):
         raise ConfigurationError(f"{name}: expected a topic name without spaces, got {value!r}")
@@ -162,10 +172,21 @@ class NodeParams:
             )
         if self.mode not in MODES:
             raise ConfigurationError(f"mode: expected one of {MODES}, got {self.mode!r}")
+        if not isinstance(self.camera_intrinsics, (list, tuple)):
+            raise ConfigurationError(
+                "camera_intrinsics: expected a list of 4 numbers fx, fy, cx, cy [px], got"
+                f" {self.camera_intrinsics!r}"
+            )
         intr = tuple(self.camera_intrinsics)
         if intr and (
             len(intr) != 4
-            or not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in intr)
+            or not all(
+                isinstance(v, (int, float))
+                and not isinstance(v, bool)
+                and math.isfinite(v)
+                and v > 0
+                for v in intr
+            )
         ):
             raise ConfigurationError(
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
@@ -215,11 +236,16 @@ class NodeParams:
         bad = sorted(set(self.symmetry) - known)
         if bad:
             raise ConfigurationError(f"symmetry.{bad[0]}: unknown (known: {sorted(known)})")
-        if self.lidar_preset:
-            from symloc.lidar_spec import PRESETS
+        try:
+            if self.lidar_preset:
+                from symloc.lidar_spec import PRESETS
 
-            return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
-        return SymmetryConfig(**self.symmetry)
+                return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
+            return SymmetryConfig(**self.symmetry)
+        except (TypeError, ValueError, OverflowError) as err:
+            if isinstance(err, ConfigurationError):
+                raise
+            raise ConfigurationError(f"symmetry: {err}") from err
 
     @property
     def allow_mapping(self) -> bool:
@@ -242,7 +268,7 @@ class NodeParams:
                 )
             kwargs[key] = value
         if "amcl" in kwargs:
-            kwargs["amcl"] = AmclParams.from_dict(kwargs["amcl"] or {})
+            kwargs["amcl"] = _block("amcl", lambda: AmclParams.from_dict(kwargs["amcl"] or {}))
         if "localizer" in kwargs:
             block = kwargs["localizer"] or {}
             if not isinstance(block, dict):
@@ -251,8 +277,9 @@ class NodeParams:
             bad = sorted(set(block) - known)
             if bad:
                 raise ConfigurationError(f"localizer.{bad[0]}: unknown (known: {sorted(known)})")
-            kwargs["localizer"] = LocalizerConfig(**block)
-        return cls(**kwargs)
+            kwargs["localizer"] = _block("localizer", lambda: LocalizerConfig(**block))
+        params: NodeParams = _block("ros__parameters", lambda: cls(**kwargs))
+        return params
 
     @classmethod
     def from_yaml(cls, source: str | Path, *, node_name: str = "symloc") -> NodeParams:
@@ -266,7 +293,7 @@ class NodeParams:
         ):
             try:
                 text = Path(source).read_text()
-            except OSError as err:
+            except (OSError, UnicodeDecodeError) as err:
                 raise ConfigurationError(f"params file {source}: cannot read ({err})") from err
         else:
             text = str(source)

@@ -21,9 +21,12 @@ weights and parents compress about tenfold, while trained binary descriptors are
 Loading is a single read plus ``np.frombuffer`` views, so a 1-million-word vocabulary loads in
 well under a second.
 
-Sizes are bounded before allocation: a file (or a decompressed ``.gz`` text) larger than
-:data:`MAX_VOCABULARY_BYTES` is refused, the node count must fit in the payload that was read,
-and compressed weights are inflated to at most the size the node count implies.
+Sizes are bounded before allocation: a file larger than :data:`MAX_VOCABULARY_BYTES` is refused
+unread, the node count must fit in the payload that was read, and compressed weights are
+inflated to at most the size the node count implies. DBoW2 text (plain or ``.gz``) is first
+scanned in 1 MiB pieces without keeping them: more than :data:`MAX_TEXT_BYTES`, a line longer
+than :data:`MAX_TEXT_LINE` characters, or lines shorter than a DBoW2 row can be on average (a
+file of newlines) are refused before the text is held in memory.
 
 DBoW2 text format (``TemplatedVocabulary::loadFromTextFile``, ORB-SLAM's ``ORBvoc.txt``): a
 header line ``k L scoring weighting``, then one line per node after the root:
@@ -32,9 +35,12 @@ header line ``k L scoring weighting``, then one line per node after the root:
 
 from __future__ import annotations
 
+import gzip
+import io
 import struct
 import warnings
 import zlib
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -46,6 +52,8 @@ from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
     "MAGIC",
+    "MAX_TEXT_BYTES",
+    "MAX_TEXT_LINE",
     "MAX_VOCABULARY_BYTES",
     "load_dbow2_text",
     "load_vocabulary",
@@ -55,6 +63,12 @@ __all__ = [
 
 #: Largest vocabulary file, or decompressed DBoW2 text, read (ORB-SLAM's ORBvoc.txt is 145 MB).
 MAX_VOCABULARY_BYTES = 256 * 2**20
+#: Largest DBoW2 text, decompressed (ORB-SLAM's ORBvoc.txt is 145 MB); parsing holds ~4x it.
+MAX_TEXT_BYTES = 160 * 2**20
+#: Longest line of a DBoW2 text (a row is 35 numbers, under 200 characters).
+MAX_TEXT_LINE = 4096
+_MIN_MEAN_ROW = 60  # characters: a row is 2 + 32 integers and a weight
+_CHUNK = 1 << 20
 
 MAGIC = b"SYMLVOC\x00"
 VERSION = 1
@@ -132,20 +146,46 @@ def _read_bounded(path: Path) -> bytes:
         raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
 
 
-def _gunzip_bounded(data: bytes, name: str) -> bytes:
-    """Decompress gzip ``data`` to at most :data:`MAX_VOCABULARY_BYTES` (more is refused)."""
-    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+def _gzip_chunks(data: bytes, name: str) -> Iterator[bytes]:
+    """The decompressed content of gzip ``data`` in pieces of at most 1 MiB."""
     try:
-        out = d.decompress(data, MAX_VOCABULARY_BYTES + 1)
-    except zlib.error as err:
+        with gzip.GzipFile(fileobj=io.BytesIO(data)) as fh:
+            while piece := fh.read(_CHUNK):
+                yield piece
+    except (OSError, EOFError, zlib.error) as err:
         raise VocabularyFileError(f"{name}: cannot decompress: {err}") from err
-    if len(out) > MAX_VOCABULARY_BYTES:
+
+
+def _scan_text(chunks: Iterable[bytes], name: str) -> None:
+    """Refuse a text over :data:`MAX_TEXT_BYTES`, with a line over :data:`MAX_TEXT_LINE`, or
+    with more lines than a DBoW2 file of its size can have, holding one piece at a time."""
+    total = newlines = 0
+    run = 0  # characters since the last newline
+    for piece in chunks:
+        total += len(piece)
+        if total > MAX_TEXT_BYTES:
+            raise VocabularyFileError(
+                f"{name}: more than {MAX_TEXT_BYTES:,} bytes of DBoW2 text; refused"
+            )
+        at = np.flatnonzero(np.frombuffer(piece, np.uint8) == 10)
+        # lengths of the lines this piece ends (the first carries the previous run)
+        ends = np.diff(at, prepend=-1) - 1
+        if ends.size:
+            ends[0] += run
+        long = np.flatnonzero(ends > MAX_TEXT_LINE)
+        run = len(piece) - int(at[-1]) - 1 if at.size else run + len(piece)
+        if long.size or run > MAX_TEXT_LINE:
+            line = newlines + 1 + (int(long[0]) if long.size else at.size)
+            raise VocabularyFileError(
+                f"{name}: line {line}: longer than {MAX_TEXT_LINE:,} characters"
+                " (not a DBoW2 vocabulary)"
+            )
+        newlines += at.size
+    if newlines > total // _MIN_MEAN_ROW + 16:
         raise VocabularyFileError(
-            f"{name}: decompresses to more than {MAX_VOCABULARY_BYTES:,} bytes; refused"
+            f"{name}: {newlines:,} lines in {total:,} bytes: shorter than DBoW2 rows"
+            f" ({_MIN_MEAN_ROW} characters or more each)"
         )
-    if not d.eof:
-        raise VocabularyFileError(f"{name}: gzip data truncated")
-    return out
 
 
 def _parse_native(data: bytes, name: str) -> Vocabulary:
@@ -249,8 +289,13 @@ def load_dbow2_text(path: str | Path) -> Vocabulary:
     """
     path = Path(path)
     raw = _read_bounded(path)
+    name = str(path)
     if path.suffix == ".gz" or raw[:2] == b"\x1f\x8b":
-        raw = _gunzip_bounded(raw, str(path))
+        _scan_text(_gzip_chunks(raw, name), name)  # first pass: nothing kept
+        raw = b"".join(_gzip_chunks(raw, name))
+    else:
+        view = memoryview(raw)
+        _scan_text((bytes(view[i : i + _CHUNK]) for i in range(0, len(raw), _CHUNK)), name)
     try:
         text = raw.decode("ascii")
     except UnicodeDecodeError as err:
