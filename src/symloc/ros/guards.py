@@ -20,6 +20,7 @@ value, however absurd, can leave the node stuck: whatever arrives consistently w
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -29,10 +30,12 @@ from numpy.typing import NDArray
 
 from symloc.geometry import compose, inverse
 
-__all__ = ["CONFIRM", "MAX_ODOM_COORDINATE", "OdometryGate", "StampGate", "Verdict"]
+__all__ = ["CLOCK_MEMORY", "CONFIRM", "MAX_ODOM_COORDINATE", "OdometryGate", "StampGate", "Verdict"]
 
 #: Far values in a row, agreeing with each other, that make a new reference.
 CONFIRM = 3
+#: Accepted stamps whose median is the node's clock.
+CLOCK_MEMORY = 9
 #: Odometry coordinates beyond this [m] are corrupt (float64 keeps sub-millimetre steps below it).
 MAX_ODOM_COORDINATE = 1e9
 
@@ -49,8 +52,9 @@ class StampGate:
     Parameters
     ----------
     max_jump : float
-        Largest distance [s] of a stamp from the node's clock (the last accepted stamp) that is
-        taken as the same time base.
+        Largest distance [s] of a stamp from the node's clock that is taken as the same time
+        base. The clock is the median of the last :data:`CLOCK_MEMORY` accepted stamps, so one
+        odd stamp that is still within ``max_jump`` does not move it.
     required : iterable of str
         Streams that must all be among the confirming stamps of a new time base once they have
         fed the node (a clock jump moves every stream; one broken publisher must not drag the
@@ -59,14 +63,20 @@ class StampGate:
 
     max_jump: float
     required: Iterable[str] = ("scan", "odom")
-    clock: float | None = None
+    _recent: deque[float] = field(default_factory=lambda: deque(maxlen=CLOCK_MEMORY))
     _active: set[str] = field(default_factory=set)
     _pending: list[tuple[float, str]] = field(default_factory=list)
 
+    @property
+    def clock(self) -> float | None:
+        """The node's clock [s]: the median of the recent accepted stamps (None before any)."""
+        return float(np.median(self._recent)) if self._recent else None
+
     def check(self, stamp: float, stream: str) -> Verdict:
         """Judge ``stamp`` [s] of a message of ``stream``; ``rebase`` moves the clock to it."""
-        if self.clock is None or abs(stamp - self.clock) <= self.max_jump:
-            self.clock = stamp
+        clock = self.clock
+        if clock is None or abs(stamp - clock) <= self.max_jump:
+            self._recent.append(stamp)
             self._pending.clear()
             if stream in self.required:
                 self._active.add(stream)
@@ -75,7 +85,8 @@ class StampGate:
         self._pending = [*keep, (stamp, stream)]
         streams = {n for _, n in self._pending}
         if len(self._pending) >= CONFIRM and self._active <= streams:
-            self.clock = stamp
+            self._recent.clear()
+            self._recent.extend(s for s, _ in self._pending)
             self._active = streams & set(self.required)
             self._pending.clear()
             return "rebase"
