@@ -46,3 +46,84 @@ def test_sim_render_bad_gv_is_a_clean_error(tmp_path: Path, capsys: pytest.Captu
         main(["sim", "render", "--gv", "0", "--out", str(tmp_path / "x")])
     assert exc.value.code == 2
     assert "--gv: expected a number > 0, got '0'" in capsys.readouterr().err
+
+
+def _packaged(name: str) -> Path:
+    from importlib import resources
+
+    return Path(str(resources.files("symloc") / "data" / "worlds" / name))
+
+
+def test_sim_render_world_file(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "scene"
+    code = main(
+        ["sim", "render", "--world", str(_packaged("square_with_box.yaml")), "--out", str(out)]
+    )
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "room=square-with-box" in text
+    assert "order=1 shape_order=4" in text
+    assert (out / "scene.png").stat().st_size > 10_000
+
+
+def test_sim_render_world_file_errors_name_the_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nroom:\n  polygon: [[0, 0], [2, 2], [2, 0], [0, 2]]\n")
+    code = main(["sim", "render", "--world", str(bad), "--out", str(tmp_path / "x")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"{bad}: room.polygon[0]: wall 0" in err
+    assert "crosses wall 2" in err
+
+
+def test_sim_world_writes_a_loadable_file(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from symloc.sim.generator import generate_world
+    from symloc.sim.world_file import load_world_file
+
+    out_dir = tmp_path / "w"
+    assert (
+        main(
+            [
+                "sim",
+                "world",
+                "--family",
+                "rhombus",
+                "--seed",
+                "7",
+                "--no-perturb",
+                "--out",
+                str(out_dir),
+            ]
+        )
+        == 0
+    )
+    text = capsys.readouterr().out
+    (out,) = out_dir.glob("*.yaml")  # --out is a folder: the world file is named after it
+    assert "family=rhombus seed=7" in text
+    assert "computed: order 2" in text
+    assert out.read_text().startswith("# symloc sim world --family rhombus --seed 7 --no-perturb\n")
+    assert load_world_file(out) == generate_world("rhombus", 7, perturb=False)
+    argv = ["sim", "world", "--room", "hexagon", "--gv", "2.5", "--no-lab", "--out", str(out_dir)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "computed: order 6" in text
+    assert "regular: {n: 6, gv: 2.5}" in text
+    assert main(["sim", "world", "--list"]) == 0
+    assert "corridor_long   symmetric" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "world"])
+    assert exc.value.code == 2
+    assert "one of the arguments --family --room --list is required" in capsys.readouterr().err
+
+
+def test_sim_gallery(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    code = main(
+        ["sim", "gallery", "--out", str(tmp_path), "--count", "2", "--families", "kite", "cross"]
+    )
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "kite-0" in text
+    assert "cross-1" in text
+    assert (tmp_path / "worlds_gallery.png").stat().st_size > 5_000

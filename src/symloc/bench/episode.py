@@ -68,6 +68,8 @@ class RobotBody:
     def __init__(self, robot: Any) -> None:
         self.robot = robot
         self.collisions = 0
+        #: the last commanded (v [m/s], w [rad/s]) (a spinning lidar's motion skew)
+        self.twist = (0.0, 0.0)
 
     @property
     def pose(self) -> FloatArray:
@@ -86,6 +88,7 @@ class RobotBody:
         cfg = self.robot.config
         v = float(np.clip(v, -cfg.max_v, cfg.max_v))
         w = float(np.clip(w, -cfg.max_w, cfg.max_w))
+        self.twist = (v, w)
         if not self.robot.step(v, w, dt):
             self.collisions += 1
         return self.odom

@@ -30,17 +30,20 @@ from symloc.errors import ConfigurationError, SymlocError, WorldError
 from symloc.geometry import angle_diff
 from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
+from symloc.grid.distance_field import surface_distance_field
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.centering import CenteringConfig
+from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
 from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
 from symloc.mcl import Amcl, AmclParams
-from symloc.odometry import OdometryReading
+from symloc.odometry import OdometryReading, twist_between
+from symloc.scan import deskew
 from symloc.sim.camera import Camera
 from symloc.sim.gyro import L3G4200D, GyroOdometryBody, SimulatedGyro
-from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+from symloc.sim.lidar import RPLIDAR_A2
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room, build_room, hallway, with_lab
@@ -54,7 +57,7 @@ from .episode import Episode, RobotBody, drive_waypoints, run_episode
 from .exploration import exploration_path
 from .explore import ExploreDrive
 from .mapping_trip import MappedPlace, map_place
-from .sensors import SensorSetup, sensor_setup
+from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
 
 __all__ = [
     "DEFAULT_GV",
@@ -89,10 +92,6 @@ MAP_SOURCE = (
     "occupancy grid: symloc.sim.rasterize.world_to_grid (ground truth of what the lidar sees); "
     "visual map poses: simulator ground truth (a real run takes both from SLAM)"
 )
-
-#: odometry noise alpha1..4 of the kidnapped robot (as ``symloc experiment amcl-symmetric``);
-#: both methods' AMCL use the same alphas (matched to the robot, as nav2's tuning guide asks)
-ODOM_ALPHA = 0.05
 
 POSITION_TOL = 0.1
 HEADING_TOL = math.radians(5.0)
@@ -169,13 +168,26 @@ class Scenario:
     slam_seconds: float = 0.0
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
-    #: the sensor regime of the robots (:func:`symloc.bench.sensors.sensor_setup`)
+    #: the sensor regime of the robot (:mod:`symloc.sim.regimes`)
     regime: str = "ideal"
+    #: the one simulated robot that maps this world and is localized in it
+    hardware: RobotHardware | None = None
+    #: pose of the world frame in the map frame (3,): identity for a ground-truth raster; for a
+    #: SLAM map, fixed by the mapping trip's first pose; graders compare claims with
+    #: ``compose(map_from_world, true_pose)``
+    map_from_world: FloatArray = field(default_factory=lambda: np.zeros(3))
+
+    def to_map(self, world_pose: FloatArray) -> FloatArray:
+        """A true pose (3,) in the map frame (where the localizer's claims live)."""
+        return np.asarray(_compose(self.map_from_world, world_pose), dtype=np.float64)
+
     _map_symmetries: list[Any] | None = None
 
     def sensors(self, rng: np.random.Generator, session: str = "query") -> SensorSetup:
-        """One robot's sensors in this scenario's regime, for ``session``."""
-        return sensor_setup(self.regime, self.preset, self.camera, rng, session=session)
+        """The robot's sensors in one ``session`` (``"mapping"`` or ``"query"``)."""
+        if self.hardware is None:
+            raise ConfigurationError("Scenario.hardware: no robot drawn for this scenario")
+        return self.hardware.session(rng, session)
 
     def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
         """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
@@ -194,15 +206,20 @@ class Scenario:
         self, rng: np.random.Generator, config: LocalizerConfig | None = None
     ) -> Localizer:
         """symloc's localizer on this scenario's maps (AMCL with ``amcl_params``)."""
-        tracker = AmclTracker(Amcl(self.grid, self.amcl_params, rng))
+        amcl = Amcl(self.grid, self.amcl_params, rng)
+        p = self.amcl_params
+        gate = ClaimGate(
+            surface_distance_field(self.grid), (p.alpha1, p.alpha2, p.alpha3, p.alpha4)
+        )
         return Localizer(
-            tracker,
+            AmclTracker(amcl),
             self.judge,
             self.store,
             config,
             scorer=GridScorer(self.grid),
             known_places=self.store.all_places(),
             map_symmetries=self.map_symmetries(),
+            claim_gate=gate,
         )
 
     def map_symmetries(self) -> list[Any]:
@@ -217,12 +234,15 @@ class Scenario:
         a = self.odom_alpha
         return AmclParams(alpha1=a, alpha2=a, alpha3=a, alpha4=a)
 
-    def scan_at(self, rng: np.random.Generator) -> Any:
+    def scan_at(self, rng: np.random.Generator, session: str = "query") -> Any:
+        """``scan(true_pose)`` of a robot standing still in the static world."""
+        setup = self.sensors(rng, session)
+        return lambda pose: setup.scan(self.room.world, pose, (0.0, 0.0), 0.0)
 
-        return lambda pose: simulate_scan(self.room.world, pose, self.preset, rng)
-
-    def image_at(self, rng: np.random.Generator) -> Any:
-        return lambda pose: self.camera.render(self.room.world, pose, rng)
+    def image_at(self, rng: np.random.Generator, session: str = "query") -> Any:
+        """``image(true_pose)`` of a robot standing still in the static world."""
+        setup = self.sensors(rng, session)
+        return lambda pose: setup.image(self.room.world, pose, (0.0, 0.0))
 
     def random_pose(self, rng: np.random.Generator, margin: float = 0.35) -> FloatArray:
         """A random pose inside the room, at least ``margin`` [m] from every obstacle."""
@@ -290,16 +310,15 @@ def build_scenario(
         else:
             room = build_room(room_name, gv, lab=True, textured=textured)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
-    camera = Camera()
-    f = camera.focal
-    K = np.array([[f, 0.0, camera.width / 2.0], [0.0, f, camera.height / 2.0], [0.0, 0.0, 1.0]])
+    hardware = robot_hardware(regime, preset, Camera(), gen)
+    camera = hardware.camera
     judge = ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(preset))
     wd = Path(workdir) if workdir is not None else Path(tempfile.mkdtemp(prefix="symloc-"))
     wd.mkdir(parents=True, exist_ok=True)
     db = wd / f"visual_map_{room_name}_{'textured' if textured else 'plain'}.sqlite"
     if db.exists():
         db.unlink()
-    store = VisionPlaceStore(VisualMap(db), _vocabulary(gen), K)
+    store = VisionPlaceStore(VisualMap(db), _vocabulary(gen), hardware.calibration)
     scen = Scenario(
         room=room,
         grid=grid,
@@ -319,15 +338,16 @@ def build_scenario(
         workdir=wd,
         notes=[MAP_SOURCE],
         regime=regime,
+        hardware=hardware,
     )
     start = mapping_start if mapping_start is not None else scen.random_pose(gen)
     dt = 1.0 / float(preset.scan_rate)
     if map_source == "raster":
-        robot = RobotBody(DiffDriveRobot(start, rng=gen, world=room.world))
+        robot = RobotBody(DiffDriveRobot(start, hardware.robot_config, gen, world=room.world))
         scen.mapped = map_place(
             robot,
-            scen.scan_at(gen),
-            scen.image_at(gen),
+            scen.scan_at(gen, "mapping"),
+            scen.image_at(gen, "mapping"),
             judge,
             store.add_place,
             map_pose=lambda: robot.pose,
@@ -371,16 +391,31 @@ def _map_with_slam(
     and errors can be graded in world coordinates.
     """
 
-    robot: Any = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
+    assert scen.hardware is not None
+    robot: Any = RobotBody(
+        DiffDriveRobot(
+            start, scen.hardware.robot_config, gen, world=scen.room.world, odom_origin=start
+        )
+    )
+    session = scen.sensors(gen, "mapping")
     if gyro is not None:
         robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
     odoms: list[FloatArray] = []
+    truths: list[FloatArray] = []
+
+    last_odom: list[OdometryReading] = []
 
     def scan_rec(pose: FloatArray) -> Any:
-        s = simulate_scan(scen.room.world, pose, scen.preset, gen)
+        odom = robot.odom
+        s = session.scan(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0)), odom.stamp)
+        # the mapping software undoes the lidar's motion skew as the localizer does
+        if last_odom:
+            s = deskew(s, *twist_between(last_odom[-1], odom))
+        last_odom[:] = [odom]
         scans.append(s)
-        odoms.append(np.asarray(robot.odom.pose))
+        odoms.append(np.asarray(odom.pose))
+        truths.append(np.asarray(pose, dtype=np.float64))
         return s
 
     marks: list[int] = []
@@ -401,7 +436,7 @@ def _map_with_slam(
     mapped = map_place(
         robot,
         scan_rec,
-        scen.image_at(gen),
+        lambda pose: session.image(scen.room.world, pose, (0.0, 0.0)),
         scen.judge,
         add_later,
         map_pose=map_pose,
@@ -423,6 +458,12 @@ def _map_with_slam(
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
+    # the SLAM map frame is defined by the trip's first pose (SLAM holds it fixed): the truth
+    # is expressed in that frame, so whatever SLAM got wrong later (map distortion, a round
+    # room's unobservable heading) is error the localizer inherits
+    scen.map_from_world = np.asarray(
+        _compose(np.asarray(slam.poses)[0], _inverse(truths[0])), dtype=np.float64
+    )
     scen.notes[0] = (
         f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "
         "visual map poses: SLAM poses"

@@ -1,5 +1,10 @@
 """One trial of the bench: a robot that does not know where it is, symloc and plain AMCL.
 
+Claims live in the map frame; the truth they are graded against is the robot's true pose
+expressed in the map frame (:meth:`symloc.bench.scenario.Scenario.to_map`: the SLAM map's
+frame is its mapping trip's first pose), so map distortion counts as error. A kidnap trial's
+known start is given to the localizer in the map frame, as an operator would.
+
 Two kinds of trial (:data:`TRIAL_KINDS`):
 
 - ``global``: the robot is put down anywhere it fits (near walls too) and nobody tells the
@@ -206,7 +211,7 @@ def _run_method(
     runner: _SymlocRunner | _AmclRunner = (
         _SymlocRunner(scen, rng) if method == "symloc" else _AmclRunner(scen, rng)
     )
-    runner.start(start if known_start else None)
+    runner.start(scen.to_map(start) if known_start else None)
     log = ScanLog()
     t = 0.0
     distance = 0.0
@@ -230,7 +235,7 @@ def _run_method(
         scan = setup.scan(world, body.pose, twist, t)
         status, pose, cov, reason, request = runner.update(body.odom, scan, image)
         image = None
-        log.append(t, body.pose, status, pose, cov, distance, reason)
+        log.append(t, scen.to_map(body.pose), status, pose, cov, distance, reason)
         if pose is not None and kidnapped and not claimed_after_start:
             claimed_after_start = True
             deadline = max(t, claim_window_start) + cfg.track_time

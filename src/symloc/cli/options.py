@@ -180,7 +180,7 @@ class _Given(argparse.Action):
         setattr(namespace, self.dest + "_given", True)
 
 
-def add_seed(parser: argparse.ArgumentParser, *, overrides: str = "") -> None:
+def add_seed(parser: argparse._ActionsContainer, *, overrides: str = "") -> None:
     """``--seed N``: an integer >= 0, default 0.
 
     ``overrides`` names another source of the seed (``"the --params file's seed"``) that is
@@ -203,7 +203,7 @@ def default_out(command: str) -> Path:
     return Path("symloc-" + "-".join(command.split()))
 
 
-def add_out(parser: argparse.ArgumentParser, command: str, *, what: str = "") -> None:
+def add_out(parser: argparse._ActionsContainer, command: str, *, what: str = "") -> None:
     """``--out DIR``: the folder the command writes into, default ``symloc-<command>``.
 
     ``command`` is the command's words after ``symloc`` (``"experiment table1"``); ``what``
@@ -220,7 +220,7 @@ def add_out(parser: argparse.ArgumentParser, command: str, *, what: str = "") ->
     )
 
 
-def add_json(parser: argparse.ArgumentParser) -> None:
+def add_json(parser: argparse._ActionsContainer) -> None:
     """``--json PATH``: also write the results as standard JSON."""
     parser.add_argument(
         "--json",
@@ -231,7 +231,7 @@ def add_json(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_lidar(parser: argparse.ArgumentParser, *, help: str = "simulated lidar") -> None:
+def add_lidar(parser: argparse._ActionsContainer, *, help: str = "simulated lidar") -> None:
     """``--lidar NAME``: one lidar preset, default ``rplidar_a2``."""
     parser.add_argument(
         "--lidar",
@@ -250,7 +250,7 @@ def _lidar_list(text: str) -> str:
     return text
 
 
-def add_lidars(parser: argparse.ArgumentParser, *, help: str = "simulated lidars") -> None:
+def add_lidars(parser: argparse._ActionsContainer, *, help: str = "simulated lidars") -> None:
     """``--lidar NAME [NAME ...]``: lidar presets to sweep, default ``rplidar_a2``; ``all``
     sweeps every preset. Read the value with :func:`lidar_names`."""
     parser.add_argument(
@@ -275,7 +275,7 @@ def lidar_names(value: str | Sequence[str]) -> list[str]:
 
 
 def add_room(
-    parser: argparse.ArgumentParser,
+    parser: argparse._ActionsContainer,
     *,
     choices: Sequence[str] = ROOMS,
     help: str = "simulated room",
@@ -291,7 +291,7 @@ def add_room(
 
 
 def add_rooms(
-    parser: argparse.ArgumentParser,
+    parser: argparse._ActionsContainer,
     *,
     rooms: Sequence[str],
     choices: Sequence[str] | None = None,
@@ -321,7 +321,7 @@ def room_names(value: Sequence[str], rooms: Sequence[str]) -> list[str]:
     return out
 
 
-def add_trials(parser: argparse.ArgumentParser, *, default: int, what: str = "trials") -> None:
+def add_trials(parser: argparse._ActionsContainer, *, default: int, what: str = "trials") -> None:
     """``--trials N``: an integer >= 1; ``what`` says what is counted."""
     parser.add_argument(
         "--trials",
@@ -333,7 +333,7 @@ def add_trials(parser: argparse.ArgumentParser, *, default: int, what: str = "tr
 
 
 def add_angle(
-    parser: argparse.ArgumentParser,
+    parser: argparse._ActionsContainer,
     flag: str,
     *,
     default: float | None,

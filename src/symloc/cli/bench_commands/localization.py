@@ -19,6 +19,7 @@ def register(subparsers: Any) -> None:
     """Add ``localization`` to ``symloc bench``."""
     from symloc.bench.trial import METHODS, TRIAL_KINDS
     from symloc.bench.world_sources import BUILTIN_ROOMS
+    from symloc.sim.regimes import REGIMES
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "localization",
@@ -69,7 +70,12 @@ def register(subparsers: Any) -> None:
         default="slam",
         help="occupancy grid and visual-map poses from SLAM (default) or ground truth",
     )
-    parser.add_argument("--regime", default="ideal", help="sensor regime (default ideal)")
+    parser.add_argument(
+        "--regime",
+        choices=REGIMES,
+        default="ideal",
+        help="sensor regime of the robot (symloc.sim.regimes; default ideal)",
+    )
     parser.add_argument(
         "--claim-timeout", type=float, default=60.0, help="seconds to make a first claim (60)"
     )
