@@ -242,11 +242,14 @@ def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:
     img = np.asarray(image)
     if img.ndim not in (2, 3) or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4)):
         raise MapFileError(f"{meta.image}: expected a grey, BGR or BGRA image, got {img.shape}")
+    h = img.shape[0]
     out = np.empty(img.shape[:2], dtype=np.int8)
     rows = max(1, _BLOCK_PIXELS // max(1, img.shape[1]))
-    for r0 in range(0, img.shape[0], rows):
-        out[r0 : r0 + rows] = _pixels_to_occupancy(img[r0 : r0 + rows], meta)
-    return np.ascontiguousarray(out[::-1])
+    for r0 in range(0, h, rows):
+        r1 = min(h, r0 + rows)
+        # image row r is grid row h - 1 - r (the image's top row is the map's last row)
+        out[h - r1 : h - r0] = _pixels_to_occupancy(img[r0:r1], meta)[::-1]
+    return out
 
 
 def _pixels_to_occupancy(img: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:

@@ -71,7 +71,7 @@ class OccupancyGrid:
             )
         if d.dtype.kind not in "iu":
             raise ConfigurationError(f"OccupancyGrid.data: expected integers, got dtype {d.dtype}")
-        if np.any((d < -1) | (d > 100)):
+        if int(d.min()) < -1 or int(d.max()) > 100:  # no (H, W) temporaries
             raise ConfigurationError("OccupancyGrid.data: values must be -1 (unknown) or 0..100")
         d = d.astype(np.int8, copy=True)
         d.setflags(write=False)

@@ -218,6 +218,11 @@ def symmetry_consistent(
     return count
 
 
+def _order_people(order: int) -> str:
+    """A symmetry order as people read it: ``inf`` for a circle (order 0 in the library)."""
+    return "inf" if int(order) == 0 else str(int(order))
+
+
 def _people(direction: int | None) -> str:
     """A direction index (0-based in the library) as people count it (1-based), for logs."""
     return "?" if direction is None else str(int(direction) + 1)
@@ -651,11 +656,11 @@ class Localizer:
         self._centering_updates = 0
         self._asym_count = 0
         self._outcomes = []
-        self._note(f"ambiguous (order {self._order}): {why}; going to the centre")
+        self._note(f"ambiguous (order {_order_people(self._order)}): {why}; going to the centre")
         return self._ambiguous(
             Status.AMBIGUOUS,
             Request(RequestKind.GO_TO_CENTRE, target=np.asarray(verdict.center, dtype=float)),
-            f"{why}; order {self._order}",
+            f"{why}; order {_order_people(self._order)}",
         )
 
     def _start_ambiguity_at_place(self, result: TrackerResult, place: Place) -> Estimate:
@@ -673,7 +678,7 @@ class Localizer:
         self._asym_count = 0
         self._outcomes = []
         why = f"inside known symmetric place {place.place_id}: rotated copies fit the map"
-        self._note(f"ambiguous (order {self._order}): {why}")
+        self._note(f"ambiguous (order {_order_people(self._order)}): {why}")
         return self._ambiguous(
             Status.AMBIGUOUS, Request(RequestKind.GO_TO_CENTRE, target=centre_base), why
         )

@@ -58,6 +58,13 @@ LEVELS = {
 _ARROW, _TEXT, _DELETEALL = 0, 9, 3
 
 
+def _order_text(order: int | None) -> str:
+    """`` (order k)`` for people; a circle (order 0 in the library) reads ``inf``."""
+    if order is None:
+        return ""
+    return f" (order {'inf' if int(order) == 0 else int(order)})"
+
+
 def _fmt(values: Any) -> str:
     return " ".join(f"{float(v):.6g}" for v in np.asarray(values, dtype=np.float64).reshape(-1))
 
@@ -150,7 +157,7 @@ def candidates_to_fields(est: Estimate, *, stamp: float, frame_id: str) -> dict[
                 "pose": pose_fields([centre[0], centre[1], 0.0]),
                 "scale": {"x": 0.0, "y": 0.0, "z": 0.25},
                 "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0},
-                "text": est.status.value + ("" if est.order is None else f" (order {est.order})"),
+                "text": est.status.value + _order_text(est.order),
             }
         )
     return {"markers": markers}
