@@ -167,7 +167,7 @@ def _judge(args: argparse.Namespace) -> int:
     report = judge_symmetry(src.scan, config=cfg, centroid=args.centroid)
     scan = src.scan
     fov = math.degrees(scan.angle_increment * len(scan))
-    print(f"# symloc symmetry judge: {src.source}")
+    print(f"# symloc symmetry judge: {src.source}; seed {args.seed}")
     print(
         f"#   {len(scan)} beams over {fov:.0f} deg, range {scan.range_min:g}..{scan.range_max:g}"
         f" m; noise sigma {sigma:g} m + {rel:g} r; centroid {args.centroid};"
