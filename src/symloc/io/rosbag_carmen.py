@@ -36,7 +36,13 @@ def carmen_to_bag(
 
     data = read_carmen(log, range_max=range_max)
     if not data.scans:
-        seen = ", ".join(f"{k} x{n}" for k, n in data.skipped.most_common(3)) or "nothing"
+        seen = (
+            ", ".join(
+                (k if k.isprintable() and len(k) <= 20 else repr(k[:12]) + "...") + f" x{n}"
+                for k, n in data.skipped.most_common(3)
+            )
+            or "nothing"
+        )
         raise DataFormatError(
             f"{log}: no FLASER scan in it (read {len(data.odometry)} ODOM, skipped {seen});"
             " not a CARMEN laser log? No bag written"
