@@ -38,7 +38,8 @@ def carmen_to_bag(
     if not data.scans:
         seen = (
             ", ".join(
-                (k if k.isprintable() and len(k) <= 20 else repr(k[:12]) + "...") + f" x{n}"
+                (k if k.isascii() and k.isprintable() and len(k) <= 20 else ascii(k[:12]) + "...")
+                + f" x{n}"
                 for k, n in data.skipped.most_common(3)
             )
             or "nothing"
