@@ -137,3 +137,24 @@ def test_summary_counts_per_family_and_all(tmp_path: Path) -> None:
         ("square", "amcl", 1),
         ("all", "amcl", 1),
     ]
+
+
+def test_world_files_run_and_bad_ones_name_the_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from importlib.resources import files
+
+    example = str(files("symloc") / "data" / "worlds" / "square_with_box.yaml")
+    args = ["bench", "localization", "--world", example, "--seeds", "2", "--trials", "1"]
+    args += ["--kinds", "global", "--map", "raster", "--claim-timeout", "3", "--track-time", "1"]
+    assert main([*args, "--workers", "1", "--out", str(tmp_path / "ok")]) == 0
+    doc = json.loads((tmp_path / "ok" / "bench_localization.json").read_text())
+    assert doc["summary"][0]["family"] == "file:square_with_box.yaml"
+    assert doc["worlds"][0]["order"] == 1  # the box breaks the square's symmetry
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nroom:\n  polygon: [[0, 0], [2, 2], [2, 0], [0, 2]]\n")
+    assert main(["bench", "localization", "--world", str(bad), "--out", str(tmp_path)]) == 2
+    assert "room.polygon" in capsys.readouterr().err
+    bad.write_text("name: x\nroom:\n  circle: {radius: 2}\nfurnitures: []\n")
+    assert main(["bench", "localization", "--world", str(bad), "--out", str(tmp_path)]) == 2
+    assert "furnitures" in capsys.readouterr().err

@@ -59,8 +59,8 @@ def test_a_corridor_leaves_its_axis_unconstrained() -> None:
         field, _points(room.world, truth, short), truth + np.array([0.3, 0.05, 0.02])
     )
     cov = m.covariance
-    assert math.sqrt(cov[0, 0]) > 1.0  # along the corridor: nothing known
-    assert math.sqrt(cov[1, 1]) < 0.05  # across it: the walls
+    assert math.sqrt(cov[0, 0]) > 0.2  # along the corridor: ten times the claim gate's limit
+    assert math.sqrt(cov[1, 1]) < 0.02  # across it: the walls
     assert abs(m.pose[1] - truth[1]) < 0.02
     # a prior along the axis bounds what the scan cannot
     prior = np.diag([0.1**2, 0.1**2, math.radians(3) ** 2])
@@ -122,3 +122,21 @@ def test_carry_by_odometry_composes_exactly_and_grows_the_covariance() -> None:
         np.zeros(3), np.diag([0, 0, 0.01]), np.zeros(3), np.array([2.0, 0.0, 0.0]), (0, 0, 0, 0)
     )
     assert math.sqrt(c_far[1, 1]) == pytest.approx(2.0 * 0.1, rel=0.05)
+
+
+def test_a_round_room_leaves_the_rotation_about_its_centre_unconstrained() -> None:
+    from symloc.sim.rooms import circular_room
+
+    room = circular_room(2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    truth = np.array([0.6, -0.3, 0.4])
+    m = match_scan_to_map(field, _points(room.world, truth), truth)
+    # the rasterised circle ripples, but a 5-degree turn about the centre costs nothing
+    assert math.degrees(math.sqrt(m.covariance[2, 2])) > 2.0  # twice the claim gate's limit
+    _, v = np.linalg.eigh(m.information)
+    weakest = v[:, 0] / v[2, 0]  # per radian of heading
+    assert weakest[:2] == pytest.approx([-(truth[1] - 0.0), truth[0] - 0.0], abs=0.1)
+    # distance from the centre is known
+    radial = truth[:2] / np.hypot(*truth[:2])
+    assert math.sqrt(radial @ m.covariance[:2, :2] @ radial) < 0.02

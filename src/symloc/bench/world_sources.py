@@ -1,9 +1,10 @@
 """Where a sweep's worlds come from, and the dev/test split of their seeds.
 
 A :class:`WorldRef` names one world: a built-in room (``builtin``: the nine rooms of the
-README's table, each inside the textured lab), a world file (``file``), or a generated world
-(``generated``: a family of the world generator and a seed). Refs are small and picklable; a
-worker builds the world itself with :func:`build_world`.
+README's table, each inside the textured lab), a world file (``file``: YAML,
+:mod:`symloc.sim.world_file`), or a generated world (``generated``: a family of
+:data:`symloc.sim.generator.FAMILIES` and a seed). Refs are small and picklable; a worker
+builds the world itself with :func:`build_world`.
 
 The split: world ``i`` of a family gets seed ``SPLIT_BASE[split] + i``; the ``dev`` seeds
 (0, 1, 2, ...) are the only ones thresholds and defaults are tuned on, the ``test`` seeds
@@ -16,7 +17,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from symloc.errors import ConfigurationError
+from symloc.sim.generator import FAMILIES, generate_world
 from symloc.sim.rooms import Room, build_room, hallway, with_lab
+from symloc.sim.world_file import load_world_file
 
 __all__ = [
     "BUILTIN_ROOMS",
@@ -24,6 +27,8 @@ __all__ = [
     "WorldRef",
     "build_world",
     "builtin_refs",
+    "family_refs",
+    "file_refs",
     "split_seeds",
 ]
 
@@ -86,8 +91,34 @@ def builtin_refs(names: Sequence[str], seeds: Sequence[int]) -> list[WorldRef]:
     return [WorldRef("builtin", n, s) for n in names for s in seeds]
 
 
+def family_refs(families: Sequence[str], seeds: Sequence[int]) -> list[WorldRef]:
+    """Worlds by name: a generator family (one world per seed) or a built-in room (a new map
+    per seed); unknown names raise, listing both."""
+    bad = [n for n in families if n not in FAMILIES and n not in BUILTIN_ROOMS]
+    if bad:
+        raise ConfigurationError(
+            f"families: unknown {', '.join(bad)}; generator families: {', '.join(FAMILIES)}; "
+            f"built-in rooms: {', '.join(BUILTIN_ROOMS)}"
+        )
+    return [
+        WorldRef("generated" if n in FAMILIES else "builtin", n, s) for n in families for s in seeds
+    ]
+
+
+def file_refs(paths: Sequence[str], seeds: Sequence[int]) -> list[WorldRef]:
+    """Every world file of ``paths`` with every seed (validated here, so a bad file fails
+    before the sweep starts)."""
+    for path in paths:
+        load_world_file(path)
+    return [WorldRef("file", str(p), s) for p in paths for s in seeds]
+
+
 def build_world(ref: WorldRef) -> Room:
     """The :class:`~symloc.sim.rooms.Room` a ref names."""
+    if ref.source == "generated":
+        return generate_world(ref.name, ref.seed).build()
+    if ref.source == "file":
+        return load_world_file(ref.name).build()
     if ref.source == "builtin":
         if ref.name not in BUILTIN_ROOMS:
             raise ConfigurationError(f"room: unknown built-in room {ref.name!r}")

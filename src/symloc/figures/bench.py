@@ -50,7 +50,7 @@ def outcome_figure(
         ax.errorbar(
             x,
             w,
-            yerr=[w - lo, hi - w],
+            yerr=[np.clip(w - lo, 0.0, None), np.clip(hi - w, 0.0, None)],
             fmt="none",
             ecolor="black",
             capsize=3,

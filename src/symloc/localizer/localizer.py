@@ -302,6 +302,17 @@ class Localizer:
     # ------------------------------------------------------------------ public
 
     @property
+    def _phase(self) -> _Phase:
+        return self._phase_value
+
+    @_phase.setter
+    def _phase(self, value: _Phase) -> None:
+        # a confirmed pose vouches for the next one only while tracking lasts
+        if value is not _Phase.TRACKING and self.claim_gate is not None:
+            self.claim_gate.forget_chain()
+        self._phase_value = value
+
+    @property
     def phase(self) -> str:
         """The internal phase name (finer than the status; for logs and tests)."""
         return self._phase.value
@@ -316,6 +327,8 @@ class Localizer:
     def set_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         """A pose given by the operator (like RViz's 2D Pose Estimate): reseed and earn it."""
         self.tracker.initialize_pose(np.asarray(pose, float), np.asarray(covariance, float))
+        if self.claim_gate is not None:
+            self.claim_gate.reset()
         self._reset_state()
         self._phase = _Phase.TRACKING
         self._note("pose set by the operator")
@@ -513,7 +526,7 @@ class Localizer:
     def _while_suspended(self, result: TrackerResult, scan: object, reason: str) -> Estimate:
         gate = self.claim_gate
         assert gate is not None
-        claim = gate.check_chain(self._odom_pose, scan)  # type: ignore[arg-type]
+        claim = gate.check(self._odom_pose, scan)  # type: ignore[arg-type]
         if claim.ok:
             self._resumed += 1
             if self._resumed >= gate.config.resume_after:

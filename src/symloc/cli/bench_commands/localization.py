@@ -19,6 +19,7 @@ def register(subparsers: Any) -> None:
     """Add ``localization`` to ``symloc bench``."""
     from symloc.bench.trial import METHODS, TRIAL_KINDS
     from symloc.bench.world_sources import BUILTIN_ROOMS
+    from symloc.sim.generator import FAMILIES
     from symloc.sim.regimes import REGIMES
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
@@ -35,7 +36,15 @@ def register(subparsers: Any) -> None:
         nargs="+",
         default=None,
         metavar="NAME",
-        help=f"built-in rooms (default all: {', '.join(BUILTIN_ROOMS)})",
+        help=f"world generator families (default all: {', '.join(FAMILIES)}) or built-in "
+        f"rooms ({', '.join(BUILTIN_ROOMS)})",
+    )
+    parser.add_argument(
+        "--world",
+        nargs="+",
+        default=None,
+        metavar="FILE",
+        help="world files (YAML, see docs/world_files.md) instead of --families",
     )
     parser.add_argument(
         "--worlds", type=int, default=3, help="worlds (mapping runs) per family (default 3)"
@@ -100,15 +109,20 @@ def run(args: argparse.Namespace) -> int:
     )
     from symloc.bench.sweep import run_sweep
     from symloc.bench.trial import TrialConfig
-    from symloc.bench.world_sources import BUILTIN_ROOMS, builtin_refs, split_seeds
+    from symloc.bench.world_sources import family_refs, file_refs, split_seeds
     from symloc.errors import ConfigurationError
     from symloc.figures.bench import outcome_figure
+    from symloc.sim.generator import FAMILIES
 
     if args.worlds < 1 or args.trials < 1:
         raise ConfigurationError("--worlds and --trials: expected integers >= 1")
-    families = args.families or list(BUILTIN_ROOMS)
     seeds = args.seeds if args.seeds else split_seeds(args.split, args.worlds)
-    refs = builtin_refs(families, seeds)
+    if args.world:
+        families = [f"file:{p}" for p in args.world]
+        refs = file_refs(args.world, seeds)
+    else:
+        families = args.families or list(FAMILIES)
+        refs = family_refs(families, seeds)
     config = TrialConfig(claim_timeout=args.claim_timeout, track_time=args.track_time)
     tasks = [
         WorldTask(
