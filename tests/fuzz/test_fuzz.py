@@ -424,13 +424,16 @@ def test_big_inputs_stay_under_500_mb(tmp_path: Path) -> None:
         [sys.executable, str(script), str(tmp_path), str(here)],
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=300,
         check=False,
     )
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    report = f"stdout:\n{proc.stdout}\nstderr (end):\n{proc.stderr[-3000:]}"
+    assert proc.returncode == 0, report
     lines = proc.stdout.splitlines()
-    assert not [line for line in lines if line.startswith("ACCEPTED")], proc.stdout
-    assert sum(line.startswith("refused") for line in lines) == 10, proc.stdout
-    peak = float(lines[-1].split()[1])
+    assert not [line for line in lines if line.startswith("ACCEPTED")], report
+    assert sum(line.startswith("refused") for line in lines) == 10, report
+    peak_lines = [line for line in lines if line.startswith("PEAK_MB")]
+    assert peak_lines, report
+    peak = float(peak_lines[-1].split()[1])
     print(proc.stdout)
-    assert peak < 500.0, proc.stdout
+    assert peak < 500.0, report
