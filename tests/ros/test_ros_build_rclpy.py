@@ -99,7 +99,8 @@ def test_node_loads_map_yaml_and_survives_a_crashing_localizer(tmp_path) -> None
         ps = drv.create_publisher(sensor_msgs.LaserScan, "scan", 10)
         scan = LaserScan(-math.pi, math.pi / 180, 0.1, 10.0, np.full(360, 2.0), stamp=1.0)
         end = time.monotonic() + 10
-        while node.core.dropped["internal error"] < 2 and time.monotonic() < end:
+        rejected = "scan: rejected by the localizer"
+        while (node.core.dropped[rejected] < 2 or len(statuses) < 2) and time.monotonic() < end:
             po.publish(
                 build_rclpy(
                     nav_msgs.Odometry, odometry_to_fields(OdometryReading(np.zeros(3), 1.0))
@@ -107,8 +108,12 @@ def test_node_loads_map_yaml_and_survives_a_crashing_localizer(tmp_path) -> None
             )
             ps.publish(build_rclpy(sensor_msgs.LaserScan, scan_to_fields(scan)))
             ex.spin_once(timeout_sec=0.1)
-        assert node.core.dropped["internal error"] >= 2  # counted, the node is still spinning
-        assert statuses == []  # nothing published for a failed step
+        assert node.core.dropped[rejected] >= 2  # counted, the node is still spinning
+        # a status for every scan, saying the scan was not used and why
+        values = {kv.key: kv.value for kv in statuses[-1].status[0].values}
+        assert values["scan"] == "dropped"
+        assert "RuntimeError: boom" in values["reason"]
+        assert int(values["dropped"]) >= 2
     finally:
         ex.shutdown()
         node.destroy()

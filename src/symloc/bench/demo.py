@@ -45,6 +45,8 @@ class DemoStory:
     matched_image: NDArray[np.uint8] | None
     match_label: str
     amcl_path: FloatArray | None = None
+    #: ``(xmin, xmax, ymin, ymax)`` [m] of the room's outline (the figure's view).
+    room_box: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -168,7 +170,7 @@ def run_demo(
         matched = scen.store.stored_image(place.place_id, int(dec.direction or 0))
         query = srun.episode.images[-1] if srun.episode.images else query
         label = (
-            f"place {place.place_id}, direction {dec.direction} of {place.m}, "
+            f"place {place.place_id}, direction {int(dec.direction or 0) + 1} of {place.m}, "
             f"offset {math.degrees(dec.offset):+.1f} deg"
         )
     fin = srun.episode.final
@@ -186,6 +188,7 @@ def run_demo(
         grid=scen.grid,
         room_center=np.asarray(scen.room.center),
         room_gv=float(scen.room.gv_distance),
+        room_box=_box(scen.room.boundary),
         kidnap_pose=np.asarray(start),
         amcl_particles=arun.particles,
         amcl_true_pose=arun.true_pose,
@@ -206,3 +209,9 @@ def run_demo(
         amcl_path=arun.path,
     )
     return DemoResult(name, seed, scen, arun, srun, story, timings)
+
+
+def _box(boundary: Any) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` [m] of an outline ``(V, 2)``."""
+    b = np.asarray(boundary, dtype=np.float64).reshape(-1, 2)
+    return (float(b[:, 0].min()), float(b[:, 0].max()), float(b[:, 1].min()), float(b[:, 1].max()))

@@ -185,11 +185,10 @@ class SymlocNode:
     def _on_scan(self, msg: Any) -> None:
         try:
             out = self.core.on_scan(msg)
-        except Exception as err:  # the node must stay up
+        except Exception as err:  # the node must stay up; the status still goes out
             self.core.drop("internal error", f"{type(err).__name__}: {err}")
-            return
-        if out is not None:
-            self.publish(out)
+            out = self.core.unused_scan(None)
+        self.publish(out)
 
     def publish(self, out: Outputs) -> None:
         """Publish one step's outputs."""

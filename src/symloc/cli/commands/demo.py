@@ -7,6 +7,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register", "run"]
 
 ROOMS = (
@@ -28,7 +30,7 @@ def register(subparsers: Any) -> None:
         help="kidnapped robot in a symmetric room: plain AMCL vs symloc (table + PNG)",
     )
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--room", choices=ROOMS, default="square", help="room (default square)")
+    options.add_room(where, choices=ROOMS, help="symmetric room inside the lab")
     where.add_argument(
         "--world",
         type=Path,
@@ -36,10 +38,8 @@ def register(subparsers: Any) -> None:
         metavar="FILE",
         help="a world file (YAML, see docs/world_files.md) instead of a built-in room",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (printed)")
-    parser.add_argument(
-        "--out", type=Path, default=Path("symloc-demo"), metavar="DIR", help="output folder"
-    )
+    options.add_seed(parser)
+    options.add_out(parser, "demo", what="the map, visual map and demo_<room>.png")
     parser.add_argument(
         "--untextured", action="store_true", help="plain lab walls (the camera's failure case)"
     )
