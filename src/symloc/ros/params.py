@@ -62,7 +62,12 @@ class NodeParams:
         (``Odometry.child_frame_id``). Messages in another frame are dropped and counted.
     laser_frame_id, camera_frame_id : str
         Frame a scan / an image must carry; empty accepts any (the sensors sit at the base
-        origin looking along +x, as in the paper).
+        origin looking along +x, as in the paper, unless TF or ``laser_pose`` says otherwise).
+    laser_pose : sequence of 3 floats
+        Where the laser sits on the robot, ``x [m], y [m], yaw [rad]`` in the base frame, used
+        when TF gives no ``base -> laser`` transform (a node without ``/tf_static``, a bag
+        replay). With ``laser_upside_down`` the laser is mounted upside down (its scans are
+        mirrored) and ``yaw`` is the heading of its x axis.
     scan_topic, odom_topic, map_topic, image_topic, compressed_image_topic, initialpose_topic
         Inputs. An empty ``image_topic`` or ``compressed_image_topic`` is not subscribed.
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
@@ -92,7 +97,13 @@ class NodeParams:
         A map whose size or origin differs from the first: rebuild the localizer on it (True),
         or drop it with a warning (False, the default; the pose is kept).
     transform_tolerance : float
-        Largest gap [s] between a scan and the newest odometry before it is used.
+        Largest gap [s] between a scan and the newest odometry before it is used; the
+        ``map -> odom`` transform is stamped this far after its scan (nav2's meaning).
+    tf_broadcast : bool
+        Broadcast ``map -> odom`` on ``/tf`` once a pose is earned (nav2's name; see
+        :mod:`symloc.ros.tf` for what is sent while the pose is not earned).
+    first_map_only : bool
+        Use the first map received and ignore every later one (nav2's name).
     max_odom_age : float
         How much odometry history [s] is kept for interpolating at scan stamps.
     seed : int
@@ -108,6 +119,8 @@ class NodeParams:
     base_frame_id: str = "base_link"
     laser_frame_id: str = ""
     camera_frame_id: str = ""
+    laser_pose: tuple[float, ...] = (0.0, 0.0, 0.0)
+    laser_upside_down: bool = False
     scan_topic: str = "scan"
     odom_topic: str = "odom"
     map_topic: str = "map"
@@ -130,6 +143,8 @@ class NodeParams:
     map_yaml: str = ""
     accept_map_updates: bool = False
     transform_tolerance: float = 1.0
+    tf_broadcast: bool = True
+    first_map_only: bool = False
     max_odom_age: float = 10.0
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
@@ -162,6 +177,24 @@ class NodeParams:
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
             )
         object.__setattr__(self, "camera_intrinsics", tuple(float(v) for v in intr))
+        lp = self.laser_pose
+        if (
+            isinstance(lp, (str, bytes))
+            or not hasattr(lp, "__len__")
+            or len(lp) != 3
+            or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                for v in lp
+            )
+        ):
+            raise ConfigurationError(
+                f"laser_pose: expected 3 numbers x [m], y [m], yaw [rad], got {lp!r}"
+            )
+        object.__setattr__(self, "laser_pose", tuple(float(v) for v in lp))
+        if not isinstance(self.laser_upside_down, bool):
+            raise ConfigurationError(
+                f"laser_upside_down: expected true/false, got {self.laser_upside_down!r}"
+            )
         dist = self.camera_dist_coeffs
         if isinstance(dist, (str, bytes)) or any(isinstance(v, bool) for v in dist):
             raise ConfigurationError(
@@ -184,6 +217,9 @@ class NodeParams:
         for name in ("visual_map", "map_yaml", "vocabulary"):
             if not isinstance(getattr(self, name), str):
                 raise ConfigurationError(f"{name}: expected a path string")
+        for name in ("tf_broadcast", "first_map_only"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigurationError(f"{name}: expected true/false, got {getattr(self, name)!r}")
         if not isinstance(self.accept_map_updates, bool):
             raise ConfigurationError(
                 f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"

@@ -21,6 +21,8 @@ key                 value
 ``scans_used``      scans given to the localizer so far
 ``dropped``         messages dropped so far (all reasons)
 ``dropped/<why>``   messages dropped for that reason
+``map_to_odom``     what the broadcast ``map -> odom`` is: sent with this scan (and the stamp it
+                    carries), not updated since an earlier scan, or never sent
 ==================  ==========================================================================
 
 **Candidates** (``visualization_msgs/MarkerArray`` on ``symloc/candidates``): a DELETEALL
