@@ -31,6 +31,7 @@ import sys
 import sysconfig
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -388,23 +389,29 @@ def setup_interfaces(
             + "; missing: "
             + "; ".join(missing)
         )
-    n_jobs = jobs if jobs is not None else max(1, os.cpu_count() or 1)
+    cpus = max(1, os.cpu_count() or 1)
+    n_jobs = jobs if jobs is not None else max(1, cpus // len(todo))
     keep = workdir is not None
     work = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="symloc-ros-setup-"))
     work.mkdir(parents=True, exist_ok=True)
-    for pkg in todo:
+
+    def build_one(pkg: InterfacePackage) -> SetupResult:
         t0 = time.perf_counter()
-        log(f"{pkg.name}: building {', '.join(pkg.files)} into {root}")
         _build(pkg, root, work, n_jobs)
         _stamp_path(root, pkg).write_text(fingerprint(pkg) + "\n")
         if not _loads(pkg):
             raise SetupError(
-                f"{pkg.name}: built and installed into {root}, but {pkg.probe} does not import"
-                f" (is {root} this interpreter's environment, {sys.prefix}?)"
+                f"{pkg.name}: built and installed into {root}, but {pkg.probe} does not load"
+                f" in {sys.executable} (is {root} this interpreter's environment?)"
             )
-        dt = time.perf_counter() - t0
-        results.append(SetupResult(pkg.name, "built", dt))
-        log(f"{pkg.name}: built in {dt:.1f} s")
+        return SetupResult(pkg.name, "built", time.perf_counter() - t0)
+
+    log(f"building {', '.join(p.name for p in todo)} into {root} (logs in {work})")
+    # the packages are independent: configure and compile them side by side
+    with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+        for result in pool.map(build_one, todo):
+            results.append(result)
+            log(f"{result.package}: built in {result.seconds:.1f} s")
     if not keep:
         shutil.rmtree(work, ignore_errors=True)
     return results

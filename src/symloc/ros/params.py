@@ -39,6 +39,27 @@ __all__ = ["MODES", "NodeParams"]
 MODES = ("localize", "build_visual_map")
 
 
+def _pose3(value: Any, name: str) -> tuple[float, float, float]:
+    """``(x, y, yaw)`` from a sequence of 3 numbers, or nav2's ``{x, y, z, yaw}`` mapping."""
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - {"x", "y", "z", "yaw"})
+        if unknown:
+            raise ConfigurationError(f"{name}.{unknown[0]}: unknown (expected x, y, z, yaw)")
+        value = (value.get("x", 0.0), value.get("y", 0.0), value.get("yaw", 0.0))
+    if (
+        isinstance(value, (str, bytes))
+        or not hasattr(value, "__len__")
+        or len(value) != 3
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+    ):
+        raise ConfigurationError(f"{name}: expected 3 numbers x [m], y [m], yaw [rad], got {value!r}")
+    x, y, yaw = (float(v) for v in value)
+    return (x, y, yaw)
+
+
 def _topic(value: Any, name: str) -> str:
     if not isinstance(value, str) or not value or any(c.isspace() for c in value):
         raise ConfigurationError(f"{name}: expected a topic name without spaces, got {value!r}")
@@ -106,8 +127,29 @@ class NodeParams:
         Use the first map received and ignore every later one (nav2's name).
     max_odom_age : float
         How much odometry history [s] is kept for interpolating at scan stamps.
+    odom_source : {"tf", "topic"}
+        Odometry from ``odom_frame_id -> base_frame_id`` on ``/tf``, as nav2_amcl reads it
+        (needs ``tf2_msgs``: ``symloc ros setup``), or from ``nav_msgs/Odometry`` on
+        ``odom_topic``.
+    set_initial_pose, initial_pose : bool, sequence of 3 floats
+        nav2's names: on activation, seed the filter at ``initial_pose`` = x [m], y [m],
+        yaw [rad] (in a nav2 file the block ``initial_pose: {x, y, z, yaw}``; z is ignored).
+    always_reset_initial_pose : bool
+        nav2's name: on activation, forget the last pose instead of resuming from it.
+    save_pose_rate : float
+        nav2's name: how often [Hz] the last published pose is written to
+        ``saved_pose_filepath`` while active (<= 0: never).
+    initialize_at_saved_pose, saved_pose_filepath : bool, str
+        nav2's names (main branch): on activation, seed the filter at the pose saved there
+        (activation fails when the file is missing, as in nav2).
+    bond_heartbeat_period : float
+        nav2's name: the period [s] of the bond heartbeat to nav2's lifecycle manager while
+        active (<= 0: no bond; then set the manager's ``bond_timeout`` to 0).
+    autostart_node : bool
+        nav2's name (main branch): configure and activate at start-up, without a lifecycle
+        manager.
     seed : int
-        Seed of the filter's random numbers.
+        Seed of the filter's random numbers (nav2's ``random_seed`` >= 0 sets it).
     amcl : AmclParams
     localizer : LocalizerConfig
     symmetry : dict
@@ -146,6 +188,15 @@ class NodeParams:
     tf_broadcast: bool = True
     first_map_only: bool = False
     max_odom_age: float = 10.0
+    odom_source: str = "tf"
+    set_initial_pose: bool = False
+    initial_pose: tuple[float, ...] = (0.0, 0.0, 0.0)
+    always_reset_initial_pose: bool = False
+    save_pose_rate: float = 0.5
+    initialize_at_saved_pose: bool = False
+    saved_pose_filepath: str = "/tmp/amcl_saved_pose"
+    bond_heartbeat_period: float = 0.25
+    autostart_node: bool = False
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
     localizer: LocalizerConfig = field(default_factory=LocalizerConfig)
@@ -177,20 +228,8 @@ class NodeParams:
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
             )
         object.__setattr__(self, "camera_intrinsics", tuple(float(v) for v in intr))
-        lp = self.laser_pose
-        if (
-            isinstance(lp, (str, bytes))
-            or not hasattr(lp, "__len__")
-            or len(lp) != 3
-            or not all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                for v in lp
-            )
-        ):
-            raise ConfigurationError(
-                f"laser_pose: expected 3 numbers x [m], y [m], yaw [rad], got {lp!r}"
-            )
-        object.__setattr__(self, "laser_pose", tuple(float(v) for v in lp))
+        for name in ("laser_pose", "initial_pose"):
+            object.__setattr__(self, name, _pose3(getattr(self, name), name))
         if not isinstance(self.laser_upside_down, bool):
             raise ConfigurationError(
                 f"laser_upside_down: expected true/false, got {self.laser_upside_down!r}"
@@ -217,7 +256,27 @@ class NodeParams:
         for name in ("visual_map", "map_yaml", "vocabulary"):
             if not isinstance(getattr(self, name), str):
                 raise ConfigurationError(f"{name}: expected a path string")
-        for name in ("tf_broadcast", "first_map_only"):
+        if self.odom_source not in ("tf", "topic"):
+            raise ConfigurationError(
+                f"odom_source: expected 'tf' or 'topic', got {self.odom_source!r}"
+            )
+        for name in ("save_pose_rate", "bond_heartbeat_period"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ConfigurationError(f"{name}: expected a number, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        if not isinstance(self.saved_pose_filepath, str) or not self.saved_pose_filepath:
+            raise ConfigurationError(
+                f"saved_pose_filepath: expected a file path, got {self.saved_pose_filepath!r}"
+            )
+        for name in (
+            "tf_broadcast",
+            "first_map_only",
+            "set_initial_pose",
+            "always_reset_initial_pose",
+            "initialize_at_saved_pose",
+            "autostart_node",
+        ):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigurationError(f"{name}: expected true/false, got {getattr(self, name)!r}")
         if not isinstance(self.accept_map_updates, bool):
