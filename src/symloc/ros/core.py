@@ -138,7 +138,8 @@ class NodeCore:
     warn : callable, optional
         Receives warning lines (the rclpy node passes its logger).
     use_tf : bool
-        The laser's mount comes from TF (:meth:`on_tf_static`), not from ``laser_pose``.
+        TF is fed (:meth:`on_tf`, :meth:`on_tf_static`): with ``laser_pose_source: tf`` the
+        laser's mount comes from it (scans wait for it), not from ``laser_pose``.
     """
 
     def __init__(
@@ -320,7 +321,7 @@ class NodeCore:
         """The mount of the laser whose scans carry ``frame`` (a str says why it is unknown);
         a new or changed mount rebuilds the localizer for it."""
         base = self.params.base_frame_id
-        if not self.use_tf or not frame:
+        if not self.use_tf or self.params.laser_pose_source != "tf" or not frame:
             mount = LaserMount(np.array(self.params.laser_pose), self.params.laser_upside_down)
         elif frame == base:
             mount = LaserMount(np.zeros(3))

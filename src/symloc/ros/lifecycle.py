@@ -256,12 +256,14 @@ class LocalizationNode(LifecycleNode):
         except ConfigurationError as err:
             log.error(f"configure failed: {err}")
             return Failed
-        if params.odom_source == "tf" and self.tf_message is None:
-            log.error(
-                "configure failed: odom_source is tf but tf2_msgs is not installed: run"
-                " `symloc ros setup`, or set odom_source: topic"
-            )
-            return Failed
+        for name in ("odom_source", "laser_pose_source"):
+            if getattr(params, name) == "tf" and self.tf_message is None:
+                other = "topic" if name == "odom_source" else "parameters"
+                log.error(
+                    f"configure failed: {name} is tf but tf2_msgs is not installed: run"
+                    f" `symloc ros setup`, or set {name}: {other}"
+                )
+                return Failed
         self.params = params
         self.core = NodeCore(
             params,

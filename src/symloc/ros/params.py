@@ -84,11 +84,14 @@ class NodeParams:
     laser_frame_id, camera_frame_id : str
         Frame a scan / an image must carry; empty accepts any (the sensors sit at the base
         origin looking along +x, as in the paper, unless TF or ``laser_pose`` says otherwise).
+    laser_pose_source : {"tf", "parameters"}
+        Where the laser's mount comes from: ``base_frame_id -> <scan frame>`` on
+        ``/tf_static`` (as nav2_amcl; scans wait for it), or ``laser_pose`` and
+        ``laser_upside_down`` (also what a bag replay without TF uses).
     laser_pose : sequence of 3 floats
-        Where the laser sits on the robot, ``x [m], y [m], yaw [rad]`` in the base frame, used
-        when TF gives no ``base -> laser`` transform (a node without ``/tf_static``, a bag
-        replay). With ``laser_upside_down`` the laser is mounted upside down (its scans are
-        mirrored) and ``yaw`` is the heading of its x axis.
+        Where the laser sits on the robot, ``x [m], y [m], yaw [rad]`` in the base frame.
+        With ``laser_upside_down`` the laser is mounted upside down (its scans are mirrored)
+        and ``yaw`` is the heading of its x axis.
     scan_topic, odom_topic, map_topic, image_topic, compressed_image_topic, initialpose_topic
         Inputs. An empty ``image_topic`` or ``compressed_image_topic`` is not subscribed.
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
@@ -161,6 +164,7 @@ class NodeParams:
     base_frame_id: str = "base_link"
     laser_frame_id: str = ""
     camera_frame_id: str = ""
+    laser_pose_source: str = "tf"
     laser_pose: tuple[float, ...] = (0.0, 0.0, 0.0)
     laser_upside_down: bool = False
     scan_topic: str = "scan"
@@ -256,6 +260,11 @@ class NodeParams:
         for name in ("visual_map", "map_yaml", "vocabulary"):
             if not isinstance(getattr(self, name), str):
                 raise ConfigurationError(f"{name}: expected a path string")
+        if self.laser_pose_source not in ("tf", "parameters"):
+            raise ConfigurationError(
+                "laser_pose_source: expected 'tf' or 'parameters', got"
+                f" {self.laser_pose_source!r}"
+            )
         if self.odom_source not in ("tf", "topic"):
             raise ConfigurationError(
                 f"odom_source: expected 'tf' or 'topic', got {self.odom_source!r}"
