@@ -246,3 +246,16 @@ def test_node_survives_a_crashing_localizer(ctx: Any, map_yaml: str) -> None:
         ex.shutdown()
         node.destroy_node()
         drv.destroy_node()
+
+
+def test_the_example_of_symlocs_settings_configures_after_nav2s_file(ctx: Any, tmp_path: Path) -> None:
+    example = Path(__file__).parents[2] / "src/symloc/ros/examples/nav2_symloc_params.yaml"
+    no_tf = _extras(tmp_path, odom_source="topic", laser_pose_source="parameters")
+    node = _node(ctx, DATA / "main.yaml", example, no_tf)
+    try:
+        assert node.unknown_parameters() == []
+        assert node.trigger_configure() == OK
+        assert node.params is not None and node.params.lidar_preset == "lds01"
+        assert node.params.localizer.converged_weight == 0.9
+    finally:
+        node.destroy_node()
