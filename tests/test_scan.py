@@ -138,13 +138,22 @@ def test_twist_between_readings() -> None:
 def test_mirror_flips_the_scan_and_is_its_own_inverse() -> None:
     from symloc.scan import mirror
 
-    scan = LaserScan(-1.0, 0.01, 0.1, 10.0, np.linspace(1.0, 3.0, 150), stamp=2.0,
-                     time_increment=1e-4, frame_id="laser")
+    scan = LaserScan(
+        -1.0,
+        0.01,
+        0.1,
+        10.0,
+        np.linspace(1.0, 3.0, 150),
+        stamp=2.0,
+        time_increment=1e-4,
+        frame_id="laser",
+    )
     flipped = mirror(scan)
     p, q = scan.to_points().points, flipped.to_points().points
     # the same end points seen from an upright frame: y negated (the beams in reverse order)
     np.testing.assert_allclose(q[::-1], p * [1.0, -1.0], atol=1e-12)
-    assert flipped.angle_increment > 0 and flipped.time_increment == -1e-4
+    assert flipped.angle_increment > 0
+    assert flipped.time_increment == -1e-4
     assert flipped.stamp == scan.stamp
     back = mirror(flipped)
     np.testing.assert_allclose(back.ranges, scan.ranges)
@@ -189,7 +198,9 @@ def test_deskew_an_upside_down_laser_off_the_centre() -> None:
 
     def off_wall_p95(scan: LaserScan) -> float:
         p = scan.to_points().points
-        world = np.column_stack([at0[0] + c * p[:, 0] - s * p[:, 1], at0[1] + s * p[:, 0] + c * p[:, 1]])
+        world = np.column_stack(
+            [at0[0] + c * p[:, 0] - s * p[:, 1], at0[1] + s * p[:, 0] + c * p[:, 1]]
+        )
         return float(np.percentile(room.world.distance(world), 95))
 
     upright = mirror(raw)

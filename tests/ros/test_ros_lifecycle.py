@@ -70,7 +70,9 @@ def map_yaml(tmp_path: Path) -> str:
     return str(tmp_path / "m.yaml")
 
 
-def _node(ctx: Any, *files: Path, params: NodeParams | None = None, factory: Any = None) -> LocalizationNode:
+def _node(
+    ctx: Any, *files: Path, params: NodeParams | None = None, factory: Any = None
+) -> LocalizationNode:
     args: list[str] = ["--ros-args"]
     for f in files:
         args += ["--params-file", str(f)]
@@ -133,15 +135,19 @@ def test_runtime_changes_are_validated_and_rebuild_the_localizer(ctx: Any, map_y
     node = _node(ctx, params=params, factory=factory)
     try:
         node.autostart()
-        assert node.active and len(built) == 1
+        assert node.active
+        assert len(built) == 1
         res = node.set_parameters([Parameter("alpha1", value=0.35)])
         assert res[0].successful
-        assert built[-1].amcl.alpha1 == 0.35 and node.params.amcl.alpha1 == 0.35  # type: ignore[union-attr]
+        assert built[-1].amcl.alpha1 == 0.35
+        assert node.params.amcl.alpha1 == 0.35
         res = node.set_parameters([Parameter("pf_z", value=1.5)])
-        assert not res[0].successful and "pf_z" in res[0].reason
+        assert not res[0].successful
+        assert "pf_z" in res[0].reason
         assert node.get_parameter("pf_z").value == pytest.approx(0.99)
         res = node.set_parameters([Parameter("localizer.converged_updates", value=5)])
-        assert res[0].successful and built[-1].localizer.converged_updates == 5
+        assert res[0].successful
+        assert built[-1].localizer.converged_updates == 5
     finally:
         node.destroy_node()
 
@@ -190,7 +196,8 @@ def test_saved_pose_format_round_trip(tmp_path: Path) -> None:
     path = tmp_path / "pose"
     save_pose(path, [1.25, -2.5, math.pi / 3], 100.5, "map")
     text = path.read_text()
-    assert "timestamp: 100.500000000" in text and "frame_id: map" in text
+    assert "timestamp: 100.500000000" in text
+    assert "frame_id: map" in text
     pose, frame = load_saved_pose(path)
     np.testing.assert_allclose(pose, [1.25, -2.5, math.pi / 3], atol=1e-6)
     assert frame == "map"
@@ -227,10 +234,13 @@ def test_node_survives_a_crashing_localizer(ctx: Any, map_yaml: str) -> None:
     ex.add_node(drv)
     try:
         node.autostart()
-        assert node.core is not None and node.core.grid is not None
+        assert node.core is not None
+        assert node.core.grid is not None
         assert node.core.grid.width == 30
         statuses: list[object] = []
-        drv.create_subscription(diagnostic_msgs.DiagnosticArray, "symloc/status", statuses.append, 10)
+        drv.create_subscription(
+            diagnostic_msgs.DiagnosticArray, "symloc/status", statuses.append, 10
+        )
         po = drv.create_publisher(nav_msgs.Odometry, "odom", 10)
         ps = drv.create_publisher(sensor_msgs.LaserScan, "scan", 10)
         scan = LaserScan(-math.pi, math.pi / 180, 0.1, 10.0, np.full(360, 2.0), stamp=1.0)
@@ -248,14 +258,17 @@ def test_node_survives_a_crashing_localizer(ctx: Any, map_yaml: str) -> None:
         drv.destroy_node()
 
 
-def test_the_example_of_symlocs_settings_configures_after_nav2s_file(ctx: Any, tmp_path: Path) -> None:
+def test_the_example_of_symlocs_settings_configures_after_nav2s_file(
+    ctx: Any, tmp_path: Path
+) -> None:
     example = Path(__file__).parents[2] / "src/symloc/ros/examples/nav2_symloc_params.yaml"
     no_tf = _extras(tmp_path, odom_source="topic", laser_pose_source="parameters")
     node = _node(ctx, DATA / "main.yaml", example, no_tf)
     try:
         assert node.unknown_parameters() == []
         assert node.trigger_configure() == OK
-        assert node.params is not None and node.params.lidar_preset == "lds01"
+        assert node.params is not None
+        assert node.params.lidar_preset == "lds01"
         assert node.params.localizer.converged_weight == 0.9
     finally:
         node.destroy_node()

@@ -286,7 +286,8 @@ class Robot:
             self.side.send("tf", {"transforms": [t]})
         else:
             self.side.send(
-                "odom", odometry_to_fields(reading, frame_id="odom", child_frame_id="base_footprint")
+                "odom",
+                odometry_to_fields(reading, frame_id="odom", child_frame_id="base_footprint"),
             )
 
     def scan(self) -> tuple[float, dict[str, Any]]:
@@ -304,7 +305,9 @@ class Robot:
     def base_scan(self) -> Any:
         """What the robot's own controller uses to avoid walls (a scan from the base)."""
         sim = self.sim
-        return simulate_scan(sim.scenario.room.world, sim.body.pose, sim.scenario.preset, noise=False)
+        return simulate_scan(
+            sim.scenario.room.world, sim.body.pose, sim.scenario.preset, noise=False
+        )
 
 
 def _step(robot: Robot, run: Run, *, retries: int = 2) -> NodeStatus:
@@ -505,7 +508,8 @@ def test_nav2_params_file_is_read_as_ros_parameters(run: Run) -> None:
 def test_services_answer(run: Run) -> None:
     assert run.services.get("request_nomotion_update") is True
     assert run.services.get("reinitialize_global_localization") is True
-    assert run.after_reinit and all(s.status is not Status.TRACKING for s in run.after_reinit)
+    assert run.after_reinit
+    assert all(s.status is not Status.TRACKING for s in run.after_reinit)
 
 
 def test_localized_with_the_upside_down_offset_laser(run: Run) -> None:
@@ -544,7 +548,9 @@ def test_no_transform_before_the_pose_is_earned(run: Run) -> None:
     for t, _ in run.transforms:
         scan = round(t - 1.0, 6)
         assert scan >= round(first_tracking, 6), f"transform for the scan at {scan} before tracking"
-        assert by_stamp[scan].status is Status.TRACKING, f"transform sent at {scan} while not tracking"
+        assert by_stamp[scan].status is Status.TRACKING, (
+            f"transform sent at {scan} while not tracking"
+        )
     assert run.transforms_after_reinit == 0, "map -> odom sent after the pose was forgotten"
 
 
@@ -562,4 +568,5 @@ def test_bond_and_weighted_particle_cloud(run: Run) -> None:
     assert any(b.id == "amcl" and not b.active for b in run.bond), "the bond was not broken"
     assert run.clouds, "no nav2_msgs/ParticleCloud"
     weights = [p.weight for p in run.clouds[-1].particles]
-    assert weights and abs(sum(weights) - 1.0) < 1e-3
+    assert weights
+    assert abs(sum(weights) - 1.0) < 1e-3

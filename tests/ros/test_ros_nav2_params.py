@@ -20,18 +20,64 @@ DATA = Path(__file__).parent / "data" / "nav2"
 
 #: Every parameter nav2_amcl declares on nav2's humble, jazzy, kilted and main branches
 #: (amcl_node.cpp) and nav2's lifecycle node base, plus the names their nav2_params.yaml use.
-NAV2_NAMES = """
-alpha1 alpha2 alpha3 alpha4 alpha5 always_reset_initial_pose base_frame_id beam_skip_distance
-beam_skip_error_threshold beam_skip_threshold do_beamskip first_map_only freespace_downsampling
-global_frame_id initial_pose.x initial_pose.y initial_pose.yaw initial_pose.z
-initialize_at_saved_pose lambda_short laser_likelihood_max_dist laser_max_range laser_min_range
-laser_model_type map_topic max_beams max_particles min_particles odom_frame_id pf_err pf_z
-random_seed recovery_alpha_fast recovery_alpha_slow resample_interval robot_model_type
-save_pose_rate saved_pose_filepath scan_topic set_initial_pose sigma_hit tf_broadcast
-transform_tolerance update_min_a update_min_d z_hit z_max z_rand z_short
-allow_parameter_qos_overrides introspection_mode service_introspection_mode use_sim_time
-bond_heartbeat_period autostart_node bond_disable_heartbeat_timeout
-""".split()
+NAV2_NAMES = [
+    "alpha1",
+    "alpha2",
+    "alpha3",
+    "alpha4",
+    "alpha5",
+    "always_reset_initial_pose",
+    "base_frame_id",
+    "beam_skip_distance",
+    "beam_skip_error_threshold",
+    "beam_skip_threshold",
+    "do_beamskip",
+    "first_map_only",
+    "freespace_downsampling",
+    "global_frame_id",
+    "initial_pose.x",
+    "initial_pose.y",
+    "initial_pose.yaw",
+    "initial_pose.z",
+    "initialize_at_saved_pose",
+    "lambda_short",
+    "laser_likelihood_max_dist",
+    "laser_max_range",
+    "laser_min_range",
+    "laser_model_type",
+    "map_topic",
+    "max_beams",
+    "max_particles",
+    "min_particles",
+    "odom_frame_id",
+    "pf_err",
+    "pf_z",
+    "random_seed",
+    "recovery_alpha_fast",
+    "recovery_alpha_slow",
+    "resample_interval",
+    "robot_model_type",
+    "save_pose_rate",
+    "saved_pose_filepath",
+    "scan_topic",
+    "set_initial_pose",
+    "sigma_hit",
+    "tf_broadcast",
+    "transform_tolerance",
+    "update_min_a",
+    "update_min_d",
+    "z_hit",
+    "z_max",
+    "z_rand",
+    "z_short",
+    "allow_parameter_qos_overrides",
+    "introspection_mode",
+    "service_introspection_mode",
+    "use_sim_time",
+    "bond_heartbeat_period",
+    "autostart_node",
+    "bond_disable_heartbeat_timeout",
+]
 
 
 @pytest.mark.parametrize("branch", ["humble", "jazzy", "kilted", "main"])
@@ -39,11 +85,14 @@ def test_nav2_params_file_of_each_branch(branch: str) -> None:
     values = read_params_block(DATA / f"{branch}.yaml")
     params = node_params_from_ros(values)
     assert params.base_frame_id == "base_footprint"
-    assert params.global_frame_id == "map" and params.odom_frame_id == "odom"
-    assert params.amcl.max_particles == 2000 and params.amcl.min_particles == 500
+    assert params.global_frame_id == "map"
+    assert params.odom_frame_id == "odom"
+    assert params.amcl.max_particles == 2000
+    assert params.amcl.min_particles == 500
     assert params.amcl.laser_model_type == "likelihood_field"
     assert params.amcl.robot_model_type == "nav2_amcl::DifferentialMotionModel"
-    assert params.transform_tolerance == 1.0 and params.tf_broadcast
+    assert params.transform_tolerance == 1.0
+    assert params.tf_broadcast
     assert params.seed == 0  # nav2's random_seed -1 (a time seed) keeps symloc's seed
 
 
@@ -54,7 +103,8 @@ def test_every_nav2_name_is_declared_and_accepted() -> None:
     values = dict(declared)
     params = node_params_from_ros(values)  # nav2's defaults throughout
     assert params.base_frame_id == "base_footprint"
-    assert params.save_pose_rate == 0.5 and params.saved_pose_filepath == "/tmp/amcl_saved_pose"
+    assert params.save_pose_rate == 0.5
+    assert params.saved_pose_filepath == "/tmp/amcl_saved_pose"
     for name in WITHOUT_EFFECT:
         assert name in declared
 
@@ -77,10 +127,13 @@ def test_nav2_names_map_to_their_settings() -> None:
         "laser_pose": [0.2, 0.0, 3.0],
     }
     p = node_params_from_ros(values)
-    assert p.amcl.alpha1 == 0.3 and p.amcl.max_particles == 3000
+    assert p.amcl.alpha1 == 0.3
+    assert p.amcl.max_particles == 3000
     assert p.seed == 7
-    assert p.initial_pose == (1.0, -2.0, 0.25) and p.set_initial_pose
-    assert p.first_map_only and not p.tf_broadcast
+    assert p.initial_pose == (1.0, -2.0, 0.25)
+    assert p.set_initial_pose
+    assert p.first_map_only
+    assert not p.tf_broadcast
     assert p.localizer.converged_updates == 4
     assert p.symmetry == {"min_points": 40}
     assert p.laser_pose == (0.2, 0.0, 3.0)

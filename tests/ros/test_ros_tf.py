@@ -36,10 +36,15 @@ TS = get_typestore(Stores.ROS2_JAZZY)
 LASER_Q = (0.0, 1.0, 0.0, 0.0)
 
 
-def _tf(parent: str, child: str, xyz: tuple[float, ...], q: tuple[float, ...], stamp: float = 0.0) -> dict:
+def _tf(
+    parent: str, child: str, xyz: tuple[float, ...], q: tuple[float, ...], stamp: float = 0.0
+) -> dict:
     sec = int(stamp)
     return {
-        "header": {"stamp": {"sec": sec, "nanosec": int(round((stamp - sec) * 1e9))}, "frame_id": parent},
+        "header": {
+            "stamp": {"sec": sec, "nanosec": round((stamp - sec) * 1e9)},
+            "frame_id": parent,
+        },
         "child_frame_id": child,
         "transform": {
             "translation": dict(zip("xyz", xyz, strict=True)),
@@ -97,10 +102,13 @@ def test_tree_looks_up_across_frames_both_ways() -> None:
     cam_from_laser = tree.lookup("camera", "laser")  # siblings: through their common parent
     assert cam_from_laser is not None
     np.testing.assert_allclose(
-        cam_from_laser, np.linalg.inv(tree.lookup("base_link", "camera")) @ tree.lookup("base_link", "laser")
+        cam_from_laser,
+        np.linalg.inv(tree.lookup("base_link", "camera")) @ tree.lookup("base_link", "laser"),
     )
     assert tree.lookup("base_footprint", "nowhere") is None
-    assert "laser" in tree and "base_footprint" in tree and "nowhere" not in tree
+    assert "laser" in tree
+    assert "base_footprint" in tree
+    assert "nowhere" not in tree
 
 
 def test_an_older_dynamic_transform_is_ignored() -> None:
@@ -149,16 +157,20 @@ def test_odometry_from_tf_through_a_static_link() -> None:
     want = compose([2.0, 1.0, 0.5], [-0.1, 0.0, 0.0])
     np.testing.assert_allclose(reading.pose, want, atol=1e-12)
     (other,) = transforms_from_msg(_msg(_tf("map", "odom", (0, 0, 0), _yaw_q(0))))
-    assert odometry_from_transform(other, tree, odom_frame="odom", base_frame="base_footprint") is None
+    assert (
+        odometry_from_transform(other, tree, odom_frame="odom", base_frame="base_footprint") is None
+    )
 
 
-poses = st.tuples(
-    st.floats(-50, 50), st.floats(-50, 50), st.floats(-math.pi, math.pi)
-).map(np.array)
+poses = st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-math.pi, math.pi)).map(
+    np.array
+)
 
 
 @given(poses, poses)
-def test_map_from_odom_composed_with_odometry_is_the_map_pose(map_pose: np.ndarray, odom_pose: np.ndarray) -> None:
+def test_map_from_odom_composed_with_odometry_is_the_map_pose(
+    map_pose: np.ndarray, odom_pose: np.ndarray
+) -> None:
     m = map_from_odom(map_pose, odom_pose)
     back = compose(m, odom_pose)
     np.testing.assert_allclose(back[:2], map_pose[:2], atol=1e-9)
@@ -183,7 +195,8 @@ def test_map_to_odom_is_sent_only_with_a_confirmed_pose() -> None:
     out = policy.step(TRACK, 11.0, [0.5, 0.0, 0.1])
     assert out is not None
     (t,) = out["transforms"]
-    assert t["header"]["frame_id"] == "map" and t["child_frame_id"] == "odom"
+    assert t["header"]["frame_id"] == "map"
+    assert t["child_frame_id"] == "odom"
     assert t["header"]["stamp"] == {"sec": 12, "nanosec": 0}  # scan time + transform_tolerance
     assert policy.describe(11.0).startswith("sent, stamped 12.000")
     assert policy.step(LOST, 11.1, [0.5, 0.0, 0.1]) is None  # not re-stamped: it ages
@@ -216,7 +229,9 @@ class Recorder:
         self.reset += 1
 
 
-def _core(script: list[Estimate], **params: object) -> tuple[NodeCore, list[tuple[object, NodeParams]], list[Recorder]]:
+def _core(
+    script: list[Estimate], **params: object
+) -> tuple[NodeCore, list[tuple[object, NodeParams]], list[Recorder]]:
     built: list[tuple[object, NodeParams]] = []
     locs: list[Recorder] = []
 
@@ -225,13 +240,23 @@ def _core(script: list[Estimate], **params: object) -> tuple[NodeCore, list[tupl
         locs.append(Recorder(script))
         return locs[-1]
 
-    core = NodeCore(NodeParams(base_frame_id="base_footprint", **params), factory=factory, use_tf=True)  # type: ignore[arg-type]
+    core = NodeCore(
+        NodeParams(base_frame_id="base_footprint", **params), factory=factory, use_tf=True
+    )  # type: ignore[arg-type]
     core.set_map(OccupancyGrid(np.zeros((40, 40), np.int8), 0.1))
     return core, built, locs
 
 
 def _scan(stamp: float) -> object:
-    scan = LaserScan(-math.pi / 2, math.pi / 180, 0.1, 10.0, np.linspace(1.0, 2.0, 181), stamp=stamp, frame_id="laser")
+    scan = LaserScan(
+        -math.pi / 2,
+        math.pi / 180,
+        0.1,
+        10.0,
+        np.linspace(1.0, 2.0, 181),
+        stamp=stamp,
+        frame_id="laser",
+    )
     return build_rosbags(TS, "sensor_msgs/msg/LaserScan", scan_to_fields(scan))
 
 
@@ -258,7 +283,8 @@ def test_scans_wait_for_the_laser_on_tf_static() -> None:
     assert core.on_scan(_scan(1.1)) is not None
     # rebuilt for the mount: 0.2 m ahead, looking back (the upright frame of the turned-over laser)
     lp = built[-1][1].laser_pose
-    assert lp[:2] == pytest.approx((0.2, 0.0)) and abs(abs(lp[2]) - math.pi) < 1e-9
+    assert lp[:2] == pytest.approx((0.2, 0.0))
+    assert abs(abs(lp[2]) - math.pi) < 1e-9
 
 
 def test_an_upside_down_laser_is_mirrored_before_the_localizer() -> None:
@@ -269,7 +295,8 @@ def test_an_upside_down_laser_is_mirrored_before_the_localizer() -> None:
     seen = locs[-1].scans[-1]
     # raw beam i at angle a_i is at -a_i upright: the first beam seen is the raw last one
     assert seen.angle_min == pytest.approx(-math.pi / 2)
-    assert seen.ranges[0] == pytest.approx(2.0, abs=1e-6) and seen.ranges[-1] == pytest.approx(1.0)
+    assert seen.ranges[0] == pytest.approx(2.0, abs=1e-6)
+    assert seen.ranges[-1] == pytest.approx(1.0)
 
 
 def test_odometry_comes_from_tf_and_map_to_odom_goes_out_with_tracking_only() -> None:
@@ -278,19 +305,28 @@ def test_odometry_comes_from_tf_and_map_to_odom_goes_out_with_tracking_only() ->
     _odom(core, 1.0, (0.0, 0.0, 0.0))
     _odom(core, 2.0, (1.0, 0.0, 0.0))
     out = core.on_scan(_scan(1.5))  # odometry interpolated at the scan's stamp
-    assert out is not None and out.tf is None  # lost: nothing sent
+    assert out is not None
+    assert out.tf is None
     _odom(core, 3.0, (1.0, 0.0, 0.0))
     out = core.on_scan(_scan(2.5))
-    assert out is not None and out.tf is not None
+    assert out is not None
+    assert out.tf is not None
     (t,) = out.tf["transforms"]
     assert t["header"]["stamp"] == {"sec": 3, "nanosec": 500_000_000}
     q = t["transform"]["rotation"]
-    m = np.array([t["transform"]["translation"]["x"], t["transform"]["translation"]["y"], 2 * math.atan2(q["z"], q["w"])])
+    m = np.array(
+        [
+            t["transform"]["translation"]["x"],
+            t["transform"]["translation"]["y"],
+            2 * math.atan2(q["z"], q["w"]),
+        ]
+    )
     np.testing.assert_allclose(compose(m, [1.0, 0.0, 0.0]), TRACK.pose, atol=1e-9)
     values = {v["key"]: v["value"] for v in out.status["status"][0]["values"]}
     assert values["map_to_odom"].startswith("sent, stamped 3.500")
     out = core.on_scan(_scan(2.9))
-    assert out is not None and out.tf is None
+    assert out is not None
+    assert out.tf is None
     values = {v["key"]: v["value"] for v in out.status["status"][0]["values"]}
     assert values["map_to_odom"].startswith("not updated since the scan at 2.500")
 
@@ -300,11 +336,18 @@ def test_tf_broadcast_false_sends_nothing() -> None:
     _static_laser(core)
     _odom(core, 1.0, (0.0, 0.0, 0.0))
     out = core.on_scan(_scan(1.0))
-    assert out is not None and out.estimate.status is Status.TRACKING and out.tf is None
+    assert out is not None
+    assert out.estimate.status is Status.TRACKING
+    assert out.tf is None
 
 
 def test_laser_pose_from_parameters_without_tf() -> None:
-    core, built, locs = _core([TRACK], laser_pose_source="parameters", laser_pose=(0.2, 0.0, math.pi), laser_upside_down=True)
+    core, built, locs = _core(
+        [TRACK],
+        laser_pose_source="parameters",
+        laser_pose=(0.2, 0.0, math.pi),
+        laser_upside_down=True,
+    )
     _odom(core, 1.0, (0.0, 0.0, 0.0))
     assert core.on_scan(_scan(1.0)) is not None  # no /tf_static needed
     assert built[-1][1].laser_pose == (0.2, 0.0, math.pi)
@@ -323,8 +366,16 @@ def test_initial_pose_from_the_past_is_carried_by_odometry() -> None:
 def test_first_map_only_and_the_services() -> None:
     core, built, locs = _core([TRACK], first_map_only=True)
     n = len(built)
-    core.on_map(build_rosbags(TS, "nav_msgs/msg/OccupancyGrid", grid_to_fields(OccupancyGrid(np.zeros((50, 50), np.int8), 0.1), stamp=0.0)))
-    assert len(built) == n and core.grid is not None and core.grid.width == 40
+    core.on_map(
+        build_rosbags(
+            TS,
+            "nav_msgs/msg/OccupancyGrid",
+            grid_to_fields(OccupancyGrid(np.zeros((50, 50), np.int8), 0.1), stamp=0.0),
+        )
+    )
+    assert len(built) == n
+    assert core.grid is not None
+    assert core.grid.width == 40
     assert core.reinitialize_global()
     assert locs[-1].reset == 1
     assert not core.request_nomotion_update()  # this localizer cannot
@@ -336,5 +387,6 @@ def test_odometry_reading_from_tf_is_used_for_scans() -> None:
     _odom(core, 5.0, (2.0, 3.0, 0.25))
     out = core.on_scan(_scan(5.0))
     assert out is not None
-    assert core.received["tf"] == 1 and core.received["tf_static"] == 1
+    assert core.received["tf"] == 1
+    assert core.received["tf_static"] == 1
     assert isinstance(core._odom.at(5.0, 1.0), OdometryReading)

@@ -240,9 +240,7 @@ class NodeCore:
         """The parameters the localizer is built with: the laser pose is the mount's."""
         if self.mount is None:
             return self.params
-        return dataclasses.replace(
-            self.params, laser_pose=tuple(float(v) for v in self.mount.pose)
-        )
+        return dataclasses.replace(self.params, laser_pose=tuple(float(v) for v in self.mount.pose))
 
     @staticmethod
     def _map_odom(params: NodeParams) -> MapToOdom:
@@ -347,7 +345,7 @@ class NodeCore:
                     f"laser {frame or '(no frame)'} at {np.round(mount.pose, 3).tolist()}"
                     f"{' upside down' if mount.upside_down else ''}"
                 )
-        return self.mount
+        return self.mount if self.mount is not None else mount
 
     def _tracked_pose(self) -> tuple[FloatArray | None, FloatArray | None]:
         if self.last is not None and self.last.estimate.status is Status.TRACKING:

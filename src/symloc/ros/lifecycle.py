@@ -193,9 +193,7 @@ class LocalizationNode(LifecycleNode):
         """Names the params file gave this node that it does not know (configure refuses)."""
         overrides = getattr(self, "_parameter_overrides", {}) or {}
         known = set(self._declared) | {"use_sim_time", "start_type_description_service"}
-        return sorted(
-            n for n in overrides if n not in known and not n.startswith("qos_overrides.")
-        )
+        return sorted(n for n in overrides if n not in known and not n.startswith("qos_overrides."))
 
     def read_params(self) -> NodeParams:
         """The node's settings from its ROS parameters (raises ConfigurationError)."""
@@ -288,7 +286,10 @@ class LocalizationNode(LifecycleNode):
             name
             for name, cls in (
                 ("tf2_msgs (no map -> odom, no /tf input)", self.tf_message),
-                ("nav2_msgs (particle_cloud as PoseArray, no set_initial_pose)", self.particle_cloud_type),
+                (
+                    "nav2_msgs (particle_cloud as PoseArray, no set_initial_pose)",
+                    self.particle_cloud_type,
+                ),
                 ("std_srvs (no services)", self.empty_service),
                 ("bond (no bond: set the manager's bond_timeout to 0)", self.bond_status),
             )
@@ -304,7 +305,8 @@ class LocalizationNode(LifecycleNode):
         return super().on_configure(state)
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        assert self.params is not None and self.core is not None
+        assert self.params is not None
+        assert self.core is not None
         p = self.params
         log = self.get_logger()
         if p.set_initial_pose:
@@ -374,7 +376,8 @@ class LocalizationNode(LifecycleNode):
         from std_msgs.msg import Header
         from visualization_msgs.msg import MarkerArray
 
-        assert self.params is not None and self.core is not None
+        assert self.params is not None
+        assert self.core is not None
         p, core = self.params, self.core
         reliable = p.sensor_qos == "reliable"
         sensor = QoSProfile(
@@ -447,7 +450,9 @@ class LocalizationNode(LifecycleNode):
         }
         if self.tf_message is not None:
             self._pub_handles["tf"] = pub(
-                self.tf_message, "/tf", QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+                self.tf_message,
+                "/tf",
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
             )
 
     def _destroy_io(self) -> None:
@@ -466,7 +471,9 @@ class LocalizationNode(LifecycleNode):
                 )
             )
             self._srv_handles.append(
-                self.create_service(self.empty_service, "request_nomotion_update", self._srv_nomotion)
+                self.create_service(
+                    self.empty_service, "request_nomotion_update", self._srv_nomotion
+                )
             )
         if self.set_initial_pose_type is not None:
             self._srv_handles.append(
@@ -535,7 +542,8 @@ class LocalizationNode(LifecycleNode):
 
     def _weighted_cloud(self, out: Outputs) -> dict[str, Any] | None:
         """nav2_msgs/ParticleCloud fields: AMCL's particles and their weights."""
-        assert self.core is not None and self.params is not None
+        assert self.core is not None
+        assert self.params is not None
         last = getattr(getattr(self.core.localizer, "tracker", None), "last", None)
         parts = getattr(last, "particles", None)
         weights = getattr(last, "weights", None)

@@ -55,7 +55,9 @@ def _pose3(value: Any, name: str) -> tuple[float, float, float]:
             for v in value
         )
     ):
-        raise ConfigurationError(f"{name}: expected 3 numbers x [m], y [m], yaw [rad], got {value!r}")
+        raise ConfigurationError(
+            f"{name}: expected 3 numbers x [m], y [m], yaw [rad], got {value!r}"
+        )
     x, y, yaw = (float(v) for v in value)
     return (x, y, yaw)
 
@@ -262,8 +264,7 @@ class NodeParams:
                 raise ConfigurationError(f"{name}: expected a path string")
         if self.laser_pose_source not in ("tf", "parameters"):
             raise ConfigurationError(
-                "laser_pose_source: expected 'tf' or 'parameters', got"
-                f" {self.laser_pose_source!r}"
+                f"laser_pose_source: expected 'tf' or 'parameters', got {self.laser_pose_source!r}"
             )
         if self.odom_source not in ("tf", "topic"):
             raise ConfigurationError(
@@ -287,7 +288,9 @@ class NodeParams:
             "autostart_node",
         ):
             if not isinstance(getattr(self, name), bool):
-                raise ConfigurationError(f"{name}: expected true/false, got {getattr(self, name)!r}")
+                raise ConfigurationError(
+                    f"{name}: expected true/false, got {getattr(self, name)!r}"
+                )
         if not isinstance(self.accept_map_updates, bool):
             raise ConfigurationError(
                 f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"

@@ -111,13 +111,11 @@ def transform_from_msg(msg: Any, where: str = "TransformStamped") -> StampedTran
         raise DataFormatError(f"{where}.child_frame_id: expected a string, got {child!r}")
     child = child.lstrip("/")
     if not parent or not child:
-        raise DataFormatError(
-            f"{where}: expected non-empty frames, got {parent!r} -> {child!r}"
-        )
+        raise DataFormatError(f"{where}: expected non-empty frames, got {parent!r} -> {child!r}")
     t = [finite_field(msg, f"transform.translation.{c}", where) for c in "xyz"]
     q = [finite_field(msg, f"transform.rotation.{c}", where) for c in "xyzw"]
     m = np.eye(4)
-    m[:3, :3] = _quaternion_matrix(*q, where=f"{where}.transform.rotation")
+    m[:3, :3] = _quaternion_matrix(q[0], q[1], q[2], q[3], f"{where}.transform.rotation")
     m[:3, 3] = t
     return StampedTransform(parent, child, header_stamp(msg, where), m)
 
@@ -163,9 +161,14 @@ class TransformTree:
     def add(self, t: StampedTransform, *, static: bool) -> bool:
         """Store ``t``; False when an older dynamic transform was ignored."""
         old = self._edges.get(t.child)
-        if old is not None and not static and t.child not in self._static:
-            if old.parent == t.parent and t.stamp < old.stamp:
-                return False
+        if (
+            old is not None
+            and not static
+            and t.child not in self._static
+            and old.parent == t.parent
+            and t.stamp < old.stamp
+        ):
+            return False
         self._edges[t.child] = t
         if static:
             self._static.add(t.child)
@@ -265,9 +268,7 @@ def map_from_odom(map_from_base: ArrayLike, odom_from_base: ArrayLike) -> FloatA
     return m
 
 
-def transform_fields(
-    pose: ArrayLike, *, stamp: float, parent: str, child: str
-) -> dict[str, Any]:
+def transform_fields(pose: ArrayLike, *, stamp: float, parent: str, child: str) -> dict[str, Any]:
     """A geometry_msgs/TransformStamped field dict of a planar ``parent_from_child`` pose."""
     x, y, th = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
     return {
