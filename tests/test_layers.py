@@ -19,6 +19,7 @@ ROBOT_SIDE = (
     "odometry.py",
     "lidar_spec.py",
     "camera_model.py",
+    "image_header.py",
     "errors.py",
     "_checks.py",
     "grid",

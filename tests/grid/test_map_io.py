@@ -151,7 +151,18 @@ def test_image_to_grid_trinary_includes_alpha() -> None:
         ("image: [unclosed", "malformed YAML"),
         ("- a\n- b\n", "expected a YAML mapping"),
         (ROS_WIKI_YAML.replace("image: testmap.png\n", ""), "missing required field 'image'"),
-        (ROS_WIKI_YAML.replace("resolution: 0.1", "resolution: -0.1"), "'resolution' must be > 0"),
+        (
+            ROS_WIKI_YAML.replace("resolution: 0.1", "resolution: -0.1"),
+            "'resolution' must be 1e-06",
+        ),
+        (
+            ROS_WIKI_YAML.replace("resolution: 0.1", "resolution: 1e-300"),
+            r"'resolution' must be 1e-06\.\.10000 m/pixel, got 1e-300",
+        ),
+        (
+            ROS_WIKI_YAML.replace("origin: [0.0, 0.0, 0.0]", "origin: [1e300, 0.0, 0.0]"),
+            "'origin' must have",
+        ),
         (
             ROS_WIKI_YAML.replace("resolution: 0.1", "resolution: abc"),
             "'resolution' must be a number",
@@ -196,8 +207,52 @@ def test_missing_yaml_and_missing_image(tmp_path: Path) -> None:
 def test_undecodable_image(tmp_path: Path) -> None:
     (tmp_path / "testmap.png").write_bytes(b"not an image")
     (tmp_path / "map.yaml").write_text(ROS_WIKI_YAML)
+    with pytest.raises(MapFileError, match=r"testmap\.png\): not an image format"):
+        load_map(tmp_path / "map.yaml")
+    # a valid PNG header, then garbage: OpenCV cannot decode it
+    _, png = cv2.imencode(".png", np.zeros((5, 4), np.uint8))
+    (tmp_path / "testmap.png").write_bytes(png.tobytes()[:40] + b"\x00" * 30)
     with pytest.raises(MapFileError, match="cannot decode image"):
         load_map(tmp_path / "map.yaml")
+
+
+@pytest.mark.parametrize(
+    ("data", "match"),
+    [
+        (b"P5\n65535 65535\n65535\n" + b"\x00" * 64, "65535 x 65535"),
+        (b"P2\n100000 100000\n255\n0 0 0\n", "100000 x 100000"),
+    ],
+)
+def test_huge_declared_images_are_refused_before_decoding(
+    tmp_path: Path, data: bytes, match: str
+) -> None:
+    import tracemalloc
+
+    (tmp_path / "big.pgm").write_bytes(data)
+    (tmp_path / "map.yaml").write_text(ROS_WIKI_YAML.replace("testmap.png", "big.pgm"))
+    tracemalloc.start()
+    with pytest.raises(MapFileError, match=rf"big\.pgm\): pnm header declares {match}"):
+        load_map(tmp_path / "map.yaml")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 5_000_000
+
+
+def test_max_pixels_and_blocks(tmp_path: Path) -> None:
+    img = np.full((300, 200), 254, np.uint8)
+    img[:10] = 0
+    y = _write_pair(tmp_path, ROS_WIKI_YAML, img)
+    with pytest.raises(MapFileError, match="at most 59,999 allowed"):
+        load_map(y, max_pixels=59_999)
+    import symloc.grid.map_io as mio
+
+    whole = load_map(y)
+    old = mio._BLOCK_PIXELS
+    mio._BLOCK_PIXELS = 999  # several blocks of rows give the same grid
+    try:
+        np.testing.assert_array_equal(load_map(y).data, whole.data)
+    finally:
+        mio._BLOCK_PIXELS = old
 
 
 def test_wrong_image_size_names_width_and_height(tmp_path: Path) -> None:

@@ -106,7 +106,7 @@ def test_malformed_lines_name_the_line(tmp_path: Path, line: str, match: str) ->
 
 
 def test_missing_file_and_bad_range_max(tmp_path: Path) -> None:
-    with pytest.raises(FileNotFoundError, match="CARMEN log not found"):
+    with pytest.raises(DataFormatError, match="CARMEN log not found"):
         read_carmen(tmp_path / "none.log")
     p = tmp_path / "a.log"
     p.write_text(LOG)
@@ -124,3 +124,23 @@ def test_real_aces_log_counts() -> None:
     assert log.skipped["NEFF"] == 440
     assert all(len(s.scan) == 180 for s in log.scans)
     assert log.duration > 1000.0
+
+
+def test_truncated_gzip_and_long_lines_name_the_file(tmp_path: Path) -> None:
+    import gzip
+
+    import symloc.io.carmen as carmen
+
+    gz = tmp_path / "cut.log.gz"
+    whole = gzip.compress(LOG.encode() * 50)
+    gz.write_bytes(whole[: len(whole) // 2])
+    with pytest.raises(DataFormatError, match=r"cut\.log\.gz: line \d+: cannot read on"):
+        read_carmen(gz)
+    bad = tmp_path / "bad.log"
+    bad.write_text("# header\nODOM 1 2\n")
+    with pytest.raises(DataFormatError, match=r"bad\.log: line 2: ODOM"):
+        read_carmen(bad)
+    long = tmp_path / "long.log"
+    long.write_text("FLASER " + "1 " * (carmen.MAX_LINE // 2 + 10) + "\n")
+    with pytest.raises(DataFormatError, match=r"long\.log: line 1: longer than"):
+        read_carmen(long)

@@ -134,7 +134,10 @@ def test_a_kidnapped_robot_stops_claiming_at_once_and_relocalizes(l_room) -> Non
     assert any("global relocalization" in line for line in loc.log)
 
 
-def test_a_passing_occlusion_suspends_then_resumes_without_relocalizing(l_room) -> None:
+@pytest.mark.parametrize(("hidden", "suspended"), [(0.8, True), (0.5, False)])
+def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
+    l_room, hidden: float, suspended: bool
+) -> None:
     room, grid = l_room
     loc = _localizer(grid)
     pose = np.array([-0.7, -0.9, 0.3])
@@ -144,12 +147,14 @@ def test_a_passing_occlusion_suspends_then_resumes_without_relocalizing(l_room) 
     out = []
     for k in range(12):
         scan = simulate_scan(room.world, pose, RPLIDAR_A2, rng)
-        if k in (4, 5):  # a person right in front of the lidar hides most of the room
+        if k in (4, 5):  # a person right in front of the lidar hides part of the room
             r = scan.ranges.copy()
-            r[: int(0.6 * r.size)] = 0.4
+            r[: int(hidden * r.size)] = 0.4
             scan = scan.with_ranges(r)
         out.append(loc.update(odom, scan).status)
     assert out[4] is not Status.TRACKING
+    assert out[5] is not Status.TRACKING
     assert out[-1] is Status.TRACKING
-    assert any("claims resumed" in line for line in loc.log)
+    # most of the scan contradicting the pose suspends claims; half of it only withholds
+    assert any("claims resumed" in line for line in loc.log) is suspended
     assert not any("global relocalization" in line for line in loc.log)

@@ -274,8 +274,13 @@ def test_compressed_image_png_round_trip_and_garbage() -> None:
     back = compressed_image_from_msg(_cdr_round_trip("sensor_msgs/msg/CompressedImage", fields))
     np.testing.assert_array_equal(back, img)
     bad = SimpleNamespace(format="jpeg", data=b"not a jpeg at all")
-    with pytest.raises(DataFormatError, match=r"CompressedImage\.data: OpenCV could not decode"):
+    with pytest.raises(DataFormatError, match=r"CompressedImage\.data: not an image format"):
         compressed_image_from_msg(bad)
+    # a valid PNG header followed by garbage: the header passes, OpenCV refuses the rest
+    png = bytes(np.asarray(fields["data"]).tobytes())
+    truncated = SimpleNamespace(format="png", data=png[:40] + b"\x00" * 40)
+    with pytest.raises(DataFormatError, match=r"CompressedImage\.data: OpenCV could not decode"):
+        compressed_image_from_msg(truncated)
     with pytest.raises(DataFormatError, match=r"CompressedImage\.data: empty"):
         compressed_image_from_msg(SimpleNamespace(format="png", data=b""))
 

@@ -306,9 +306,9 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     assert dropped.get("scan: malformed", 0) >= 3
     assert dropped.get("odom: malformed", 0) >= 3
     assert dropped.get("odom: wrong frame", 0) >= 3
-    assert dropped.get("image: malformed", 0) >= 6
+    # no capture was pending: the images were not even decoded (NodeCore tests cover decoding)
+    assert "image: malformed" not in dropped
     assert dropped.get("initialpose: malformed", 0) >= 3
     assert dropped.get("map: changed", 0) >= 1
     log = log_path.read_text()
-    assert "yuv422" in log
     assert "still localizing" in log

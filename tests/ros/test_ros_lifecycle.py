@@ -245,13 +245,18 @@ def test_node_survives_a_crashing_localizer(ctx: Any, map_yaml: str) -> None:
         ps = drv.create_publisher(sensor_msgs.LaserScan, "scan", 10)
         scan = LaserScan(-math.pi, math.pi / 180, 0.1, 10.0, np.full(360, 2.0), stamp=1.0)
         end = time.monotonic() + 10
-        while node.core.dropped["internal error"] < 2 and time.monotonic() < end:
+        rejected = "scan: rejected by the localizer"
+        while (node.core.dropped[rejected] < 2 or len(statuses) < 2) and time.monotonic() < end:
             odom = odometry_to_fields(OdometryReading(np.zeros(3), 1.0))
             po.publish(build_rclpy(nav_msgs.Odometry, odom))
             ps.publish(build_rclpy(sensor_msgs.LaserScan, scan_to_fields(scan)))
             ex.spin_once(timeout_sec=0.1)
-        assert node.core.dropped["internal error"] >= 2  # counted, the node is still spinning
-        assert statuses == []  # nothing published for a failed step
+        assert node.core.dropped[rejected] >= 2  # counted, the node is still spinning
+        # a status for every scan, saying the scan was not used and why
+        values = {kv.key: kv.value for kv in statuses[-1].status[0].values}
+        assert values["scan"] == "dropped"
+        assert "RuntimeError: boom" in values["reason"]
+        assert values["map_to_odom"] == "never sent (no pose earned yet)"
     finally:
         ex.shutdown()
         node.destroy_node()

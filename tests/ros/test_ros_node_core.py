@@ -93,10 +93,10 @@ def _scan_msg(t: float, n: int = 36, frame: str = "laser") -> object:
 
 def test_scans_need_a_map_and_odometry() -> None:
     core, _loc, warns = _core([LOST])
-    assert core.on_scan(_scan_msg(1.0)) is None
+    assert not core.on_scan(_scan_msg(1.0)).used
     assert core.dropped["scan: no map yet"] == 1
     core.on_map(_map_msg())
-    assert core.on_scan(_scan_msg(1.0)) is None
+    assert not core.on_scan(_scan_msg(1.0)).used
     assert core.dropped["scan: no odometry yet"] == 1
     core.on_odom(_odom_msg(1.0))
     out = core.on_scan(_scan_msg(1.0))
@@ -118,7 +118,7 @@ def test_odometry_is_interpolated_at_the_scan_stamp() -> None:
     assert abs(abs(odom.pose[2]) - math.pi) < 0.3
     core.on_scan(_scan_msg(2.0))
     np.testing.assert_array_equal(loc.calls[-1][0].pose, [1.0, 2.0, wrap(-3.0)])
-    assert core.on_scan(_scan_msg(5.0)) is None  # > transform_tolerance after the newest
+    assert not core.on_scan(_scan_msg(5.0)).used  # > transform_tolerance after the newest
     assert core.dropped["scan: no odometry within transform_tolerance"] == 1
 
 
@@ -146,6 +146,9 @@ def test_tracking_publishes_amcl_pose_and_status_values() -> None:
 def test_requests_become_goal_and_capture_and_image_is_paired() -> None:
     script = [
         _ambiguous(Request(RequestKind.GO_TO_CENTRE, target=np.array([1.0, 1.0]))),
+        # the localizer asks until it gets an image
+        _ambiguous(Request(RequestKind.CAPTURE_IMAGE)),
+        _ambiguous(Request(RequestKind.CAPTURE_IMAGE)),
         _ambiguous(Request(RequestKind.CAPTURE_IMAGE)),
         _ambiguous(Request(RequestKind.ROTATE, angle=-math.pi / 2)),
     ]
@@ -179,13 +182,20 @@ def test_requests_become_goal_and_capture_and_image_is_paired() -> None:
 
 
 def test_bad_input_is_dropped_counted_and_survived() -> None:
-    core, loc, warns = _core([TRACK], laser_frame_id="laser", camera_frame_id="camera")
+    capture = Estimate(
+        Status.TRACKING,
+        pose=TRACK.pose,
+        covariance=TRACK.covariance,
+        request=Request(RequestKind.CAPTURE_IMAGE),
+        reason="capture",
+    )
+    core, loc, warns = _core([capture, TRACK], laser_frame_id="laser", camera_frame_id="camera")
     core.on_map(_map_msg())
     core.on_odom(_odom_msg(1.0))
-    assert core.on_scan(_scan_msg(1.0)) is not None
+    assert core.on_scan(_scan_msg(1.0)).used  # asks for an image: images are decoded now
     # wrong length, wrong frame
-    assert core.on_scan(_scan_msg(1.0, n=35)) is None
-    assert core.on_scan(_scan_msg(1.0, frame="base_link")) is None
+    assert not core.on_scan(_scan_msg(1.0, n=35)).used
+    assert not core.on_scan(_scan_msg(1.0, frame="base_link")).used
     # NaN odometry, wrong odom frames, stamps going backwards
     nan_odom = odometry_to_fields(OdometryReading(np.zeros(3), 1.1))
     nan_odom["pose"]["pose"]["position"]["y"] = float("nan")
@@ -280,7 +290,7 @@ def test_accepting_map_updates_rebuilds_and_keeps_the_pose() -> None:
     core.on_map(_map_msg())  # identical re-publication: ignored
     core.on_odom(_odom_msg(1.0))
     core.on_scan(_scan_msg(1.0))
-    core.on_map(_map_msg((25, 20)))
+    core.on_map(_map_msg((60, 40)))  # 2 m x 3 m: the tracked pose (1, 2) is inside
     assert len(built) == 2
     np.testing.assert_allclose(loc.poses_set[-1], [1.0, 2.0, 0.5])
 
@@ -329,6 +339,9 @@ def test_example_params_file_is_valid() -> None:
         ("symloc:\n  ros__parameters:\n    scan_topic: 'a b'\n", r"scan_topic"),
         ("symloc:\n  ros__parameters:\n    odom_frame_id: ''\n", r"odom_frame_id"),
         ("symloc:\n  ros__parameters:\n    seed: -3\n", r"seed"),
+        ("symloc:\n  ros__parameters:\n    max_stamp_jump: 0\n", r"max_stamp_jump"),
+        ("symloc:\n  ros__parameters:\n    max_odom_speed: .nan\n", r"max_odom_speed.*m/s"),
+        ("symloc:\n  ros__parameters:\n    max_image_pixels: 0\n", r"max_image_pixels"),
         ("symloc: [1, 2\n", r"not valid YAML"),
         ("symloc: 3\n", r"ros__parameters block"),
     ],
@@ -359,3 +372,48 @@ def test_ros_node_command_without_rclpy_says_what_to_install(
     assert main(["ros", "node", "--params", str(params)]) == 2
     assert "pip install 'symloc[ros]'" in capsys.readouterr().err
     assert main(["ros", "check-params", str(params)]) == 0
+
+
+def _png_header(width: int, height: int) -> bytes:
+    """A PNG signature and IHDR declaring ``width x height`` (then garbage: never decoded)."""
+    import struct
+    import zlib
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    chunk = struct.pack(">I", 13) + b"IHDR" + ihdr + struct.pack(">I", zlib.crc32(b"IHDR" + ihdr))
+    return b"\x89PNG\r\n\x1a\n" + chunk + b"\x00" * 200
+
+
+def test_images_are_bounded_and_only_decoded_when_requested() -> None:
+    import tracemalloc
+
+    capture = _ambiguous(Request(RequestKind.CAPTURE_IMAGE))
+    core, loc, warns = _core([LOST, capture], max_image_pixels=1000)
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0))
+    big = {"header": {"stamp": {"sec": 1, "nanosec": 0}, "frame_id": "camera"}, "format": "png"}
+    bomb = _msg(
+        "sensor_msgs/msg/CompressedImage",
+        {**big, "data": np.frombuffer(_png_header(16000, 16000), np.uint8)},
+    )
+    core.on_compressed_image(bomb)  # nothing requested: not decoded, not kept, not an error
+    assert core.received["image"] == 1
+    assert not core.dropped
+    core.on_scan(_scan_msg(1.0))
+    out = core.on_scan(_scan_msg(1.0))
+    assert out.capture is not None
+    tracemalloc.start()
+    core.on_compressed_image(bomb)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 5_000_000  # refused from its header, not decoded (256 MP would be 768 MB)
+    assert core.dropped["image: malformed"] == 1
+    assert any("16000 x 16000" in w and "at most 1,000" in w for w in warns)
+    raw = image_to_fields(np.zeros((40, 30, 3), np.uint8), stamp=1.0)  # 1200 pixels > 1000
+    core.on_image(_msg("sensor_msgs/msg/Image", raw))
+    assert core.dropped["image: malformed"] == 2
+    ok = image_to_fields(np.zeros((20, 30, 3), np.uint8), stamp=1.0)
+    core.on_image(_msg("sensor_msgs/msg/Image", ok))
+    core.on_scan(_scan_msg(1.0))
+    assert loc.calls[-1][2] is not None
+    assert loc.calls[-1][2].shape == (20, 30, 3)

@@ -68,11 +68,41 @@ def test_replay_cli_writes_tum_and_png(
     out = tmp_path / "replay"
     argv = ["replay", str(recording.bag), "--params", str(recording.params_path), "--out", str(out)]
     assert main(argv) == 0
-    assert "final: tracking" in capsys.readouterr().out
-    lines = out.with_suffix(".tum").read_text().splitlines()
-    assert lines
-    assert len(lines[0].split()) == 8
-    assert out.with_suffix(".png").stat().st_size > 10_000
+    text = capsys.readouterr().out
+    assert "final: tracking" in text
+    assert f"seed: {recording.params.seed}" in text  # the params' seed unless --seed is given
+    tracked = (out / "replay.tum").read_text().splitlines()
+    assert tracked
+    assert len(tracked[0].split()) == 8
+    # every scan's estimate (evo sees the whole run) and every scan's status
+    every = (out / "replay_scans.tum").read_text().splitlines()
+    assert len(every) == len(recording.trajectory) > len(tracked)
+    assert all(len(line.split()) == 8 for line in every)
+    rows = (out / "replay_scans.csv").read_text().splitlines()
+    assert rows[0].startswith("stamp,status,tracked,x,y,theta_deg")
+    assert len(rows) == 1 + len(recording.trajectory)
+    statuses = [r.split(",")[1] for r in rows[1:]]
+    assert statuses == [p.status for p in recording.trajectory]
+    assert sum(int(r.split(",")[2]) for r in rows[1:]) == len(tracked)
+    assert (out / "replay.png").stat().st_size > 10_000
+
+
+def test_replay_without_a_visual_map_says_so(
+    recording: SimRecording, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The square is symmetric: with no visual map no pose is earned, and the command says so
+    (exit code 3) instead of writing an empty TUM and exiting 0."""
+    from symloc.cli.main import main
+
+    map_yaml = recording.assets / "map.yaml"
+    out = tmp_path / "nomap"
+    assert main(["replay", str(recording.bag), "--map", str(map_yaml), "--out", str(out)]) == 3
+    captured = capsys.readouterr()
+    assert "without a visual map a symmetric room cannot be resolved" in captured.out
+    assert "no pose was earned" in captured.err
+    assert "--visual-map" in captured.err
+    assert (out / "replay.tum").read_text() == ""
+    assert (out / "replay_scans.tum").read_text().strip()
 
 
 def test_record_refuses_existing_paths(tmp_path: Path) -> None:
@@ -88,14 +118,18 @@ def test_record_refuses_existing_paths(tmp_path: Path) -> None:
 def test_sim_record_cli_mcap_compressed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from symloc.cli.main import main
 
-    out = tmp_path / "run"
+    out = tmp_path / "rec"
     argv = ["sim", "record", "--out", str(out), "--format", "mcap", "--compressed", "--seed", "5"]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "seed=5" in text
     assert "/camera/image_raw/compressed" in text
     assert "final: tracking" in text
-    assert list(out.glob("*.mcap"))
-    images = [m for m in read_bag(out) if m.kind == "image"]
+    assert list((out / "run").glob("*.mcap"))
+    assert (out / "assets" / "params.yaml").is_file()
+    assert f"symloc replay {out / 'run'} --params {out / 'assets' / 'params.yaml'}" in text
+    assert main(argv) == 2  # the folder is not empty now
+    assert "not an empty folder" in capsys.readouterr().err
+    images = [m for m in read_bag(out / "run") if m.kind == "image"]
     assert images
     assert images[0].value.shape == (480, 640, 3)

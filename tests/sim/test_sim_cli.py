@@ -11,8 +11,7 @@ from symloc.cli.main import main
 
 
 def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = tmp_path / "scene.png"
-    cam = tmp_path / "cam.png"
+    out = tmp_path / "render"
     code = main(
         [
             "sim",
@@ -30,8 +29,6 @@ def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.Captur
             "3",
             "--out",
             str(out),
-            "--image-out",
-            str(cam),
         ]
     )
     assert code == 0
@@ -39,15 +36,16 @@ def test_sim_render_writes_scene_and_image(tmp_path: Path, capsys: pytest.Captur
     assert "seed=3" in text
     assert "room=hexagon" in text
     assert "360 beams" in text
-    assert out.stat().st_size > 10_000
-    img = cv2.imread(str(cam))
+    assert (out / "scene.png").stat().st_size > 10_000
+    img = cv2.imread(str(out / "camera.png"))
     assert img.shape == (480, 640, 3)
 
 
 def test_sim_render_bad_gv_is_a_clean_error(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    code = main(["sim", "render", "--gv", "0", "--out", str(tmp_path / "x.png")])
-    assert code == 2
-    assert "gv: expected a value > 0" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "render", "--gv", "0", "--out", str(tmp_path / "x")])
+    assert exc.value.code == 2
+    assert "--gv: expected a number > 0, got '0'" in capsys.readouterr().err
 
 
 def _packaged(name: str) -> Path:
@@ -57,7 +55,7 @@ def _packaged(name: str) -> Path:
 
 
 def test_sim_render_world_file(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = tmp_path / "scene.png"
+    out = tmp_path / "scene"
     code = main(
         ["sim", "render", "--world", str(_packaged("square_with_box.yaml")), "--out", str(out)]
     )
@@ -65,7 +63,7 @@ def test_sim_render_world_file(tmp_path: Path, capsys: pytest.CaptureFixture) ->
     text = capsys.readouterr().out
     assert "room=square-with-box" in text
     assert "order=1 shape_order=4" in text
-    assert out.stat().st_size > 10_000
+    assert (out / "scene.png").stat().st_size > 10_000
 
 
 def test_sim_render_world_file_errors_name_the_key(
@@ -73,7 +71,7 @@ def test_sim_render_world_file_errors_name_the_key(
 ) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nroom:\n  polygon: [[0, 0], [2, 2], [2, 0], [0, 2]]\n")
-    code = main(["sim", "render", "--world", str(bad), "--out", str(tmp_path / "x.png")])
+    code = main(["sim", "render", "--world", str(bad), "--out", str(tmp_path / "x")])
     assert code == 2
     err = capsys.readouterr().err
     assert f"{bad}: room.polygon[0]: wall 0" in err
@@ -84,7 +82,7 @@ def test_sim_world_writes_a_loadable_file(tmp_path: Path, capsys: pytest.Capture
     from symloc.sim.generator import generate_world
     from symloc.sim.world_file import load_world_file
 
-    out = tmp_path / "w.yaml"
+    out_dir = tmp_path / "w"
     assert (
         main(
             [
@@ -96,23 +94,28 @@ def test_sim_world_writes_a_loadable_file(tmp_path: Path, capsys: pytest.Capture
                 "7",
                 "--no-perturb",
                 "--out",
-                str(out),
+                str(out_dir),
             ]
         )
         == 0
     )
     text = capsys.readouterr().out
+    (out,) = out_dir.glob("*.yaml")  # --out is a folder: the world file is named after it
     assert "family=rhombus seed=7" in text
     assert "computed: order 2" in text
     assert out.read_text().startswith("# symloc sim world --family rhombus --seed 7 --no-perturb\n")
     assert load_world_file(out) == generate_world("rhombus", 7, perturb=False)
-    assert main(["sim", "world", "--room", "hexagon", "--gv", "2.5", "--no-lab"]) == 0
+    argv = ["sim", "world", "--room", "hexagon", "--gv", "2.5", "--no-lab", "--out", str(out_dir)]
+    assert main(argv) == 0
     text = capsys.readouterr().out
     assert "computed: order 6" in text
     assert "regular: {n: 6, gv: 2.5}" in text
     assert main(["sim", "world", "--list"]) == 0
     assert "corridor_long   symmetric" in capsys.readouterr().out
-    assert main(["sim", "world"]) == 2
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "world"])
+    assert exc.value.code == 2
+    assert "one of the arguments --family --room --list is required" in capsys.readouterr().err
 
 
 def test_sim_gallery(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

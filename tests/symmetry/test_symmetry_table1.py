@@ -21,7 +21,7 @@ def test_table1_small_run_json_and_figure(
             "3",
             "--positions",
             "2",
-            "--sensors",
+            "--lidar",
             "paper_15m",
             "--fp-per-room",
             "1",
@@ -72,10 +72,11 @@ def test_table1_is_reproducible_and_rejects_bad_positions(
     assert a["cells"] == b["cells"]
     fp = run_false_positives(seed=1, per_room=1, gv_distances=(3.0,), progress=False)
     assert fp["trials"] == len(FP_ROOMS)
-    assert main(["experiment", "table1", "--positions", "0"]) == 2
-    assert "--positions: expected an integer >= 1" in capsys.readouterr().err
-    assert main(["experiment", "table1", "--fp-per-room", "0"]) == 2
-    assert "--fp-per-room: expected an integer >= 1" in capsys.readouterr().err
+    for flag in ("--positions", "--fp-per-room"):
+        with pytest.raises(SystemExit) as exc:
+            main(["experiment", "table1", flag, "0"])
+        assert exc.value.code == 2
+        assert f"{flag}: expected an integer >= 1" in capsys.readouterr().err
 
 
 def test_unknown_false_positive_family_is_rejected() -> None:

@@ -44,22 +44,23 @@ def test_add_list_decide_remove(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert "1 place(s)" in out
     assert "polygon" in out
     assert "2.120" in out
-    # a JPEG re-capture of direction 2 after the camera turned 3 degrees left
+    # a JPEG re-capture of the third photo (direction 3 for people) after the camera turned
+    # 3 degrees left
     q = _write(tmp_path / "q.jpg", view(_scenes()[2], math.radians(3.0)))
     assert main(["places", "decide", "--db", str(db), "--place", "1", "--query", str(q),
                  "--hfov", f"{math.degrees(2 * math.atan(320 / 500)):.4f}"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "status:         decided" in out
-    assert "direction:      2" in out
+    assert "direction:      3 of 4" in out
     offset = float(out.split("heading offset:")[1].split("deg")[0])
     assert abs(offset - 3.0) < 0.5
-    # direction 2 looks along 90 - 180 = -90 deg; the camera turned 3 deg left
+    # direction 3 looks along 90 - 2 x 90 = -90 deg; the camera turned 3 deg left
     heading = float(out.split("heading:")[1].split("deg")[0])
     assert abs(heading - (-87.0)) < 0.5
     # same with explicit intrinsics
     assert main(["places", "decide", "--db", str(db), "--place", "1", "--query", str(q),
                  "--intrinsics", "500", "500", "320", "240"]) == 0  # fmt: skip
-    assert "direction:      2" in capsys.readouterr().out
+    assert "direction:      3 of 4" in capsys.readouterr().out
     # a flat wall is refused (exit code 3) and the user is told to turn
     flat = tmp_path / "flat.png"
     cv2.imwrite(str(flat), np.full((480, 640), 128, np.uint8))
@@ -111,15 +112,15 @@ def test_place_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     assert main(["places", "list", "--db", str(tmp_path / "none.db")]) == 2
     assert "no visual map there" in capsys.readouterr().err
     # a map made with one vocabulary refuses places described with another
-    voc = tmp_path / "v.symvoc"
     train = tmp_path / "train"
     train.mkdir()
     for i in range(2):
         _write(train / f"{i}.png", view(_scenes()[i]))
-    assert main(["vocab", "train", str(train), "--k", "3", "--L", "2", "--out", str(voc)]) == 0
+    assert main(["vocab", "train", str(train), "--k", "3", "--L", "2", "--out", str(tmp_path)]) == 0
+    voc = tmp_path / "vocabulary.symvoc"
     capsys.readouterr()
     assert main([*add, "--images", *imgs[:2], "--vocabulary", str(voc)]) == 2
-    assert "were made with default" in capsys.readouterr().err
+    assert "were made with the shipped vocabulary" in capsys.readouterr().err
 
 
 def test_image_file_helpers(tmp_path: Path) -> None:
@@ -145,3 +146,28 @@ def test_image_file_helpers(tmp_path: Path) -> None:
         intrinsics_from_values(-1.0, 500.0, 320.0, 240.0)
     with pytest.raises(DataFormatError, match="no such image file"):
         read_image(tmp_path / "nope.png")
+
+
+def test_decide_refuses_another_vocabulary_and_stored_paths(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db, imgs = _setup(tmp_path)  # made with the shipped vocabulary
+    train = tmp_path / "train"
+    train.mkdir()
+    for i in range(2):
+        _write(train / f"{i}.png", view(_scenes()[i]))
+    assert main(["vocab", "train", str(train), "--k", "3", "--L", "2", "--out", str(tmp_path)]) == 0
+    voc = tmp_path / "vocabulary.symvoc"
+    capsys.readouterr()
+    decide = ["places", "decide", "--db", str(db), "--place", "1", "--query", imgs[0]]
+    assert main([*decide, "--hfov", "60", "--vocabulary", str(voc)]) == 2
+    assert "were made with the shipped vocabulary, not" in capsys.readouterr().err
+    # a crafted database naming a file as its vocabulary: the path is never opened
+    con = sqlite3.connect(db)
+    con.execute("UPDATE meta SET value = '/etc/passwd' WHERE key = 'vocabulary'")
+    con.commit()
+    con.close()
+    assert main([*decide, "--hfov", "60"]) == 2
+    assert "never opens a path stored in the database" in capsys.readouterr().err
+    assert main([*decide, "--hfov", "60", "--vocabulary", str(voc)]) == 2
+    assert "were made with /etc/passwd, not" in capsys.readouterr().err

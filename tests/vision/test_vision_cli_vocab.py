@@ -24,17 +24,18 @@ def _folder(tmp_path: Path) -> Path:
 def test_train_info_convert_round_trip(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = _folder(tmp_path)
     (folder / "notes.png").write_text("not an image")  # skipped with a warning
-    out = tmp_path / "voc.symvoc"
-    args = ["vocab", "train", str(folder), "--k", "4", "--L", "2", "--out", str(out)]
+    args = ["vocab", "train", str(folder), "--k", "4", "--L", "2", "--out", str(tmp_path / "v1")]
     assert main([*args, "--seed", "3", "--weighting", "tf", "--scoring", "l2"]) == 0
     captured = capsys.readouterr()
     assert "skipped 1 unreadable" in captured.err
+    out = tmp_path / "v1" / "vocabulary.symvoc"  # --out is a folder
     voc = Vocabulary.load(out)
     assert (voc.k, voc.L, voc.weighting.name, voc.scoring.name) == (4, 2, "TF", "L2_NORM")
-    # same seed, same vocabulary
-    out2 = tmp_path / "voc2.symvoc"
-    assert main([*args[:-1], str(out2), "--seed", "3", "--weighting", "tf", "--scoring", "l2"]) == 0
-    assert Vocabulary.load(out2).equals(voc)
+    # same seed, same vocabulary (here as DBoW2 text)
+    v2 = tmp_path / "v2"
+    argv = [*args[:-1], str(v2), "--seed", "3", "--weighting", "tf", "--scoring", "l2"]
+    assert main([*argv, "--format", "dbow2"]) == 0
+    assert Vocabulary.load(v2 / "vocabulary.txt").equals(voc, weight_rtol=1e-12)
 
     assert main(["vocab", "info", str(out)]) == 0
     info = capsys.readouterr().out
@@ -45,6 +46,8 @@ def test_train_info_convert_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["vocab", "convert", str(out), str(txt)]) == 0
     assert txt.read_text().splitlines()[0].split() == ["4", "2", "1", "1"]
     back = tmp_path / "back.symvoc"
+    assert main(["vocab", "convert", str(back), str(back)]) == 2  # never writes its input
+    assert "never writes into its input" in capsys.readouterr().err
     assert main(["vocab", "convert", str(txt), str(back), "--compress"]) == 0
     assert Vocabulary.load(back).equals(voc, weight_rtol=1e-12)
     capsys.readouterr()
@@ -55,7 +58,7 @@ def test_train_info_convert_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_train_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    out = str(tmp_path / "v.symvoc")
+    out = str(tmp_path / "v")
     assert main(["vocab", "train", str(tmp_path / "missing"), "--out", out]) == 2
     assert "is not a directory" in capsys.readouterr().err
     empty = tmp_path / "empty"
@@ -68,15 +71,17 @@ def test_train_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     (bad / "b.jpg").write_text("nope")
     assert main(["vocab", "train", str(bad), "--out", out]) == 2
     assert "none of the 2 image file(s)" in capsys.readouterr().err
-    folder = _folder(tmp_path)
-    assert main(["vocab", "train", str(folder), "--out", str(tmp_path / "no" / "v.symvoc")]) == 2
-    assert "does not exist" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["vocab", "train", str(bad), "--k", "0"])
+    assert "--k: expected an integer >= 1, got 0" in capsys.readouterr().err
 
 
 def test_corrupt_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = _folder(tmp_path)
-    out = tmp_path / "voc.symvoc"
-    assert main(["vocab", "train", str(folder), "--k", "3", "--L", "2", "--out", str(out)]) == 0
+    assert (
+        main(["vocab", "train", str(folder), "--k", "3", "--L", "2", "--out", str(tmp_path)]) == 0
+    )
+    out = tmp_path / "vocabulary.symvoc"
     capsys.readouterr()
     trunc = tmp_path / "trunc.symvoc"
     trunc.write_bytes(out.read_bytes()[:200])

@@ -8,6 +8,7 @@ import sqlite3
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -199,6 +200,86 @@ def test_damaged_record_is_reported(tmp_path) -> None:  # type: ignore[no-untype
     con.close()
     with (
         VisualMap(path) as vm,
-        pytest.raises(DatabaseError, match="direction 2: damaged image record"),
+        pytest.raises(
+            DatabaseError,
+            match=r"direction 2: images\.descriptors: 2 bytes, expected \d+ \(damaged record\)",
+        ),
     ):
         vm.place(pid)
+
+
+_LOOSE = (
+    "CREATE TABLE old AS SELECT * FROM {t}; DROP TABLE {t}; CREATE TABLE {t} ({cols});"
+    " INSERT INTO {t} SELECT * FROM old; DROP TABLE old;"
+)
+_LOOSE_IMAGES = _LOOSE.format(
+    t="images",
+    cols="place_id INTEGER, direction INTEGER, heading REAL, width INTEGER, height INTEGER,"
+    " n_features INTEGER, bow_words BLOB, bow_values BLOB, keypoints BLOB, descriptors BLOB,"
+    " image_png BLOB",
+)
+_LOOSE_PLACES = _LOOSE.format(
+    t="places",
+    cols="id INTEGER PRIMARY KEY, kind TEXT, symmetry_order INTEGER, gv_distance REAL,"
+    " x REAL, y REAL, heading REAL, n_directions INTEGER, label TEXT, created REAL",
+)
+
+
+def _damaged(tmp_path, sql: str) -> Path:  # type: ignore[no-untyped-def]
+    path = tmp_path / "x.db"
+    with VisualMap(path) as vm:
+        _add(vm, 1)
+    con = sqlite3.connect(path)
+    con.executescript(sql)
+    con.commit()
+    con.close()
+    return path
+
+
+@pytest.mark.parametrize(
+    ("sql", "match"),
+    [
+        ("DROP TABLE images;", r"table 'images' is missing"),
+        (
+            _LOOSE_IMAGES + "UPDATE images SET bow_words = NULL;",
+            r"images\.bow_words: expected a BLOB, got NULL",
+        ),
+        ("UPDATE images SET keypoints = 'text';", r"images\.keypoints: expected a BLOB, got str"),
+        ("UPDATE images SET n_features = 'many';", r"images\.n_features: expected an integer"),
+        ("UPDATE images SET n_features = 1e12;", r"images\.n_features: expected an integer"),
+        ("UPDATE places SET gv_distance = 'far';", r"places\.gv_distance: expected a finite"),
+        (_LOOSE_PLACES + "UPDATE places SET kind = NULL;", r"places\.kind: expected text"),
+        (
+            "ALTER TABLE images RENAME COLUMN keypoints TO kp;",
+            r"column images\.keypoints is missing",
+        ),
+        (
+            "CREATE TABLE t2 AS SELECT * FROM meta; DROP TABLE meta;"
+            " CREATE TABLE meta (key TEXT, value BLOB);",
+            r"column meta\.value is declared BLOB, expected TEXT",
+        ),
+        ("UPDATE images SET image_png = x'89504e470d0a1a0a';", r"image_png: PNG without"),
+    ],
+)
+def test_damaged_databases_name_table_and_column(tmp_path, sql: str, match: str) -> None:  # type: ignore[no-untyped-def]
+    path = _damaged(tmp_path, sql)
+    with pytest.raises(DatabaseError, match=match), VisualMap(path, create=False) as vm:
+        vm.query(vm.place(vm.place_ids()[0]).images[0].bow)
+
+
+def test_opening_for_reading_never_writes(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    empty = tmp_path / "empty.db"
+    empty.write_bytes(b"")
+    for kwargs in ({"create": False}, {"readonly": True}):
+        with pytest.raises(DatabaseError, match="an empty database, not a symloc visual map"):
+            VisualMap(empty, **kwargs)
+        assert empty.read_bytes() == b""
+    path = tmp_path / "m.db"
+    with VisualMap(path) as vm:
+        _add(vm, 1)
+    before = path.read_bytes()
+    with VisualMap(path, readonly=True) as vm:
+        assert len(vm) == 1
+        with pytest.raises(DatabaseError, match="cannot write"):
+            vm.set_meta("x", "y")
+    assert path.read_bytes() == before

@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.localizer.types import Status
+from symloc.sim.rooms import Room
 
 from .scenario import AmclRun, Scenario, SymlocRun, build_scenario, run_plain_amcl, run_symloc
 
@@ -44,6 +45,8 @@ class DemoStory:
     matched_image: NDArray[np.uint8] | None
     match_label: str
     amcl_path: FloatArray | None = None
+    #: ``(xmin, xmax, ymin, ymax)`` [m] of the room's outline (the figure's view).
+    room_box: tuple[float, float, float, float] | None = None
 
 
 @dataclass
@@ -124,18 +127,30 @@ def _err(dpos: float, dth: float) -> str:
 
 
 def run_demo(
-    room: str = "square",
+    room: str | Room = "square",
     *,
     seed: int = 0,
     workdir: Path | None = None,
     textured: bool = True,
     amcl_duration: float = 45.0,
 ) -> DemoResult:
-    """Build the maps, kidnap the robot to a random pose, run symloc and plain AMCL."""
+    """Build the maps, kidnap the robot to a random pose, run symloc and plain AMCL.
+
+    ``room`` is a built-in room name or a ready :class:`~symloc.sim.rooms.Room` (a world
+    file's, :func:`symloc.sim.world_file.load_world_file`); a ready room is also explored
+    along its outline while mapping, so that SLAM sees all of it.
+    """
     rng = as_rng(seed)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    scen = build_scenario(room, textured=textured, rng=rng, workdir=workdir)
+    scen = build_scenario(
+        room,
+        textured=textured,
+        rng=rng,
+        workdir=workdir,
+        explore_laps=1.0 if isinstance(room, Room) else 0.0,
+    )
+    name = scen.room.name
     timings["maps"] = time.perf_counter() - t0
     start = scen.random_pose(rng)
     t0 = time.perf_counter()
@@ -155,7 +170,7 @@ def run_demo(
         matched = scen.store.stored_image(place.place_id, int(dec.direction or 0))
         query = srun.episode.images[-1] if srun.episode.images else query
         label = (
-            f"place {place.place_id}, direction {dec.direction} of {place.m}, "
+            f"place {place.place_id}, direction {int(dec.direction or 0) + 1} of {place.m}, "
             f"offset {math.degrees(dec.offset):+.1f} deg"
         )
     fin = srun.episode.final
@@ -167,12 +182,13 @@ def run_demo(
         after = np.asarray(tr.last.particles)  # type: ignore[attr-defined]
     story = DemoStory(
         title=(
-            f"symloc demo: {room} room in a {'textured' if textured else 'plain'} lab, seed {seed}"
+            f"symloc demo: {name} room in a {'textured' if textured else 'plain'} lab, seed {seed}"
             f" — plain AMCL {arun.outcome.grade}, symloc {srun.outcome.grade}"
         ),
         grid=scen.grid,
         room_center=np.asarray(scen.room.center),
         room_gv=float(scen.room.gv_distance),
+        room_box=_box(scen.room.boundary),
         kidnap_pose=np.asarray(start),
         amcl_particles=arun.particles,
         amcl_true_pose=arun.true_pose,
@@ -192,4 +208,10 @@ def run_demo(
         match_label=label,
         amcl_path=arun.path,
     )
-    return DemoResult(room, seed, scen, arun, srun, story, timings)
+    return DemoResult(name, seed, scen, arun, srun, story, timings)
+
+
+def _box(boundary: Any) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` [m] of an outline ``(V, 2)``."""
+    b = np.asarray(boundary, dtype=np.float64).reshape(-1, 2)
+    return (float(b[:, 0].min()), float(b[:, 0].max()), float(b[:, 1].min()), float(b[:, 1].max()))

@@ -207,10 +207,7 @@ class Scenario:
     ) -> Localizer:
         """symloc's localizer on this scenario's maps (AMCL with ``amcl_params``)."""
         amcl = Amcl(self.grid, self.amcl_params, rng)
-        p = self.amcl_params
-        gate = ClaimGate(
-            surface_distance_field(self.grid), (p.alpha1, p.alpha2, p.alpha3, p.alpha4)
-        )
+        gate = ClaimGate(surface_distance_field(self.grid))
         return Localizer(
             AmclTracker(amcl),
             self.judge,

@@ -288,7 +288,7 @@ def record_sim_run(
                 bag.scan_topic, "sensor_msgs/msg/LaserScan", scan_to_fields(sim.scan()), t
             )
             last = core.on_scan(scan_msg)
-            if last is None:
+            if not last.used:
                 raise ConfigurationError(f"the node dropped a simulated scan: {dict(core.dropped)}")
             est = last.estimate
             trajectory.append(TrajectoryPoint(t, est.status.value, est.pose))

@@ -1,13 +1,14 @@
-"""Helpers every experiment shares: printing the configuration, writing JSON."""
+"""Helpers every experiment shares: the common options, printing the configuration, JSON."""
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+
+from symloc.cli import options
 
 __all__ = ["CARMEN_LOGS", "add_common_arguments", "find_carmen_dir", "print_config", "write_json"]
 
@@ -15,13 +16,13 @@ __all__ = ["CARMEN_LOGS", "add_common_arguments", "find_carmen_dir", "print_conf
 CARMEN_LOGS = ("intel", "aces", "freiburg-079")
 
 
-def add_common_arguments(parser: Any, *, default_seed: int = 0) -> None:
-    """Add ``--seed``, ``--json`` and ``--out`` (figure directory) to an experiment parser."""
-    parser.add_argument("--seed", type=int, default=default_seed, help="random seed (printed)")
-    parser.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
-    parser.add_argument(
-        "--out", type=Path, default=Path("."), metavar="DIR", help="directory for figures"
-    )
+def add_common_arguments(parser: Any, name: str) -> None:
+    """Add ``--seed``, ``--json`` and ``--out`` (the folder for figures, default
+    ``symloc-experiment-<name>``) to the parser of experiment ``name``
+    (:mod:`symloc.cli.options`)."""
+    options.add_seed(parser)
+    options.add_json(parser)
+    options.add_out(parser, f"experiment {name}", what="figures")
 
 
 def print_config(name: str, config: Mapping[str, Any]) -> None:
@@ -33,11 +34,10 @@ def print_config(name: str, config: Mapping[str, Any]) -> None:
 
 
 def write_json(path: Path | None, data: Mapping[str, Any]) -> None:
-    """Write ``data`` as indented JSON to ``path`` (creating folders); no-op for None."""
+    """Write ``data`` as standard JSON (``null`` for NaN) to ``path``; no-op for None."""
     if path is None:
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=2, default=float) + "\n")
+    options.write_json(path, data)
     print(f"wrote {path}")
 
 

@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.cli import options
 from symloc.experiments._common import CARMEN_LOGS as LOG_NAMES
 from symloc.experiments._common import (
     add_common_arguments,
@@ -453,24 +454,36 @@ def register(subparsers: Any) -> None:
         "amcl-carmen",
         help="AMCL tracking and global localization on the CARMEN logs (map from corrected poses)",
     )
-    add_common_arguments(parser)
+    add_common_arguments(parser, "amcl-carmen")
     parser.add_argument("--logs", nargs="+", default=list(LOG_NAMES), help="log names")
     parser.add_argument("--data", type=Path, default=None, help="folder with the CARMEN logs")
-    parser.add_argument("--starts", type=int, default=20, help="global-localization starts")
-    parser.add_argument("--window", type=int, default=100, help="scans per global start")
     parser.add_argument(
-        "--odom-alpha", type=float, default=0.01, help="odometry noise alpha1..4 (10%% std)"
+        "--starts", type=options.positive_int, default=20, help="global-localization starts"
+    )
+    parser.add_argument(
+        "--window", type=options.positive_int, default=100, help="scans per global start"
+    )
+    parser.add_argument(
+        "--odom-alpha",
+        type=options.nonnegative_float,
+        default=0.01,
+        help="odometry noise alpha1..4 (10%% std)",
     )
     parser.add_argument(
         "--laser-model",
         default="likelihood_field_prob",
         choices=["likelihood_field", "likelihood_field_prob", "beam"],
+        help="nav2 laser_model_type (default likelihood_field_prob)",
     )
-    parser.add_argument("--tracking-particles", type=int, default=2000, help="max_particles")
-    parser.add_argument("--global-particles", type=int, default=20000, help="max_particles")
+    parser.add_argument(
+        "--tracking-particles", type=options.positive_int, default=2000, help="max_particles"
+    )
+    parser.add_argument(
+        "--global-particles", type=options.positive_int, default=20000, help="max_particles"
+    )
     parser.add_argument(
         "--global-exponent",
-        type=float,
+        type=options.positive_float,
         default=1.0,
         help="laser_likelihood_exponent for global localization (1 = nav2's likelihood)",
     )

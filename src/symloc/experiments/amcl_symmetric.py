@@ -39,7 +39,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.sim.rooms import ROOM_NAMES
 
 __all__ = ["TrialResult", "classify", "register", "run", "run_room", "symmetric_images"]
 
@@ -303,25 +305,34 @@ def register(subparsers: Any) -> None:
         "amcl-symmetric",
         help="plain AMCL global localization in symmetric rooms (paper Figure 8, measured)",
     )
-    add_common_arguments(parser)
-    parser.add_argument("--trials", type=int, default=200, help="trials per room (default 200)")
+    add_common_arguments(parser, "amcl-symmetric")
+    options.add_trials(parser, default=200, what="trials per room")
+    options.add_rooms(parser, rooms=DEFAULT_ROOMS, choices=ROOM_NAMES)
     parser.add_argument(
-        "--rooms", nargs="+", default=list(DEFAULT_ROOMS), help="room names (sim.build_room)"
+        "--gv", type=options.positive_float, default=2.5, help="room G-V distance [m]"
     )
-    parser.add_argument("--gv", type=float, default=2.5, help="room G-V distance [m]")
-    parser.add_argument("--duration", type=float, default=45.0, help="path length [s] at 0.3 m/s")
-    parser.add_argument("--lidar", default="paper_15m", help="lidar preset (sim.lidar.PRESETS)")
-    parser.add_argument("--max-particles", type=int, default=2000, help="nav2 max_particles")
-    parser.add_argument("--min-particles", type=int, default=500, help="nav2 min_particles")
+    parser.add_argument(
+        "--duration", type=options.positive_float, default=45.0, help="path length [s] at 0.3 m/s"
+    )
+    options.add_lidar(parser, help="simulated lidar (the paper's Figure 8: paper_15m)")
+    parser.add_argument(
+        "--max-particles", type=options.positive_int, default=2000, help="nav2 max_particles"
+    )
+    parser.add_argument(
+        "--min-particles", type=options.positive_int, default=500, help="nav2 min_particles"
+    )
     parser.add_argument(
         "--params", default=None, metavar="YAML", help="nav2 params file (amcl block) to use"
     )
     parser.add_argument(
-        "--odom-alpha", type=float, default=0.05, help="robot odometry noise alpha1..4"
+        "--odom-alpha",
+        type=options.nonnegative_float,
+        default=0.05,
+        help="robot odometry noise alpha1..4",
     )
     parser.add_argument(
         "--amcl-alpha",
-        type=float,
+        type=options.nonnegative_float,
         default=None,
         help="AMCL alpha1..4 (default: equal to --odom-alpha, i.e. matched to the robot)",
     )
@@ -356,7 +367,7 @@ def run(args: argparse.Namespace) -> int:
         {
             "seed": args.seed,
             "trials": args.trials,
-            "rooms": ", ".join(args.rooms),
+            "rooms": ", ".join(options.room_names(args.rooms, DEFAULT_ROOMS)),
             "gv_distance_m": args.gv,
             "path": f"{args.duration:g} s random drive at 0.3 m/s, scans at 2 Hz",
             "lidar": args.lidar,
@@ -372,7 +383,7 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     summaries = []
     examples = {}
-    for name in args.rooms:
+    for name in options.room_names(args.rooms, DEFAULT_ROOMS):
         summary, trials, grid = run_room(
             name,
             args.trials,

@@ -4,8 +4,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = ["register", "run"]
@@ -16,9 +18,11 @@ def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "keyframes", help="storage of M=4 images per place vs a keyframe every 5 deg (Figure 14)"
     )
-    add_common_arguments(parser)
-    parser.add_argument("--m", type=int, default=4, help="images per place (default 4)")
-    parser.add_argument("--step-deg", type=float, default=5.0, help="keyframe step [deg]")
+    add_common_arguments(parser, "keyframes")
+    parser.add_argument(
+        "--m", type=options.positive_int, default=4, help="images per place (default 4)"
+    )
+    options.add_angle(parser, "--step-deg", default=5.0, help="keyframe step", dest="step")
     parser.set_defaults(func=run)
 
 
@@ -30,12 +34,12 @@ def run(args: argparse.Namespace) -> int:
         {
             "seed": args.seed,
             "M": args.m,
-            "keyframe step": f"{args.step_deg:g} deg",
+            "keyframe step": f"{math.degrees(args.step):g} deg",
             "scene": "one full turn at the centre of a 3 m square in the textured lab, 640x480",
             "stored per image": "ORB keypoints + descriptors + BoW vector (+ PNG image)",
         },
     )
-    results = run_keyframes(m=args.m, step_deg=args.step_deg, rng=args.seed)
+    results = run_keyframes(m=args.m, step_deg=math.degrees(args.step), rng=args.seed)
     print(
         f"\n{'policy':<26}{'images':>8}{'features':>10}{'bytes (features)':>18}{'bytes (+PNG)':>14}"
     )

@@ -8,6 +8,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = ["ROOMS", "register", "run"]
@@ -26,6 +27,8 @@ ROOMS = (
     ("hallway_40m", True),
     ("square", False),
 )
+#: ``--rooms`` names of :data:`ROOMS`.
+ROOM_KEYS = tuple(r if textured else f"{r}-untextured" for r, textured in ROOMS)
 
 
 def register(subparsers: Any) -> None:
@@ -35,23 +38,18 @@ def register(subparsers: Any) -> None:
         help="kidnapped-robot trials per room: plain AMCL vs symloc (correct / confident wrong "
         "/ undetermined)",
     )
-    add_common_arguments(parser)
-    parser.add_argument("--trials", type=int, default=100, help="trials per room (default 100)")
-    parser.add_argument(
-        "--room",
-        action="append",
-        default=None,
-        help="only this room (repeatable; 'square-untextured' for the plain lab)",
+    add_common_arguments(parser, "localization")
+    options.add_trials(parser, default=100, what="trials per room")
+    options.add_rooms(
+        parser, rooms=ROOM_KEYS, help="rooms ('square-untextured': the square in a plain lab)"
     )
     parser.add_argument(
         "--amcl-duration",
-        type=float,
+        type=options.positive_float,
         default=45.0,
         help="plain AMCL drive time [s] (default 45, as amcl-symmetric)",
     )
-    parser.add_argument(
-        "--lidar", default="rplidar_a2", help="lidar preset (default rplidar_a2, the paper's)"
-    )
+    options.add_lidar(parser)
     parser.add_argument(
         "--map",
         choices=("slam", "raster"),
@@ -61,11 +59,9 @@ def register(subparsers: Any) -> None:
     parser.set_defaults(func=run)
 
 
-def _selected(names: list[str] | None) -> list[tuple[str, bool]]:
-    if not names:
-        return list(ROOMS)
+def _selected(names: list[str]) -> list[tuple[str, bool]]:
     out = []
-    for n in names:
+    for n in options.room_names(names, ROOM_KEYS):
         if n.endswith("-untextured"):
             out.append((n.removesuffix("-untextured"), False))
         else:
@@ -79,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     from symloc.figures.demo import localization_figure
     from symloc.sim.lidar import PRESETS
 
-    rooms = _selected(args.room)
+    rooms = _selected(args.rooms)
     print_config(
         "localization",
         {

@@ -8,6 +8,7 @@ import argparse
 import math
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = ["register", "run"]
@@ -21,9 +22,9 @@ def register(subparsers: Any) -> None:
         "photos",
         help="orientation decisions on real photos (re-captures, near-duplicates, featureless)",
     )
-    add_common_arguments(parser)
-    parser.add_argument("--trials", type=int, default=25, help="queries per direction and case")
-    parser.add_argument("--max-yaw", type=float, default=5.0, help="largest camera yaw [deg]")
+    add_common_arguments(parser, "photos")
+    options.add_trials(parser, default=25, what="queries per direction and case")
+    options.add_angle(parser, "--max-yaw", default=5.0, help="largest camera yaw")
     parser.add_argument(
         "--photos",
         nargs=4,
@@ -32,7 +33,12 @@ def register(subparsers: Any) -> None:
         help="four skimage.data photos as the four directions",
     )
     parser.add_argument(
-        "--conditions", nargs="+", default=list(CONDITIONS), choices=CONDITIONS, metavar="COND"
+        "--conditions",
+        nargs="+",
+        default=list(CONDITIONS),
+        choices=CONDITIONS,
+        metavar="COND",
+        help=f"re-capture conditions (default all: {', '.join(CONDITIONS)})",
     )
     parser.add_argument("--vocabulary", default=None, help="vocabulary file (default: shipped)")
     parser.add_argument(
@@ -62,11 +68,11 @@ def run(args: argparse.Namespace) -> int:
         "photos",
         {
             "seed": args.seed,
-            "photos (directions 0..3)": ", ".join(args.photos),
+            "photos (directions 1..4)": ", ".join(args.photos),
             "vocabulary": args.vocabulary or "shipped default (not trained on these photos)",
             "camera": "640x480, f=500 px (hfov 65.2 deg)",
             "trials per direction and case": args.trials,
-            "max yaw": f"{args.max_yaw:g} deg",
+            "max yaw": f"{math.degrees(args.max_yaw):g} deg",
             "conditions": ", ".join(args.conditions),
             "decision": "BoW first, no geometric fallback" if args.bow_only else "BoW + geometry",
             "heading offset from": args.offset_from,
@@ -76,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         voc,
         photos=args.photos,
         trials_per_direction=args.trials,
-        max_yaw_deg=args.max_yaw,
+        max_yaw_deg=math.degrees(args.max_yaw),
         conditions=args.conditions,
         config=cfg,
         rng=args.seed,
@@ -110,7 +116,9 @@ def run(args: argparse.Namespace) -> int:
     from symloc.figures.vision import photos_figure
 
     path = photos_figure(
-        res, args.out / "photos.png", example_views(args.photos, args.seed, args.max_yaw)
+        res,
+        args.out / "photos.png",
+        example_views(args.photos, args.seed, math.degrees(args.max_yaw)),
     )
     print(f"wrote {path}")
     write_json(

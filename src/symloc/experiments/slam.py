@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import (
     CARMEN_LOGS,
     add_common_arguments,
@@ -44,7 +45,7 @@ def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "slam", help="laser SLAM: simulated rooms and the CARMEN logs (ATE, RPE, loops, speed)"
     )
-    add_common_arguments(parser)
+    add_common_arguments(parser, "slam")
     parser.add_argument(
         "--worlds", nargs="*", default=list(SIM_WORLDS), help="simulated worlds (none: skip)"
     )
@@ -57,17 +58,21 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--data", type=Path, default=None, help="folder with the CARMEN logs")
     parser.add_argument(
         "--alphas",
-        type=float,
+        type=options.nonnegative_float,
         nargs=4,
         default=list(DEFAULT_ALPHAS),
         metavar=("A1", "A2", "A3", "A4"),
         help="odometry noise alpha1..alpha4",
     )
-    parser.add_argument("--max-scans", type=int, default=None, help="use only the first N scans")
-    parser.add_argument("--laps", type=float, default=1.3, help="loops of the simulated run")
+    parser.add_argument(
+        "--max-scans", type=options.positive_int, default=None, help="use only the first N scans"
+    )
+    parser.add_argument(
+        "--laps", type=options.positive_float, default=1.3, help="loops of the simulated run"
+    )
     parser.add_argument(
         "--loop-every",
-        type=int,
+        type=options.positive_int,
         default=None,
         help="search loop closures every N graph nodes (default: SlamParams, every node, sampled)",
     )
@@ -79,13 +84,13 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--loop-resample",
-        type=float,
+        type=options.nonnegative_float,
         default=None,
         help="travel [m] before a submap is searched for loops again (default: SlamParams)",
     )
     parser.add_argument(
         "--loop-constrained",
-        type=float,
+        type=options.nonnegative_float,
         default=None,
         help="travel [m] before a submap with a found loop is searched again (default: SlamParams)",
     )

@@ -35,7 +35,8 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError
+from symloc.cli import options
+from symloc.errors import ConfigurationError, SymlocError
 from symloc.experiments._common import (
     CARMEN_LOGS,
     add_common_arguments,
@@ -139,8 +140,8 @@ def run_symmetry_carmen(
     ------
     ConfigurationError
         For a bad stride, noise, or unknown log name.
-    FileNotFoundError
-        When a log file is missing.
+    DataFormatError
+        When a log file is missing or malformed.
     """
     from symloc.io.carmen import read_carmen
     from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
@@ -305,7 +306,7 @@ def _run(args: argparse.Namespace) -> int:
         result = run_symmetry_carmen(
             Path(data), args.logs, range_sigma=args.range_sigma, stride=args.stride
         )
-    except (ConfigurationError, FileNotFoundError) as err:
+    except SymlocError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     kinds = ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")
@@ -361,22 +362,27 @@ def register(subparsers: Any) -> None:
         "symmetry-carmen",
         help="symmetry judgement on every scan of the real CARMEN logs (180-degree scans)",
     )
-    add_common_arguments(parser)
+    add_common_arguments(parser, "symmetry-carmen")
     parser.add_argument(
         "--data", type=Path, default=None, metavar="DIR", help="folder of the CARMEN logs"
     )
     parser.add_argument(
         "--logs", nargs="+", choices=CARMEN_LOGS, default=list(CARMEN_LOGS), help="logs to judge"
     )
-    parser.add_argument("--stride", type=int, default=1, help="judge every N-th scan (default 1)")
+    parser.add_argument(
+        "--stride", type=options.positive_int, default=1, help="judge every N-th scan (default 1)"
+    )
     parser.add_argument(
         "--range-sigma",
-        type=float,
+        type=options.positive_float,
         default=0.01,
         help="range noise [m] the tolerances follow from (default 0.01, SICK LMS cm mode)",
     )
     parser.add_argument(
-        "--examples", type=int, default=6, help="symmetric scans per log in the figure"
+        "--examples",
+        type=options.positive_int,
+        default=6,
+        help="symmetric scans per log in the figure",
     )
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figures")
     parser.set_defaults(func=_run)

@@ -34,6 +34,7 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
+from symloc.cli import options
 from symloc.errors import ConfigurationError, WorldError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import transform_points
@@ -396,11 +397,7 @@ def format_false_positives(fp: dict[str, Any]) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    if args.positions < 1:
-        raise ConfigurationError(f"--positions: expected an integer >= 1, got {args.positions}")
-    if args.fp_per_room < 1:
-        raise ConfigurationError(f"--fp-per-room: expected an integer >= 1, got {args.fp_per_room}")
-    sensors = tuple(args.sensors)
+    sensors = tuple(sorted(options.lidar_names(args.lidar), key=SENSORS.index))
     config = {
         "seed": args.seed,
         "positions": args.positions,
@@ -430,7 +427,8 @@ def _run(args: argparse.Namespace) -> int:
         from symloc.figures.symmetry import plot_table1_positions
 
         path = Path(args.out) / "table1_positions.png"
-        plot_table1_positions(result["positions"], path, sensor="paper_15m")
+        shown = "paper_15m" if "paper_15m" in sensors else sensors[0]
+        plot_table1_positions(result["positions"], path, sensor=shown)
         print(f"wrote {path}")
     return 0
 
@@ -441,20 +439,19 @@ def register(subparsers: Any) -> None:
         "table1",
         help="Table 1: symmetry recognition in regular rooms (paper Sec. 5.1), plus false positives",
     )
-    add_common_arguments(parser)
+    add_common_arguments(parser, "table1")
     parser.add_argument(
-        "--positions", type=int, default=50, help="robot positions per room (paper: 50)"
+        "--positions",
+        type=options.positive_int,
+        default=50,
+        help="robot positions per room, an integer >= 1 (paper: 50)",
     )
-    parser.add_argument(
-        "--sensors",
-        nargs="+",
-        choices=SENSORS,
-        default=list(SENSORS),
-        help="lidar presets to run (default: all three)",
+    options.add_lidars(
+        parser, help="simulated lidars (the paper's Table 1: paper_15m; all three: all)"
     )
     parser.add_argument(
         "--fp-per-room",
-        type=int,
+        type=options.positive_int,
         default=12,
         help=f"scans per asymmetric room ({len(FP_ROOMS)} rooms; default 12 -> 204 scans)",
     )

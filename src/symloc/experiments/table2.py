@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = ["register", "run"]
@@ -18,15 +19,17 @@ def register(subparsers: Any) -> None:
         "table2",
         help="Algorithm 2: share of runs ending within 5/10/15 mm of the centre (paper Table 2)",
     )
-    add_common_arguments(parser)
-    parser.add_argument("--positions", type=int, default=50, help="start positions (default 50)")
-    parser.add_argument("--side", type=float, default=3.0, help="square side [m] (paper: 3)")
+    add_common_arguments(parser, "table2")
     parser.add_argument(
-        "--preset",
-        action="append",
-        default=None,
-        help="lidar preset name (repeatable; default rplidar_a2, the paper's sensor, and lds01)",
+        "--positions",
+        type=options.positive_int,
+        default=50,
+        help="start positions, an integer >= 1 (default 50)",
     )
+    parser.add_argument(
+        "--side", type=options.positive_float, default=3.0, help="square side [m] (paper: 3)"
+    )
+    options.add_lidars(parser, help="simulated lidars (the README's table: rplidar_a2 lds01)")
     parser.set_defaults(func=run)
 
 
@@ -34,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from symloc.bench.table2 import run_table2
     from symloc.sim.lidar import PRESETS
 
-    names = args.preset or ["rplidar_a2", "lds01"]
+    names = options.lidar_names(args.lidar)
     presets = [PRESETS[n] for n in names]
     print_config(
         "table2",

@@ -7,6 +7,7 @@ import argparse
 import math
 from typing import Any
 
+from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = ["register", "run"]
@@ -24,11 +25,17 @@ def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "table3", help="BoW similarity matrix and orientation decisions at a square's centre"
     )
-    add_common_arguments(parser)
-    parser.add_argument("--trials", type=int, default=50, help="trials per direction (default 50)")
-    parser.add_argument("--side", type=float, default=3.0, help="square side [m] (paper: 3)")
-    parser.add_argument("--radius-mm", type=float, default=15.0, help="position spread [mm]")
-    parser.add_argument("--heading-deg", type=float, default=5.0, help="max heading error [deg]")
+    add_common_arguments(parser, "table3")
+    options.add_trials(parser, default=50, what="trials per direction")
+    parser.add_argument(
+        "--side", type=options.positive_float, default=3.0, help="square side [m] (paper: 3)"
+    )
+    parser.add_argument(
+        "--radius-mm", type=options.positive_float, default=15.0, help="position spread [mm]"
+    )
+    options.add_angle(
+        parser, "--heading-deg", default=5.0, help="largest heading error", dest="max_heading"
+    )
     parser.add_argument("--vocabulary", default=None, help="vocabulary file (default: shipped)")
     parser.set_defaults(func=run)
 
@@ -44,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
             "seed": args.seed,
             "trials per direction": args.trials,
             "room": f"square {args.side:g} m inside a 12-segment lab (textured, then untextured)",
-            "robot spread": f"uniform in a {args.radius_mm:g} mm disc, heading +-{args.heading_deg:g} deg",
+            "robot spread": f"uniform in a {args.radius_mm:g} mm disc, heading +-{math.degrees(args.max_heading):g} deg",
             "vocabulary": args.vocabulary or "shipped default (k=10, L=5, TF-IDF, L1)",
         },
     )
@@ -52,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         trials=args.trials,
         side=args.side,
         radius=args.radius_mm / 1000.0,
-        max_heading_error=math.radians(args.heading_deg),
+        max_heading_error=args.max_heading,
         vocabulary=voc,
         rng=args.seed,
     )

@@ -62,84 +62,128 @@ def table2_figure(results: Sequence[Any], path: Path) -> Path:
     return save_figure(fig, path, dpi=110)
 
 
+def _view(story: Any) -> tuple[float, float, float, float]:
+    """The map panels' limits [m]: the room's outline with a margin (a square around the
+    centre when the outline is unknown)."""
+    box = getattr(story, "room_box", None)
+    if box is None:
+        x0, y0 = story.room_center
+        r = story.room_gv * 1.25
+        return (x0 - r, x0 + r, y0 - r, y0 + r)
+    xmin, xmax, ymin, ymax = box
+    m = 0.15 * max(xmax - xmin, ymax - ymin, 1.0)
+    m = min(m, 1.0 + 0.1 * min(xmax - xmin, ymax - ymin))
+    return (xmin - m, xmax + m, ymin - m, ymax + m)
+
+
 def demo_figure(story: Any, path: Path) -> Path:
-    """The demo's picture: map, particles before/after, path to the centre, query vs stored."""
+    """The demo's picture: map, particles before/after, path to the centre, query vs stored.
+
+    Map panels show the room (axes in metres, each with a legend); a long room (a corridor
+    more than three times longer than wide) gets one full-width row per panel, so it is not
+    drawn as a thin line in a blank square.
+    """
     plt = _plt()
-    fig = plt.figure(figsize=(15, 8.5))
-    gs = fig.add_gridspec(2, 4)
+    view = _view(story)
+    width, height = view[1] - view[0], view[3] - view[2]
+    long_room = max(width, height) > 3.0 * min(width, height)
+    images = story.query_image is not None or story.matched_image is not None
+    if long_room:
+        # one full-width row per map panel, as tall as the room's outline needs
+        row = 0.7 + 13.5 * min(width, height) / max(width, height)
+        rows = [row] * 4 + ([4.0] if images else [])
+        fig = plt.figure(figsize=(15, sum(rows) + 0.8))
+        gs = fig.add_gridspec(len(rows), 2, height_ratios=rows)
+        slots = [gs[0, :], gs[1, :], gs[2, :], gs[3, :]]
+        if images:
+            slots += [gs[4, 0], gs[4, 1]]
+    else:
+        fig = plt.figure(figsize=(15, 8.5))
+        gs = fig.add_gridspec(2, 4)
+        slots = [gs[0, 0], gs[0, 1], gs[0, 2], gs[0, 3], gs[1, 0:2], gs[1, 2:4]]
     grid = story.grid
     ext = grid.extent()
     img = np.where(grid.data < 0, 0.75, 1.0 - grid.data / 100.0)
+    arrow_len = 0.08 * min(max(width, height), 6.0)
 
     def map_axes(ax: Any, title: str) -> None:
         ax.imshow(img, cmap="gray", origin="lower", extent=ext, vmin=0, vmax=1)
         ax.set_title(title, fontsize=10)
-        x0, y0 = story.room_center
-        r = story.room_gv * 1.25
-        ax.set_xlim(x0 - r, x0 + r)
-        ax.set_ylim(y0 - r, y0 + r)
+        ax.set_xlim(view[0], view[1])
+        ax.set_ylim(view[2], view[3])
         ax.set_aspect("equal")
+        ax.set_xlabel("x [m]", fontsize=8)
+        ax.set_ylabel("y [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
 
     def arrow(ax: Any, pose: Any, color: str, label: str) -> None:
         ax.arrow(
             pose[0],
             pose[1],
-            0.35 * np.cos(pose[2]),
-            0.35 * np.sin(pose[2]),
-            width=0.03,
+            arrow_len * np.cos(pose[2]),
+            arrow_len * np.sin(pose[2]),
+            width=0.085 * arrow_len,
             color=color,
             length_includes_head=True,
-            label=label,
+            label=label or None,
         )
 
-    ax = fig.add_subplot(gs[0, 0])
+    def legend(ax: Any) -> None:
+        ax.legend(fontsize=7, loc="lower left", markerscale=6, framealpha=0.85)
+
+    ax = fig.add_subplot(slots[0])
     map_axes(ax, "map, kidnapped robot")
     arrow(ax, story.kidnap_pose, "g", "true pose")
-    ax.legend(fontsize=7, loc="lower left")
+    legend(ax)
 
-    ax = fig.add_subplot(gs[0, 1])
+    ax = fig.add_subplot(slots[1])
     map_axes(ax, f"plain AMCL: {story.amcl_summary}")
     p = story.amcl_particles
     apath = getattr(story, "amcl_path", None)
     if apath is not None and len(apath) > 1:
         ax.plot(apath[:, 0], apath[:, 1], color="tab:olive", lw=0.6, alpha=0.7, label="drive")
-    ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3)
+    ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3, label="AMCL particles")
     arrow(ax, story.amcl_true_pose, "g", "true pose")
     if story.amcl_estimate is not None:
         arrow(ax, story.amcl_estimate, "r", "AMCL estimate")
-    ax.legend(fontsize=7, loc="lower left")
+    legend(ax)
 
-    ax = fig.add_subplot(gs[0, 2])
+    ax = fig.add_subplot(slots[2])
     map_axes(ax, "symloc: k candidates + AMCL at the centre")
     p = story.particles_before
     if p is not None:
-        ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3)
-    for h in story.candidates:
-        arrow(ax, h, "m", "")
+        ax.scatter(
+            p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3, label="AMCL particles at the centre"
+        )
+    k = len(story.candidates)
+    for i, h in enumerate(story.candidates):
+        arrow(ax, h, "m", f"the {k} symmetric candidates" if i == 0 else "")
     arrow(ax, story.kidnap_pose, "g", "true pose")
+    legend(ax)
 
-    ax = fig.add_subplot(gs[0, 3])
+    ax = fig.add_subplot(slots[3])
     map_axes(ax, f"symloc: path, final ({story.symloc_summary})")
     path_xy = np.asarray(story.path)
     ax.plot(path_xy[:, 0], path_xy[:, 1], "g-", lw=1.5, label="true path")
     p = story.particles_after
     if p is not None:
-        ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3)
+        ax.scatter(p[:, 0], p[:, 1], s=1, c="tab:blue", alpha=0.3, label="AMCL particles")
     if story.final_pose is not None:
         arrow(ax, story.final_pose, "r", "symloc pose")
     arrow(ax, path_xy[-1], "g", "true pose")
-    ax.legend(fontsize=7, loc="lower left")
+    legend(ax)
 
-    ax = fig.add_subplot(gs[1, 0:2])
-    if story.query_image is not None:
-        ax.imshow(story.query_image)
-    ax.set_title("query image at the centre", fontsize=10)
-    ax.axis("off")
-    ax = fig.add_subplot(gs[1, 2:4])
-    if story.matched_image is not None:
-        ax.imshow(story.matched_image)
-    ax.set_title(f"matched stored image: {story.match_label}", fontsize=10)
-    ax.axis("off")
+    if len(slots) > 4:
+        ax = fig.add_subplot(slots[4])
+        if story.query_image is not None:
+            ax.imshow(story.query_image)
+        ax.set_title("query image at the centre", fontsize=10)
+        ax.axis("off")
+        ax = fig.add_subplot(slots[5])
+        if story.matched_image is not None:
+            ax.imshow(story.matched_image)
+        ax.set_title(f"matched stored image: {story.match_label}", fontsize=10)
+        ax.axis("off")
     fig.suptitle(story.title)
     fig.tight_layout()
     return save_figure(fig, path, dpi=72)

@@ -16,6 +16,12 @@ channels over 255 (in trinary mode an alpha channel is averaged in too); its occ
 
 The image's top row is the map's last row (row 0 of the grid is at the origin).
 
+Bounds, checked before anything is allocated: ``resolution`` within
+:data:`~symloc.grid.occupancy_grid.MIN_RESOLUTION` .. ``MAX_RESOLUTION``, ``origin`` within
+``MAX_ORIGIN``; the image's size is read from its header (:mod:`symloc.image_header`: PGM, PNG,
+BMP, JPEG, TIFF) and refused above ``max_pixels`` (default :data:`MAX_MAP_PIXELS`) before it is
+decoded; the conversion to occupancy works in blocks of rows, so its temporaries stay small.
+
 Saving, as nav2's ``map_saver``: trinary writes 254 (free, ``<= rint(100 free_thresh)``),
 0 (occupied, ``>= rint(100 occupied_thresh)``) and 205 (unknown); scale writes
 ``255 (100 - v) / 100`` with unknown cells transparent (RGBA PNG); raw writes ``v`` and
@@ -25,6 +31,7 @@ Saving, as nav2's ``map_saver``: trinary writes 254 (free, ``<= rint(100 free_th
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,11 +41,13 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from symloc.errors import MapFileError
-from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.errors import DataFormatError, MapFileError
+from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
+from symloc.image_header import check_image_size, image_header
 
 __all__ = [
     "MAP_MODES",
+    "MAX_MAP_PIXELS",
     "MapMetadata",
     "grid_to_image",
     "image_to_grid",
@@ -48,6 +57,10 @@ __all__ = [
 ]
 
 MAP_MODES = ("trinary", "scale", "raw")
+#: Default bound on a map image's pixels (64 Mi: 8192 x 8192 cells, 410 m square at 5 cm).
+MAX_MAP_PIXELS = 64 * 2**20
+_BLOCK_PIXELS = 1 << 20  # pixels converted at a time by image_to_grid
+_MAX_YAML_BYTES = 1 << 20
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,13 +96,28 @@ class MapMetadata:
     height: int | None = None
 
 
+_FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+
+
+def _as_number(value: Any) -> float | None:
+    """A YAML number; PyYAML (YAML 1.1) reads ``1e-3`` as a string, yaml-cpp as a number."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    if isinstance(value, str) and _FLOAT.fullmatch(value.strip()):
+        return float(value)
+    return None
+
+
 def _number(doc: dict[str, Any], key: str, path: Path) -> float:
     if key not in doc:
         raise MapFileError(f"{path}: missing required field '{key}'")
     value = doc[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    out_or_none = _as_number(value)
+    if out_or_none is None:
         raise MapFileError(f"{path}: field '{key}' must be a number, got {value!r}")
-    out = float(value)
+    out = out_or_none
     if not math.isfinite(out):
         raise MapFileError(f"{path}: field '{key}' must be finite, got {value!r}")
     return out
@@ -118,9 +146,16 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     """
     p = Path(path)
     try:
+        if p.stat().st_size > _MAX_YAML_BYTES:
+            raise MapFileError(
+                f"{p}: {p.stat().st_size:,} bytes; a map YAML is a few lines (at most"
+                f" {_MAX_YAML_BYTES:,} bytes read)"
+            )
         text = p.read_text()
     except OSError as err:
         raise MapFileError(f"{p}: cannot read map YAML ({err.strerror})") from err
+    except UnicodeDecodeError as err:
+        raise MapFileError(f"{p}: not a text file (byte {err.start} is not UTF-8)") from err
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as err:
@@ -133,19 +168,27 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     if not isinstance(image, str) or not image.strip():
         raise MapFileError(f"{p}: field 'image' must be a non-empty file name, got {image!r}")
     resolution = _number(doc, "resolution", p)
-    if resolution <= 0:
-        raise MapFileError(f"{p}: field 'resolution' must be > 0 m/pixel, got {resolution}")
+    if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
+        raise MapFileError(
+            f"{p}: field 'resolution' must be {MIN_RESOLUTION:g}..{MAX_RESOLUTION:g} m/pixel,"
+            f" got {resolution}"
+        )
     if "origin" not in doc:
         raise MapFileError(f"{p}: missing required field 'origin'")
     origin = doc["origin"]
+    values = [_as_number(v) for v in origin] if isinstance(origin, (list, tuple)) else []
     if (
-        not isinstance(origin, (list, tuple))
-        or len(origin) != 3
-        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in origin)
-        or not all(math.isfinite(float(v)) for v in origin)
+        len(values) != 3
+        or any(v is None for v in values)
+        or not all(math.isfinite(v) for v in values if v is not None)
     ):
         raise MapFileError(
             f"{p}: field 'origin' must be 3 finite numbers [x, y, yaw], got {origin!r}"
+        )
+    ox, oy, oyaw = (float(v) for v in values if v is not None)
+    if max(abs(ox), abs(oy)) > MAX_ORIGIN:
+        raise MapFileError(
+            f"{p}: field 'origin' must have |x|, |y| <= {MAX_ORIGIN:g} m, got {origin!r}"
         )
     occupied = _number(doc, "occupied_thresh", p)
     free = _number(doc, "free_thresh", p)
@@ -172,7 +215,7 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     return MapMetadata(
         image=img,
         resolution=resolution,
-        origin=(float(origin[0]), float(origin[1]), float(origin[2])),
+        origin=(ox, oy, oyaw),
         occupied_thresh=occupied,
         free_thresh=free,
         negate=negate,
@@ -197,6 +240,20 @@ def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:
         Occupancy data with row 0 at the origin.
     """
     img = np.asarray(image)
+    if img.ndim not in (2, 3) or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4)):
+        raise MapFileError(f"{meta.image}: expected a grey, BGR or BGRA image, got {img.shape}")
+    h = img.shape[0]
+    out = np.empty(img.shape[:2], dtype=np.int8)
+    rows = max(1, _BLOCK_PIXELS // max(1, img.shape[1]))
+    for r0 in range(0, h, rows):
+        r1 = min(h, r0 + rows)
+        # image row r is grid row h - 1 - r (the image's top row is the map's last row)
+        out[h - r1 : h - r0] = _pixels_to_occupancy(img[r0:r1], meta)[::-1]
+    return out
+
+
+def _pixels_to_occupancy(img: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:
+    """Occupancy of a block of image rows (see :func:`image_to_grid`)."""
     scale = 65535.0 if img.dtype == np.uint16 else 255.0
     x = img.astype(np.float64) / scale
     alpha = None
@@ -229,7 +286,7 @@ def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:
             out[mid] = np.rint(ratio[mid] * 100.0).astype(np.int8)
             if alpha is not None:
                 out[alpha < 1.0] = -1
-    return np.ascontiguousarray(out[::-1])
+    return out
 
 
 def grid_to_image(
@@ -265,22 +322,52 @@ def grid_to_image(
     return np.dstack([grey, grey, grey, alpha])
 
 
-def load_map(path: str | Path) -> OccupancyGrid:
+def load_map(path: str | Path, *, max_pixels: int = MAX_MAP_PIXELS) -> OccupancyGrid:
     """Load a map_server map (YAML + image) as an :class:`OccupancyGrid`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The map YAML.
+    max_pixels : int
+        Largest image (pixels) accepted; its size is read from the header before decoding.
 
     Raises
     ------
     MapFileError
-        Malformed YAML or field (named), missing or unreadable image, or an image whose size
-        disagrees with the YAML's optional ``width``/``height``.
+        Malformed YAML or field (named), missing, unreadable or oversized image, or an image
+        whose size disagrees with the YAML's optional ``width``/``height``.
     """
     meta = read_map_yaml(path)
+    where = f"{path}: field 'image' ({meta.image})"
     if not meta.image.is_file():
         raise MapFileError(f"{path}: field 'image': file not found: {meta.image}")
-    img = cv2.imread(str(meta.image), cv2.IMREAD_UNCHANGED)
+    # a raw 16-bit RGBA image of max_pixels is the largest a bounded image can be
+    max_bytes = 8 * max_pixels + (1 << 20)
+    try:
+        size = meta.image.stat().st_size
+        if size > max_bytes:
+            raise MapFileError(
+                f"{where}: {size:,} bytes, more than any image of at most {max_pixels:,}"
+                " pixels needs"
+            )
+        raw = meta.image.read_bytes()
+    except OSError as err:
+        raise MapFileError(f"{where}: cannot read ({err.strerror})") from err
+    try:
+        head = check_image_size(image_header(raw, where), max_pixels, where)
+    except DataFormatError as err:
+        raise MapFileError(str(err)) from err
+    img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
+    del raw
     if img is None or img.size == 0:
         raise MapFileError(f"{path}: field 'image': cannot decode image {meta.image}")
     h, w = img.shape[:2]
+    if (w, h) != (head.width, head.height):
+        raise MapFileError(
+            f"{where}: decoded {w} x {h} pixels, its header declared"
+            f" {head.width} x {head.height} (corrupt)"
+        )
     if meta.width is not None and meta.width != w:
         raise MapFileError(
             f"{path}: field 'width' is {meta.width} pixels but image {meta.image.name} is {w}"

@@ -17,11 +17,24 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import ConfigurationError
 from symloc.geometry import inverse, transform_points
 
-__all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyGrid"]
+__all__ = [
+    "FREE",
+    "MAX_ORIGIN",
+    "MAX_RESOLUTION",
+    "MIN_RESOLUTION",
+    "OCCUPIED",
+    "UNKNOWN",
+    "OccupancyGrid",
+]
 
 UNKNOWN = -1
 FREE = 0
 OCCUPIED = 100
+#: Cell sizes [m/cell] a map may have (a micrometre to 10 km); outside, cell indices overflow.
+MIN_RESOLUTION = 1e-6
+MAX_RESOLUTION = 1e4
+#: Largest |origin x|, |origin y| [m] (cell arithmetic stays exact below it).
+MAX_ORIGIN = 1e9
 
 FloatArray = NDArray[np.float64]
 
@@ -35,9 +48,10 @@ class OccupancyGrid:
     data : array of shape (H, W), int8
         -1 unknown, 0..100 occupancy probability in percent.
     resolution : float
-        Cell edge [m/cell], > 0.
+        Cell edge [m/cell], in [:data:`MIN_RESOLUTION`, :data:`MAX_RESOLUTION`].
     origin : array of shape (3,)
-        World pose x [m], y [m], yaw [rad] of the corner of cell (0, 0).
+        World pose x [m], y [m], yaw [rad] of the corner of cell (0, 0); |x|, |y| at most
+        :data:`MAX_ORIGIN`.
     occupied_thresh, free_thresh : float
         Occupancy fractions above / below which a cell counts as occupied / free
         (map_server defaults 0.65 and 0.196).
@@ -57,16 +71,23 @@ class OccupancyGrid:
             )
         if d.dtype.kind not in "iu":
             raise ConfigurationError(f"OccupancyGrid.data: expected integers, got dtype {d.dtype}")
-        if np.any((d < -1) | (d > 100)):
+        if int(d.min()) < -1 or int(d.max()) > 100:  # no (H, W) temporaries
             raise ConfigurationError("OccupancyGrid.data: values must be -1 (unknown) or 0..100")
         d = d.astype(np.int8, copy=True)
         d.setflags(write=False)
         res = float(self.resolution)
-        if not np.isfinite(res) or res <= 0:
-            raise ConfigurationError(f"OccupancyGrid.resolution: expected > 0 m/cell, got {res}")
+        if not np.isfinite(res) or not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
+            raise ConfigurationError(
+                f"OccupancyGrid.resolution: expected {MIN_RESOLUTION:g}..{MAX_RESOLUTION:g}"
+                f" m/cell, got {res}"
+            )
         o = np.array(self.origin, dtype=np.float64)
         if o.shape != (3,) or not np.all(np.isfinite(o)):
             raise ConfigurationError(f"OccupancyGrid.origin: expected finite (x, y, yaw), got {o}")
+        if np.any(np.abs(o[:2]) > MAX_ORIGIN):
+            raise ConfigurationError(
+                f"OccupancyGrid.origin: expected |x|, |y| <= {MAX_ORIGIN:g} m, got {o[:2]}"
+            )
         if not 0.0 <= self.free_thresh < self.occupied_thresh <= 1.0:
             raise ConfigurationError(
                 "OccupancyGrid thresholds: expected 0 <= free_thresh < occupied_thresh <= 1, got"

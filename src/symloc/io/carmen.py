@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import gzip
 import math
+import zlib
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -183,15 +184,29 @@ def _parse_odom(tokens: list[str], lineno: int) -> CarmenOdometry:
     )
 
 
+#: Longest line read [characters] (a FLASER line of 100 000 readings is about 700 kB).
+MAX_LINE = 1 << 20
+
+
 def _open_text(path: Path) -> Iterator[str]:
+    """The log's lines, each at most :data:`MAX_LINE` long; a truncated or corrupt gzip, or a
+    longer line, raises DataFormatError naming the file and the line."""
     with path.open("rb") as probe:
         magic = probe.read(2)
-    if magic == b"\x1f\x8b":
-        with gzip.open(path, "rt", encoding="ascii", errors="replace") as fh:
-            yield from fh
-    else:
-        with path.open("r", encoding="ascii", errors="replace") as fh:
-            yield from fh
+    opener = gzip.open if magic == b"\x1f\x8b" else open
+    n = 0
+    try:
+        with opener(path, "rt", encoding="ascii", errors="replace") as fh:
+            while line := fh.readline(MAX_LINE + 1):
+                n += 1
+                if len(line) > MAX_LINE:
+                    raise DataFormatError(f"{path}: line {n}: longer than {MAX_LINE:,} characters")
+                yield line
+    except (OSError, EOFError, zlib.error) as err:
+        raise DataFormatError(
+            f"{path}: line {n + 1}: cannot read on ({type(err).__name__}: {err});"
+            " truncated or corrupt file?"
+        ) from err
 
 
 def iter_carmen(
@@ -218,13 +233,13 @@ def iter_carmen(
     Raises
     ------
     DataFormatError
-        A ``FLASER``/``ODOM``/``PARAM`` line is malformed (the message gives the line number).
-    FileNotFoundError
-        The file does not exist.
+        A ``FLASER``/``ODOM``/``PARAM`` line is malformed (the message gives the line number;
+        :func:`read_carmen` adds the file), a line is longer than :data:`MAX_LINE`, a gzip log
+        is truncated or corrupt, or the file does not exist.
     """
     p = Path(path)
     if not p.is_file():
-        raise FileNotFoundError(f"CARMEN log not found: {p}")
+        raise DataFormatError(f"CARMEN log not found: {p}")
     if not (math.isfinite(range_max) and range_max > 0):
         raise DataFormatError(f"range_max: expected > 0 m, got {range_max}")
     for lineno, raw in enumerate(_open_text(p), start=1):
@@ -258,9 +273,15 @@ def read_carmen(path: str | Path, *, range_max: float = 50.0) -> CarmenLog:
     params: dict[str, str] = {}
     scans: list[CarmenScan] = []
     odom: list[CarmenOdometry] = []
-    for msg in iter_carmen(path, range_max=range_max, skipped=skipped, params=params):
-        if isinstance(msg, CarmenScan):
-            scans.append(msg)
-        else:
-            odom.append(msg)
+    try:
+        for msg in iter_carmen(path, range_max=range_max, skipped=skipped, params=params):
+            if isinstance(msg, CarmenScan):
+                scans.append(msg)
+            else:
+                odom.append(msg)
+    except DataFormatError as err:
+        text = str(err)
+        if not text.startswith(str(path)) and "CARMEN log not found" not in text:
+            raise DataFormatError(f"{path}: {text}") from err
+        raise
     return CarmenLog(scans, odom, params, skipped)

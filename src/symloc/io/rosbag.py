@@ -27,6 +27,7 @@ transient-local durability, as map_server publishes it.
 
 from __future__ import annotations
 
+import contextlib
 import warnings
 from collections import Counter
 from collections.abc import Callable, Iterator
@@ -45,6 +46,7 @@ from symloc.ros.build import build_rosbags
 from symloc.ros.grid_msg import grid_from_msg, grid_to_fields
 from symloc.ros.header import header_stamp
 from symloc.ros.image_msg import (
+    MAX_IMAGE_PIXELS,
     compressed_image_from_msg,
     compressed_image_to_fields,
     image_from_msg,
@@ -183,19 +185,48 @@ def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
     return chosen
 
 
-def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
-    """Every topic of a bag with its message type and message count."""
+def _open_reader(bag: Path) -> Any:
     from rosbags.highlevel import AnyReader
 
+    try:
+        reader = AnyReader([bag])
+        reader.open()
+    except Exception as err:  # rosbags raises its own family (and worse on corrupt files)
+        raise DataFormatError(
+            f"bag {bag}: cannot open ({type(err).__name__}: {err}); truncated or corrupt?"
+        ) from err
+    return reader
+
+
+def _close_reader(reader: Any) -> None:
+    # closing a corrupt bag may fail too; there is nothing left to save
+    with contextlib.suppress(Exception):
+        reader.close()
+
+
+def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
+    """Every topic of a bag with its message type and message count.
+
+    Raises
+    ------
+    DataFormatError
+        Not a bag, or one rosbags cannot open (naming the file).
+    """
+    bag = resolve_bag_path(path)
+    reader = _open_reader(bag)
     out: dict[str, tuple[str, int]] = {}
-    with AnyReader([resolve_bag_path(path)]) as reader:
+    try:
         for c in reader.connections:
             prev = out.get(c.topic, (c.msgtype, 0))
-            out[c.topic] = (c.msgtype, prev[1] + c.msgcount)
+            out[c.topic] = (c.msgtype, prev[1] + int(c.msgcount))
+    except Exception as err:  # a connection record rosbags could not make sense of
+        raise DataFormatError(f"bag {bag}: unreadable connection records: {err}") from err
+    finally:
+        _close_reader(reader)
     return out
 
 
-def _convert(kind: str, msgtype: str, msg: Any) -> tuple[float, Any]:
+def _convert(kind: str, msgtype: str, msg: Any, max_pixels: int) -> tuple[float, Any]:
     if kind == "scan":
         scan = scan_from_msg(msg)
         return scan.stamp, scan
@@ -205,9 +236,9 @@ def _convert(kind: str, msgtype: str, msg: Any) -> tuple[float, Any]:
     if kind == "image":
         where = msgtype.rsplit("/", 1)[-1]
         img = (
-            compressed_image_from_msg(msg)
+            compressed_image_from_msg(msg, max_pixels=max_pixels)
             if msgtype.endswith("CompressedImage")
-            else image_from_msg(msg)
+            else image_from_msg(msg, max_pixels=max_pixels)
         )
         return header_stamp(msg, where), img
     if kind == "map":
@@ -222,6 +253,7 @@ def read_bag(
     topics: BagTopics | None = None,
     on_error: Literal["raise", "skip"] = "raise",
     dropped: Counter[str] | None = None,
+    max_image_pixels: int = MAX_IMAGE_PIXELS,
 ) -> Iterator[BagMessage]:
     """Yield the bag's scans, odometry, images, maps, ground truth and initial poses in order.
 
@@ -233,36 +265,56 @@ def read_bag(
         Which topics to read; by default the first topic of each message type.
     on_error : {"raise", "skip"}
         A malformed message raises :class:`DataFormatError` (naming the topic, the log time and
-        the field), or is skipped with a warning and counted in ``dropped[topic]``.
+        the field), or is skipped with a warning and counted in ``dropped[topic]``. A bag that
+        turns unreadable part-way (truncated, corrupt) raises, or with ``"skip"`` ends there
+        with a warning, counted in ``dropped["<unreadable rest of the bag>"]``: iterating never
+        raises with ``"skip"`` once the bag is open.
     dropped : Counter, optional
         Receives the number of skipped messages per topic.
+    max_image_pixels : int
+        Images of more pixels are malformed messages (refused before decoding).
 
     Raises
     ------
     DataFormatError
-        Not a bag, a named topic is missing or of the wrong type, or a malformed message
-        (with ``on_error="raise"``).
+        Not a bag, one that cannot be opened, a named topic is missing or of the wrong type,
+        or (with ``on_error="raise"``) a malformed message or an unreadable part.
     """
-    from rosbags.highlevel import AnyReader
-
     if on_error not in ("raise", "skip"):
         raise DataFormatError(f"on_error: expected 'raise' or 'skip', got {on_error!r}")
     bag = resolve_bag_path(path)
-    try:
-        reader = AnyReader([bag])
-        reader.open()
-    except Exception as err:  # rosbags raises its own family; present one
-        raise DataFormatError(f"bag: cannot open {bag}: {err}") from err
+    reader = _open_reader(bag)
     try:
         chosen = _pick_topics(reader.connections, topics or BagTopics())
         conns = [c for c in reader.connections if c.topic in chosen]
-        for conn, log_time, raw in reader.messages(connections=conns):
+        try:
+            records = iter(reader.messages(connections=conns))
+        except Exception as err:  # rosbags on a corrupt index
+            raise DataFormatError(f"bag {bag}: cannot read its messages: {err}") from err
+        n_read = 0
+        while True:
+            try:
+                conn, log_time, raw = next(records)
+            except StopIteration:
+                break
+            except Exception as err:  # truncated or corrupt storage: the rest is lost
+                text = (
+                    f"bag {bag}: unreadable after {n_read} messages"
+                    f" ({type(err).__name__}: {err}); truncated or corrupt?"
+                )
+                if on_error == "raise":
+                    raise DataFormatError(text) from err
+                warnings.warn(f"stopped: {text}", stacklevel=2)
+                if dropped is not None:
+                    dropped["<unreadable rest of the bag>"] += 1
+                break
+            n_read += 1
             kind = chosen[conn.topic]
             try:
                 msg = reader.deserialize(raw, conn.msgtype)
-                stamp, value = _convert(kind, conn.msgtype, msg)
+                stamp, value = _convert(kind, conn.msgtype, msg, max_image_pixels)
             except Exception as err:  # wrapped into one error family
-                text = f"bag topic {conn.topic} at log time {log_time} ns: {err}"
+                text = f"bag {bag} topic {conn.topic} at log time {log_time} ns: {err}"
                 if on_error == "raise":
                     raise DataFormatError(text) from err
                 warnings.warn(f"skipped: {text}", stacklevel=2)
@@ -271,7 +323,7 @@ def read_bag(
                 continue
             yield BagMessage(kind, conn.topic, stamp, int(log_time), value)
     finally:
-        reader.close()
+        _close_reader(reader)
 
 
 # ------------------------------------------------------------------------------------ writing

@@ -28,11 +28,27 @@ def carmen_to_bag(
     Raises
     ------
     DataFormatError
-        The log is malformed (from :func:`symloc.io.carmen.read_carmen`) or ``out`` exists.
+        The log is malformed (from :func:`symloc.io.carmen.read_carmen`), holds no ``FLASER``
+        scan (nothing is written), or ``out`` exists.
     """
+    from symloc.errors import DataFormatError
     from symloc.io.carmen import read_carmen
 
     data = read_carmen(log, range_max=range_max)
+    if not data.scans:
+        seen = (
+            ", ".join(
+                (k if k.isascii() and k.isprintable() and len(k) <= 20 else ascii(k[:12]) + "...")
+                + f" x{n}"
+                for k, n in data.skipped.most_common(3)
+            )
+            or "nothing"
+        )
+        raise DataFormatError(
+            f"{log}: no FLASER scan in it (read {len(data.odometry)} ODOM, skipped {seen});"
+            " not a CARMEN laser log? No bag written"
+        )
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
     with BagWriter(out, fmt) as bag:
         for s in data.scans:
             bag.write_odometry(OdometryReading(s.odom_pose, s.stamp))

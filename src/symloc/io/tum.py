@@ -16,11 +16,14 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True, slots=True)
 class TrajectoryPoint:
-    """The localizer's answer at one scan: stamp [s], status, pose (3,) or None."""
+    """The localizer's answer at one scan: stamp [s], status, the earned pose (3,) or None,
+    the tracker's best estimate (3,) earned or not (None if unknown), and the reason."""
 
     stamp: float
     status: str
     pose: FloatArray | None
+    estimate: FloatArray | None = None
+    reason: str = ""
 
 
 def write_tum(path: Path, rows: list[tuple[float, FloatArray]]) -> None:

@@ -218,6 +218,16 @@ def symmetry_consistent(
     return count
 
 
+def _order_people(order: int) -> str:
+    """A symmetry order as people read it: ``inf`` for a circle (order 0 in the library)."""
+    return "inf" if int(order) == 0 else str(int(order))
+
+
+def _people(direction: int | None) -> str:
+    """A direction index (0-based in the library) as people count it (1-based), for logs."""
+    return "?" if direction is None else str(int(direction) + 1)
+
+
 def _cov(xy_std: float, theta_std: float) -> FloatArray:
     return np.diag([xy_std**2, xy_std**2, theta_std**2])
 
@@ -677,11 +687,11 @@ class Localizer:
         self._centering_updates = 0
         self._asym_count = 0
         self._outcomes = []
-        self._note(f"ambiguous (order {self._order}): {why}; going to the centre")
+        self._note(f"ambiguous (order {_order_people(self._order)}): {why}; going to the centre")
         return self._ambiguous(
             Status.AMBIGUOUS,
             Request(RequestKind.GO_TO_CENTRE, target=np.asarray(verdict.center, dtype=float)),
-            f"{why}; order {self._order}",
+            f"{why}; order {_order_people(self._order)}",
         )
 
     def _start_ambiguity_at_place(self, result: TrackerResult, place: Place) -> Estimate:
@@ -699,7 +709,7 @@ class Localizer:
         self._asym_count = 0
         self._outcomes = []
         why = f"inside known symmetric place {place.place_id}: rotated copies fit the map"
-        self._note(f"ambiguous (order {self._order}): {why}")
+        self._note(f"ambiguous (order {_order_people(self._order)}): {why}")
         return self._ambiguous(
             Status.AMBIGUOUS, Request(RequestKind.GO_TO_CENTRE, target=centre_base), why
         )
@@ -827,7 +837,10 @@ class Localizer:
         self.last_decision = (place, dec)
         pose = np.array([place.center[0], place.center[1], heading])
         cov = _cov(self.config.decision_xy_std, self.config.decision_theta_std)
-        reason = f"visual decision: place {place.place_id}, direction {dec.direction}"
+        reason = (
+            f"visual decision: place {place.place_id},"
+            f" direction {_people(dec.direction)} of {place.m}"
+        )
         gate = self.claim_gate
         claim = None
         if gate is not None:
@@ -835,7 +848,7 @@ class Localizer:
             if claim.verdict == "withdrawn":
                 self._outcomes.append("undetermined")
                 self._note(
-                    f"image {self._attempt + 1}: direction {dec.direction} of place "
+                    f"image {self._attempt + 1}: direction {_people(dec.direction)} of place "
                     f"{place.place_id} rejected by the laser ({claim.reason})"
                 )
                 return self._next_attempt("the laser rejected the decided pose")
@@ -848,8 +861,8 @@ class Localizer:
         reseed_cov = np.maximum(cov, _cov(self.config.reseed_xy_std, self.config.reseed_theta_std))
         self.tracker.initialize_pose(pose, reseed_cov)
         self._note(
-            f"decided direction {dec.direction} of place {place.place_id} "
-            f"(offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
+            f"decided direction {_people(dec.direction)} of {place.m} at place {place.place_id}"
+            f" (offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
         )
         if claim is not None and gate is not None:
             if claim.verdict == "withheld":
@@ -873,7 +886,8 @@ class Localizer:
         """A direction was decided, but the place's heading reference is odometry's: no claim."""
         self.last_decision = (place, dec)
         self._note(
-            f"decided direction {dec.direction} of place {place.place_id}, but its stored "
+            f"decided direction {_people(dec.direction)} of {place.m} at place"
+            f" {place.place_id}, but its stored "
             "headings came from odometry (not observable by the laser when it was mapped)"
         )
         return self._settle(

@@ -257,7 +257,7 @@ class AmclParams:
             path = Path(source)
             try:
                 text = path.read_text()
-            except OSError as err:
+            except (OSError, UnicodeDecodeError) as err:
                 raise ConfigurationError(f"nav2 params file {path}: cannot read ({err})") from err
         else:
             text = str(source)

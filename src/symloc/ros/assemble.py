@@ -74,10 +74,13 @@ def camera_matrix(params: NodeParams) -> NDArray[np.float64]:
 def open_places(params: NodeParams) -> Any:
     """The place store for ``params.visual_map`` (``""``: :class:`MemoryPlaces`).
 
+    In ``localize`` mode the visual map is opened read-only.
+
     Raises
     ------
     ConfigurationError
-        The file is missing in ``localize`` mode.
+        The file is missing in ``localize`` mode, or the map records another vocabulary than
+        ``params.vocabulary``.
     """
     path = params.visual_map
     if not path:
@@ -89,17 +92,21 @@ def open_places(params: NodeParams) -> Any:
 
     if not params.allow_mapping and not Path(path).is_file():
         raise ConfigurationError(f"visual_map: {path} does not exist (mode localize)")
-    if params.vocabulary:
-        vocab = Vocabulary.load(params.vocabulary)
-    else:
-        from symloc.vision.default_vocabulary import default_vocabulary
+    from symloc.vision.default_vocabulary import default_vocabulary
 
-        vocab = default_vocabulary()
+    vocab = Vocabulary.load(params.vocabulary) if params.vocabulary else default_vocabulary()
+    vmap = VisualMap(path, create=params.allow_mapping, readonly=not params.allow_mapping)
+    stored = vmap.get_meta("vocabulary")
+    want = default_vocabulary().fingerprint() if stored == "default" else stored
+    if want is not None and want.startswith("sha256:") and want != vocab.fingerprint():
+        vmap.close()
+        made = "the shipped vocabulary" if stored == "default" else want[:19] + "..."
+        raise ConfigurationError(
+            f"vocabulary: the visual map {path} was made with {made}, not with"
+            f" {params.vocabulary or 'the shipped vocabulary'}; set 'vocabulary' to its file"
+        )
     return VisionPlaceStore(
-        VisualMap(path, create=params.allow_mapping),
-        vocab,
-        camera_matrix(params),
-        dist_coeffs=params.camera_dist_coeffs or None,
+        vmap, vocab, camera_matrix(params), dist_coeffs=params.camera_dist_coeffs or None
     )
 
 
@@ -121,7 +128,6 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
     store = places if places is not None else open_places(params)
     known = list(store.all_places()) if hasattr(store, "all_places") else []
     config = dataclasses.replace(params.localizer, allow_mapping=params.allow_mapping)
-    a = params.amcl
     loc = Localizer(
         AmclTracker(amcl, laser_pose=laser),
         ReportJudge(judge_symmetry, laser_pose=laser, config=params.symmetry_config()),
@@ -130,11 +136,7 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
         scorer=GridScorer(grid, laser_pose=laser),
         known_places=known,
         map_symmetries=map_symmetries(grid),
-        claim_gate=ClaimGate(
-            surface_distance_field(grid),
-            (a.alpha1, a.alpha2, a.alpha3, a.alpha4),
-            laser_pose=laser,
-        ),
+        claim_gate=ClaimGate(surface_distance_field(grid), laser_pose=laser),
         laser_pose=laser,
     )
     loc.reset_global()

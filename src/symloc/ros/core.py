@@ -8,6 +8,23 @@ encoding, a message in the wrong frame, a map that changes size, stamps that go 
 is dropped, counted in :attr:`NodeCore.dropped` under a short reason, and reported through the
 ``warn`` callback (the first few of each reason, then every 100th); localization carries on.
 
+It also never gets stuck (each case recovers within a few scans, :mod:`symloc.ros.guards`):
+
+* a stamp far from the node's clock (odometry from the future, a clock jump) is dropped, not
+  adopted; a clock jump that every stream confirms becomes the new time base;
+* odometry that leaps faster than a robot moves, or to absurd coordinates, is dropped; a leap
+  that persists (an odometry reset) is absorbed, the localizer seeing no motion across it;
+* a stream whose newest stamps turn out to be outliers (its next messages keep coming older)
+  forgets them;
+* a map the localizer cannot be built on (no free cell) is not stored;
+* an initial pose outside the map, or with a covariance that is not a covariance of it, is
+  rejected at the door;
+* a localizer that fails three scans in a row is rebuilt (global initialisation);
+* every scan gets a status, used or not (``Outputs.used``), so the drop counters are seen;
+* camera images are decoded only while a capture is pending, bounded by ``max_image_pixels``.
+
+Each recovery is counted in :attr:`NodeCore.recovered` and in the status.
+
 :mod:`symloc.ros.node` wraps it in rclpy; ``symloc replay`` feeds it a bag.
 
 With ``use_tf`` (the live node) it also reads TF as nav2_amcl does (:mod:`symloc.ros.tf`):
@@ -38,6 +55,7 @@ from symloc.localizer import Estimate, RequestKind, Status
 from symloc.odometry import OdometryReading
 from symloc.ros.fields import field as msg_field
 from symloc.ros.grid_msg import grid_from_msg
+from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
 from symloc.ros.header import header_fields, header_frame, header_stamp
 from symloc.ros.image_msg import compressed_image_from_msg, image_from_msg
 from symloc.ros.odometry_msg import odometry_from_msg
@@ -68,25 +86,36 @@ LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Any]
 
 _WARN_FIRST = 5
 _WARN_EVERY = 100
+#: Scans in a row not used before the status says ``lost`` (localization is not happening).
+STALE_SCANS = 5
+#: Latest stamp a ROS time can carry [s] (``builtin_interfaces/Time.sec`` is an int32).
+MAX_STAMP = float(2**31 - 1)
 
 
 @dataclass
 class Outputs:
     """What to publish after one scan (field dicts; ``None``: publish nothing on that topic).
 
-    ``amcl_pose`` (PoseWithCovarianceStamped, map frame) only while tracking, as nav2_amcl
-    publishes only poses it has; ``goal`` (PoseStamped, odom frame) for go-to-centre, face and
-    rotate requests; ``capture`` (std_msgs/Header) for a capture request.
+    ``used`` tells whether the localizer took the scan. A scan that was dropped still gets a
+    ``status`` (the last status, its reason saying why this scan was not used; ``lost`` after
+    :data:`STALE_SCANS` unused scans in a row) and nothing else. ``amcl_pose``
+    (PoseWithCovarianceStamped, map frame) only while tracking, as nav2_amcl publishes only
+    poses it has; ``goal`` (PoseStamped, odom frame) for go-to-centre, face and rotate requests;
+    ``capture`` (std_msgs/Header) for a capture request.
     """
 
     estimate: Estimate
     stamp: float
     status: dict[str, Any]
-    candidates: dict[str, Any]
+    candidates: dict[str, Any] | None = None
     particle_cloud: dict[str, Any] | None = None
     amcl_pose: dict[str, Any] | None = None
     goal: dict[str, Any] | None = None
     capture: dict[str, Any] | None = None
+    used: bool = True
+    #: The tracker's best pose (3,) at this scan, earned or not (for logs such as
+    #: ``replay_scans.tum``; never published as a pose).
+    best_estimate: FloatArray | None = None
     #: tf2_msgs/TFMessage fields with ``map -> odom`` (None: nothing to broadcast)
     tf: dict[str, Any] | None = None
 
@@ -105,6 +134,11 @@ class _OdomBuffer:
         if cut > 0:
             del self.stamps[:cut], self.poses[:cut]
         return True
+
+    def forget_after(self, t: float) -> None:
+        """Drop the readings stamped after ``t`` (they were outliers)."""
+        cut = bisect.bisect_right(self.stamps, t)
+        del self.stamps[cut:], self.poses[cut:]
 
     def at(self, t: float, tolerance: float) -> OdometryReading | str:
         """The reading at ``t`` (exact, interpolated, or the newest within tolerance)."""
@@ -134,7 +168,7 @@ class NodeCore:
     ----------
     params : NodeParams
     factory : callable, optional
-        ``factory(grid, params) -> Localizer``; called when the first map arrives.
+        ``factory(grid, params) -> Localizer``; called when the first usable map arrives.
     warn : callable, optional
         Receives warning lines (the rclpy node passes its logger).
     use_tf : bool
@@ -158,12 +192,19 @@ class NodeCore:
         self.factory = factory
         self.warn = warn or (lambda text: None)
         self.dropped: Counter[str] = Counter()
+        self.recovered: Counter[str] = Counter()
         self.received: Counter[str] = Counter()
         self.grid: OccupancyGrid | None = None
         self.localizer: Any = None
         self.scans_used = 0
         self.last: Outputs | None = None
         self._odom = _OdomBuffer()
+        self._clock = StampGate(params.max_stamp_jump)
+        self._odom_gate = OdometryGate(params.max_odom_speed)
+        self._backwards: Counter[str] = Counter()
+        self._failures = 0
+        self._unused = 0
+        self._last_drop = ("", "")
         self._beams: int | None = None
         self._last_scan_stamp = -math.inf
         self._image: tuple[float, NDArray[np.uint8]] | None = None
@@ -180,15 +221,52 @@ class NodeCore:
     def drop(self, reason: str, detail: str = "") -> None:
         """Count a dropped message and warn (first few of each reason, then every 100th)."""
         self.dropped[reason] += 1
+        self._last_drop = (reason, detail)
         n = self.dropped[reason]
         if n <= _WARN_FIRST or n % _WARN_EVERY == 0:
             extra = f": {detail}" if detail else ""
             self.warn(f"dropped ({reason}, {n} so far){extra}; still localizing")
 
+    def _recover(self, what: str, detail: str) -> None:
+        self.recovered[what] += 1
+        self.warn(f"recovered ({what}): {detail}")
+
     def _frame_ok(self, got: str, want: str, reason: str) -> bool:
         if want and got != want:
             self.drop(reason, f"frame {got!r}, expected {want!r}")
             return False
+        return True
+
+    def _time_ok(self, stamp: float, stream: str) -> bool:
+        """The time gate (:class:`~symloc.ros.guards.StampGate`) for a scan, odom or image."""
+        if not (math.isfinite(stamp) and 0.0 <= stamp <= MAX_STAMP):
+            self.drop(
+                f"{stream}: stamp out of range",
+                f"{stamp}: expected 0 .. {MAX_STAMP} s (builtin_interfaces/Time)",
+            )
+            return False
+        clock = self._clock.clock
+        verdict = self._clock.check(stamp, stream)
+        if verdict == "far":
+            self.drop(
+                f"{stream}: stamp jump",
+                f"{stamp:.3f} s is more than max_stamp_jump = {self.params.max_stamp_jump:g} s"
+                f" from the node's clock {clock:.3f} s; not adopted",
+            )
+            return False
+        if verdict == "rebase":
+            self._odom = _OdomBuffer()
+            self._odom_gate.restart_clock()
+            self._last_scan_stamp = -math.inf
+            self._backwards.clear()
+            self._image = None
+            if self._want_image_after is not None:
+                self._want_image_after = -math.inf
+            self._recover(
+                "time base",
+                f"the clock jumped from {clock:.3f} s to {stamp:.3f} s and {CONFIRM} messages"
+                " agree: new time base, odometry history cleared",
+            )
         return True
 
     # ------------------------------------------------------------------ map
@@ -206,35 +284,43 @@ class NodeCore:
             return
         self.set_map(grid)
 
-    def set_map(self, grid: OccupancyGrid) -> None:
-        """Use ``grid``: the first map builds the localizer; a changed one is handled per params."""
+    def set_map(self, grid: OccupancyGrid) -> bool:
+        """Use ``grid``: the first usable map builds the localizer; a changed one is handled per
+        ``accept_map_updates``. A map the localizer cannot be built on (no free cell, ...) is
+        dropped and not stored. Returns whether the map is now in use."""
         old = self.grid
-        if old is not None and self.params.first_map_only:
-            return  # nav2's first_map_only: later maps are ignored
-        if old is None:
-            self.grid = grid
-            self.localizer = self.factory(grid, self._build_params())
-            return
-        same_geometry = (
-            old.data.shape == grid.data.shape
-            and old.resolution == grid.resolution
-            and np.array_equal(old.origin, grid.origin)
-        )
-        if same_geometry and np.array_equal(old.data, grid.data):
-            return  # re-published (transient local): nothing new
-        if not self.params.accept_map_updates:
-            self.drop(
-                "map: changed",
-                f"{old.width}x{old.height} -> {grid.width}x{grid.height} cells; keeping the"
-                " first map (set accept_map_updates to switch)",
+        if old is not None:
+            same_geometry = (
+                old.data.shape == grid.data.shape
+                and old.resolution == grid.resolution
+                and np.array_equal(old.origin, grid.origin)
             )
-            return
+            if same_geometry and np.array_equal(old.data, grid.data):
+                return True  # re-published (transient local): nothing new
+            if self.params.first_map_only:
+                return False  # nav2's first_map_only: later maps are ignored
+            if not self.params.accept_map_updates:
+                self.drop(
+                    "map: changed",
+                    f"{old.width}x{old.height} -> {grid.width}x{grid.height} cells; keeping the"
+                    " first map (set accept_map_updates to switch)",
+                )
+                return False
+        try:
+            localizer = self.factory(grid, self._build_params())
+        except SymlocError as err:
+            self.drop("map: unusable", f"{grid.width}x{grid.height} cells: {err}")
+            return False
         pose, cov = self._tracked_pose()
         self.grid = grid
-        self.localizer = self.factory(grid, self._build_params())
-        if pose is not None and cov is not None:
+        self.localizer = localizer
+        self._failures = 0
+        if old is None:
+            return True
+        if pose is not None and cov is not None and self._pose_problem(pose, cov) is None:
             self.localizer.set_pose(pose, cov)
         self.warn(f"map changed to {grid.width}x{grid.height} cells: localizer rebuilt")
+        return True
 
     def _build_params(self) -> NodeParams:
         """The parameters the localizer is built with: the laser pose is the mount's."""
@@ -371,24 +457,63 @@ class NodeCore:
         self.add_odometry(reading)
 
     def add_odometry(self, reading: OdometryReading) -> None:
-        """An odometry reading (odom frame); an older stamp than the newest is dropped."""
-        if not self._odom.add(reading, self.params.max_odom_age):
+        """An odometry reading (odom frame), through the time and odometry gates."""
+        raw = np.asarray(reading.pose, dtype=np.float64)
+        if OdometryGate.absurd(raw):
+            self.drop(
+                "odom: absurd pose",
+                f"{raw.tolist()}: expected finite coordinates within {MAX_ODOM_COORDINATE:g} m",
+            )
+            return
+        if not self._time_ok(reading.stamp, "odom"):
+            return
+        verdict = self._odom_gate.check(reading.stamp, raw)
+        if verdict == "far":
+            self.drop(
+                "odom: jump",
+                f"{raw.round(3).tolist()} at {reading.stamp:.3f} s moves faster than"
+                f" max_odom_speed = {self.params.max_odom_speed:g} m/s; not adopted",
+            )
+            return
+        if verdict == "rebase":
+            self._recover(
+                "odometry reset",
+                f"odometry leapt and {CONFIRM} readings agree: re-anchored, no motion assumed"
+                " across the leap",
+            )
+        corrected = OdometryReading(self._odom_gate.correct(raw), reading.stamp)
+        if self._odom.add(corrected, self.params.max_odom_age):
+            self._backwards["odom"] = 0
+            return
+        self._backwards["odom"] += 1
+        if self._backwards["odom"] < CONFIRM:
             self.drop("odom: stamp went backwards", f"{reading.stamp:.3f} s")
+            return
+        self._odom.forget_after(reading.stamp)
+        self._odom.add(corrected, self.params.max_odom_age)
+        self._backwards["odom"] = 0
+        self._recover(
+            "odometry stamps",
+            f"{CONFIRM} readings in a row older than the newest: the newer ones were outliers"
+            " and are forgotten",
+        )
 
     def on_image(self, msg: Any) -> None:
-        """A sensor_msgs/Image message."""
+        """A sensor_msgs/Image message (decoded only while a capture is pending)."""
         self._on_any_image(msg, image_from_msg, "Image")
 
     def on_compressed_image(self, msg: Any) -> None:
-        """A sensor_msgs/CompressedImage message."""
+        """A sensor_msgs/CompressedImage message (decoded only while a capture is pending)."""
         self._on_any_image(msg, compressed_image_from_msg, "CompressedImage")
 
-    def _on_any_image(self, msg: Any, convert: Callable[[Any], Any], where: str) -> None:
+    def _on_any_image(self, msg: Any, convert: Callable[..., Any], where: str) -> None:
         self.received["image"] += 1
+        if self._want_image_after is None:
+            return  # nothing requested: not decoded, not kept
         try:
             stamp = header_stamp(msg, where)
             frame = header_frame(msg, where)
-            img = convert(msg)
+            img = convert(msg, max_pixels=self.params.max_image_pixels)
         except SymlocError as err:
             self.drop("image: malformed", str(err))
             return
@@ -397,8 +522,23 @@ class NodeCore:
         self.add_image(img, stamp)
 
     def add_image(self, image: NDArray[np.uint8], stamp: float) -> None:
-        """Keep the newest ``(H, W, 3)`` RGB image for a pending capture request."""
-        self._image = (float(stamp), image)
+        """Keep the newest ``(H, W, 3)`` RGB image while a capture request is pending."""
+        if self._want_image_after is None:
+            return
+        img = np.asarray(image)
+        if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+            self.drop("image: malformed", f"expected (H, W, 3) uint8, got {img.shape} {img.dtype}")
+            return
+        if img.shape[0] * img.shape[1] > self.params.max_image_pixels:
+            self.drop(
+                "image: too large",
+                f"{img.shape[1]} x {img.shape[0]} pixels; max_image_pixels is"
+                f" {self.params.max_image_pixels:,}",
+            )
+            return
+        if not self._time_ok(float(stamp), "image"):
+            return
+        self._image = (float(stamp), img)
 
     def on_initialpose(self, msg: Any) -> None:
         """A geometry_msgs/PoseWithCovarianceStamped (RViz's 2D Pose Estimate)."""
@@ -406,17 +546,68 @@ class NodeCore:
         try:
             frame = header_frame(msg, "PoseWithCovarianceStamped")
             pose, cov = pose_with_covariance_from_msg(msg)
+            stamp = header_stamp(msg, "PoseWithCovarianceStamped")
         except SymlocError as err:
             self.drop("initialpose: malformed", str(err))
             return
         if not self._frame_ok(frame, self.params.global_frame_id, "initialpose: wrong frame"):
             return
-        if self.localizer is None:
+        # as nav2_amcl: a pose given for an earlier time is moved by the odometry since then
+        self.set_initial_pose(self.carried_to_now(pose, stamp), cov)
+
+    def set_initial_pose(self, pose: FloatArray, covariance: FloatArray) -> bool:
+        """Reseed the localizer at ``pose`` (3,) with ``covariance`` (3, 3), if both make sense
+        on the map (inside it; a finite, symmetric, positive semi-definite covariance no wider
+        than the map). Returns whether the pose was taken."""
+        if self.localizer is None or self.grid is None:
             self.drop("initialpose: no map yet")
-            return
-        pose = self.carried_to_now(pose, header_stamp(msg, "PoseWithCovarianceStamped"))
-        self.localizer.set_pose(pose, cov)
-        self.warn(f"initial pose set to {pose.round(3).tolist()}")
+            return False
+        problem = self._pose_problem(pose, covariance)
+        if problem is not None:
+            self.drop("initialpose: rejected", problem)
+            return False
+        try:
+            self.localizer.set_pose(np.asarray(pose, float), np.asarray(covariance, float))
+        except SymlocError as err:
+            self.drop("initialpose: rejected", str(err))
+            return False
+        self.warn(f"initial pose set to {np.asarray(pose).round(3).tolist()}")
+        return True
+
+    def _pose_problem(self, pose: Any, covariance: Any) -> str | None:
+        """Why ``pose`` / ``covariance`` cannot seed the localizer on the map (None: they can)."""
+        assert self.grid is not None
+        g = self.grid
+        p = np.asarray(pose, dtype=np.float64).reshape(-1)
+        c = np.asarray(covariance, dtype=np.float64)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            return f"pose {p.tolist()}: expected finite x, y, theta"
+        xmin, xmax, ymin, ymax = g.extent()
+        diag = math.hypot(xmax - xmin, ymax - ymin)
+        inside = np.all(np.abs(p[:2] - g.origin[:2]) <= 2.0 * diag) and bool(
+            g.in_bounds(g.world_to_cell(p[:2]))[0]
+        )
+        if not inside:
+            return (
+                f"pose ({p[0]:.6g}, {p[1]:.6g}) m is outside the map"
+                f" ({g.width} x {g.height} cells of {g.resolution:g} m from"
+                f" ({g.origin[0]:.3f}, {g.origin[1]:.3f}))"
+            )
+        if c.shape != (3, 3) or not np.all(np.isfinite(c)):
+            return f"covariance: expected a finite 3 x 3 matrix, got shape {c.shape}"
+        if not np.allclose(c, c.T, rtol=1e-6, atol=1e-9):
+            return "covariance: expected a symmetric matrix"
+        evals = np.linalg.eigvalsh(c)
+        if evals.min() < -1e-9 * max(1.0, float(np.abs(evals).max())):
+            return f"covariance: expected positive semi-definite, eigenvalues {evals.tolist()}"
+        if max(c[0, 0], c[1, 1]) > diag**2:
+            return (
+                f"covariance: position variance {max(c[0, 0], c[1, 1]):.3g} m^2 is wider than"
+                f" the map ({diag:.1f} m across)"
+            )
+        if c[2, 2] > (2.0 * math.pi) ** 2:
+            return f"covariance: heading variance {c[2, 2]:.3g} rad^2 exceeds (2 pi)^2"
+        return None
 
     def carried_to_now(self, pose: FloatArray, stamp: float) -> FloatArray:
         """``pose`` (3,) given for time ``stamp``, moved by the odometry since then to the
@@ -430,53 +621,71 @@ class NodeCore:
 
     # ------------------------------------------------------------------ scans
 
-    def on_scan(self, msg: Any) -> Outputs | None:
-        """A sensor_msgs/LaserScan message: one localizer step if everything is in place."""
+    def on_scan(self, msg: Any) -> Outputs:
+        """A sensor_msgs/LaserScan message: one localizer step if everything is in place.
+
+        Always returns :class:`Outputs` (with at least a status); ``used`` says whether the
+        localizer took the scan.
+        """
         self.received["scan"] += 1
         try:
             scan = scan_from_msg(msg)
         except SymlocError as err:
             self.drop("scan: malformed", str(err))
-            return None
+            return self.unused_scan(None)
         return self.add_scan(scan)
 
-    def add_scan(self, scan: LaserScan) -> Outputs | None:
-        """One localizer step with ``scan`` and the odometry at its stamp."""
+    def add_scan(self, scan: LaserScan) -> Outputs:
+        """One localizer step with ``scan`` and the odometry at its stamp (see :meth:`on_scan`)."""
         if not self._frame_ok(scan.frame_id, self.params.laser_frame_id, "scan: wrong frame"):
-            return None
+            return self.unused_scan(scan.stamp)
         if self._beams is not None and len(scan) != self._beams:
             self.drop("scan: wrong length", f"{len(scan)} beams, expected {self._beams}")
-            return None
+            return self.unused_scan(scan.stamp)
         if not np.any(scan.valid_mask):
             self.drop(
                 "scan: no valid readings", f"all {len(scan)} readings NaN, inf or out of range"
             )
-            return None
+            return self.unused_scan(scan.stamp)
+        if not self._time_ok(scan.stamp, "scan"):
+            return self.unused_scan(scan.stamp)
         if scan.stamp < self._last_scan_stamp:
-            self.drop("scan: stamp went backwards", f"{scan.stamp:.3f} s")
-            return None
+            self._backwards["scan"] += 1
+            if self._backwards["scan"] < CONFIRM:
+                self.drop("scan: stamp went backwards", f"{scan.stamp:.3f} s")
+                return self.unused_scan(scan.stamp)
+            self._recover(
+                "scan stamps",
+                f"{CONFIRM} scans in a row older than {self._last_scan_stamp:.3f} s: that stamp"
+                " was an outlier and is forgotten",
+            )
+            self._last_scan_stamp = -math.inf
+        self._backwards["scan"] = 0
         if self.localizer is None:
             self.drop("scan: no map yet")
-            return None
+            return self.unused_scan(scan.stamp)
         mount = self._laser_mount(scan.frame_id)
         if isinstance(mount, str):
             self.drop("scan: no laser pose", mount)
-            return None
+            return self.unused_scan(scan.stamp)
         if mount.upside_down:
             scan = mirror(scan)
         odom = self._odom.at(scan.stamp, self.params.transform_tolerance)
         if isinstance(odom, str):
             self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
-            return None
+            return self.unused_scan(scan.stamp)
         image = None
         want, got = self._want_image_after, self._image
         if want is not None and got is not None and got[0] >= want - 1e-9:
             image = got[1]
         try:
             est = self.localizer.update(odom, scan, image)
-        except SymlocError as err:
-            self.drop("scan: rejected by the localizer", str(err))
-            return None
+        except Exception as err:  # the node must keep localizing: count, rebuild if it persists
+            self.drop("scan: rejected by the localizer", f"{type(err).__name__}: {err}")
+            self._localizer_failed()
+            return self.unused_scan(scan.stamp)
+        self._failures = 0
+        self._unused = 0
         if self._beams is None:
             self._beams = len(scan)
         self._last_scan_stamp = scan.stamp
@@ -487,6 +696,60 @@ class NodeCore:
         out = self._outputs(est, scan.stamp, odom)
         self.last = out
         return out
+
+    def _localizer_failed(self) -> None:
+        """After :data:`~symloc.ros.guards.CONFIRM` failures in a row, rebuild the localizer."""
+        self._failures += 1
+        if self._failures < CONFIRM or self.grid is None:
+            return
+        self._failures = 0
+        try:
+            self.localizer = self.factory(self.grid, self.params)
+        except SymlocError as err:
+            self.drop("localizer: cannot be rebuilt", str(err))
+            return
+        self._recover(
+            "localizer", f"{CONFIRM} scans in a row failed: rebuilt (global initialisation)"
+        )
+
+    def unused_scan(self, stamp: float | None = None) -> Outputs:
+        """The outputs (a status only) for a scan the localizer did not take (:class:`Outputs`);
+        ``stamp`` None: the node's clock."""
+        self._unused += 1
+        if stamp is None or not (math.isfinite(stamp) and 0.0 <= stamp <= MAX_STAMP):
+            stamp = self._clock.clock if self._clock.clock is not None else 0.0
+        reason, detail = self._last_drop
+        why = f"scan not used ({reason}{': ' + detail if detail else ''})"
+        last = self.last.estimate if self.last is not None else None
+        if last is None or self._unused >= STALE_SCANS:
+            n = "" if last is None else f"; no scan used for {self._unused} scans"
+            est = Estimate(Status.LOST, reason=why + n)
+        else:
+            est = dataclasses.replace(last, request=None, reason=f"{why}; last: {last.reason}")
+        p = self.params
+        out = Outputs(
+            estimate=est,
+            stamp=stamp,
+            status=status_to_fields(
+                est,
+                stamp=stamp,
+                frame_id=p.global_frame_id,
+                scans_used=self.scans_used,
+                dropped=self.dropped,
+                recovered=self.recovered,
+                scan_used=False,
+            ),
+            used=False,
+        )
+        self._add_map_to_odom(out, stamp)
+        return out
+
+    def _add_map_to_odom(self, out: Outputs, stamp: float) -> None:
+        """The status says what the broadcast ``map -> odom`` is (:mod:`symloc.ros.tf`)."""
+        for diag in out.status.get("status", []):
+            diag.setdefault("values", []).append(
+                {"key": "map_to_odom", "value": self.map_odom.describe(stamp)}
+            )
 
     def _outputs(self, est: Estimate, stamp: float, odom: OdometryReading) -> Outputs:
         p = self.params
@@ -499,14 +762,13 @@ class NodeCore:
                 frame_id=p.global_frame_id,
                 scans_used=self.scans_used,
                 dropped=self.dropped,
+                recovered=self.recovered,
             ),
             candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
+            best_estimate=self._best_estimate(),
         )
         out.tf = self.map_odom.step(est, stamp, odom.pose)
-        for diag in out.status.get("status", []):
-            diag.setdefault("values", []).append(
-                {"key": "map_to_odom", "value": self.map_odom.describe(stamp)}
-            )
+        self._add_map_to_odom(out, stamp)
         particles = self._particles()
         if particles is not None:
             out.particle_cloud = pose_array_to_fields(
@@ -517,8 +779,12 @@ class NodeCore:
                 est.pose, est.covariance, stamp=stamp, frame_id=p.global_frame_id
             )
         req = est.request
+        if req is None or req.kind is not RequestKind.CAPTURE_IMAGE:
+            self._want_image_after = None
+            self._image = None
         if req is not None:
-            o = np.asarray(odom.pose, dtype=np.float64)
+            # goals are for the robot: in its own (uncorrected) odometry frame
+            o = self._odom_gate.uncorrect(np.asarray(odom.pose, dtype=np.float64))
             if req.kind is RequestKind.GO_TO_CENTRE and req.target is not None:
                 t = np.asarray(req.target, dtype=np.float64)
                 goal = compose(o, np.array([t[0], t[1], math.atan2(t[1], t[0])]))
@@ -527,10 +793,20 @@ class NodeCore:
                 goal = compose(o, np.array([0.0, 0.0, float(req.angle or 0.0)]))
                 out.goal = pose_stamped_to_fields(goal, stamp=stamp, frame_id=p.odom_frame_id)
             elif req.kind is RequestKind.CAPTURE_IMAGE:
-                self._want_image_after = stamp
+                # from the first request of a run: an image taken after it answers the repeats
+                if self._want_image_after is None:
+                    self._want_image_after = stamp
                 frame = p.camera_frame_id or p.base_frame_id
                 out.capture = header_fields(stamp, frame)
         return out
+
+    def _best_estimate(self) -> FloatArray | None:
+        last = getattr(getattr(self.localizer, "tracker", None), "last", None)
+        est = getattr(last, "estimate", None)
+        if est is None:
+            return None
+        arr = np.asarray(est, dtype=np.float64).reshape(-1)
+        return arr.copy() if arr.shape == (3,) and np.all(np.isfinite(arr)) else None
 
     def _particles(self) -> FloatArray | None:
         last = getattr(getattr(self.localizer, "tracker", None), "last", None)

@@ -32,7 +32,7 @@ def grid_from_msg(msg: Any) -> OccupancyGrid:
     try:
         width = int(field(msg, "info.width", _WHERE))
         height = int(field(msg, "info.height", _WHERE))
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:
         raise DataFormatError(f"{_WHERE}.info.width/height: expected integers") from err
     if width <= 0 or height <= 0:
         raise DataFormatError(f"{_WHERE}.info: expected width, height > 0, got {width}x{height}")

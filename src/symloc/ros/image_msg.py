@@ -4,7 +4,11 @@ symloc's camera images are ``(H, W, 3)`` uint8 RGB. Raw images in the encodings 
 ``bgr8``, ``rgba8``, ``bgra8``, ``mono8`` / ``8UC1``, ``8UC3`` (taken as BGR, OpenCV's order),
 ``mono16`` / ``16UC1`` (scaled by 1/256) are read, honouring ``step`` (row padding) and
 ``is_bigendian``; any other encoding raises :class:`~symloc.errors.DataFormatError`.
-Compressed images are decoded with OpenCV (PNG, JPEG, ...).
+Compressed images (PNG, JPEG; see :mod:`symloc.image_header`) are decoded with OpenCV.
+
+Both refuse an image of more than ``max_pixels`` pixels (default :data:`MAX_IMAGE_PIXELS`)
+before allocating or decoding it: raw images by ``height x width``, compressed ones by the size
+their header declares.
 """
 
 from __future__ import annotations
@@ -16,10 +20,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError
+from symloc.image_header import check_image_size, image_header
 from symloc.ros.fields import field
 from symloc.ros.header import header_fields
 
 __all__ = [
+    "MAX_IMAGE_PIXELS",
     "SUPPORTED_ENCODINGS",
     "compressed_image_from_msg",
     "compressed_image_to_fields",
@@ -42,6 +48,9 @@ SUPPORTED_ENCODINGS: dict[str, tuple[int, int]] = {
 
 Image = NDArray[np.uint8]
 
+#: Default bound on a camera image's pixels (5 MP; the node's ``max_image_pixels``).
+MAX_IMAGE_PIXELS = 5_000_000
+
 
 def _as_bytes(data: Any, where: str) -> NDArray[np.uint8]:
     if isinstance(data, (bytes, bytearray, memoryview)):
@@ -58,13 +67,14 @@ def _as_bytes(data: Any, where: str) -> NDArray[np.uint8]:
     return arr.reshape(-1)
 
 
-def image_from_msg(msg: Any) -> Image:
+def image_from_msg(msg: Any, *, max_pixels: int = MAX_IMAGE_PIXELS) -> Image:
     """Convert a sensor_msgs/Image to ``(H, W, 3)`` uint8 RGB.
 
     Raises
     ------
     DataFormatError
-        Unknown ``encoding``, zero size, or ``data`` shorter than ``height x step``.
+        Unknown ``encoding``, zero size, more than ``max_pixels`` pixels, or ``data`` shorter
+        than ``height x step``.
     """
     where = "Image"
     enc = str(field(msg, "encoding", where))
@@ -76,10 +86,14 @@ def image_from_msg(msg: Any) -> Image:
     ch, depth = SUPPORTED_ENCODINGS[enc]
     try:
         h, w, step = (int(field(msg, k, where)) for k in ("height", "width", "step"))
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:
         raise DataFormatError(f"{where}.height/width/step: expected integers") from err
     if h <= 0 or w <= 0:
         raise DataFormatError(f"{where}.height/width: expected > 0, got {h}x{w}")
+    if h * w > max_pixels:
+        raise DataFormatError(
+            f"{where}.height/width: {w} x {h} = {w * h:,} pixels; at most {max_pixels:,} allowed"
+        )
     row = w * ch * depth
     if step < row:
         raise DataFormatError(f"{where}.step: expected >= width x {ch * depth} = {row}, got {step}")
@@ -102,13 +116,24 @@ def image_from_msg(msg: Any) -> Image:
     return np.ascontiguousarray(px[:, :, :3])
 
 
-def compressed_image_from_msg(msg: Any) -> Image:
-    """Decode a sensor_msgs/CompressedImage (PNG, JPEG, ...) to ``(H, W, 3)`` uint8 RGB."""
+def compressed_image_from_msg(msg: Any, *, max_pixels: int = MAX_IMAGE_PIXELS) -> Image:
+    """Decode a sensor_msgs/CompressedImage (PNG, JPEG) to ``(H, W, 3)`` uint8 RGB.
+
+    Raises
+    ------
+    DataFormatError
+        Empty data, a header that is not PNG or JPEG, more than ``max_pixels`` pixels declared,
+        or data OpenCV cannot decode.
+    """
     where = "CompressedImage"
     buf = _as_bytes(field(msg, "data", where), f"{where}.data")
     fmt = str(getattr(msg, "format", ""))
     if buf.size == 0:
         raise DataFormatError(f"{where}.data: empty (format {fmt!r})")
+    head = image_header(buf[: 1 << 20].tobytes(), f"{where}.data")
+    if head.format not in ("png", "jpeg"):
+        raise DataFormatError(f"{where}.data: {head.format} image; expected PNG or JPEG")
+    check_image_size(head, max_pixels, f"{where}.data")
     bgr = cv2.imdecode(buf, cv2.IMREAD_COLOR)
     if bgr is None:
         raise DataFormatError(f"{where}.data: OpenCV could not decode it (format {fmt!r})")

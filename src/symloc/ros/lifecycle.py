@@ -51,7 +51,6 @@ from rclpy.parameter import Parameter
 
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import wrap_angle
-from symloc.localizer import Status
 from symloc.ros.build import build_rclpy
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.header import header_fields
@@ -511,18 +510,17 @@ class LocalizationNode(LifecycleNode):
         try:
             self._apply_pending_pose()
             out = core.on_scan(msg)
-        except Exception as err:  # the node must stay up
+        except Exception as err:  # the node must stay up; the status still goes out
             core.drop("internal error", f"{type(err).__name__}: {err}")
-            return
-        if out is not None:
-            self.publish(out)
+            out = core.unused_scan(None)
+        self.publish(out)
 
     def publish(self, out: Outputs) -> None:
         """Publish one step's outputs (and remember the pose for the pose file)."""
         p = self.params
         assert p is not None
         est = out.estimate
-        if est.status is Status.TRACKING and est.pose is not None and est.covariance is not None:
+        if out.amcl_pose is not None and est.pose is not None and est.covariance is not None:
             self._last_pose = (np.asarray(est.pose), np.asarray(est.covariance), out.stamp)
         cloud = out.particle_cloud
         if cloud is not None and self.particle_cloud_type is not None:

@@ -62,6 +62,16 @@ def _pose3(value: Any, name: str) -> tuple[float, float, float]:
     return (x, y, yaw)
 
 
+def _block(name: str, build: Any) -> Any:
+    """``build()``, with a value of the wrong type reported as a ConfigurationError."""
+    try:
+        return build()
+    except (TypeError, ValueError, OverflowError) as err:
+        if isinstance(err, ConfigurationError):
+            raise
+        raise ConfigurationError(f"{name}: {err}") from err
+
+
 def _topic(value: Any, name: str) -> str:
     if not isinstance(value, str) or not value or any(c.isspace() for c in value):
         raise ConfigurationError(f"{name}: expected a topic name without spaces, got {value!r}")
@@ -153,6 +163,18 @@ class NodeParams:
     autostart_node : bool
         nav2's name (main branch): configure and activate at start-up, without a lifecycle
         manager.
+    max_stamp_jump : float
+        A scan, odometry or image stamp further than this [s] from the node's clock (the last
+        accepted stamp) is dropped, not adopted; three such stamps in a row that agree, from
+        every sensor stream, are a clock jump and become the new time base
+        (:mod:`symloc.ros.guards`).
+    max_odom_speed : float
+        Odometry that moves faster than this [m/s] between readings is dropped; three readings
+        in a row that agree are an odometry reset, which the node absorbs (the localizer sees
+        no motion across it).
+    max_image_pixels : int
+        Camera images of more pixels are refused before decoding (compressed ones by the size
+        their header declares).
     seed : int
         Seed of the filter's random numbers (nav2's ``random_seed`` >= 0 sets it).
     amcl : AmclParams
@@ -203,6 +225,9 @@ class NodeParams:
     saved_pose_filepath: str = "/tmp/amcl_saved_pose"
     bond_heartbeat_period: float = 0.25
     autostart_node: bool = False
+    max_stamp_jump: float = 5.0
+    max_odom_speed: float = 10.0
+    max_image_pixels: int = 5_000_000
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
     localizer: LocalizerConfig = field(default_factory=LocalizerConfig)
@@ -225,10 +250,21 @@ class NodeParams:
             )
         if self.mode not in MODES:
             raise ConfigurationError(f"mode: expected one of {MODES}, got {self.mode!r}")
+        if not isinstance(self.camera_intrinsics, (list, tuple)):
+            raise ConfigurationError(
+                "camera_intrinsics: expected a list of 4 numbers fx, fy, cx, cy [px], got"
+                f" {self.camera_intrinsics!r}"
+            )
         intr = tuple(self.camera_intrinsics)
         if intr and (
             len(intr) != 4
-            or not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in intr)
+            or not all(
+                isinstance(v, (int, float))
+                and not isinstance(v, bool)
+                and math.isfinite(v)
+                and v > 0
+                for v in intr
+            )
         ):
             raise ConfigurationError(
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
@@ -295,7 +331,7 @@ class NodeParams:
             raise ConfigurationError(
                 f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"
             )
-        for name in ("transform_tolerance", "max_odom_age"):
+        for name in ("transform_tolerance", "max_odom_age", "max_stamp_jump", "max_odom_speed"):
             v = getattr(self, name)
             if (
                 isinstance(v, bool)
@@ -303,8 +339,12 @@ class NodeParams:
                 or not math.isfinite(v)
                 or v <= 0
             ):
-                raise ConfigurationError(f"{name}: expected a number > 0 s, got {v!r}")
+                unit = "m/s" if name == "max_odom_speed" else "s"
+                raise ConfigurationError(f"{name}: expected a number > 0 {unit}, got {v!r}")
             object.__setattr__(self, name, float(v))
+        px = self.max_image_pixels
+        if isinstance(px, bool) or not isinstance(px, int) or px < 1:
+            raise ConfigurationError(f"max_image_pixels: expected an integer >= 1, got {px!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigurationError(f"seed: expected an integer >= 0, got {self.seed!r}")
         if not isinstance(self.amcl, AmclParams):
@@ -320,11 +360,16 @@ class NodeParams:
         bad = sorted(set(self.symmetry) - known)
         if bad:
             raise ConfigurationError(f"symmetry.{bad[0]}: unknown (known: {sorted(known)})")
-        if self.lidar_preset:
-            from symloc.lidar_spec import PRESETS
+        try:
+            if self.lidar_preset:
+                from symloc.lidar_spec import PRESETS
 
-            return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
-        return SymmetryConfig(**self.symmetry)
+                return SymmetryConfig.from_lidar(PRESETS[self.lidar_preset], **self.symmetry)
+            return SymmetryConfig(**self.symmetry)
+        except (TypeError, ValueError, OverflowError) as err:
+            if isinstance(err, ConfigurationError):
+                raise
+            raise ConfigurationError(f"symmetry: {err}") from err
 
     @property
     def allow_mapping(self) -> bool:
@@ -347,7 +392,7 @@ class NodeParams:
                 )
             kwargs[key] = value
         if "amcl" in kwargs:
-            kwargs["amcl"] = AmclParams.from_dict(kwargs["amcl"] or {})
+            kwargs["amcl"] = _block("amcl", lambda: AmclParams.from_dict(kwargs["amcl"] or {}))
         if "localizer" in kwargs:
             block = kwargs["localizer"] or {}
             if not isinstance(block, dict):
@@ -356,8 +401,9 @@ class NodeParams:
             bad = sorted(set(block) - known)
             if bad:
                 raise ConfigurationError(f"localizer.{bad[0]}: unknown (known: {sorted(known)})")
-            kwargs["localizer"] = LocalizerConfig(**block)
-        return cls(**kwargs)
+            kwargs["localizer"] = _block("localizer", lambda: LocalizerConfig(**block))
+        params: NodeParams = _block("ros__parameters", lambda: cls(**kwargs))
+        return params
 
     @classmethod
     def from_yaml(cls, source: str | Path, *, node_name: str = "symloc") -> NodeParams:
@@ -371,7 +417,7 @@ class NodeParams:
         ):
             try:
                 text = Path(source).read_text()
-            except OSError as err:
+            except (OSError, UnicodeDecodeError) as err:
                 raise ConfigurationError(f"params file {source}: cannot read ({err})") from err
         else:
             text = str(source)

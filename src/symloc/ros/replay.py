@@ -3,7 +3,8 @@
 The bag's messages go through :class:`symloc.ros.core.NodeCore` (the ROS node's own logic) in
 record order: odometry, images and maps are buffered, and every scan is one localizer step with
 the odometry at its stamp and, when the localizer asked for one, the newest image. The result is
-the status and pose at every scan, written as a TUM trajectory (tracked poses only) by the CLI.
+the status, the earned pose and the tracker's best estimate at every scan (``symloc replay``
+writes the earned poses and every scan's estimate as TUM trajectories).
 """
 
 from __future__ import annotations
@@ -79,9 +80,13 @@ def replay_bag(
     for m in messages:
         if m.kind == "scan":
             out = core.add_scan(m.value)
-            if out is not None:
+            if out.used:
                 est = out.estimate
-                trajectory.append(TrajectoryPoint(m.stamp, est.status.value, est.pose))
+                trajectory.append(
+                    TrajectoryPoint(
+                        m.stamp, est.status.value, est.pose, out.best_estimate, est.reason
+                    )
+                )
         elif m.kind == "odom":
             core.add_odometry(m.value)
         elif m.kind == "image":
@@ -91,9 +96,9 @@ def replay_bag(
                 core.set_map(m.value)
         elif m.kind == "truth":
             truth.append([m.stamp, *m.value.pose])
-        elif m.kind == "initialpose" and core.localizer is not None:
+        elif m.kind == "initialpose":
             pose, cov = m.value
-            core.localizer.set_pose(pose, cov)
+            core.set_initial_pose(pose, cov)
     store = getattr(core.localizer, "places", None)
     if store is not None and hasattr(store, "visual_map"):
         store.visual_map.close()

@@ -1,6 +1,7 @@
 """The localizer's status and symmetric candidates as ROS messages.
 
-**Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan used): one
+**Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan, used or
+not): one
 ``DiagnosticStatus`` named ``symloc: localization`` whose ``level`` is OK while tracking, WARN
 while ambiguous / going to the centre / deciding, ERROR when lost, and whose ``message`` is
 ``"<status>: <reason>"``. Its ``values`` (key / value strings) are:
@@ -18,11 +19,16 @@ key                 value
 ``request_target``  "x y" [m] of a go_to_centre target in the robot (base) frame
 ``request_angle``   [rad] of a face_direction / rotate request (CCW positive)
 ``stamp``           the scan stamp [s] this status answers
+``scan``            ``used``, or ``dropped`` when the localizer did not take this scan (then
+                    the status is the last one, ``lost`` after a few unused scans in a row,
+                    and ``reason`` says why)
 ``scans_used``      scans given to the localizer so far
 ``dropped``         messages dropped so far (all reasons)
 ``dropped/<why>``   messages dropped for that reason
 ``map_to_odom``     what the broadcast ``map -> odom`` is: sent with this scan (and the stamp it
                     carries), not updated since an earlier scan, or never sent
+``recovered``       recoveries from a stuck state so far (clock jump, odometry reset, ...)
+``recovered/<what>``  recoveries of that kind (:mod:`symloc.ros.core`)
 ==================  ==========================================================================
 
 **Candidates** (``visualization_msgs/MarkerArray`` on ``symloc/candidates``): a DELETEALL
@@ -54,6 +60,13 @@ LEVELS = {
 _ARROW, _TEXT, _DELETEALL = 0, 9, 3
 
 
+def _order_text(order: int | None) -> str:
+    """`` (order k)`` for people; a circle (order 0 in the library) reads ``inf``."""
+    if order is None:
+        return ""
+    return f" (order {'inf' if int(order) == 0 else int(order)})"
+
+
 def _fmt(values: Any) -> str:
     return " ".join(f"{float(v):.6g}" for v in np.asarray(values, dtype=np.float64).reshape(-1))
 
@@ -76,6 +89,8 @@ def status_to_fields(
     frame_id: str,
     scans_used: int,
     dropped: Mapping[str, int],
+    recovered: Mapping[str, int] | None = None,
+    scan_used: bool = True,
 ) -> dict[str, Any]:
     """A diagnostic_msgs/DiagnosticArray field dict describing ``est`` (see module doc)."""
     values: list[tuple[str, str]] = [
@@ -89,10 +104,14 @@ def status_to_fields(
     values += _request_values(est.request)
     values += [
         ("stamp", f"{stamp:.9f}"),
+        ("scan", "used" if scan_used else "dropped"),
         ("scans_used", str(scans_used)),
         ("dropped", str(sum(dropped.values()))),
     ]
     values += [(f"dropped/{k}", str(v)) for k, v in sorted(dropped.items())]
+    rec = recovered or {}
+    values += [("recovered", str(sum(rec.values())))]
+    values += [(f"recovered/{k}", str(v)) for k, v in sorted(rec.items())]
     return {
         "header": header_fields(stamp, frame_id),
         "status": [
@@ -140,7 +159,7 @@ def candidates_to_fields(est: Estimate, *, stamp: float, frame_id: str) -> dict[
                 "pose": pose_fields([centre[0], centre[1], 0.0]),
                 "scale": {"x": 0.0, "y": 0.0, "z": 0.25},
                 "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0},
-                "text": est.status.value + ("" if est.order is None else f" (order {est.order})"),
+                "text": est.status.value + _order_text(est.order),
             }
         )
     return {"markers": markers}

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError, DataFormatError
+from symloc.image_header import MAX_PHOTO_PIXELS, read_image_file
 from symloc.vision.orb import OrbExtractor
 from symloc.vision.visual_map import PlaceImage, direction_headings
 from symloc.vision.vocabulary import IMAGE_SUFFIXES, Vocabulary
@@ -25,22 +26,26 @@ __all__ = [
 ]
 
 
-def read_image(path: str | Path) -> NDArray[np.uint8]:
+def read_image(path: str | Path, *, max_pixels: int = MAX_PHOTO_PIXELS) -> NDArray[np.uint8]:
     """Read an image file as ``(H, W)`` grey or ``(H, W, 3)`` RGB uint8.
+
+    The size its header declares is checked against ``max_pixels`` before decoding.
 
     Raises
     ------
     DataFormatError
-        The file does not exist or is not an image OpenCV can decode.
+        The file does not exist, is not an image OpenCV can decode, or is too large.
     """
     p = Path(path)
     if not p.is_file():
         raise DataFormatError(f"{p}: no such image file")
-    img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-    if img is None or img.size == 0:
+    try:
+        img = read_image_file(p, max_pixels=max_pixels)
+    except DataFormatError as err:
+        why = str(err).removeprefix(f"{p}: ")
         raise DataFormatError(
-            f"{p}: not a readable image (expected one of {', '.join(IMAGE_SUFFIXES)})"
-        )
+            f"{p}: not a readable image ({why}; expected one of {', '.join(IMAGE_SUFFIXES)})"
+        ) from err
     if img.dtype != np.uint8:
         img = cv2.convertScaleAbs(img, alpha=255.0 / max(float(img.max()), 1.0))
     if img.ndim == 3 and img.shape[2] == 4:

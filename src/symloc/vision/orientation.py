@@ -188,7 +188,7 @@ class OrientationDecision:
     attempts : int
         Images tried (1 without retries).
     reason : str
-        Why, in words.
+        Why, in words (directions numbered from 1, as people count them).
     """
 
     status: Status
@@ -470,8 +470,8 @@ def decide_orientation(
         bow_problem = f"best score {s1:.3f} < min_score {cfg.min_score}"
     elif m > 1 and s1 < cfg.min_score_ratio * s2:
         bow_problem = (
-            f"ambiguous: best score {s1:.3f} (direction {best}) is not {cfg.min_score_ratio}x "
-            f"the second {s2:.3f} (direction {int(order[1])})"
+            f"ambiguous: best score {s1:.3f} (direction {best + 1}) is not {cfg.min_score_ratio}x "
+            f"the second {s2:.3f} (direction {int(order[1]) + 1})"
         )
     if bow_problem and not cfg.geometric_fallback:
         return _undecided("undetermined", bow_problem, scores, n_kp)
@@ -492,7 +492,7 @@ def decide_orientation(
     if H is None or inl < cfg.min_inliers:
         return _undecided(
             "undetermined",
-            f"{prefix}geometric check failed: {inl} homography inliers for direction {best} "
+            f"{prefix}geometric check failed: {inl} homography inliers for direction {best + 1} "
             f"(< {cfg.min_inliers})",
             scores,
             n_kp,
@@ -501,8 +501,8 @@ def decide_orientation(
     if inl < cfg.min_inlier_ratio * inl2:
         return _undecided(
             "undetermined",
-            f"{prefix}geometric check ambiguous: {inl} inliers for direction {best} against "
-            f"{inl2} for direction {j2}",
+            f"{prefix}geometric check ambiguous: {inl} inliers for direction {best + 1} against "
+            f"{inl2} for direction {j2 + 1}",
             scores,
             n_kp,
             **kw,
@@ -534,9 +534,9 @@ def decide_orientation(
         second_inliers=inl2,
         n_keypoints=n_kp,
         reason=(
-            f"direction {best} by geometry ({bow_problem}): {inl} inliers vs {inl2}"
+            f"direction {best + 1} by geometry ({bow_problem}): {inl} inliers vs {inl2}"
             if bow_problem
-            else f"direction {best}: score {s1:.3f} vs {s2:.3f}, {inl} inliers vs {inl2}"
+            else f"direction {best + 1}: score {s1:.3f} vs {s2:.3f}, {inl} inliers vs {inl2}"
         ),
         homography=H,
     )

@@ -9,6 +9,12 @@ optionally the image itself (PNG).
 Every write is one transaction; the journal is WAL with ``synchronous=FULL``, so a process that
 dies mid-write loses only the place it was writing. The file carries ``PRAGMA application_id``
 (``'SYML'``) and the schema version in ``PRAGMA user_version``.
+
+A damaged or foreign file gives :class:`~symloc.errors.DatabaseError` naming the file, the table
+and column and what was expected, never a raw ``sqlite3`` or NumPy error: the tables and their
+columns are checked when the map is opened, every value when it is read (a NULL blob, a
+text-typed column, a record of the wrong length). Opened for reading (``create=False``) a map is
+never written to: an empty file does not get a schema, and ``readonly=True`` opens it read-only.
 """
 
 from __future__ import annotations
@@ -16,7 +22,8 @@ from __future__ import annotations
 import math
 import sqlite3
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,7 +31,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from symloc.errors import ConfigurationError, DatabaseError
+from symloc.errors import ConfigurationError, DatabaseError, DataFormatError
+from symloc.image_header import check_image_size, image_header
 from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
 from symloc.vision.orb import OrbFeatures
 
@@ -66,6 +74,41 @@ CREATE TABLE images (
     PRIMARY KEY (place_id, direction)
 );
 """
+
+
+#: The columns each table must have (name -> declared type).
+_COLUMNS: dict[str, dict[str, str]] = {
+    "meta": {"key": "TEXT", "value": "TEXT"},
+    "places": {
+        "id": "INTEGER",
+        "kind": "TEXT",
+        "symmetry_order": "INTEGER",
+        "gv_distance": "REAL",
+        "x": "REAL",
+        "y": "REAL",
+        "heading": "REAL",
+        "n_directions": "INTEGER",
+        "label": "TEXT",
+        "created": "REAL",
+    },
+    "images": {
+        "place_id": "INTEGER",
+        "direction": "INTEGER",
+        "heading": "REAL",
+        "width": "INTEGER",
+        "height": "INTEGER",
+        "n_features": "INTEGER",
+        "bow_words": "BLOB",
+        "bow_values": "BLOB",
+        "keypoints": "BLOB",
+        "descriptors": "BLOB",
+        "image_png": "BLOB",
+    },
+}
+#: Largest stored image (pixels) decoded from ``images.image_png``.
+MAX_STORED_IMAGE_PIXELS = 50_000_000
+#: Most ORB features one stored image may claim.
+MAX_FEATURES = 1_000_000
 
 
 def direction_headings(heading0: float, m: int) -> NDArray[np.float64]:
@@ -152,15 +195,49 @@ def _encode_png(image: NDArray[np.uint8]) -> bytes:
     return bytes(buf.tobytes())
 
 
-def _decode_png(blob: bytes) -> NDArray[np.uint8]:
+def _decode_png(blob: bytes, where: str) -> NDArray[np.uint8]:
     import cv2
 
+    try:
+        head = check_image_size(image_header(blob, where), MAX_STORED_IMAGE_PIXELS, where)
+    except DataFormatError as err:
+        raise DatabaseError(str(err)) from err
+    if head.format != "png":
+        raise DatabaseError(f"{where}: expected a PNG, got {head.format}")
     arr = cv2.imdecode(np.frombuffer(blob, np.uint8), cv2.IMREAD_UNCHANGED)
     if arr is None:
-        raise DatabaseError("images.image_png: cannot decode the stored PNG")
+        raise DatabaseError(f"{where}: cannot decode the stored PNG")
     if arr.ndim == 3:
         arr = cv2.cvtColor(arr, cv2.COLOR_BGR2RGB)
     return np.asarray(arr, np.uint8)
+
+
+def _blob(value: Any, where: str) -> bytes:
+    """A BLOB column's value, refusing NULL and other types."""
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value)
+    kind = "NULL" if value is None else type(value).__name__
+    raise DatabaseError(f"{where}: expected a BLOB, got {kind}")
+
+
+def _int(value: Any, where: str, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise DatabaseError(f"{where}: expected an integer in {low}..{high}, got {value!r}")
+    return int(value)
+
+
+def _real(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise DatabaseError(f"{where}: expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _text(value: Any, where: str, *, null: bool = False) -> str | None:
+    if value is None and null:
+        return None
+    if not isinstance(value, str):
+        raise DatabaseError(f"{where}: expected text, got {value!r}")
+    return value
 
 
 class VisualMap:
@@ -171,33 +248,52 @@ class VisualMap:
     path : str or Path
         Database file (``":memory:"`` for a throw-away map).
     create : bool
-        Create the file when it does not exist (else raise :class:`DatabaseError`).
+        Create the file (and the schema in a new or empty file) when needed. False: the file
+        must already be a symloc visual map; nothing is written on opening.
     journal : {"wal", "delete"}
         SQLite journal mode: write-ahead log (default) or rollback journal.
+    readonly : bool
+        Open read-only (implies ``create=False``): writes raise :class:`DatabaseError`.
 
     Raises
     ------
     DatabaseError
-        The file is not a symloc visual map, has a newer schema, or cannot be opened.
+        The file is not a symloc visual map (or an empty one opened for reading), has a newer
+        schema, a missing table or column, or cannot be opened.
     """
 
-    def __init__(self, path: str | Path, *, create: bool = True, journal: str = "wal") -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        create: bool = True,
+        journal: str = "wal",
+        readonly: bool = False,
+    ) -> None:
         if journal not in ("wal", "delete"):
             raise ConfigurationError(f"journal: expected 'wal' or 'delete', got {journal!r}")
         self.path = str(path)
+        self.readonly = bool(readonly)
+        create = create and not self.readonly
         if self.path != ":memory:":
             p = Path(self.path)
             if not p.exists() and not create:
-                raise DatabaseError(f"{p}: no visual map there (create=False)")
+                raise DatabaseError(f"{p}: no visual map there")
+            if p.exists() and not p.is_file():
+                raise DatabaseError(f"{p}: not a file")
             if not p.parent.is_dir():
                 raise DatabaseError(f"{p}: folder {p.parent} does not exist")
         try:
-            self._con = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
+            if self.readonly and self.path != ":memory:":
+                uri = Path(self.path).resolve().as_uri() + "?mode=ro"
+                self._con = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=30.0)
+            else:
+                self._con = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
         except sqlite3.Error as err:
             raise DatabaseError(f"{self.path}: cannot open: {err}") from err
         self._cache: tuple[BowMatrix, NDArray[np.int64], NDArray[np.int64]] | None = None
         try:
-            self._init_schema(journal)
+            self._init_schema(journal, create)
         except sqlite3.DatabaseError as err:
             self._con.close()
             raise DatabaseError(
@@ -207,13 +303,30 @@ class VisualMap:
             self._con.close()
             raise
 
+    @contextmanager
+    def _reading(self, what: str) -> Iterator[None]:
+        """Turn SQLite and decoding errors met while reading ``what`` into DatabaseError."""
+        try:
+            yield
+        except DatabaseError:
+            raise
+        except sqlite3.Error as err:
+            raise DatabaseError(f"{self.path}: {what}: {err}") from err
+        except (TypeError, ValueError, OverflowError) as err:
+            raise DatabaseError(f"{self.path}: {what}: damaged record: {err}") from err
+
     # ------------------------------------------------------------------ lifecycle
-    def _init_schema(self, journal: str) -> None:
+    def _init_schema(self, journal: str, create: bool) -> None:
         con = self._con
         app_id = con.execute("PRAGMA application_id").fetchone()[0]
         version = con.execute("PRAGMA user_version").fetchone()[0]
         n_tables = con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
         if app_id == 0 and version == 0 and n_tables == 0:
+            if not create:
+                raise DatabaseError(
+                    f"{self.path}: an empty database, not a symloc visual map (opened for"
+                    " reading: nothing is written to it)"
+                )
             con.execute("BEGIN IMMEDIATE")
             for stmt in _SCHEMA.split(";"):
                 if stmt.strip():
@@ -234,10 +347,28 @@ class VisualMap:
             )
         elif version < 1:
             raise DatabaseError(f"{self.path}: schema version {version} is not a valid version")
-        if self.path != ":memory:":
+        self._check_tables()
+        if self.path != ":memory:" and not self.readonly:
             con.execute(f"PRAGMA journal_mode = {journal}")
         con.execute("PRAGMA synchronous = FULL")
         con.execute("PRAGMA foreign_keys = ON")
+
+    def _check_tables(self) -> None:
+        for table, cols in _COLUMNS.items():
+            have = {
+                str(r[1]): str(r[2]).upper()
+                for r in self._con.execute(f"PRAGMA table_info({table})")
+            }
+            if not have:
+                raise DatabaseError(f"{self.path}: table '{table}' is missing")
+            for col, typ in cols.items():
+                if col not in have:
+                    raise DatabaseError(f"{self.path}: column {table}.{col} is missing")
+                if have[col] != typ:
+                    raise DatabaseError(
+                        f"{self.path}: column {table}.{col} is declared {have[col] or 'untyped'},"
+                        f" expected {typ}"
+                    )
 
     def close(self) -> None:
         """Close the connection (checkpointing the WAL)."""
@@ -250,7 +381,8 @@ class VisualMap:
         self.close()
 
     def __len__(self) -> int:
-        return int(self._con.execute("SELECT count(*) FROM places").fetchone()[0])
+        with self._reading("places"):
+            return int(self._con.execute("SELECT count(*) FROM places").fetchone()[0])
 
     # ------------------------------------------------------------------ meta
     def set_meta(self, key: str, value: str) -> None:
@@ -260,27 +392,37 @@ class VisualMap:
 
     def get_meta(self, key: str) -> str | None:
         """Return a metadata string or None."""
-        row = self._con.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
-        return None if row is None else str(row[0])
+        with self._reading(f"meta {key!r}"):
+            row = self._con.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
+        return None if row is None else _text(row[0], f"{self.path}: meta.value of {key!r}")
 
     # ------------------------------------------------------------------ writes
     class _Tx:
-        def __init__(self, con: sqlite3.Connection) -> None:
+        def __init__(self, con: sqlite3.Connection, path: str) -> None:
             self.con = con
+            self.path = path
 
         def __enter__(self) -> sqlite3.Connection:
-            self.con.execute("BEGIN IMMEDIATE")
+            try:
+                self.con.execute("BEGIN IMMEDIATE")
+            except sqlite3.Error as err:
+                raise DatabaseError(f"{self.path}: cannot write: {err}") from err
             return self.con
 
-        def __exit__(self, exc_type: Any, *rest: object) -> None:
+        def __exit__(self, exc_type: Any, exc: BaseException | None, tb: object) -> None:
             if exc_type is None:
-                self.con.execute("COMMIT")
-            else:
-                self.con.execute("ROLLBACK")
+                try:
+                    self.con.execute("COMMIT")
+                except sqlite3.Error as err:
+                    raise DatabaseError(f"{self.path}: cannot write: {err}") from err
+                return
+            self.con.execute("ROLLBACK")
+            if isinstance(exc, sqlite3.Error):
+                raise DatabaseError(f"{self.path}: cannot write: {exc}") from exc
 
     def _transaction(self) -> VisualMap._Tx:
         self._cache = None
-        return VisualMap._Tx(self._con)
+        return VisualMap._Tx(self._con, self.path)
 
     def add_place(
         self,
@@ -364,44 +506,79 @@ class VisualMap:
     # ------------------------------------------------------------------ reads
     def place_ids(self) -> list[int]:
         """Ids of all places, ascending."""
-        return [int(r[0]) for r in self._con.execute("SELECT id FROM places ORDER BY id")]
+        with self._reading("places.id"):
+            rows = self._con.execute("SELECT id FROM places ORDER BY id").fetchall()
+        return [_int(r[0], f"{self.path}: places.id", 0, 2**62) for r in rows]
 
     def place(self, place_id: int, *, with_images: bool = True) -> Place:
         """Load one place with its images in clockwise order."""
-        row = self._con.execute(
-            "SELECT kind, symmetry_order, gv_distance, x, y, heading, label FROM places "
-            "WHERE id = ?",
-            (int(place_id),),
-        ).fetchone()
-        if row is None:
-            raise DatabaseError(f"{self.path}: no place with id {place_id}")
-        imgs = []
-        for r in self._con.execute(
-            "SELECT direction, heading, width, height, n_features, bow_words, bow_values, "
-            "keypoints, descriptors, image_png FROM images WHERE place_id = ? ORDER BY direction",
-            (int(place_id),),
-        ):
-            n = int(r[4])
-            try:
-                kp = np.frombuffer(r[7], "<f4").reshape(n, 6)
-                desc = np.frombuffer(r[8], np.uint8).reshape(n, 32)
-                bow = BowVector(np.frombuffer(r[5], "<i4"), np.frombuffer(r[6], "<f8"))
-            except ValueError as err:
-                raise DatabaseError(
-                    f"{self.path}: place {place_id} direction {r[0]}: damaged image record: {err}"
-                ) from err
-            feats = OrbFeatures.from_arrays(kp, desc, (int(r[2]), int(r[3])))
-            image = _decode_png(r[9]) if (with_images and r[9] is not None) else None
-            imgs.append(PlaceImage(int(r[0]), float(r[1]), feats, bow, image))
-        return Place(
-            id=int(place_id),
-            kind=str(row[0]),
-            order=int(row[1]),
-            gv_distance=float(row[2]),
-            pose=np.array(row[3:6], np.float64),
-            images=tuple(imgs),
-            label=row[6],
+        where = f"{self.path}: place {place_id}"
+        with self._reading(f"place {place_id}"):
+            row = self._con.execute(
+                "SELECT kind, symmetry_order, gv_distance, x, y, heading, label FROM places "
+                "WHERE id = ?",
+                (int(place_id),),
+            ).fetchone()
+            if row is None:
+                raise DatabaseError(f"{self.path}: no place with id {place_id}")
+            rows = self._con.execute(
+                "SELECT direction, heading, width, height, n_features, bow_words, bow_values, "
+                "keypoints, descriptors, image_png FROM images WHERE place_id = ? "
+                "ORDER BY direction",
+                (int(place_id),),
+            ).fetchall()
+            imgs = [self._image_record(r, where, with_images) for r in rows]
+            return Place(
+                id=int(place_id),
+                kind=str(_text(row[0], f"{where}: places.kind")),
+                order=_int(row[1], f"{where}: places.symmetry_order", 0, 1_000_000),
+                gv_distance=_real(row[2], f"{where}: places.gv_distance"),
+                pose=np.array(
+                    [
+                        _real(row[3], f"{where}: places.x"),
+                        _real(row[4], f"{where}: places.y"),
+                        _real(row[5], f"{where}: places.heading"),
+                    ],
+                    np.float64,
+                ),
+                images=tuple(imgs),
+                label=_text(row[6], f"{where}: places.label", null=True),
+            )
+
+    def _image_record(self, r: Sequence[Any], where: str, with_images: bool) -> PlaceImage:
+        d = _int(r[0], f"{where}: images.direction", 0, 1_000_000)
+        at = f"{where} direction {d}: images"
+        n = _int(r[4], f"{at}.n_features", 0, MAX_FEATURES)
+        size = (
+            _int(r[2], f"{at}.width", 0, 1_000_000),
+            _int(r[3], f"{at}.height", 0, 1_000_000),
         )
+        words = _blob(r[5], f"{at}.bow_words")
+        values = _blob(r[6], f"{at}.bow_values")
+        kp_b = _blob(r[7], f"{at}.keypoints")
+        desc_b = _blob(r[8], f"{at}.descriptors")
+        for name, blob, need in (
+            ("keypoints", kp_b, 24 * n),
+            ("descriptors", desc_b, 32 * n),
+            ("bow_values", values, 2 * len(words)),
+        ):
+            if len(blob) != need:
+                raise DatabaseError(
+                    f"{at}.{name}: {len(blob)} bytes, expected {need} (damaged record)"
+                )
+        if len(words) % 4:
+            raise DatabaseError(f"{at}.bow_words: {len(words)} bytes, not whole int32 words")
+        try:
+            kp = np.frombuffer(kp_b, "<f4").reshape(n, 6)
+            desc = np.frombuffer(desc_b, np.uint8).reshape(n, 32)
+            bow = BowVector(np.frombuffer(words, "<i4"), np.frombuffer(values, "<f8"))
+            feats = OrbFeatures.from_arrays(kp, desc, size)
+        except (ValueError, DataFormatError) as err:
+            raise DatabaseError(f"{at}: damaged image record: {err}") from err
+        image = None
+        if with_images and r[9] is not None:
+            image = _decode_png(_blob(r[9], f"{at}.image_png"), f"{at}.image_png")
+        return PlaceImage(d, _real(r[1], f"{at}.heading"), feats, bow, image)
 
     def find_places(
         self,
@@ -425,16 +602,36 @@ class VisualMap:
         if order is not None:
             sql += " AND symmetry_order = ?"
             args.append(int(order))
-        rows = [(int(a), float(b)) for a, b in self._con.execute(sql, args)]
+        with self._reading("places (G-V index)"):
+            found = self._con.execute(sql, args).fetchall()
+        rows = [
+            (
+                _int(a, f"{self.path}: places.id", 0, 2**62),
+                _real(b, f"{self.path}: places.gv_distance"),
+            )
+            for a, b in found
+        ]
         return sorted(rows, key=lambda r: abs(r[1] - gv_distance))
 
     def _bow_cache(self) -> tuple[BowMatrix, NDArray[np.int64], NDArray[np.int64]]:
         if self._cache is None:
-            rows = self._con.execute(
-                "SELECT place_id, direction, bow_words, bow_values FROM images "
-                "ORDER BY place_id, direction"
-            ).fetchall()
-            vecs = [BowVector(np.frombuffer(r[2], "<i4"), np.frombuffer(r[3], "<f8")) for r in rows]
+            with self._reading("images (BoW vectors)"):
+                rows = self._con.execute(
+                    "SELECT place_id, direction, bow_words, bow_values FROM images "
+                    "ORDER BY place_id, direction"
+                ).fetchall()
+                vecs = []
+                for r in rows:
+                    at = f"{self.path}: place {r[0]} direction {r[1]}: images"
+                    _int(r[0], f"{at}.place_id", 0, 2**62)
+                    _int(r[1], f"{at}.direction", 0, 1_000_000)
+                    words = _blob(r[2], f"{at}.bow_words")
+                    values = _blob(r[3], f"{at}.bow_values")
+                    if len(words) % 4 or len(values) != 2 * len(words):
+                        raise DatabaseError(f"{at}.bow_words/bow_values: lengths disagree")
+                    vecs.append(
+                        BowVector(np.frombuffer(words, "<i4"), np.frombuffer(values, "<f8"))
+                    )
             self._cache = (
                 BowMatrix.stack(vecs),
                 np.array([r[0] for r in rows], np.int64),
@@ -467,7 +664,8 @@ class VisualMap:
 
     def integrity_check(self) -> str:
         """SQLite's ``PRAGMA integrity_check`` result (``"ok"`` when sound)."""
-        return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
+        with self._reading("integrity check"):
+            return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
 
     def checkpoint(self) -> None:
         """Fold the WAL into the main file (so the file size is the map's size)."""

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, DataFormatError
+from symloc.image_header import read_image_file
 from symloc.vision.bow import (
     BowMatrix,
     BowVector,
@@ -182,6 +183,20 @@ class Vocabulary:
 
     def __len__(self) -> int:
         return self.n_words
+
+    def fingerprint(self) -> str:
+        """``sha256:<hex>`` of the tree, words and weights: the identity of the BoW space.
+
+        Two vocabularies with the same fingerprint make the same BoW vectors; a visual map
+        stores its vocabulary's fingerprint so a query with another one is refused.
+        """
+        import hashlib
+
+        h = hashlib.sha256()
+        h.update(f"{self.k} {self.L} {int(self.weighting)} {int(self.scoring)}".encode())
+        for a in (self.parent.astype("<i4"), self.descriptors, self.weights.astype("<f8")):
+            h.update(np.ascontiguousarray(a).tobytes())
+        return "sha256:" + h.hexdigest()
 
     def __repr__(self) -> str:
         return (
@@ -396,8 +411,9 @@ class Vocabulary:
         docs = []
         unreadable = []
         for p in tqdm(files, desc="ORB features", unit="img", disable=not progress):
-            img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-            if img is None:
+            try:
+                img = read_image_file(p, flags=cv2.IMREAD_GRAYSCALE)
+            except DataFormatError:
                 unreadable.append(p)
                 continue
             d = ext.extract(img).descriptors

@@ -21,6 +21,13 @@ weights and parents compress about tenfold, while trained binary descriptors are
 Loading is a single read plus ``np.frombuffer`` views, so a 1-million-word vocabulary loads in
 well under a second.
 
+Sizes are bounded before allocation: a file larger than :data:`MAX_VOCABULARY_BYTES` is refused
+unread, the node count must fit in the payload that was read, and compressed weights are
+inflated to at most the size the node count implies. DBoW2 text (plain or ``.gz``) is first
+scanned in 1 MiB pieces without keeping them: more than :data:`MAX_TEXT_BYTES`, a line longer
+than :data:`MAX_TEXT_LINE` characters, or lines shorter than a DBoW2 row can be on average (a
+file of newlines) are refused before the text is held in memory.
+
 DBoW2 text format (``TemplatedVocabulary::loadFromTextFile``, ORB-SLAM's ``ORBvoc.txt``): a
 header line ``k L scoring weighting``, then one line per node after the root:
 ``parent isLeaf d0 d1 ... d31 weight`` (descriptor bytes as decimal integers).
@@ -29,9 +36,11 @@ header line ``k L scoring weighting``, then one line per node after the root:
 from __future__ import annotations
 
 import gzip
+import io
 import struct
 import warnings
 import zlib
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +50,25 @@ from symloc.errors import VocabularyFileError
 from symloc.vision.bow import Scoring, Weighting
 from symloc.vision.vocabulary import Vocabulary
 
-__all__ = ["MAGIC", "load_dbow2_text", "load_vocabulary", "save_dbow2_text", "save_vocabulary"]
+__all__ = [
+    "MAGIC",
+    "MAX_TEXT_BYTES",
+    "MAX_TEXT_LINE",
+    "MAX_VOCABULARY_BYTES",
+    "load_dbow2_text",
+    "load_vocabulary",
+    "save_dbow2_text",
+    "save_vocabulary",
+]
+
+#: Largest vocabulary file, or decompressed DBoW2 text, read (ORB-SLAM's ORBvoc.txt is 145 MB).
+MAX_VOCABULARY_BYTES = 256 * 2**20
+#: Largest DBoW2 text, decompressed (ORB-SLAM's ORBvoc.txt is 145 MB); parsing holds ~4x it.
+MAX_TEXT_BYTES = 160 * 2**20
+#: Longest line of a DBoW2 text (a row is 35 numbers, under 200 characters).
+MAX_TEXT_LINE = 4096
+_MIN_MEAN_ROW = 60  # characters: a row is 2 + 32 integers and a weight
+_CHUNK = 1 << 20
 
 MAGIC = b"SYMLVOC\x00"
 VERSION = 1
@@ -94,18 +121,71 @@ def load_vocabulary(path: str | Path) -> Vocabulary:
         The file is corrupt or truncated; the message names the byte (binary) or line (text).
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()  # one read: far faster than reading a header, then the rest
-    except OSError as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+    data = _read_bounded(path)  # one read: far faster than reading a header, then the rest
     if data[: len(MAGIC)] != MAGIC:
-        if path.suffix == ".gz" or data[:1].isdigit():
+        if path.suffix == ".gz" or data[:2] == b"\x1f\x8b" or data[:1].isdigit():
             return load_dbow2_text(path)
         raise VocabularyFileError(
             f"{path}: byte 0: not a symloc vocabulary (magic {data[:8]!r}, expected {MAGIC!r})"
             " nor a DBoW2 text vocabulary"
         )
     return _parse_native(data, str(path))
+
+
+def _read_bounded(path: Path) -> bytes:
+    """The file's bytes, refusing one larger than :data:`MAX_VOCABULARY_BYTES` unread."""
+    try:
+        size = path.stat().st_size
+        if size > MAX_VOCABULARY_BYTES:
+            raise VocabularyFileError(
+                f"{path}: {size:,} bytes; a vocabulary file is at most"
+                f" {MAX_VOCABULARY_BYTES:,} bytes"
+            )
+        return path.read_bytes()
+    except OSError as err:
+        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+
+
+def _gzip_chunks(data: bytes, name: str) -> Iterator[bytes]:
+    """The decompressed content of gzip ``data`` in pieces of at most 1 MiB."""
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(data)) as fh:
+            while piece := fh.read(_CHUNK):
+                yield piece
+    except (OSError, EOFError, zlib.error) as err:
+        raise VocabularyFileError(f"{name}: cannot decompress: {err}") from err
+
+
+def _scan_text(chunks: Iterable[bytes], name: str) -> None:
+    """Refuse a text over :data:`MAX_TEXT_BYTES`, with a line over :data:`MAX_TEXT_LINE`, or
+    with more lines than a DBoW2 file of its size can have, holding one piece at a time."""
+    total = newlines = 0
+    run = 0  # characters since the last newline
+    for piece in chunks:
+        total += len(piece)
+        if total > MAX_TEXT_BYTES:
+            raise VocabularyFileError(
+                f"{name}: more than {MAX_TEXT_BYTES:,} bytes of DBoW2 text; refused"
+            )
+        at = np.flatnonzero(np.frombuffer(piece, np.uint8) == 10)
+        # lengths of the lines this piece ends (the first carries the previous run)
+        ends = np.diff(at, prepend=-1) - 1
+        if ends.size:
+            ends[0] += run
+        long = np.flatnonzero(ends > MAX_TEXT_LINE)
+        run = len(piece) - int(at[-1]) - 1 if at.size else run + len(piece)
+        if long.size or run > MAX_TEXT_LINE:
+            line = newlines + 1 + (int(long[0]) if long.size else at.size)
+            raise VocabularyFileError(
+                f"{name}: line {line}: longer than {MAX_TEXT_LINE:,} characters"
+                " (not a DBoW2 vocabulary)"
+            )
+        newlines += at.size
+    if newlines > total // _MIN_MEAN_ROW + 16:
+        raise VocabularyFileError(
+            f"{name}: {newlines:,} lines in {total:,} bytes: shorter than DBoW2 rows"
+            f" ({_MIN_MEAN_ROW} characters or more each)"
+        )
 
 
 def _parse_native(data: bytes, name: str) -> Vocabulary:
@@ -142,13 +222,20 @@ def _parse_native(data: bytes, name: str) -> Vocabulary:
         raise VocabularyFileError(
             f"{name}: bytes {HEADER_SIZE}..{HEADER_SIZE + plen}: checksum mismatch (corrupt payload)"
         )
+    if n * DESC_BYTES > len(stored):
+        raise VocabularyFileError(
+            f"{name}: byte 32: node count {n} needs {n * DESC_BYTES:,} bytes of descriptors,"
+            f" the payload has {len(stored):,}"
+        )
     head: bytes | memoryview = stored
     desc_buf: bytes | memoryview = stored
     desc_at = 12 * n
     if flags & 1:
         try:
             (nz,) = struct.unpack_from("<Q", stored, 0)
-            head = zlib.decompress(stored[8 : 8 + nz])
+            inflate = zlib.decompressobj()
+            # weights and parents of n nodes are 12 n bytes: inflate no more than that
+            head = inflate.decompress(stored[8 : 8 + nz], 12 * n + 1)
         except (struct.error, zlib.error) as err:
             raise VocabularyFileError(
                 f"{name}: byte {HEADER_SIZE}: cannot decompress weights and parents: {err}"
@@ -201,11 +288,16 @@ def load_dbow2_text(path: str | Path) -> Vocabulary:
         Naming the line (1-based) that is malformed.
     """
     path = Path(path)
+    raw = _read_bounded(path)
+    name = str(path)
+    if path.suffix == ".gz" or raw[:2] == b"\x1f\x8b":
+        _scan_text(_gzip_chunks(raw, name), name)  # first pass: nothing kept
+        raw = b"".join(_gzip_chunks(raw, name))
+    else:
+        view = memoryview(raw)
+        _scan_text((bytes(view[i : i + _CHUNK]) for i in range(0, len(raw), _CHUNK)), name)
     try:
-        raw = gzip.decompress(path.read_bytes()) if path.suffix == ".gz" else path.read_bytes()
         text = raw.decode("ascii")
-    except (OSError, EOFError, gzip.BadGzipFile) as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
     except UnicodeDecodeError as err:
         line = raw[: err.start].count(b"\n") + 1
         raise VocabularyFileError(f"{path}: line {line}: not ASCII text") from err

@@ -1,34 +1,28 @@
-"""Options every ``symloc bench`` command shares: parallelism, outputs, seed."""
+"""Options every ``symloc bench`` command shares: parallelism, outputs, seed.
+
+``--out``, ``--json`` and ``--seed`` come from :mod:`symloc.cli.options` (one vocabulary
+across every command).
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from symloc.bench.stats import json_safe
 from symloc.bench.sweep import default_workers
+from symloc.cli import options
 
 __all__ = ["add_sweep_arguments", "write_json"]
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from err
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
-    return value
-
-
-def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--workers``, ``--ray``, ``--out`` and ``--json``."""
+def add_sweep_arguments(parser: argparse.ArgumentParser, command: str = "bench") -> None:
+    """``--workers``, ``--ray``, ``--out`` and ``--json``; ``command`` names the default output
+    folder (``"bench localization"`` -> ``symloc-bench-localization``)."""
     parser.add_argument(
         "--workers",
-        type=_positive_int,
+        type=options.positive_int,
         default=default_workers(),
         help=f"worker processes (default: all cores, here {default_workers()})",
     )
@@ -39,16 +33,10 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
         help="run on Ray instead of local processes: 'local' (a private local instance), "
         "'auto' (a running cluster) or a cluster address; needs pip install 'symloc[ray]'",
     )
-    parser.add_argument(
-        "--out", type=Path, default=Path("symloc-bench"), metavar="DIR", help="output folder"
-    )
-    parser.add_argument(
-        "--json", type=Path, default=None, metavar="PATH", help="also write the JSON here"
-    )
+    options.add_out(parser, command)
+    options.add_json(parser)
 
 
 def write_json(path: Path, data: Mapping[str, Any]) -> Path:
-    """Write ``data`` as standard JSON (no NaN: None) to ``path``; returns ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(json_safe(dict(data)), indent=2, sort_keys=True) + "\n")
-    return path
+    """Write ``data`` as standard JSON (no NaN: null) to ``path``; returns ``path``."""
+    return options.write_json(path, data)

@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
 from symloc.cli.bench_commands._common import add_sweep_arguments, write_json
 
 __all__ = ["register", "run"]
@@ -61,7 +62,7 @@ def register(subparsers: Any) -> None:
         default=None,
         help="explicit world seeds (overrides --split)",
     )
-    parser.add_argument("--trials", type=int, default=10, help="trials per world (default 10)")
+    options.add_trials(parser, default=10, what="trials per world")
     parser.add_argument(
         "--kinds",
         nargs="+",
@@ -90,7 +91,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--track-time", type=float, default=20.0, help="seconds driven after the first claim (20)"
     )
-    add_sweep_arguments(parser)
+    add_sweep_arguments(parser, "bench localization")
     parser.set_defaults(func=run)
 
 

@@ -40,7 +40,7 @@ def register(subparsers: Any) -> None:
         "--lidar", choices=sorted(PRESETS), default="rplidar_a2", help="lidar (rplidar_a2)"
     )
     parser.add_argument("--regime", choices=REGIMES, default="ideal", help="sensor regime")
-    add_sweep_arguments(parser)
+    add_sweep_arguments(parser, "bench symmetry")
     parser.set_defaults(func=run)
 
 

@@ -7,6 +7,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register", "run"]
 
 ROOMS = (
@@ -27,11 +29,17 @@ def register(subparsers: Any) -> None:
         "demo",
         help="kidnapped robot in a symmetric room: plain AMCL vs symloc (table + PNG)",
     )
-    parser.add_argument("--room", choices=ROOMS, default="square", help="room (default square)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (printed)")
-    parser.add_argument(
-        "--out", type=Path, default=Path("symloc-demo"), metavar="DIR", help="output folder"
+    where = parser.add_mutually_exclusive_group()
+    options.add_room(where, choices=ROOMS, help="symmetric room inside the lab")
+    where.add_argument(
+        "--world",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="a world file (YAML, see docs/world_files.md) instead of a built-in room",
     )
+    options.add_seed(parser)
+    options.add_out(parser, "demo", what="the map, visual map and demo_<room>.png")
     parser.add_argument(
         "--untextured", action="store_true", help="plain lab walls (the camera's failure case)"
     )
@@ -43,11 +51,17 @@ def run(args: argparse.Namespace) -> int:
     from symloc.figures.demo import demo_figure
 
     t0 = time.perf_counter()
+    room: Any = args.room
+    if args.world is not None:
+        from symloc.sim.world_file import load_world_file
+
+        room = load_world_file(args.world).build()
     print(
-        f"# symloc demo: room {args.room}, seed {args.seed}, "
-        f"{'untextured' if args.untextured else 'textured'} lab, out {args.out}"
+        f"# symloc demo: {'world ' + str(args.world) if args.world else 'room ' + args.room}, "
+        f"seed {args.seed}, {'untextured' if args.untextured else 'textured'} lab, "
+        f"out {args.out}"
     )
-    res = run_demo(args.room, seed=args.seed, workdir=args.out, textured=not args.untextured)
+    res = run_demo(room, seed=args.seed, workdir=args.out, textured=not args.untextured)
     scen = res.scenario
     print(
         f"# lidar {scen.preset.name}; symloc AMCL max_particles {scen.amcl_params.max_particles}; "
@@ -67,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     width = max(len(k) for k, _ in res.rows())
     for key, value in res.rows():
         print(f"{key:<{width}}  {value}")
-    path = demo_figure(res.story, Path(args.out) / f"demo_{args.room}.png")
+    path = demo_figure(res.story, Path(args.out) / f"demo_{res.room}.png")
     print()
     t = res.timings
     print(f"wrote {path}")

@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register"]
 
 
@@ -29,20 +31,36 @@ def register(subparsers: Any) -> None:
     src = b.add_mutually_exclusive_group(required=True)
     src.add_argument("--world", choices=sorted(SIM_WORLDS), help="simulated world to explore")
     src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
-    b.add_argument("--out", type=Path, default=Path("map_out"), help="output folder")
+    options.add_out(b, "map build", what="NAME.yaml, NAME.pgm and NAME_trajectory.png")
     b.add_argument("--name", default="map", help="file stem of the map (default: map)")
-    b.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    options.add_seed(b)
     b.add_argument(
         "--alphas",
-        type=float,
+        type=options.nonnegative_float,
         nargs=4,
         default=list(DEFAULT_ALPHAS),
         metavar=("A1", "A2", "A3", "A4"),
         help="odometry noise alpha1..alpha4 (simulated robot, or added to the log's increments)",
     )
-    b.add_argument("--max-scans", type=int, default=None, help="CARMEN: first N scans only")
-    b.add_argument("--laps", type=float, default=1.3, help="simulation: loops around the room")
-    b.add_argument("--resolution", type=float, default=0.05, help="map cell size [m]")
+    b.add_argument(
+        "--max-scans",
+        type=options.positive_int,
+        default=None,
+        metavar="N",
+        help="CARMEN: the first N scans only",
+    )
+    b.add_argument(
+        "--laps",
+        type=options.positive_float,
+        default=1.3,
+        help="simulation: loops around the room (default 1.3)",
+    )
+    b.add_argument(
+        "--resolution",
+        type=options.positive_float,
+        default=0.05,
+        help="map cell size [m] (default 0.05)",
+    )
     b.add_argument(
         "--mode", choices=["trinary", "scale", "raw"], default="trinary", help="map_server mode"
     )

@@ -8,6 +8,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register"]
 
 
@@ -22,29 +24,38 @@ def register(subparsers: Any) -> None:
     a = sub.add_parser(
         "add",
         help="store a place from M photos taken at its centre, in clockwise order",
-        description="Photo j looks along heading - j * 360/M degrees (clockwise order, as the "
-        "paper stores them). Creates the database when it does not exist.",
+        description="Photo j (j = 1..M) looks along heading - (j - 1) * 360/M degrees (clockwise"
+        " order, as the paper stores them). Creates the database when it does not exist.",
     )
     a.add_argument("--db", type=Path, required=True, help="visual map database (SQLite)")
-    a.add_argument("--images", type=Path, nargs="+", required=True, metavar="IMG")
+    a.add_argument(
+        "--images",
+        type=Path,
+        nargs="+",
+        required=True,
+        metavar="IMG",
+        help="the M photos, direction 1 first, clockwise",
+    )
     a.add_argument("--kind", default="polygon", help="room kind (square, polygon, circle, ...)")
-    a.add_argument("--order", type=int, required=True, help="symmetry order of the room")
-    a.add_argument("--gv", type=float, required=True, help="G-V distance [m]")
+    a.add_argument(
+        "--order", type=options.positive_int, required=True, help="symmetry order of the room"
+    )
+    a.add_argument("--gv", type=options.nonnegative_float, required=True, help="G-V distance [m]")
     a.add_argument(
         "--pose",
-        type=float,
+        type=options.finite_float,
         nargs=3,
         default=(0.0, 0.0, 0.0),
         metavar=("X", "Y", "THETA_DEG"),
-        help="map pose of the centre [m, m, deg]; THETA is the heading of the first photo",
+        help="map pose of the centre [m, m, deg]; THETA is the heading of direction 1",
     )
-    a.add_argument("--label", default=None)
+    a.add_argument("--label", default=None, help="a name for the place")
     a.add_argument("--vocabulary", type=Path, default=None, help="default: the shipped one")
     a.add_argument("--keep-images", action="store_true", help="also store the pixels (PNG)")
     a.set_defaults(func=_add)
 
     ls = sub.add_parser("list", help="list the stored places")
-    ls.add_argument("--db", type=Path, required=True)
+    ls.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
     ls.set_defaults(func=_list)
 
     d = sub.add_parser(
@@ -54,39 +65,79 @@ def register(subparsers: Any) -> None:
         "beat the second clearly, verifies it with a RANSAC homography and reads the residual "
         "heading offset from it. Exit code 0 when decided, 3 when undetermined or refused.",
     )
-    d.add_argument("--db", type=Path, required=True)
-    d.add_argument("--place", type=int, required=True, help="place id (see 'places list')")
+    d.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
+    d.add_argument(
+        "--place", type=options.positive_int, required=True, help="place id (see 'places list')"
+    )
     d.add_argument("--query", type=Path, required=True, help="query photo")
     cam = d.add_mutually_exclusive_group(required=True)
-    cam.add_argument("--hfov", type=float, help="horizontal field of view [deg]")
     cam.add_argument(
-        "--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"), help="[px]"
+        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
     )
-    d.add_argument("--vocabulary", type=Path, default=None, help="default: the one used by add")
+    cam.add_argument(
+        "--intrinsics",
+        type=options.finite_float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        help="camera intrinsics [px]",
+    )
+    d.add_argument(
+        "--vocabulary",
+        type=Path,
+        default=None,
+        help="the vocabulary the map was made with (default: the shipped one; another is refused)",
+    )
     d.set_defaults(func=_decide)
 
     r = sub.add_parser("remove", help="remove a place and its images")
-    r.add_argument("--db", type=Path, required=True)
-    r.add_argument("--place", type=int, required=True)
+    r.add_argument("--db", type=Path, required=True, help="visual map database")
+    r.add_argument("--place", type=options.positive_int, required=True, help="place id")
     r.set_defaults(func=_remove)
 
 
-def _open(db: Path, create: bool = False) -> Any:
+def _open(db: Path, *, create: bool = False, readonly: bool = False) -> Any:
     from symloc.vision.visual_map import VisualMap
 
-    return VisualMap(db, create=create)
+    return VisualMap(db, create=create, readonly=readonly)
 
 
-def _vocabulary(path: Path | None, vmap: Any | None = None) -> tuple[Any, str]:
+def _vocabulary(path: Path | None, vmap: Any, *, option: str = "--vocabulary") -> tuple[Any, str]:
+    """The vocabulary to use with ``vmap`` and its identity to store (``"default"`` or its
+    fingerprint). The map's record says which vocabulary made its BoW vectors; another one is
+    refused. A path is never read from the database (a crafted one could point anywhere)."""
+    from symloc.errors import ConfigurationError
     from symloc.vision.default_vocabulary import default_vocabulary
     from symloc.vision.vocabulary import Vocabulary
 
-    stored = vmap.get_meta("vocabulary") if vmap is not None else None
-    if path is None and stored not in (None, "default"):
-        path = Path(str(stored))
-    if path is None:
-        return default_vocabulary(), "default"
-    return Vocabulary.load(path), str(path.resolve())
+    stored = vmap.get_meta("vocabulary")
+    voc = default_vocabulary() if path is None else Vocabulary.load(path)
+    name = "the shipped vocabulary" if path is None else str(path)
+    ident = voc.fingerprint()
+    if stored is None:
+        return voc, "default" if path is None else ident
+    if stored == "default":
+        want = default_vocabulary().fingerprint()
+    elif stored.startswith("sha256:"):
+        want = stored
+    else:  # maps written before fingerprints: the vocabulary file's path
+        if path is None:
+            raise ConfigurationError(
+                f"{option}: this map's BoW vectors were made with {stored}; give that file"
+                f" (symloc never opens a path stored in the database)"
+            )
+        if Path(stored).resolve() != path.resolve():
+            raise ConfigurationError(
+                f"{option}: this map's BoW vectors were made with {stored}, not {path}"
+            )
+        return voc, stored
+    if ident != want:
+        made = "the shipped vocabulary" if stored == "default" else f"vocabulary {want[:19]}..."
+        hint = "" if path is not None else " (give it with --vocabulary)"
+        raise ConfigurationError(
+            f"{option}: this map's BoW vectors were made with {made}, not {name}"
+            f" ({ident[:19]}...){hint}; scores against another vocabulary mean nothing"
+        )
+    return voc, "default" if stored == "default" else ident
 
 
 def _add(args: argparse.Namespace) -> int:
@@ -99,12 +150,8 @@ def _add(args: argparse.Namespace) -> int:
             "expected a multiple of the order"
         )
     with _open(args.db, create=True) as vmap:
-        voc, voc_name = _vocabulary(args.vocabulary)
+        voc, voc_id = _vocabulary(args.vocabulary, vmap)
         stored = vmap.get_meta("vocabulary")
-        if stored is not None and stored != voc_name:
-            raise ConfigurationError(
-                f"--vocabulary: this map's BoW vectors were made with {stored}, not {voc_name}"
-            )
         images = place_images_from_files(
             args.images,
             voc,
@@ -121,7 +168,10 @@ def _add(args: argparse.Namespace) -> int:
             label=args.label,
         )
         if stored is None:
-            vmap.set_meta("vocabulary", voc_name)
+            vmap.set_meta("vocabulary", voc_id)
+            vmap.set_meta(
+                "vocabulary_file", "shipped" if args.vocabulary is None else str(args.vocabulary)
+            )
     counts = ", ".join(str(len(im.features)) for im in images)
     print(f"added place {pid} to {args.db}: {args.kind}, order {args.order}, G-V {args.gv} m")
     print(f"  {len(images)} directions (ORB keypoints: {counts})")
@@ -129,9 +179,11 @@ def _add(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    with _open(args.db) as vmap:
+    with _open(args.db, readonly=True) as vmap:
         ids = vmap.place_ids()
-        print(f"{args.db}: {len(ids)} place(s), vocabulary {vmap.get_meta('vocabulary')}")
+        voc = vmap.get_meta("vocabulary")
+        made = vmap.get_meta("vocabulary_file") or voc
+        print(f"{args.db}: {len(ids)} place(s), vocabulary {made} ({voc})")
         if ids:
             print(f"{'id':>4}  {'kind':<10}{'order':>6}{'G-V [m]':>9}{'M':>3}  pose (x, y, deg)")
         for pid in ids:
@@ -148,7 +200,7 @@ def _decide(args: argparse.Namespace) -> int:
     from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values, read_image
     from symloc.vision.orientation import decide_orientation
 
-    with _open(args.db) as vmap:
+    with _open(args.db, readonly=True) as vmap:
         place = vmap.place(args.place, with_images=False)
         voc, _ = _vocabulary(args.vocabulary, vmap)
     query = read_image(args.query)
@@ -163,7 +215,7 @@ def _decide(args: argparse.Namespace) -> int:
     print(f"place {place.id} ({place.kind}, M={place.n_directions}), query {args.query}")
     print(f"status:         {d.status}")
     if d.decided:
-        print(f"direction:      {d.direction}")
+        print(f"direction:      {options.direction_text(d.direction or 0, place.n_directions)}")
         print(f"heading offset: {math.degrees(d.heading_offset):+.2f} deg (CCW positive)")
         print(f"heading:        {math.degrees(d.heading):.2f} deg (map)")
     print(f"scores:         [{scores}]")

@@ -1,4 +1,10 @@
-"""``symloc replay BAG``: run the localizer over a ROS 1 / ROS 2 bag; TUM trajectory + PNG."""
+"""``symloc replay BAG``: run the localizer over a ROS 1 / ROS 2 bag; TUM trajectories + PNG.
+
+Into ``--out DIR``: ``replay.tum`` (the poses the localizer earned, status tracking: what a
+robot would act on), ``replay_scans.tum`` (AMCL's best estimate at every scan, earned or not,
+so evo sees the whole run), ``replay_scans.csv`` (every scan's status, estimate and reason) and
+``replay.png``. A run that never earned a pose says why and exits with code 3.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +12,8 @@ import argparse
 import sys
 from pathlib import Path
 from typing import Any
+
+from symloc.cli import options
 
 __all__ = ["register"]
 
@@ -15,8 +23,10 @@ def register(subparsers: Any) -> None:
     p: argparse.ArgumentParser = subparsers.add_parser(
         "replay",
         help="run the localizer over a recorded bag (ROS 1 .bag, ROS 2 .db3 / .mcap)",
-        description="Run the symloc localizer over a recorded bag with the ROS node's own logic"
-        " and write the estimated trajectory (TUM format, tracked poses only) and a PNG.",
+        description="Run the symloc localizer over a recorded bag with the ROS node's own logic."
+        " Writes into --out: replay.tum (tracked poses), replay_scans.tum (AMCL's estimate at"
+        " every scan), replay_scans.csv (every scan's status and reason) and replay.png."
+        " Exit code 3 when no pose was earned.",
     )
     p.add_argument("bag", type=Path, help="ROS 1 .bag file or ROS 2 bag folder (or its .db3/.mcap)")
     p.add_argument(
@@ -33,7 +43,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--truth-topic", default="ground_truth", help="ground-truth Odometry topic, if any"
     )
-    p.add_argument("--seed", type=int, default=None, help="AMCL seed (overrides the params' seed)")
+    options.add_seed(p, overrides="the --params file's seed, else 0")
     p.add_argument(
         "--build-map",
         type=Path,
@@ -48,12 +58,7 @@ def register(subparsers: Any) -> None:
         help="mode build_visual_map: places that match nothing are added to --visual-map (the"
         " bag must hold the robot's trip to the centre and its images, as a node run records)",
     )
-    p.add_argument(
-        "--out",
-        type=Path,
-        default=Path("replay"),
-        help="output prefix (writes PREFIX.tum, PREFIX.png)",
-    )
+    options.add_out(p, "replay", what="replay.tum, replay_scans.tum, replay_scans.csv, replay.png")
     p.set_defaults(func=_run)
 
 
@@ -75,7 +80,7 @@ def _run(args: argparse.Namespace) -> int:
         changes["visual_map"] = str(args.visual_map)
     if args.vocabulary is not None:
         changes["vocabulary"] = str(args.vocabulary)
-    if args.seed is not None:
+    if args.seed_given or args.params is None:
         changes["seed"] = args.seed
     params = dataclasses.replace(params, **changes)
     grid = None
@@ -87,9 +92,19 @@ def _run(args: argparse.Namespace) -> int:
 
             raise ConfigurationError("--map: map_server file support is missing") from err
         grid = load_map(args.map)
+    out = Path(args.out)
+    options.refuse_overwriting_inputs(
+        {"bag": args.bag, "--map": args.map, "--params": args.params},
+        {"--out": out, "--out/replay.tum": out / "replay.tum"},
+    )
     print(f"# symloc replay {args.bag}")
     print(f"#   seed: {params.seed}")
     print(f"#   map: {args.map or 'from the bag'}; visual map: {params.visual_map or 'none'}")
+    if not params.visual_map:
+        print(
+            "#   without a visual map a symmetric room cannot be resolved: the localizer can"
+            " earn a pose only where the map itself is not symmetric"
+        )
     topics = BagTopics(
         scan=args.scan_topic, odom=args.odom_topic, image=args.image_topic, truth=args.truth_topic
     )
@@ -104,14 +119,18 @@ def _run(args: argparse.Namespace) -> int:
     if res.grid is None:
         print("symloc: error: no map (give --map or record the map topic)", file=sys.stderr)
         return 2
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tum = out.with_suffix(".tum")
-    write_tum(tum, [(p.stamp, p.pose) for p in res.trajectory if p.pose is not None])
+    out.mkdir(parents=True, exist_ok=True)
+    tum = out / "replay.tum"
+    tracked = [(p.stamp, p.pose) for p in res.trajectory if p.pose is not None]
+    write_tum(tum, tracked)
+    scans_tum = out / "replay_scans.tum"
+    write_tum(scans_tum, [(p.stamp, p.estimate) for p in res.trajectory if p.estimate is not None])
+    scans_csv = out / "replay_scans.csv"
+    _write_scans_csv(scans_csv, res.trajectory)
     from symloc.figures.replay import plot_replay
 
     png = plot_replay(
-        out.with_suffix(".png"),
+        out / "replay.png",
         grid=res.grid,
         trajectory=res.trajectory,
         truth=res.truth,
@@ -137,9 +156,38 @@ def _run(args: argparse.Namespace) -> int:
             )
     for line in res.steps:
         print(f"  step: {line}")
-    print(f"wrote {tum}")
+    print(f"wrote {tum} ({len(tracked)} tracked poses of {len(res.trajectory)} scans)")
+    print(f"wrote {scans_tum} and {scans_csv} (every scan: estimate and status)")
     print(f"wrote {png}")
+    if not tracked:
+        why = (
+            "no visual map was given (--visual-map), so a symmetric room stays ambiguous"
+            if not params.visual_map
+            else "see the status counts and steps above"
+        )
+        print(
+            f"symloc: no pose was earned in {len(res.trajectory)} scans: replay.tum is empty;"
+            f" {why}",
+            file=sys.stderr,
+        )
+        return 3
     return 0
+
+
+def _write_scans_csv(path: Path, trajectory: list[Any]) -> None:
+    """One row per scan used: stamp, status, tracked, AMCL's estimate (x, y, theta_deg)."""
+    import csv
+    import math
+
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["stamp", "status", "tracked", "x", "y", "theta_deg", "reason"])
+        for p in trajectory:
+            e = p.estimate
+            xyz = ["", "", ""] if e is None else [f"{e[0]:.6f}", f"{e[1]:.6f}"]
+            if e is not None:
+                xyz.append(f"{math.degrees(float(e[2])):.4f}")
+            w.writerow([f"{p.stamp:.9f}", p.status, int(p.pose is not None), *xyz, p.reason])
 
 
 def _build_map(args: argparse.Namespace) -> int:

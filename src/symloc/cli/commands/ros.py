@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register"]
 
 
@@ -75,16 +77,24 @@ def register(subparsers: Any) -> None:
     conv = sub.add_parser(
         "carmen-to-bag",
         help="convert a CARMEN laser log to a ROS bag (scan, odom, ground_truth)",
+        description="Write the log's scans, odometry and corrected poses as a bag named after the"
+        " log inside the output folder: DIR/<log name> (a ROS 2 bag folder) or"
+        " DIR/<log name>.bag (ROS 1).",
     )
     conv.add_argument("log", type=Path, help="CARMEN log (.log or .log.gz)")
-    conv.add_argument("--out", type=Path, required=True, help="bag to create")
-    conv.add_argument("--format", choices=("ros2", "mcap", "ros1"), default="ros2")
+    options.add_out(conv, "ros carmen-to-bag", what="the bag")
+    conv.add_argument(
+        "--format",
+        choices=("ros2", "mcap", "ros1"),
+        default="ros2",
+        help="ros2 (sqlite3 .db3, default), mcap (ROS 2 MCAP) or ros1 (.bag)",
+    )
     conv.set_defaults(func=_carmen_to_bag)
     check = sub.add_parser(
         "check-params",
         help="validate a parameters YAML (nav2's amcl block or symloc's) and print it",
     )
-    check.add_argument("params", type=Path)
+    check.add_argument("params", type=Path, help="nav2's params file or symloc's layout")
     check.add_argument("--node-name", default="amcl", help="node block to read (default amcl)")
     check.set_defaults(func=_check)
 
@@ -114,10 +124,13 @@ def _setup(args: argparse.Namespace) -> int:
 def _carmen_to_bag(args: argparse.Namespace) -> int:
     from symloc.io.rosbag_carmen import carmen_to_bag
 
-    counts = carmen_to_bag(args.log, args.out, fmt=args.format)
+    stem = args.log.name.removesuffix(".gz").removesuffix(".log")
+    bag = Path(args.out) / (stem + (".bag" if args.format == "ros1" else ""))
+    options.refuse_overwriting_inputs({"log": args.log}, {"--out": bag})
+    counts = carmen_to_bag(args.log, bag, fmt=args.format)
     for topic, n in sorted(counts.items()):
         print(f"  {topic}: {n} messages")
-    print(f"wrote {args.out}")
+    print(f"wrote {bag}")
     return 0
 
 
@@ -136,28 +149,45 @@ def add_sim_record_parser(sim_subparsers: Any) -> None:
         help="record a simulated kidnapped-robot run (scan, odom, image, ground truth) as a bag",
         description="Kidnap the simulated robot in a symmetric room inside the textured lab, let"
         " the symloc node logic localize it while a driver carries out its requests, and record"
-        " every message as a ROS 2 bag (or ROS 1). Beside the bag, DIR_assets holds the map,"
-        " the visual map, the vocabulary, node parameters and TUM trajectories.",
+        " every message as a ROS 2 bag (or ROS 1). The output folder gets the bag (run, or"
+        " run.bag for ROS 1) and assets/: the map, the visual map, the vocabulary, node"
+        " parameters and TUM trajectories.",
     )
-    rec.add_argument("--out", type=Path, required=True, help="bag to create (ROS 2: a folder)")
+    options.add_out(rec, "sim record", what="must be new or empty: run (the bag) and assets/")
     rec.add_argument(
         "--format",
         choices=("ros2", "mcap", "ros1"),
         default="ros2",
         help="ros2 (sqlite3 .db3, default), mcap (ROS 2 MCAP) or ros1 (.bag)",
     )
-    rec.add_argument("--room", default="square", help="room name (square, triangle, hexagon, ...)")
+    options.add_room(rec, choices=_record_rooms(), help="symmetric room inside the lab")
     rec.add_argument("--plain", action="store_true", help="untextured lab walls")
     rec.add_argument("--compressed", action="store_true", help="images as CompressedImage (PNG)")
-    rec.add_argument("--max-time", type=float, default=60.0, help="simulated seconds at most")
-    rec.add_argument("--particles", type=int, default=2000, help="AMCL max_particles")
+    rec.add_argument(
+        "--max-time",
+        type=options.positive_float,
+        default=60.0,
+        help="simulated seconds at most (default 60)",
+    )
+    rec.add_argument(
+        "--particles",
+        type=options.positive_int,
+        default=2000,
+        help="AMCL max_particles (default 2000)",
+    )
     rec.add_argument(
         "--build-visual-map",
         action="store_true",
         help="run the node in its visual-map building mode against a new places_built.db",
     )
-    rec.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    options.add_seed(rec)
     rec.set_defaults(func=_sim_record)
+
+
+def _record_rooms() -> tuple[str, ...]:
+    from symloc.sim.rooms import ROOM_NAMES
+
+    return tuple(r for r in options.ROOMS if r in ROOM_NAMES)
 
 
 def _sim_record(args: argparse.Namespace) -> int:
@@ -165,9 +195,16 @@ def _sim_record(args: argparse.Namespace) -> int:
 
     from symloc.bench.sim_record import record_sim_run
 
+    out = Path(args.out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        from symloc.errors import ConfigurationError
+
+        raise ConfigurationError(f"--out: {out} exists and is not an empty folder")
+    bag = out / ("run.bag" if args.format == "ros1" else "run")
     print(f"# symloc sim record  seed={args.seed}  room={args.room}  format={args.format}")
     rec = record_sim_run(
-        args.out,
+        bag,
+        assets=out / "assets",
         room=args.room,
         textured=not args.plain,
         seed=args.seed,

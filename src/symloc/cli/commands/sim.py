@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 from typing import Any
+
+from symloc.cli import options
 
 __all__ = ["register"]
 
@@ -19,7 +20,6 @@ def register(subparsers: Any) -> None:
     )
     sub = parser.add_subparsers(dest="sim_command", metavar="ACTION")
     sub.required = True
-    from symloc.sim.lidar import PRESETS
     from symloc.sim.rooms import ROOM_NAMES
 
     r = sub.add_parser(
@@ -30,9 +30,7 @@ def register(subparsers: Any) -> None:
         "them.",
     )
     which = r.add_mutually_exclusive_group()
-    which.add_argument(
-        "--room", choices=ROOM_NAMES, default=None, help="room shape (default square)"
-    )
+    options.add_room(which, choices=ROOM_NAMES, help="room shape")
     which.add_argument(
         "--world",
         type=Path,
@@ -41,35 +39,39 @@ def register(subparsers: Any) -> None:
         "--furniture and --tables apply to --room only",
     )
     r.add_argument(
-        "--time", type=float, default=0.0, help="time [s]: where the world's people are (default 0)"
+        "--time",
+        type=options.finite_float,
+        default=0.0,
+        help="time [s]: where the world's people are (default 0)",
     )
     r.add_argument(
         "--gv",
-        type=float,
+        type=options.positive_float,
         default=1.5 * math.sqrt(2),
         help="G-V distance, centre to vertex [m] (default: the paper's 3 m x 3 m square)",
     )
     r.add_argument(
         "--pose",
-        type=float,
+        type=options.finite_float,
         nargs=3,
         metavar=("X", "Y", "THETA_DEG"),
         default=None,
         help="robot pose relative to the room centre [m, m, deg] (default 0.3 0.2 30)",
     )
-    r.add_argument("--lidar", choices=sorted(PRESETS), default="rplidar_a2", help="lidar preset")
+    options.add_lidar(r)
     r.add_argument("--no-lab", action="store_true", help="no lab around the room (tall walls)")
     r.add_argument("--plain", action="store_true", help="untextured walls (no photographs)")
     r.add_argument("--door", action="store_true", help="a 0.8 m door gap in the bottom wall")
-    r.add_argument("--furniture", type=int, default=0, help="number of boxes")
-    r.add_argument("--tables", type=int, default=0, help="number of round tables")
-    r.add_argument("--hfov", type=float, default=65.0, help="camera horizontal FOV [deg]")
-    r.add_argument("--gain", type=float, default=1.0, help="camera lighting gain")
-    r.add_argument("--seed", type=int, default=0, help="random seed (printed)")
-    r.add_argument("--out", type=Path, default=Path("scene.png"), help="output PNG")
+    r.add_argument("--furniture", type=options.nonnegative_int, default=0, help="number of boxes")
     r.add_argument(
-        "--image-out", type=Path, default=None, help="also write the bare camera image here"
+        "--tables", type=options.nonnegative_int, default=0, help="number of round tables"
     )
+    options.add_angle(
+        r, "--hfov", default=65.0, help="camera horizontal field of view", dest="hfov"
+    )
+    r.add_argument("--gain", type=options.positive_float, default=1.0, help="camera lighting gain")
+    options.add_seed(r)
+    options.add_out(r, "sim render", what="scene.png (top view + camera) and camera.png")
     r.set_defaults(func=_render)
     from symloc.cli.commands.ros import add_sim_record_parser  # `sim record` (ROS part)
 
@@ -89,11 +91,11 @@ def _add_world_parser(sub: Any) -> None:
         "rooms) and write it as YAML that `symloc sim render --world` and the bench load. "
         "Prints the computed symmetry order, centre and G-V distance.",
     )
-    src = w.add_mutually_exclusive_group()
+    src = w.add_mutually_exclusive_group(required=True)
     src.add_argument("--family", choices=sorted(FAMILIES), help="generator family")
-    src.add_argument("--room", choices=ROOM_NAMES, help="a named room (as `sim render --room`)")
+    options.add_room(src, choices=ROOM_NAMES, help="a named room (as `sim render --room`)")
     src.add_argument("--list", action="store_true", help="list the families and exit")
-    w.add_argument("--seed", type=int, default=0, help="world seed (printed)")
+    options.add_seed(w)
     pert = w.add_mutually_exclusive_group()
     pert.add_argument(
         "--perturb",
@@ -105,9 +107,11 @@ def _add_world_parser(sub: Any) -> None:
     pert.add_argument(
         "--no-perturb", dest="perturb", action="store_false", help="the bare family room"
     )
-    w.add_argument("--gv", type=float, default=3.0, help="G-V distance [m] for --room")
+    w.add_argument(
+        "--gv", type=options.positive_float, default=3.0, help="G-V distance [m] for --room"
+    )
     w.add_argument("--no-lab", action="store_true", help="--room: tall walls, no lab")
-    w.add_argument("--out", type=Path, default=None, help="output YAML (default: print it)")
+    options.add_out(w, "sim world", what="<world name>.yaml (also printed)")
     w.set_defaults(func=_world)
 
 
@@ -120,8 +124,10 @@ def _add_gallery_parser(sub: Any) -> None:
         description="Generate COUNT worlds going round the families (alternately bare and "
         "perturbed) from --seed on, and draw them from above with their computed order.",
     )
-    g.add_argument("--out", type=Path, default=Path("gallery"), help="output folder")
-    g.add_argument("--count", type=int, default=16, help="number of worlds (default 16)")
+    options.add_out(g, "sim gallery", what="worlds_gallery.png")
+    g.add_argument(
+        "--count", type=options.positive_int, default=16, help="number of worlds (default 16)"
+    )
     g.add_argument(
         "--families",
         nargs="+",
@@ -129,7 +135,7 @@ def _add_gallery_parser(sub: Any) -> None:
         default=None,
         help="families to draw from (default all)",
     )
-    g.add_argument("--seed", type=int, default=0, help="first world seed (printed)")
+    options.add_seed(g)
     g.set_defaults(func=_gallery)
 
 
@@ -165,14 +171,17 @@ def _render(args: argparse.Namespace) -> int:
         pose = room.sample_pose(rng)  # the default spot is taken: any free pose
         rel = (*(pose[:2] - room.center), math.degrees(pose[2]))
     preset = PRESETS[args.lidar]
-    camera = Camera(hfov=math.radians(args.hfov), gain=args.gain)
+    camera = Camera(hfov=args.hfov, gain=args.gain)
     print(
         f"#   room={room.name} gv={room.gv_distance:.3f} m order={room.order}"
         f" shape_order={room.shape_order} wall_height={room.wall_height} door={room.door}"
         f" furniture={room.n_furniture} people={len(room.people)} t={args.time} s"
     )
     print(f"#   pose=({pose[0]:.3f}, {pose[1]:.3f}, {rel[2]:.1f} deg) lidar={preset.name}")
-    print(f"#   camera {camera.width}x{camera.height} hfov={args.hfov} deg gain={args.gain}")
+    print(
+        f"#   camera {camera.width}x{camera.height} hfov={math.degrees(args.hfov):g} deg"
+        f" gain={args.gain}"
+    )
     world = room.world_at(args.time)
     scan = simulate_scan(world, pose, preset, rng)
     image = camera.render(world, pose, rng)
@@ -187,18 +196,18 @@ def _render(args: argparse.Namespace) -> int:
         pose,
         world_pts,
         image,
-        args.out,
+        Path(args.out) / "scene.png",
         hfov=camera.hfov,
         lidar_height=LIDAR_MOUNT_HEIGHT,
         title=f"{room.name}, G-V {room.gv_distance:.2f} m, {preset.name}",
     )
     print(f"wrote {out}")
-    if args.image_out is not None:
-        import cv2
+    import cv2
 
-        args.image_out.parent.mkdir(parents=True, exist_ok=True)
-        cv2.imwrite(str(args.image_out), image[:, :, ::-1])
-        print(f"wrote {args.image_out}")
+    camera_png = Path(args.out) / "camera.png"
+    camera_png.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(camera_png), image[:, :, ::-1])
+    print(f"wrote {camera_png}")
     return 0
 
 
@@ -211,9 +220,6 @@ def _world(args: argparse.Namespace) -> int:
             nature = "symmetric" if fam.symmetric else "asymmetric"
             print(f"{name:<15} {nature:<11} {fam.description}")
         return 0
-    if args.family is None and args.room is None:
-        print("symloc sim world: give --family F (or --room NAME, or --list)", file=sys.stderr)
-        return 2
     if args.family is not None:
         print(f"# symloc sim world  family={args.family} seed={args.seed} perturb={args.perturb}")
         spec = generate_world(args.family, args.seed, perturb=args.perturb)
@@ -235,11 +241,11 @@ def _world(args: argparse.Namespace) -> int:
     )
     print(f"#   {spec.name}: {spec.description}")
     print(f"#   computed: {summary}")
-    if args.out is None:
-        print(spec.to_yaml(), end="")
-    else:
-        out = save_world_file(spec, args.out, header=f"{header}\n{spec.description}\n{summary}")
-        print(f"wrote {out}")
+    print(spec.to_yaml(), end="")
+    target = Path(args.out) / f"{spec.name}.yaml"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    out = save_world_file(spec, target, header=f"{header}\n{spec.description}\n{summary}")
+    print(f"wrote {out}")
     return 0
 
 
@@ -248,9 +254,6 @@ def _gallery(args: argparse.Namespace) -> int:
     from symloc.sim.generator import FAMILIES, generate_world
 
     families = args.families or list(FAMILIES)
-    if args.count < 1:
-        print("symloc sim gallery: --count must be >= 1", file=sys.stderr)
-        return 2
     print(f"# symloc sim gallery  seed={args.seed} count={args.count} families={families}")
     rooms = []
     for i in range(args.count):

@@ -1,8 +1,9 @@
 """``symloc symmetry judge``: judge the symmetry of the room around the robot from one scan.
 
 The scan comes from a CARMEN log (``--carmen PATH [--index N]``), a ROS bag topic
-(``--bag PATH [--topic /scan] [--index N]``) or a simulated room
-(``--room square --gv 3 --pose X Y DEG``). Prints the :class:`SymmetryReport` (and the ground
+(``--bag PATH [--topic /scan] [--index N]``) or, when neither is given, a simulated room
+(``--room square --gv 3 --pose X Y DEG``; defaults: the paper's 3 m x 3 m square, the robot at
+0.3 m, 0.2 m, 30 deg from its centre). Prints the :class:`SymmetryReport` (and the ground
 truth for a simulated room); ``--png`` saves a picture of the scan with its lines and centre,
 ``--json`` the report.
 """
@@ -10,7 +11,6 @@ truth for a simulated room); ``--png`` saves a picture of the scan with its line
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
@@ -18,7 +18,20 @@ from typing import Any
 
 import numpy as np
 
+from symloc.cli import options
+
 __all__ = ["register"]
+
+#: The simulated room's default G-V distance [m] (the paper's 3 m x 3 m square) and robot pose
+#: (x [m], y [m], heading [deg] from the room centre).
+DEFAULT_GV = 1.5 * math.sqrt(2.0)
+DEFAULT_POSE = (0.3, 0.2, 30.0)
+
+
+def _judge_rooms() -> tuple[str, ...]:
+    from symloc.sim.rooms import ROOM_NAMES
+
+    return tuple(r for r in options.ROOMS if r in ROOM_NAMES)
 
 
 def register(subparsers: Any) -> None:
@@ -35,34 +48,52 @@ def register(subparsers: Any) -> None:
         "circle, rectangle, hallway), with the symmetry order, the centre in the sensor frame "
         "and the reason. A scan of under 360 degrees gives 'unknown' unless --partial-view.",
     )
-    src = j.add_mutually_exclusive_group(required=True)
+    src = j.add_mutually_exclusive_group()
     src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
     src.add_argument("--bag", type=Path, metavar="PATH", help="ROS 1 .bag or ROS 2 bag folder")
-    src.add_argument("--room", metavar="NAME", help="simulated room: square, hexagon, circle, ...")
-    j.add_argument("--index", type=int, default=0, help="scan index in the log / topic (0)")
+    options.add_room(j, choices=_judge_rooms(), help="without --carmen or --bag: simulated room")
+    j.add_argument(
+        "--index",
+        type=options.nonnegative_int,
+        default=0,
+        help="scan index in the log / topic, from 0 (default 0)",
+    )
     j.add_argument("--topic", default=None, help="bag: LaserScan topic (default: the first)")
-    j.add_argument("--gv", type=float, default=None, help="room: G-V distance [m]")
+    j.add_argument(
+        "--gv",
+        type=options.positive_float,
+        default=None,
+        help=f"room: G-V distance [m] (default {DEFAULT_GV:.3f}, a 3 m x 3 m square)",
+    )
     j.add_argument(
         "--pose",
-        type=float,
+        type=options.finite_float,
         nargs=3,
         default=None,
         metavar=("X", "Y", "DEG"),
         help="room: robot pose in the room frame (centre at 0 0) [m m deg]",
     )
-    j.add_argument("--sensor", default="paper_15m", help="room: lidar preset (paper_15m)")
+    options.add_lidar(j, help="room: simulated lidar")
     j.add_argument("--door", action="store_true", help="room: open a door in the first wall")
-    j.add_argument("--furniture", type=int, default=0, help="room: number of boxes inside")
-    j.add_argument("--seed", type=int, default=0, help="room: random seed for the range noise")
+    j.add_argument(
+        "--furniture",
+        type=options.nonnegative_int,
+        default=0,
+        help="room: number of boxes inside",
+    )
+    options.add_seed(j)
     j.add_argument(
         "--range-sigma",
-        type=float,
+        type=options.positive_float,
         default=None,
         help="range noise [m] the tolerances follow from (default: the preset's for a room, "
         "0.01 otherwise)",
     )
     j.add_argument(
-        "--range-sigma-relative", type=float, default=None, help="relative range noise (0)"
+        "--range-sigma-relative",
+        type=options.nonnegative_float,
+        default=None,
+        help="relative range noise (0)",
     )
     j.add_argument(
         "--centroid", choices=["area", "mean"], default="area", help="centroid method (area)"
@@ -93,16 +124,12 @@ def _judge(args: argparse.Namespace) -> int:
     from symloc.bench.scan_sources import bag_scan, carmen_scan, room_scan
     from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
 
-    if args.room is not None:
-        if args.gv is None or args.pose is None:
-            return _error("--room needs --gv M and --pose X Y DEG")
-        if args.furniture < 0:
-            return _error(f"--furniture: expected >= 0, got {args.furniture}")
+    if args.carmen is None and args.bag is None:
         src = room_scan(
             args.room,
-            args.gv,
-            args.pose,
-            sensor=args.sensor,
+            DEFAULT_GV if args.gv is None else args.gv,
+            DEFAULT_POSE if args.pose is None else args.pose,
+            sensor=args.lidar,
             rng=args.seed,
             door=args.door,
             furniture=args.furniture,
@@ -118,8 +145,10 @@ def _judge(args: argparse.Namespace) -> int:
             )
             if bad
         ]
+        if args.room != options.DEFAULT_ROOM:
+            room_only.insert(0, "--room")
         if room_only:
-            return _error(f"{', '.join(room_only)} only apply to --room")
+            return _error(f"{', '.join(room_only)} only apply to a simulated room")
         if args.carmen is not None:
             if args.topic is not None:
                 return _error("--topic only applies to --bag")
@@ -138,13 +167,13 @@ def _judge(args: argparse.Namespace) -> int:
     report = judge_symmetry(src.scan, config=cfg, centroid=args.centroid)
     scan = src.scan
     fov = math.degrees(scan.angle_increment * len(scan))
-    print(f"# symloc symmetry judge: {src.source}")
+    print(f"# symloc symmetry judge: {src.source}; seed {args.seed}")
     print(
         f"#   {len(scan)} beams over {fov:.0f} deg, range {scan.range_min:g}..{scan.range_max:g}"
         f" m; noise sigma {sigma:g} m + {rel:g} r; centroid {args.centroid};"
         f" partial_view {cfg.partial_view}"
     )
-    order = "inf" if report.continuous else str(report.order)
+    order = options.order_text(report.order, report.continuous)
     print(f"kind        {report.kind}")
     print(f"symmetric   {report.symmetric}")
     print(f"order       {order}")
@@ -158,7 +187,7 @@ def _judge(args: argparse.Namespace) -> int:
     print(f"reason      {report.reason}")
     if src.truth:
         t = src.truth
-        t_order = "inf" if t["order"] == 0 and t["kind"] == "circle" else str(t["order"])
+        t_order = options.order_text(t["order"], t["kind"] == "circle" and t["order"] == 0)
         err = float(np.hypot(*(report.center - t["center"])))
         where = f", centre error {err:.3f} m" if np.isfinite(err) else ""
         print(
@@ -166,6 +195,9 @@ def _judge(args: argparse.Namespace) -> int:
             f" frame), G-V {t['gv_distance']:.3f} m{where}"
         )
     if args.png is not None:
+        options.refuse_overwriting_inputs(
+            {"--carmen": args.carmen, "--bag": args.bag}, {"--png": args.png}
+        )
         from symloc.figures.symmetry import plot_judgement
 
         out = plot_judgement(scan, report, args.png, lines=scan_lines(scan, cfg))
@@ -174,7 +206,9 @@ def _judge(args: argparse.Namespace) -> int:
         data = {"source": src.source, "index": src.index, "report": report.to_dict()}
         if src.truth:
             data["truth"] = {**src.truth, "center": [float(v) for v in src.truth["center"]]}
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(data, indent=2) + "\n")
+        options.refuse_overwriting_inputs(
+            {"--carmen": args.carmen, "--bag": args.bag}, {"--json": args.json}
+        )
+        options.write_json(args.json, data)
         print(f"wrote {args.json}")
     return 0

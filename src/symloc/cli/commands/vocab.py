@@ -9,6 +9,8 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
+
 __all__ = ["register"]
 
 _WEIGHTINGS = ["tf-idf", "tf", "idf", "binary"]
@@ -31,14 +33,29 @@ def register(subparsers: Any) -> None:
         "recursively (png, jpg, bmp, tif, pgm, ppm); unreadable files are skipped with a warning.",
     )
     t.add_argument("folder", type=Path, help="folder of training images")
-    t.add_argument("--k", type=int, default=10, help="branching factor (default 10)")
-    t.add_argument("--L", type=int, default=5, help="depth levels (default 5)")
-    t.add_argument("--weighting", choices=_WEIGHTINGS, default="tf-idf")
-    t.add_argument("--scoring", choices=_SCORINGS, default="l1")
-    t.add_argument("--features", type=int, default=1000, help="ORB features per image")
-    t.add_argument("--out", type=Path, required=True, help="output file (.symvoc, or .txt)")
+    t.add_argument(
+        "--k", type=options.positive_int, default=10, help="branching factor (default 10)"
+    )
+    t.add_argument("--L", type=options.positive_int, default=5, help="depth levels (default 5)")
+    t.add_argument(
+        "--weighting", choices=_WEIGHTINGS, default="tf-idf", help="word weights (tf-idf)"
+    )
+    t.add_argument("--scoring", choices=_SCORINGS, default="l1", help="BoW scoring (l1)")
+    t.add_argument(
+        "--features",
+        type=options.positive_int,
+        default=1000,
+        help="ORB features per image (default 1000)",
+    )
+    options.add_out(t, "vocab train", what="vocabulary.symvoc (or vocabulary.txt)")
+    t.add_argument(
+        "--format",
+        choices=("symloc", "dbow2"),
+        default="symloc",
+        help="symloc binary (vocabulary.symvoc, default) or DBoW2 text (vocabulary.txt)",
+    )
     t.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
-    t.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    options.add_seed(t)
     t.set_defaults(func=_train)
 
     c = sub.add_parser(
@@ -47,13 +64,13 @@ def register(subparsers: Any) -> None:
         description="OUT ending in .txt gets DBoW2's text format (loadFromTextFile), anything "
         "else symloc's binary format. The input format is detected from its content.",
     )
-    c.add_argument("input", type=Path)
-    c.add_argument("output", type=Path)
+    c.add_argument("input", type=Path, help="vocabulary file to read")
+    c.add_argument("output", type=Path, help="file to write (.txt: DBoW2 text)")
     c.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
     c.set_defaults(func=_convert)
 
     i = sub.add_parser("info", help="k, L, words, weighting, scoring and size of a vocabulary")
-    i.add_argument("path", type=Path)
+    i.add_argument("path", type=Path, help="vocabulary file")
     i.set_defaults(func=_info)
 
 
@@ -62,7 +79,7 @@ def _save(voc: Any, out: Path, compress: bool) -> None:
     from symloc.vision.vocabulary_io import save_dbow2_text, save_vocabulary
 
     if not out.parent.is_dir():
-        raise ConfigurationError(f"--out: folder {out.parent} does not exist")
+        raise ConfigurationError(f"{out}: folder {out.parent} does not exist")
     if out.suffix == ".txt":
         save_dbow2_text(voc, out)
     else:
@@ -93,14 +110,17 @@ def _train(args: argparse.Namespace) -> int:
         )
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
-    _save(voc, args.out, args.compress)
-    print(f"{voc!r} -> {args.out} ({args.out.stat().st_size:,} bytes)")
+    out = Path(args.out) / ("vocabulary.txt" if args.format == "dbow2" else "vocabulary.symvoc")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    _save(voc, out, args.compress)
+    print(f"{voc!r} -> {out} ({out.stat().st_size:,} bytes)")
     return 0
 
 
 def _convert(args: argparse.Namespace) -> int:
     from symloc.vision.vocabulary_io import load_vocabulary
 
+    options.refuse_overwriting_inputs({"input": args.input}, {"output": args.output})
     voc = load_vocabulary(args.input)
     _save(voc, args.output, args.compress)
     print(f"{voc!r}: {args.input} -> {args.output} ({args.output.stat().st_size:,} bytes)")

@@ -1,0 +1,26 @@
+"""``symloc demo --world FILE`` runs a user's floor plan end to end."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+import pytest
+
+from symloc.cli.main import main
+
+
+def test_demo_on_a_world_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    world = str(files("symloc") / "data" / "worlds" / "square_with_box.yaml")
+    assert main(["demo", "--world", world, "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "world " + world in out
+    assert "symloc: verdict" in out
+    assert (tmp_path / "demo_square-with-box.png").stat().st_size > 10_000
+
+
+def test_demo_rejects_a_bad_world_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "w.yaml"
+    bad.write_text("name: w\nroom:\n  regular: {n: 2, gv: 3}\n")
+    assert main(["demo", "--world", str(bad), "--out", str(tmp_path)]) == 2
+    assert "room.regular" in capsys.readouterr().err

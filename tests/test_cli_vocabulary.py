@@ -1,0 +1,157 @@
+"""One vocabulary across every command: the whole ``symloc`` parser tree is walked and every
+shared option is checked to have one name, one default and one validation
+(:mod:`symloc.cli.options`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from symloc.cli import options
+from symloc.cli.main import build_parser, main
+
+
+def _leaves(
+    parser: argparse.ArgumentParser, path: tuple[str, ...] = ()
+) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser]]:
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield path, parser
+        return
+    for action in subs:
+        for name, sub in action.choices.items():
+            yield from _leaves(sub, (*path, name))
+
+
+LEAVES = dict(_leaves(build_parser()))
+
+
+def _option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action | None:
+    return next((a for a in parser._actions if flag in a.option_strings), None)
+
+
+#: Commands without randomness: no --seed.
+NOT_STOCHASTIC = {
+    ("places", "add"),
+    ("places", "list"),
+    ("places", "decide"),
+    ("places", "remove"),
+    ("ros", "node"),  # the seed is a node parameter (params.yaml)
+    ("ros", "check-params"),
+    ("ros", "carmen-to-bag"),
+    ("vocab", "convert"),
+    ("vocab", "info"),
+}
+#: Old names of the lidar option, and of others, that must not come back.
+RETIRED = ("--sensor", "--sensors", "--preset", "--presets", "--image-out", "--png-out")
+
+
+def _ids(path: tuple[str, ...]) -> str:
+    return " ".join(path)
+
+
+def test_the_tree_is_walked() -> None:
+    assert ("demo",) in LEAVES
+    assert ("experiment", "table1") in LEAVES
+    assert ("places", "decide") in LEAVES
+    assert len(LEAVES) >= 25
+
+
+@pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)
+def test_shared_options_have_one_name_and_one_default(path: tuple[str, ...]) -> None:
+    parser = LEAVES[path]
+    flags = {s for a in parser._actions for s in a.option_strings}
+    assert not flags & set(RETIRED), f"retired option names: {flags & set(RETIRED)}"
+    seed = _option(parser, "--seed")
+    if path[0] == "bench":  # seeds are per world there (--seeds / --split), printed per world
+        assert seed is None or seed.default == options.DEFAULT_SEED
+    elif path in NOT_STOCHASTIC:
+        assert seed is None
+    else:
+        assert seed is not None, "every stochastic command takes --seed"
+        assert seed.type is options.nonnegative_int
+        assert seed.default == options.DEFAULT_SEED
+    out = _option(parser, "--out")
+    if out is not None:
+        assert out.type is Path
+        assert out.metavar == "DIR", "--out is always a folder"
+        assert out.default == options.default_out(" ".join(path))
+    js = _option(parser, "--json")
+    if js is not None:
+        assert js.type is Path
+        assert js.default is None
+    lidar = _option(parser, "--lidar")
+    if lidar is not None:
+        assert lidar.default in (options.DEFAULT_LIDAR, [options.DEFAULT_LIDAR])
+    room = _option(parser, "--room")
+    if room is not None:
+        assert room.default == options.DEFAULT_ROOM
+        assert set(room.choices or ()) <= set(options.ROOMS)
+    rooms = _option(parser, "--rooms")
+    if rooms is not None:
+        assert rooms.default == ["all"]
+    trials = _option(parser, "--trials")
+    if trials is not None:
+        assert trials.type is options.positive_int
+    for action in parser._actions:
+        text = (action.help or "").lower()
+        assert "[rad" not in text, f"{action.option_strings}: angles are degrees for people"
+        if action.dest != "help" and action.option_strings:
+            assert action.help, f"{action.option_strings} has no help"
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(p for p in LEAVES if p not in NOT_STOCHASTIC and _option(LEAVES[p], "--seed")),
+    ids=_ids,
+)
+def test_a_negative_seed_is_a_usage_error(
+    path: tuple[str, ...], capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main([*path, "--seed", "-1"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--seed: expected an integer >= 0, got -1" in err
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "path", sorted(p for p in LEAVES if _option(LEAVES[p], "--trials")), ids=_ids
+)
+@pytest.mark.parametrize("value", ["0", "-5"])
+def test_trials_below_one_are_a_usage_error(
+    path: tuple[str, ...], value: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main([*path, "--trials", value])
+    assert exc.value.code == 2
+    assert "--trials: expected an integer >= 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)
+def test_help_reads(path: tuple[str, ...], capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main([*path, "--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    assert text.startswith("usage: symloc " + " ".join(path))
+    if _option(LEAVES[path], "--out") is not None:
+        assert "output folder" in text
+
+
+def test_angles_are_degrees_at_the_command_line() -> None:
+    angle_flags = {
+        ("experiment", "photos"): ("--max-yaw", 5.0),
+        ("experiment", "keyframes"): ("--step-deg", 5.0),
+        ("experiment", "table3"): ("--heading-deg", 5.0),
+    }
+    for path, (flag, deg) in angle_flags.items():
+        action = _option(LEAVES[path], flag)
+        assert action is not None
+        assert action.default == pytest.approx(math.radians(deg)), f"{path} {flag}"
+        assert "degrees" in (action.help or "")
