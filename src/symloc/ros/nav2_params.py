@@ -225,7 +225,7 @@ def read_params_block(path: str | Path, node_name: str = "amcl") -> dict[str, An
     with dots (``initial_pose: {x: 1}`` is ``initial_pose.x``)."""
     try:
         doc = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError) as err:
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
         raise ConfigurationError(f"params file {path}: cannot read ({err})") from err
     if not isinstance(doc, dict):
         raise ConfigurationError(f"params file {path}: expected a mapping of node names")
