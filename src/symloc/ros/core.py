@@ -352,7 +352,9 @@ class NodeCore:
         """Use new (validated) parameters from now on; the localizer is rebuilt on them."""
         self.params = params
         self.map_odom = self._map_odom(params)
-        self.mount = None  # resolved again at the next scan (laser_pose may have changed)
+        if not (self.use_tf and params.laser_pose_source == "tf"):
+            # the mount from the (maybe changed) laser_pose; a TF mount stays as it is
+            self.mount = LaserMount(np.array(params.laser_pose), params.laser_upside_down)
         self.rebuild("parameters changed")
 
     def reinitialize_global(self) -> bool:
