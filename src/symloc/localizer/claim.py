@@ -337,6 +337,17 @@ class ClaimGate:
         )
         return self._judge(carried, c_cov, match)
 
+    def fit(self, pose: FloatArray, scan: LaserScan) -> tuple[FloatArray, float]:
+        """``scan`` aligned to the map from ``pose`` (3,): the aligned pose and the share of
+        returning beams that then fit (within the match's ``inlier_distance``); 0 with too
+        few beams."""
+        pts = self.points(scan)
+        start = np.asarray(pose, dtype=np.float64)
+        if pts.shape[0] < self.config.min_beams:
+            return start, 0.0
+        match = match_scan_to_map(self.field, pts, start, self.match_config)
+        return match.pose, match.inlier_fraction
+
     def confirm(self, candidate: FloatArray, covariance: FloatArray, scan: LaserScan) -> Claim:
         """Let the laser set a pose from a ``candidate`` (3,) known to ``covariance`` (e.g. the
         symmetric copy a visual decision picked): the same tests as :meth:`check`, without

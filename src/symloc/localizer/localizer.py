@@ -99,7 +99,7 @@ class LocalizerConfig:
     converged_updates: int = 3
     symmetry_position_tol: float = 0.35
     symmetry_angle_tol: float = math.radians(15.0)
-    copy_score_ratio: float = 0.8
+    copy_score_ratio: float = 0.9
     place_radius_factor: float = 1.2
     centre_tolerance: float = 0.01
     facing_tolerance: float = math.radians(1.5)
@@ -449,12 +449,39 @@ class Localizer:
                 best, best_d = place, d
         return best
 
+    def _copy_scores(self, copies: FloatArray, scan: object) -> FloatArray | None:
+        """How well ``scan`` fits the map at each pose ``(k, 3)``: with a claim gate, each is
+        first aligned to the map (a copy about an imprecise centre is a few centimetres off)
+        and scored by the share of beams that fit; else the pose scorer's score; None without
+        either."""
+        if self.claim_gate is not None and isinstance(scan, LaserScan):
+            return np.array([self.claim_gate.fit(c, scan)[1] for c in copies])
+        if self.scorer is None:
+            return None
+        return np.asarray(self.scorer(copies, scan), dtype=np.float64)
+
+    def _copies_verdict(
+        self, pose: FloatArray, center: FloatArray, order: int, scan: object
+    ) -> str | int:
+        """``"unique"`` when every rotated copy of ``pose`` explains ``scan`` clearly worse,
+        the index of a copy that explains it clearly better, else ``"ambiguous"``."""
+        copies = rotated_copies(pose, center, order)
+        scores = self._copy_scores(copies, scan)
+        if scores is None:
+            return "ambiguous"
+        own = max(float(scores[0]), 1e-12)
+        best = int(np.argmax(scores))
+        if best != 0 and self.config.copy_score_ratio * float(scores[best]) >= own:
+            return best
+        if np.any(scores[1:] >= self.config.copy_score_ratio * own):
+            return "ambiguous"
+        return "unique"
+
     def _copies_fit(self, pose: FloatArray, center: FloatArray, order: int, scan: object) -> bool:
         """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose``."""
-        if self.scorer is None:
+        scores = self._copy_scores(rotated_copies(pose, center, order), scan)
+        if scores is None:
             return True
-        copies = rotated_copies(pose, center, order)
-        scores = np.asarray(self.scorer(copies, scan), dtype=np.float64)
         own = max(float(scores[0]), 1e-12)
         return bool(np.any(scores[1:] >= self.config.copy_score_ratio * own))
 
@@ -609,23 +636,35 @@ class Localizer:
                 self._converged_count = 0
                 return self._start_ambiguity_at_place(result, place)
             for sym in self.map_symmetries:
-                if self._copies_fit(result.estimate, sym.centre, sym.order, scan):
-                    self._converged_count = 0
-                    copies = rotated_copies(result.estimate, sym.centre, sym.order)
+                verdict = self._copies_verdict(result.estimate, sym.centre, sym.order, scan)
+                if verdict == "unique":
+                    continue
+                self._converged_count = 0
+                copies = rotated_copies(result.estimate, sym.centre, sym.order)
+                if isinstance(verdict, int):
+                    # a rotated copy explains the scan clearly better: AMCL chose wrong
+                    self.tracker.initialize_pose(
+                        copies[verdict],
+                        _cov(self.config.reseed_xy_std, self.config.reseed_theta_std),
+                    )
                     why = (
-                        f"the map itself is symmetric (order {sym.order}) and a rotated copy of "
-                        "AMCL's pose explains the scan as well: pose not earned"
+                        f"a rotated copy (order {sym.order}) of AMCL's pose explains the scan "
+                        "clearly better: AMCL reseeded there, pose not earned yet"
                     )
-                    if not self.log or self.log[-1] != why:
-                        self._note(why)
-                    return Estimate(
-                        status=Status.AMBIGUOUS,
-                        hypotheses=tuple(
-                            Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies
-                        ),
-                        order=sym.order,
-                        reason=why,
+                else:
+                    why = (
+                        f"the map itself is symmetric (order {sym.order}, overlap "
+                        f"{100 * sym.overlap:.0f} %) and a rotated copy of AMCL's pose explains "
+                        "the scan about as well: pose not earned"
                     )
+                if not self.log or self.log[-1] != why:
+                    self._note(why)
+                return Estimate(
+                    status=Status.AMBIGUOUS,
+                    hypotheses=tuple(Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies),
+                    order=sym.order,
+                    reason=why,
+                )
             self._converged_count += 1
             if self._converged_count >= self.config.converged_updates:
                 self._phase = _Phase.TRACKING

@@ -4,9 +4,12 @@ A pose that AMCL converged to cannot be earned when the map maps onto itself und
 that also carries the pose onto a copy explaining the scan as well: in a 40 m hallway whose far
 ends the lidar sees one at a time, the two ends look alike and AMCL's particles die out at one
 of them by chance. :func:`map_symmetries` finds such rotations once per map: the occupied cells
-are rotated by ``2 pi / k`` about their centroid and the share of rotated cells landing within
-``tolerance`` of an occupied cell is measured; orders whose share reaches ``min_overlap`` are
-symmetries of the map.
+are rotated by ``2 pi / k`` about a centre (their centroid, refined by a local search: a box or
+a door pulls the centroid off the rotation centre) and the share of rotated cells landing
+within ``tolerance`` of an occupied cell is measured; orders whose share reaches
+``min_overlap`` are symmetries of the map. The default (0.6) keeps *near* symmetries too (a
+rectangle with one box, uneven chamfers): whether the scan tells their copies apart is the
+localizer's decision, made with the scan.
 """
 
 from __future__ import annotations
@@ -38,10 +41,10 @@ class MapSymmetry:
 
 def map_symmetries(
     grid: OccupancyGrid,
-    orders: tuple[int, ...] = (2, 3, 4, 5, 6, 8),
+    orders: tuple[int, ...] = (2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12),
     *,
     tolerance: float = 0.1,
-    min_overlap: float = 0.9,
+    min_overlap: float = 0.6,
 ) -> list[MapSymmetry]:
     """The rotational symmetries of ``grid`` about its occupied cells' centroid.
 
@@ -68,9 +71,8 @@ def map_symmetries(
         return []
     pts = np.asarray(grid.cell_to_world(rc), dtype=np.float64)[:, :2]
     dist = distance_transform_edt(~occ) * grid.resolution
-    centre = pts.mean(axis=0)
-    out: list[MapSymmetry] = []
-    for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
+
+    def overlap(centre: FloatArray, k: int) -> float:
         a = 2.0 * math.pi / k
         c, s = math.cos(a), math.sin(a)
         d = pts - centre
@@ -80,7 +82,23 @@ def map_symmetries(
         hit = np.zeros(len(rot), dtype=bool)
         ci = cells[inside].astype(int)
         hit[inside] = dist[ci[:, 0], ci[:, 1]] <= tolerance
-        share = float(hit.mean())
-        if share >= min_overlap:
-            out.append(MapSymmetry(centre=centre.copy(), order=k, overlap=share))
+        return float(hit.mean())
+
+    centroid = pts.mean(axis=0)
+    out: list[MapSymmetry] = []
+    for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
+        # a feature that breaks the symmetry (a box, a door, an uneven chamfer) pulls the
+        # centroid off the rotation centre: refine it by a coarse-to-fine local search
+        centre, best = centroid.copy(), overlap(centroid, k)
+        for step in (4.0 * tolerance, 2.0 * tolerance, tolerance, 0.5 * tolerance):
+            improved = True
+            while improved:
+                improved = False
+                for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
+                    cand = centre + np.array([dx, dy])
+                    share = overlap(cand, k)
+                    if share > best + 1e-9:
+                        centre, best, improved = cand, share, True
+        if best >= min_overlap:
+            out.append(MapSymmetry(centre=centre, order=k, overlap=best))
     return out
