@@ -88,3 +88,46 @@ def test_huge_table_path_equals_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(lf, "_INT32_CELLS", 10)
     slow = endpoint_table_sums(field, poses, r, a, table)
     np.testing.assert_array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("model", ["diff", "diff-corrected"])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_compiled_motion_model_bit_identical(model: str, seed: int) -> None:
+    from symloc.mcl.motion_model import sample_motion_model_odometry
+
+    rng = np.random.default_rng(seed)
+    n = 2000
+    parts = np.column_stack(
+        [rng.uniform(-5, 5, n), rng.uniform(-5, 5, n), rng.uniform(-np.pi, np.pi, n)]
+    )
+    parts[:5, 2] = [np.pi, -np.pi, 3.14159, -3.14159, 0.0]
+    a, b = np.array([0.3, -0.2, 3.0]), np.array([0.5, 0.1, -3.1])
+    alphas = (0.2, 0.1, 0.3, 0.05, 0.0)
+    fast = sample_motion_model_odometry(parts, a, b, alphas, np.random.default_rng(7), model=model)
+    # a strided view takes the NumPy path
+    wide = np.zeros((n, 6))
+    wide[:, ::2] = parts
+    slow = sample_motion_model_odometry(
+        wide[:, ::2], a, b, alphas, np.random.default_rng(7), model=model
+    )
+    np.testing.assert_array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_match_scores_kernel_equals_numpy(seed: int) -> None:
+    from symloc.mcl import rival_search
+
+    rng = np.random.default_rng(seed)
+    _, field = _field(rng)
+    poses = np.column_stack(
+        [rng.uniform(-1, 3.5, 3000), rng.uniform(-1, 2.5, 3000), rng.uniform(-4, 4, 3000)]
+    )
+    pts = rng.uniform(-2, 2, (37, 2))
+    tol = rng.uniform(0.0, 0.4, 37)
+    fast = rival_search.match_scores(field, poses, pts, tol)
+    # the former vectorised definition
+    r = np.hypot(pts[:, 0], pts[:, 1])
+    a = np.arctan2(pts[:, 1], pts[:, 0])
+    idx = endpoint_flat_indices(field, field.grid_frame_poses(poses), r, a)
+    slow = np.count_nonzero(field.padded.ravel()[idx] <= tol.astype(np.float32), axis=1) / 37
+    np.testing.assert_array_equal(fast, slow)

@@ -151,3 +151,308 @@ def endpoint_table_sum_py(
 
 
 endpoint_table_sum = _jit(endpoint_table_sum_py)
+
+
+def np_mod_py(a: float, b: float) -> float:
+    """NumPy's float remainder ``np.mod(a, b)`` (the sign of ``b``), operation for operation."""
+    mod: float = np.fmod(a, b)  # exact, as C fmod
+    if mod != 0.0:
+        if (b < 0.0) != (mod < 0.0):
+            mod += b
+    else:
+        mod = np.copysign(0.0, b)
+    return mod
+
+
+np_mod = _jit(np_mod_py)
+
+
+def wrap_angle_py(a: float) -> float:
+    """:func:`symloc.geometry.wrap_angle` of one angle, bit for bit."""
+    m: float = np_mod(math.pi - a, 2.0 * math.pi)
+    return math.pi - m
+
+
+wrap_angle = _jit(wrap_angle_py)
+
+
+def _find(parent: NDArray[np.int64], u: int) -> int:
+    while parent[u] != u:
+        parent[u] = parent[parent[u]]
+        u = parent[u]
+    return u
+
+
+_find_jit = _jit(_find)
+
+
+def bin_components_py(
+    particles: NDArray[np.float64],
+    bin_xy: float,
+    bin_angle: float,
+    n_angle: int,
+    labels: NDArray[np.int64],
+) -> int:
+    """Cluster particles ``(N, 3)`` by touching histogram bins; returns the cluster count.
+
+    Bins are ``floor(x / bin_xy), floor(y / bin_xy), floor((theta + pi) / bin_angle) mod
+    n_angle``; two occupied bins touch when they differ by at most one in each index (the
+    heading index wraps). ``labels (N,)`` receives each particle's cluster, numbered in the
+    order of the smallest bin key in the cluster -- the numbering
+    :func:`symloc.mcl.clustering.cluster_particles` got from sorted unique keys and
+    ``scipy.sparse.csgraph.connected_components``. Linear in N: bins in an open-addressing
+    hash table, clusters by union-find.
+    """
+    n = particles.shape[0]
+    bx = np.empty(n, dtype=np.int64)
+    by = np.empty(n, dtype=np.int64)
+    bt = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        bx[i] = np.int64(math.floor(particles[i, 0] / bin_xy))
+        by[i] = np.int64(math.floor(particles[i, 1] / bin_xy))
+        bt[i] = np.int64(math.floor((particles[i, 2] + math.pi) / bin_angle)) % n_angle
+    lo0 = bx.min() - 1
+    lo1 = by.min() - 1
+    span1 = by.max() - lo1 + 2
+    cap = 16
+    while cap < 2 * n:
+        cap *= 2
+    mask = cap - 1
+    slot_key = np.full(cap, -1, dtype=np.int64)
+    slot_bin = np.empty(cap, dtype=np.int64)
+    bin_key = np.empty(n, dtype=np.int64)
+    n_bins = 0
+    for i in range(n):
+        key = ((bx[i] - lo0) * span1 + (by[i] - lo1)) * n_angle + bt[i]
+        h = (key * np.int64(-7046029254386353131)) >> np.int64(20)
+        s = h & mask
+        while slot_key[s] != -1 and slot_key[s] != key:
+            s = (s + 1) & mask
+        if slot_key[s] == -1:
+            slot_key[s] = key
+            slot_bin[s] = n_bins
+            bin_key[n_bins] = key
+            n_bins += 1
+        labels[i] = slot_bin[s]
+    parent = np.arange(n_bins)
+    for u in range(n_bins):
+        key = bin_key[u]
+        ub_t = key % n_angle
+        ub_xy = key // n_angle
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                for dt in range(-1, 2):
+                    if dx < 0 or (dx == 0 and (dy < 0 or (dy == 0 and dt <= 0))):
+                        continue  # each undirected edge once
+                    nkey = (ub_xy + dx * span1 + dy) * n_angle + (ub_t + dt) % n_angle
+                    h = (nkey * np.int64(-7046029254386353131)) >> np.int64(20)
+                    s = h & mask
+                    while slot_key[s] != -1 and slot_key[s] != nkey:
+                        s = (s + 1) & mask
+                    if slot_key[s] == nkey:
+                        ra = _find_jit(parent, u)
+                        rb = _find_jit(parent, slot_bin[s])
+                        if ra != rb:
+                            parent[max(ra, rb)] = min(ra, rb)
+    # clusters numbered by their smallest key
+    root_min = np.full(n_bins, np.iinfo(np.int64).max, dtype=np.int64)
+    for u in range(n_bins):
+        r = _find_jit(parent, u)
+        parent[u] = r
+        if bin_key[u] < root_min[r]:
+            root_min[r] = bin_key[u]
+    n_comp = 0
+    for u in range(n_bins):
+        if parent[u] == u:
+            n_comp += 1
+    roots = np.empty(n_comp, dtype=np.int64)
+    mins = np.empty(n_comp, dtype=np.int64)
+    c = 0
+    for u in range(n_bins):
+        if parent[u] == u:
+            roots[c] = u
+            mins[c] = root_min[u]
+            c += 1
+    order = np.argsort(mins)
+    comp_of_root = np.empty(n_bins, dtype=np.int64)
+    for rank in range(n_comp):
+        comp_of_root[roots[order[rank]]] = rank
+    for i in range(n):
+        labels[i] = comp_of_root[parent[labels[i]]]
+    return n_comp
+
+
+bin_components = _jit(bin_components_py)
+
+
+def cluster_sums_py(
+    particles: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    total: float,
+    labels: NDArray[np.int64],
+    n: int,
+    out: NDArray[np.float64],
+) -> None:
+    """First moments of each cluster, as ``np.bincount`` adds them (particle order).
+
+    ``out (7, n)`` receives rows ``wsum, count, mean x, mean y, mean cos, mean sin`` (the means
+    over weights normalised within the cluster; equal weights where the cluster's sum is 0)
+    and row 6 unused here.
+    """
+    out[:, :] = 0.0
+    m = particles.shape[0]
+    for i in range(m):
+        c = labels[i]
+        out[0, c] += weights[i] / total
+        out[1, c] += 1.0
+    for i in range(m):
+        c = labels[i]
+        w = weights[i] / total
+        ws = out[0, c]
+        wn = w / ws if ws > 0.0 else 1.0 / out[1, c]
+        th = particles[i, 2]
+        out[2, c] += wn * particles[i, 0]
+        out[3, c] += wn * particles[i, 1]
+        out[4, c] += wn * math.cos(th)
+        out[5, c] += wn * math.sin(th)
+
+
+cluster_sums = _jit(cluster_sums_py)
+
+
+def cluster_moments_py(
+    particles: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    total: float,
+    labels: NDArray[np.int64],
+    first: NDArray[np.float64],
+    mean_theta: NDArray[np.float64],
+    out: NDArray[np.float64],
+) -> None:
+    """Second moments ``out (5, n)``: xx, yy, xy, x-theta, y-theta of each cluster.
+
+    ``first`` is :func:`cluster_sums`'s output, ``mean_theta (n,)`` the clusters' circular mean
+    headings; headings are unwrapped around it (``pi - mod(pi - (theta - mean), 2 pi)``).
+    """
+    out[:, :] = 0.0
+    m = particles.shape[0]
+    two_pi = 2.0 * math.pi
+    for i in range(m):
+        c = labels[i]
+        w = weights[i] / total
+        ws = first[0, c]
+        wn = w / ws if ws > 0.0 else 1.0 / first[1, c]
+        dx = particles[i, 0] - first[2, c]
+        dy = particles[i, 1] - first[3, c]
+        dt = math.pi - np_mod(math.pi - (particles[i, 2] - mean_theta[c]), two_pi)
+        out[0, c] += wn * dx * dx
+        out[1, c] += wn * dy * dy
+        out[2, c] += wn * dx * dy
+        out[3, c] += wn * dx * dt
+        out[4, c] += wn * dy * dt
+
+
+cluster_moments = _jit(cluster_moments_py)
+
+
+def move_diff_py(
+    particles: NDArray[np.float64],
+    noise: NDArray[np.float64],
+    rot1: float,
+    trans: float,
+    rot2: float,
+    s_r1: float,
+    s_tr: float,
+    s_r2: float,
+    out: NDArray[np.float64],
+) -> None:
+    """The differential motion model's sample for every particle (Thrun et al., Table 5.6).
+
+    ``noise (3, N)`` standard normal draws; ``out (N, 3)`` (may be ``particles``) receives
+    ``x + tr cos(theta + r1), y + tr sin(theta + r1), wrap(theta + r1 + r2)`` with
+    ``r1 = rot1 - s_r1 n0``, ``tr = trans - s_tr n1``, ``r2 = rot2 - s_r2 n2``: the
+    expressions of :func:`symloc.mcl.motion_model.sample_motion_model_odometry`, bit for bit.
+    """
+    for i in range(particles.shape[0]):
+        r1_hat = rot1 - s_r1 * noise[0, i]
+        tr_hat = trans - s_tr * noise[1, i]
+        r2_hat = rot2 - s_r2 * noise[2, i]
+        heading = particles[i, 2] + r1_hat
+        x = particles[i, 0] + tr_hat * math.cos(heading)
+        y = particles[i, 1] + tr_hat * math.sin(heading)
+        th = heading + r2_hat
+        out[i, 0] = x
+        out[i, 1] = y
+        out[i, 2] = math.pi - np_mod(math.pi - th, 2.0 * math.pi)
+
+
+move_diff = _jit(move_diff_py)
+
+
+def count_within_py(
+    table: NDArray[np.float32],
+    width: int,
+    height: int,
+    poses: NDArray[np.float64],
+    inv_res: float,
+    bx: NDArray[np.float32],
+    by: NDArray[np.float32],
+    tol: NDArray[np.float32],
+    start: int,
+    stop: int,
+    out: NDArray[np.float64],
+) -> None:
+    """``out[i]`` = how many end points of pose ``i`` read ``table <= tol[j]``, over ``m``.
+
+    End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); the count is
+    divided by the number of points, as ``np.count_nonzero(...) / m``.
+    """
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    xmax = np.float32(width - 1)
+    ymax = np.float32(height - 1)
+    nb = bx.shape[0]
+    cb = np.empty(_BLOCK, dtype=np.float32)
+    sb = np.empty(_BLOCK, dtype=np.float32)
+    xb = np.empty(_BLOCK, dtype=np.float32)
+    yb = np.empty(_BLOCK, dtype=np.float32)
+    cnt = np.empty(_BLOCK, dtype=np.int64)
+    cell = np.empty(_BLOCK, dtype=np.uint32)
+    for b0 in range(start, stop, _BLOCK):
+        m = min(_BLOCK, stop - b0)
+        for k in range(m):
+            th = poses[b0 + k, 2]
+            px = np.float32(poses[b0 + k, 0] * inv_res)
+            py = np.float32(poses[b0 + k, 1] * inv_res)
+            ck = np.float32(math.cos(th))
+            sk = np.float32(math.sin(th))
+            if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(ck)):
+                px = np.float32(-1e30)
+                py = np.float32(-1e30)
+                ck = zero
+                sk = zero
+            cb[k] = ck
+            sb[k] = sk
+            xb[k] = px
+            yb[k] = py
+            cnt[k] = 0
+        for j in range(nb):
+            bxj = bx[j]
+            byj = by[j]
+            tj = tol[j]
+            for k in range(m):
+                x = cb[k] * bxj - sb[k] * byj
+                x = x + xb[k]
+                y = sb[k] * bxj + cb[k] * byj
+                y = y + yb[k]
+                x = min(max(x + one, zero), xmax)
+                y = min(max(y + one, zero), ymax)
+                cell[k] = np.uint32(np.int32(y) * np.int32(width) + np.int32(x))
+            for k in range(m):
+                if table[cell[k]] <= tj:
+                    cnt[k] += 1
+        for k in range(m):
+            out[b0 + k] = cnt[k] / nb
+
+
+count_within = _jit(count_within_py)

@@ -46,6 +46,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose, wrap_angle
 from symloc.grid.distance_field import DistanceField, distance_field
 from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import endpoint_flat_indices
 
 __all__ = ["RivalReport", "find_rival", "match_scores", "padded_field"]
@@ -125,13 +126,25 @@ def match_scores(
     t = np.broadcast_to(np.asarray(tol, dtype=np.float32), (m,))
     r = np.hypot(pts[:, 0], pts[:, 1])
     a = np.arctan2(pts[:, 1], pts[:, 0])
-    local = field.grid_frame_poses(pz)
+    local = np.ascontiguousarray(field.grid_frame_poses(pz))
     flat = field.padded.ravel()
     out = np.empty(pz.shape[0])
-    step = max(1, _CHUNK // m)
-    for s in range(0, pz.shape[0], step):
-        idx = endpoint_flat_indices(field, local[s : s + step], r, a)
-        out[s : s + step] = np.count_nonzero(flat[idx] <= t, axis=1) / m
+    h2, w2 = field.padded.shape
+    if h2 * w2 >= 2**31:  # beyond the kernel's 32-bit cell index: NumPy blocks
+        step = max(1, _CHUNK // m)
+        for s in range(0, pz.shape[0], step):
+            idx = endpoint_flat_indices(field, local[s : s + step], r, a)
+            out[s : s + step] = np.count_nonzero(flat[idx] <= t, axis=1) / m
+        return out
+    inv_res = 1.0 / field.grid.resolution
+    bx = np.ascontiguousarray(r * np.cos(a) * inv_res, dtype=np.float32)
+    by = np.ascontiguousarray(r * np.sin(a) * inv_res, dtype=np.float32)
+    tt = np.ascontiguousarray(t, dtype=np.float32)
+
+    def run(start: int, stop: int) -> None:
+        kernels.count_within(flat, w2, h2, local, inv_res, bx, by, tt, start, stop, out)
+
+    kernels.split_over_threads(pz.shape[0], pz.shape[0] * m, run)
     return out
 
 
