@@ -131,3 +131,74 @@ def test_match_scores_kernel_equals_numpy(seed: int) -> None:
     idx = endpoint_flat_indices(field, field.grid_frame_poses(poses), r, a)
     slow = np.count_nonzero(field.padded.ravel()[idx] <= tol.astype(np.float32), axis=1) / 37
     np.testing.assert_array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("at_least", [0.0, 0.3, 0.55, 0.9, 1.0])
+def test_match_scores_early_exit_exact_above_threshold(at_least: float) -> None:
+    from symloc.mcl import rival_search
+
+    rng = np.random.default_rng(3)
+    _, field = _field(rng)
+    poses = np.column_stack(
+        [rng.uniform(0, 2.5, 4000), rng.uniform(0, 1.8, 4000), rng.uniform(-4, 4, 4000)]
+    )
+    pts = rng.uniform(-1, 1, (41, 2))
+    exact = rival_search.match_scores(field, poses, pts, 0.2)
+    fast = rival_search.match_scores(field, poses, pts, 0.2, at_least=at_least)
+    keep = exact >= at_least
+    np.testing.assert_array_equal(fast >= at_least, keep)
+    np.testing.assert_array_equal(fast[keep], exact[keep])
+
+
+def test_find_rival_same_with_and_without_early_exit(monkeypatch: pytest.MonkeyPatch) -> None:
+    from symloc.mcl import rival_search
+
+    # two identical rooms side by side: a rival exists
+    data = np.full((60, 130), -1, np.int8)
+    for c0 in (5, 70):
+        data[5:55, c0 : c0 + 55] = 0
+        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
+        data[5:55, c0] = data[5:55, c0 + 54] = 100
+        data[20:24, c0 + 10 : c0 + 30] = 100
+    grid = OccupancyGrid(data, 0.05)
+    field = rival_search.padded_field(grid, 0.6)
+    est = np.array([1.5, 1.5, 0.3])
+    ang = np.linspace(-np.pi, np.pi, 90, endpoint=False)
+    from symloc.mcl.beam_model import raycast_grid
+
+    r = raycast_grid(grid, np.repeat(est[None, :2], 90, 0), ang + est[2], 8.0)
+    pts = np.column_stack([r * np.cos(ang), r * np.sin(ang)])[r < 8.0]
+    fast = rival_search.find_rival(field, pts, est, tol=0.1)
+    real = kernels.count_within
+
+    def exact(*a: object) -> None:
+        b = list(a)
+        b[10] = 0  # need: no early exit
+        real(*b)
+
+    monkeypatch.setattr(kernels, "count_within", exact)
+    slow = rival_search.find_rival(field, pts, est, tol=0.1)
+    assert fast.ambiguous == slow.ambiguous
+    assert fast.estimate_score == slow.estimate_score
+    assert fast.rival_score == slow.rival_score
+    assert fast.n_candidates == slow.n_candidates
+    np.testing.assert_array_equal(fast.rival_pose, slow.rival_pose)
+
+
+def test_match_scores_with_tolerances_beyond_the_clip() -> None:
+    from symloc.mcl import rival_search
+
+    rng = np.random.default_rng(4)
+    _, field = _field(rng)  # clipped at 0.5 m
+    poses = np.column_stack(
+        [rng.uniform(-1, 3, 2000), rng.uniform(-1, 2.5, 2000), rng.uniform(-4, 4, 2000)]
+    )
+    pts = rng.uniform(-2, 2, (30, 2))
+    tol = np.where(rng.random(30) < 0.5, 0.7, rng.uniform(0.0, 0.5, 30))
+    tol[0] = 0.5  # exactly the clip
+    got = rival_search.match_scores(field, poses, pts, tol)
+    r = np.hypot(pts[:, 0], pts[:, 1])
+    a = np.arctan2(pts[:, 1], pts[:, 0])
+    idx = endpoint_flat_indices(field, field.grid_frame_poses(poses), r, a)
+    want = np.count_nonzero(field.padded.ravel()[idx] <= tol.astype(np.float32), axis=1) / 30
+    np.testing.assert_array_equal(got, want)

@@ -31,6 +31,9 @@ __all__ = ["endpoint_table_sum", "n_threads", "split_over_threads"]
 #: Particle-beam pairs below which one thread does the whole update (threads cost ~20 us).
 PARALLEL_MIN_PAIRS = 200_000
 
+#: Poses processed together when counting matches (small, so a block gives up early).
+_CBLOCK = 64
+
 #: Particles processed together by the table-sum kernel (its inner, vectorised loop).
 _BLOCK = 256
 
@@ -398,28 +401,34 @@ def count_within_py(
     bx: NDArray[np.float32],
     by: NDArray[np.float32],
     tol: NDArray[np.float32],
+    pre: int,
+    total: int,
+    need: int,
     start: int,
     stop: int,
     out: NDArray[np.float64],
 ) -> None:
-    """``out[i]`` = how many end points of pose ``i`` read ``table <= tol[j]``, over ``m``.
+    """``out[i] = (pre + #{j: table at end point j of pose i <= tol[j]}) / total``.
 
-    End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); the count is
-    divided by the number of points, as ``np.count_nonzero(...) / m``.
+    End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); ``pre`` counts
+    points known to pass everywhere, ``total`` is the number of points in all, so the value is
+    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a block of poses stops early
+    once none of them can reach ``need`` points any more: their values are then below ``need
+    / total`` but not exact (exact for every pose that reaches it).
     """
     one = np.float32(1.0)
     zero = np.float32(0.0)
     xmax = np.float32(width - 1)
     ymax = np.float32(height - 1)
     nb = bx.shape[0]
-    cb = np.empty(_BLOCK, dtype=np.float32)
-    sb = np.empty(_BLOCK, dtype=np.float32)
-    xb = np.empty(_BLOCK, dtype=np.float32)
-    yb = np.empty(_BLOCK, dtype=np.float32)
-    cnt = np.empty(_BLOCK, dtype=np.int64)
-    cell = np.empty(_BLOCK, dtype=np.uint32)
-    for b0 in range(start, stop, _BLOCK):
-        m = min(_BLOCK, stop - b0)
+    cb = np.empty(_CBLOCK, dtype=np.float32)
+    sb = np.empty(_CBLOCK, dtype=np.float32)
+    xb = np.empty(_CBLOCK, dtype=np.float32)
+    yb = np.empty(_CBLOCK, dtype=np.float32)
+    cnt = np.empty(_CBLOCK, dtype=np.int64)
+    cell = np.empty(_CBLOCK, dtype=np.uint32)
+    for b0 in range(start, stop, _CBLOCK):
+        m = min(_CBLOCK, stop - b0)
         for k in range(m):
             th = poses[b0 + k, 2]
             px = np.float32(poses[b0 + k, 0] * inv_res)
@@ -451,8 +460,14 @@ def count_within_py(
             for k in range(m):
                 if table[cell[k]] <= tj:
                     cnt[k] += 1
+            if need > 0 and (j & 7) == 7:
+                best = 0
+                for k in range(m):
+                    best = max(best, cnt[k])
+                if pre + best + (nb - 1 - j) < need:
+                    break  # no pose of the block can reach need points any more
         for k in range(m):
-            out[b0 + k] = cnt[k] / nb
+            out[b0 + k] = (cnt[k] + pre) / total
 
 
 count_within = _jit(count_within_py)
