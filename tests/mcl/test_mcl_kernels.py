@@ -202,3 +202,47 @@ def test_match_scores_with_tolerances_beyond_the_clip() -> None:
     idx = endpoint_flat_indices(field, field.grid_frame_poses(poses), r, a)
     want = np.count_nonzero(field.padded.ravel()[idx] <= tol.astype(np.float32), axis=1) / 30
     np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 100, 128, 129, 255, 1000, 4099, 20000])
+def test_pairwise_sum_equals_numpy_sum(n: int) -> None:
+    rng = np.random.default_rng(n)
+    a = rng.standard_normal(n) ** 2 * 10.0 ** rng.uniform(-3, 3, n)
+    assert kernels.pairwise_sum(a, 0, n) == np.sum(a)
+
+
+def test_scan_cost_and_bilinear_equal_numpy() -> None:
+    from symloc.grid.distance_field import surface_distance_field
+    from symloc.mcl import scan_to_map as stm
+
+    rng = np.random.default_rng(2)
+    rotated, _ = _field(rng)
+    grid = OccupancyGrid(rotated.data, 0.05, origin=(-0.4, 0.3, 0.0))
+
+    field = surface_distance_field(grid, 0.8)
+    pts = rng.uniform(-2, 2, (150, 2))
+    pose = np.array([1.1, 0.7, 0.4])
+    cfg = stm.ScanMatchConfig()
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    world = np.column_stack(
+        [c * pts[:, 0] - s * pts[:, 1] + pose[0], s * pts[:, 0] + c * pts[:, 1] + pose[1]]
+    )
+    d, grad = stm._bilinear(field, world)
+    # the NumPy expressions, through a grid origin rotated by 0 written as a tiny rotation
+    o = grid.origin
+    res = grid.resolution
+    u = np.clip((world[:, 0] - o[0]) / res - 0.5 + 1.0, 0.0, field.padded.shape[1] - 1.000001)
+    v = np.clip((world[:, 1] - o[1]) / res - 0.5 + 1.0, 0.0, field.padded.shape[0] - 1.000001)
+    i0, j0 = u.astype(np.intp), v.astype(np.intp)
+    fu, fv = u - i0, v - j0
+    flat, w2 = field.padded.ravel(), field.padded.shape[1]
+    base = j0 * w2 + i0
+    d00, d10 = flat[base].astype(float), flat[base + 1].astype(float)
+    d01, d11 = flat[base + w2].astype(float), flat[base + w2 + 1].astype(float)
+    want = (1 - fv) * ((1 - fu) * d00 + fu * d10) + fv * ((1 - fu) * d01 + fu * d11)
+    np.testing.assert_array_equal(d, want)
+    np.testing.assert_array_equal(grad[:, 0], ((1 - fv) * (d10 - d00) + fv * (d11 - d01)) / res)
+    cost = stm._cost(field, pts, pose, cfg)
+    assert cost == float(
+        0.5 * np.sum(want * want) * cfg.information_scale / (cfg.sigma * cfg.sigma)
+    )

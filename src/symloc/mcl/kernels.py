@@ -471,3 +471,160 @@ def count_within_py(
 
 
 count_within = _jit(count_within_py)
+
+
+def _leaf_sum_py(a: NDArray[np.float64], lo: int, n: int) -> float:
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0 = a[lo]
+    r1 = a[lo + 1]
+    r2 = a[lo + 2]
+    r3 = a[lo + 3]
+    r4 = a[lo + 4]
+    r5 = a[lo + 5]
+    r6 = a[lo + 6]
+    r7 = a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    out: float = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        out += a[lo + i]
+        i += 1
+    return out
+
+
+_leaf_sum = _jit(_leaf_sum_py)
+
+
+def pairwise_sum_py(a: NDArray[np.float64], lo: int, n: int) -> float:
+    """``np.sum(a[lo:lo + n])`` for contiguous float64, bit for bit: NumPy's pairwise
+    summation (eight partial sums in blocks of up to 128 values, halves above that; the
+    halving recursion unrolled on an explicit stack)."""
+    if n <= 128:
+        leaf: float = _leaf_sum(a, lo, n)
+        return leaf
+    los = np.empty(64, dtype=np.int64)
+    ns = np.empty(64, dtype=np.int64)
+    phase = np.zeros(64, dtype=np.int64)
+    vals = np.empty(64, dtype=np.float64)
+    sp = 0
+    vsp = 0
+    los[0] = lo
+    ns[0] = n
+    while sp >= 0:
+        m = ns[sp]
+        if m <= 128:
+            vals[vsp] = _leaf_sum(a, los[sp], m)
+            vsp += 1
+            sp -= 1
+            continue
+        n2 = m // 2
+        n2 -= n2 % 8
+        if phase[sp] == 0:
+            phase[sp] = 1
+            los[sp + 1] = los[sp]
+            ns[sp + 1] = n2
+            phase[sp + 1] = 0
+            sp += 1
+        elif phase[sp] == 1:
+            phase[sp] = 2
+            los[sp + 1] = los[sp] + n2
+            ns[sp + 1] = m - n2
+            phase[sp + 1] = 0
+            sp += 1
+        else:
+            vals[vsp - 2] = vals[vsp - 2] + vals[vsp - 1]
+            vsp -= 1
+            sp -= 1
+    total: float = vals[0]
+    return total
+
+
+pairwise_sum = _jit(pairwise_sum_py)
+
+
+def bilinear_py(
+    pad: NDArray[np.float32],
+    width: int,
+    height: int,
+    ox: float,
+    oy: float,
+    res: float,
+    x: NDArray[np.float64],
+    y: NDArray[np.float64],
+    d: NDArray[np.float64],
+    gu: NDArray[np.float64],
+    gv: NDArray[np.float64],
+    with_gradient: bool,
+) -> None:
+    """Bilinear distance ``d`` (and its gradient ``gu, gv`` per metre) at world points ``x, y``
+    on a padded field (flattened, ``height * width``) whose grid has an unrotated origin
+    ``(ox, oy)``: :func:`symloc.mcl.scan_to_map._bilinear`'s expressions, bit for bit."""
+    umax = width - 1.000001
+    vmax = height - 1.000001
+    for k in range(x.shape[0]):
+        u = (x[k] - ox) / res - 0.5 + 1.0
+        v = (y[k] - oy) / res - 0.5 + 1.0
+        u = min(max(u, 0.0), umax)
+        v = min(max(v, 0.0), vmax)
+        i0 = np.int64(u)
+        j0 = np.int64(v)
+        fu = u - i0
+        fv = v - j0
+        base = j0 * width + i0
+        d00 = np.float64(pad[base])
+        d10 = np.float64(pad[base + 1])
+        d01 = np.float64(pad[base + width])
+        d11 = np.float64(pad[base + width + 1])
+        d[k] = (1 - fv) * ((1 - fu) * d00 + fu * d10) + fv * ((1 - fu) * d01 + fu * d11)
+        if with_gradient:
+            gu[k] = ((1 - fv) * (d10 - d00) + fv * (d11 - d01)) / res
+            gv[k] = ((1 - fu) * (d01 - d00) + fu * (d11 - d10)) / res
+
+
+bilinear = _jit(bilinear_py)
+
+
+def squared_distance_sum_py(
+    pad: NDArray[np.float32],
+    width: int,
+    height: int,
+    ox: float,
+    oy: float,
+    res: float,
+    pts: NDArray[np.float64],
+    c: float,
+    s: float,
+    tx: float,
+    ty: float,
+    buf: NDArray[np.float64],
+) -> float:
+    """``np.sum(d * d)`` of the bilinear distances of ``pts (N, 2)`` placed at the pose
+    ``(tx, ty)`` with ``cos, sin = c, s`` (``x = c px - s py + tx``), bit for bit; ``buf``
+    (N,) is scratch space."""
+    n = pts.shape[0]
+    x = np.empty(1)
+    y = np.empty(1)
+    dd = np.empty(1)
+    for k in range(n):
+        x[0] = c * pts[k, 0] - s * pts[k, 1] + tx
+        y[0] = s * pts[k, 0] + c * pts[k, 1] + ty
+        bilinear(pad, width, height, ox, oy, res, x, y, dd, dd, dd, False)
+        buf[k] = dd[0] * dd[0]
+    total: float = pairwise_sum(buf, 0, n)
+    return total
+
+
+squared_distance_sum = _jit(squared_distance_sum_py)
