@@ -43,6 +43,7 @@ NOT_STOCHASTIC = {
     ("ros", "node"),  # the seed is a node parameter (params.yaml)
     ("ros", "check-params"),
     ("ros", "carmen-to-bag"),
+    ("ros", "setup"),  # builds interface packages: nothing random
     ("vocab", "convert"),
     ("vocab", "info"),
 }

@@ -133,3 +133,81 @@ def test_twist_between_readings() -> None:
     assert twist_between(a, back)[0] == pytest.approx(-0.3)
     assert twist_between(b, a) == (0.0, 0.0)  # out of order
     assert twist_between(a, OdometryReading(b.pose, 12.0)) == (0.0, 0.0)  # too old
+
+
+def test_mirror_flips_the_scan_and_is_its_own_inverse() -> None:
+    from symloc.scan import mirror
+
+    scan = LaserScan(
+        -1.0,
+        0.01,
+        0.1,
+        10.0,
+        np.linspace(1.0, 3.0, 150),
+        stamp=2.0,
+        time_increment=1e-4,
+        frame_id="laser",
+    )
+    flipped = mirror(scan)
+    p, q = scan.to_points().points, flipped.to_points().points
+    # the same end points seen from an upright frame: y negated (the beams in reverse order)
+    np.testing.assert_allclose(q[::-1], p * [1.0, -1.0], atol=1e-12)
+    assert flipped.angle_increment > 0
+    assert flipped.time_increment == -1e-4
+    assert flipped.stamp == scan.stamp
+    back = mirror(flipped)
+    np.testing.assert_allclose(back.ranges, scan.ranges)
+    assert back.angle_min == pytest.approx(scan.angle_min)
+    assert back.time_increment == scan.time_increment
+
+
+def test_sensor_twist_of_an_offset_laser() -> None:
+    from symloc.scan import sensor_twist
+
+    assert sensor_twist(0.3, 0.0, [0.0, 0.0, 0.0]) == pytest.approx((0.3, 0.0, 0.0))
+    # turning on the spot, a laser 0.2 m ahead moves sideways (to its left) at 0.2 w
+    assert sensor_twist(0.0, 1.0, [0.2, 0.0, 0.0]) == pytest.approx((0.0, 0.2, 1.0))
+    # facing backwards, forward motion is backwards for the laser
+    assert sensor_twist(0.3, 0.0, [0.2, 0.0, np.pi]) == pytest.approx((-0.3, 0.0, 0.0))
+
+
+def test_deskew_an_upside_down_laser_off_the_centre() -> None:
+    """A laser 0.2 m ahead, upside down and looking back, on a robot driving along an arc:
+    mirrored and deskewed with its own twist, its points land on the walls again."""
+    from symloc.geometry import compose
+    from symloc.scan import deskew, mirror, sensor_twist
+    from symloc.sim.raycast import raycast
+    from symloc.sim.rooms import rectangle_room
+
+    room = rectangle_room(6.0, 4.0)
+    base0 = np.array([0.4, -0.3, 0.2])
+    mount = np.array([0.2, 0.0, np.pi])  # the upright frame of the turned-over laser
+    v, w, n, dt = 0.3, -0.8, 720, 0.1 / 720
+    t = np.arange(n) * dt
+    # the base along its arc, the laser on it; raw beam i (laser frame angle a_i) is taken at
+    # t_i and points at -a_i in the upright frame
+    th = base0[2] + w * t
+    bx = base0[0] + v / w * (np.sin(th) - np.sin(base0[2]))
+    by = base0[1] - v / w * (np.cos(th) - np.cos(base0[2]))
+    sensor = compose(np.column_stack([bx, by, th]), mount)
+    a = -np.pi + np.arange(n) * (2 * np.pi / n)
+    ranges = raycast(room.world, sensor[:, :2], (sensor[:, 2] - a)[:, None])[:, 0]
+    raw = LaserScan(-np.pi, 2 * np.pi / n, 0.1, 12.0, ranges, time_increment=dt)
+    at0 = compose(base0, mount)
+    c, s = np.cos(at0[2]), np.sin(at0[2])
+
+    def off_wall_p95(scan: LaserScan) -> float:
+        p = scan.to_points().points
+        world = np.column_stack(
+            [at0[0] + c * p[:, 0] - s * p[:, 1], at0[1] + s * p[:, 0] + c * p[:, 1]]
+        )
+        return float(np.percentile(room.world.distance(world), 95))
+
+    upright = mirror(raw)
+    vx, vy, wz = sensor_twist(v, w, mount)
+    fixed = off_wall_p95(deskew(upright, vx, wz, vy=vy))
+    # as for a laser at the centre (the translation is undone to first order along each beam)
+    assert fixed < 0.025
+    assert off_wall_p95(upright) > 5 * fixed
+    # the robot's twist alone (the laser taken for the centre) leaves an error
+    assert off_wall_p95(deskew(upright, v, w)) > 2 * fixed

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import DataFormatError
 
-__all__ = ["LaserScan", "ScanPoints", "deskew"]
+__all__ = ["LaserScan", "ScanPoints", "deskew", "mirror", "sensor_twist"]
 
 FloatArray = NDArray[np.float64]
 
@@ -233,7 +233,7 @@ class LaserScan:
         )
 
 
-def deskew(scan: LaserScan, v: float, w: float) -> LaserScan:
+def deskew(scan: LaserScan, v: float, w: float, *, vy: float = 0.0) -> LaserScan:
     """The scan as the sensor would have taken it standing still at its stamp (first beam).
 
     A spinning lidar takes its beams one after the other over ``scan_time``: beam ``i`` at
@@ -247,23 +247,32 @@ def deskew(scan: LaserScan, v: float, w: float) -> LaserScan:
     uncorrected). Beams that would wrap past one revolution are dropped; invalid and
     no-return readings keep their values. A scan without ``time_increment``, or a robot
     standing still, comes back unchanged.
+
+    ``v`` and ``vy`` are the sensor's own velocity along its x and y axes (a laser mounted off
+    the robot's centre also moves sideways when the robot turns, see
+    :func:`sensor_twist`). A negative ``time_increment`` means the beams were taken in reverse
+    order (a mirrored scan of an upside-down laser, :func:`mirror`): beam ``i`` at
+    ``stamp + (n - 1 - i) |time_increment|``, the stamp still being the earliest beam's time.
     """
     dt = scan.time_increment
-    if dt == 0.0 or (v == 0.0 and w == 0.0) or not (math.isfinite(v) and math.isfinite(w)):
+    moving = v != 0.0 or vy != 0.0 or w != 0.0
+    if dt == 0.0 or not moving or not all(math.isfinite(x) for x in (v, vy, w)):
         return scan
     inc = scan.angle_increment + w * dt
     if inc <= 0.0:
         return scan
     n = min(len(scan), math.floor(2.0 * math.pi / inc + 1e-9) + 1)
-    t = np.arange(n) * dt
+    steps = np.arange(n) - (len(scan) - 1 if dt < 0.0 else 0)
+    t = steps * dt
     th = w * t
     if abs(w) > 1e-9:
-        x = v / w * np.sin(th)
-        y = v / w * (1.0 - np.cos(th))
+        x = (v * np.sin(th) - vy * (1.0 - np.cos(th))) / w
+        y = (v * (1.0 - np.cos(th)) + vy * np.sin(th)) / w
     else:
         x = v * t
-        y = np.zeros(n)
-    a = scan.angle_min + inc * np.arange(n)
+        y = vy * t
+    angle_min = scan.angle_min + w * float(t[0])
+    a = angle_min + inc * np.arange(n)
     r = scan.ranges[:n]
     with np.errstate(invalid="ignore"):
         point = (r >= scan.range_min) & (r < scan.range_max)
@@ -271,7 +280,7 @@ def deskew(scan: LaserScan, v: float, w: float) -> LaserScan:
     out[point] = r[point] + x[point] * np.cos(a[point]) + y[point] * np.sin(a[point])
     inten = None if scan.intensities is None else scan.intensities[:n]
     return LaserScan(
-        scan.angle_min,
+        angle_min,
         inc,
         scan.range_min,
         scan.range_max,
@@ -282,3 +291,42 @@ def deskew(scan: LaserScan, v: float, w: float) -> LaserScan:
         scan.scan_time,
         scan.frame_id,
     )
+
+
+def mirror(scan: LaserScan) -> LaserScan:
+    """The scan of a laser mounted upside down, as a laser with its z axis up sees it.
+
+    Turned over (a roll of 180 degrees), the laser's counter-clockwise sweep is clockwise seen
+    from above: beam ``i`` at angle ``a_i`` of the laser points at ``-a_i`` in the upright
+    frame. The result lists the same readings in reverse order from ``-angle_max`` with the
+    same positive increment; its ``time_increment`` is negated (the beams were taken in
+    reverse order, which :func:`deskew` understands) and its stamp is unchanged.
+    """
+    n = len(scan)
+    inten = None if scan.intensities is None else scan.intensities[::-1].copy()
+    return LaserScan(
+        -(scan.angle_min + (n - 1) * scan.angle_increment),
+        scan.angle_increment,
+        scan.range_min,
+        scan.range_max,
+        scan.ranges[::-1].copy(),
+        inten,
+        scan.stamp,
+        -scan.time_increment,
+        scan.scan_time,
+        scan.frame_id,
+    )
+
+
+def sensor_twist(v: float, w: float, laser_pose: ArrayLike) -> tuple[float, float, float]:
+    """The velocity ``(vx, vy, w)`` of a sensor mounted at ``laser_pose`` on a moving robot.
+
+    The robot moves forward at ``v`` [m/s] and turns at ``w`` [rad/s]; the sensor sits at
+    ``laser_pose`` (3,) x [m], y [m], yaw [rad] in the robot frame. A sensor off the centre
+    also moves sideways while the robot turns; ``vx``, ``vy`` are along the sensor's own
+    axes (what :func:`deskew` takes), ``w`` is unchanged.
+    """
+    px, py, yaw = (float(c) for c in np.asarray(laser_pose, dtype=np.float64).reshape(3))
+    bx, by = v - w * py, w * px
+    c, s = math.cos(yaw), math.sin(yaw)
+    return c * bx + s * by, -s * bx + c * by, w

@@ -687,6 +687,8 @@ BAD_VALUES = ["-1", "0", "nan", "inf", "-inf", "1e999", "abc", "", "1.5", "99999
 INVALID = ["abc", "nan", "1e999", "", "0x1", "--"]
 #: Commands that would run a simulation or an experiment when their options are valid.
 RUNS = ("demo", "experiment", "sim", "bench")
+#: Commands that would run a node until stopped, or build packages, when their options are valid.
+RUNS_PATHS = {("ros", "node"), ("ros", "setup")}
 
 
 def _is_flag(a: Any) -> bool:
@@ -741,7 +743,7 @@ def command_lines(
         else:
             vals = [draw(st.sampled_from(BAD_VALUES)) for _ in range(nargs)]
         argv += [flag, *vals]
-    if path[0] in RUNS:
+    if path[0] in RUNS or path in RUNS_PATHS:
         checked = [a for a in actions if not _is_flag(a) and not _takes_file(a)]
         if checked:
             a = draw(st.sampled_from(checked))

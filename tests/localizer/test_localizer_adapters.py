@@ -121,3 +121,30 @@ def test_directions_for():
     assert directions_for("circle", 0) == 8
     with pytest.raises(ConfigurationError, match="order"):
         directions_for("polygon", 1)
+
+
+def test_verdict_in_the_robot_frame_with_a_laser_pose():
+    """A laser 0.2 m ahead looking back: the centre it reports is turned into the base frame,
+    and the facing bearing and axis are the robot's."""
+    laser = np.array([0.2, 0.0, math.pi])
+    v = verdict_from(_report(), laser)
+    np.testing.assert_allclose(v.center, [0.2 - 1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(v.corners[0], [0.2 - 2.0, 1.0], atol=1e-12)
+    # in the base frame the corner middles lie at x = -1.8 and 0.2 (ahead: bearing 0)
+    assert v.facing == pytest.approx(0.0, abs=1e-12)
+    assert verdict_from(_report(), [0.0, 0.0, 0.0]).center == pytest.approx([1.0, 0.0])
+    with pytest.raises(ConfigurationError, match="laser_pose"):
+        verdict_from(_report(), [0.0, 0.0])
+
+
+def test_grid_scorer_scores_robot_poses_with_the_laser_offset():
+    grid = _box_grid()
+    laser = np.array([0.2, 0.0, math.pi])
+    robot = np.array([1.2, 1.0, 0.3])
+    at = np.array([1.2 + 0.2 * math.cos(0.3), 1.0 + 0.2 * math.sin(0.3), 0.3 + math.pi])
+    scan = _scan_from(grid, at)  # what the laser on the robot sees
+    with_mount = GridScorer(grid, laser_pose=laser)(np.array([robot]), scan)[0]
+    without = GridScorer(grid)(np.array([robot]), scan)[0]
+    assert with_mount > 0.8
+    assert without < 0.5 * with_mount
+    assert with_mount == pytest.approx(GridScorer(grid)(np.array([at]), scan)[0])

@@ -1,7 +1,8 @@
 """The symloc node over real DDS on loopback: a simulated kidnapped-robot run and bad input.
 
-Starts ``symloc ros node`` as its own process on a random ROS_DOMAIN_ID with discovery limited
-to this host (its scan topic remapped with ``--ros-args -r scan:=front/scan``), plays the simulator into it over topics (map, odom, scan, camera), carries out the
+Starts ``symloc ros node --autostart`` (odometry from the topic) as its own process on a random
+ROS_DOMAIN_ID with discovery limited to this host (its scan topic remapped with
+``--ros-args -r scan:=front/scan``), plays the simulator into it over topics (map, odom, scan, camera), carries out the
 node's requests (read from ``symloc/status``) in the simulator, and checks that ``amcl_pose``
 ends within 0.1 m and 5 degrees of the truth. Then it sends a burst of malformed messages and
 checks that the node counts them, stays up and keeps localizing.
@@ -138,6 +139,8 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
         map_yaml="",
         camera_frame_id="camera",
         laser_frame_id="laser",
+        odom_source="topic",
+        laser_pose_source="parameters",
     )
     domain = random.randint(1, 100)
     env = dict(os.environ)
@@ -157,6 +160,7 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
             "node",
             "--params",
             str(sim.params_path),
+            "--autostart",
             "--ros-args",
             "-r",
             "scan:=front/scan",

@@ -166,6 +166,8 @@ class Scenario:
     workdir: Path
     notes: list[str] = field(default_factory=list)
     slam_seconds: float = 0.0
+    #: 95th percentile [m] of the mapping trip's SLAM pose error in the map frame (NaN: raster)
+    slam_error_p95: float = math.nan
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
     #: the sensor regime of the robot (:mod:`symloc.sim.regimes`)
@@ -460,6 +462,13 @@ def _map_with_slam(
     # room's unobservable heading) is error the localizer inherits
     scen.map_from_world = np.asarray(
         _compose(np.asarray(slam.poses)[0], _inverse(truths[0])), dtype=np.float64
+    )
+    in_map = np.asarray(_compose(scen.map_from_world, np.array(truths)), dtype=np.float64)
+    slam_err = np.hypot(*(np.asarray(slam.poses)[:, :2] - in_map[:, :2]).T)
+    scen.slam_error_p95 = float(np.percentile(slam_err, 95))
+    scen.notes.append(
+        f"mapping trip: SLAM pose error in the map frame mean {100 * slam_err.mean():.1f} cm, "
+        f"p95 {100 * scen.slam_error_p95:.1f} cm, max {100 * slam_err.max():.1f} cm"
     )
     scen.notes[0] = (
         f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "

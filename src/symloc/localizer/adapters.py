@@ -16,11 +16,12 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import distance_transform_edt
 
 from symloc._checks import check_positive
-from symloc.geometry import wrap_angle
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.scan import LaserScan
 
@@ -32,10 +33,15 @@ FloatArray = NDArray[np.float64]
 
 
 class AmclTracker:
-    """:class:`symloc.mcl.Amcl` as a :class:`~symloc.localizer.types.Tracker`."""
+    """:class:`symloc.mcl.Amcl` as a :class:`~symloc.localizer.types.Tracker`.
 
-    def __init__(self, amcl: Any) -> None:
+    ``laser_pose`` (3,): the laser in the robot frame (``base_from_laser``), given to every
+    filter update.
+    """
+
+    def __init__(self, amcl: Any, *, laser_pose: ArrayLike = (0.0, 0.0, 0.0)) -> None:
         self.amcl = amcl
+        self.laser_pose = _pose3(laser_pose, "AmclTracker.laser_pose")
         self.last: Any = None
 
     def initialize_global(self) -> None:
@@ -49,7 +55,7 @@ class AmclTracker:
         self.amcl.request_nomotion_update()
 
     def update(self, odom: Any, scan: Any) -> TrackerResult:
-        r = self.amcl.update(odom, scan)
+        r = self.amcl.update(odom, scan, laser_pose=self.laser_pose)
         self.last = r
         hyps = tuple(
             Hypothesis(pose=np.asarray(h.mean, dtype=np.float64), weight=float(h.weight))
@@ -82,17 +88,25 @@ def corner_middle_bearing(corners: NDArray[np.float64]) -> float | None:
     return float(bearings[int(np.argmin(np.abs(bearings)))])
 
 
-def verdict_from(report: Any) -> SymmetryVerdict:
+def verdict_from(report: Any, laser_pose: ArrayLike | None = None) -> SymmetryVerdict:
     """Translate a :class:`symloc.symmetry.SymmetryReport` into a :class:`SymmetryVerdict`.
 
     A circle's infinite order becomes 0. A hallway is reported symmetric (order 2) but its
-    centre along the axis is not observable, so it carries ``kind="hallway"``.
+    centre along the axis is not observable, so it carries ``kind="hallway"``. The report is in
+    the laser's frame; with ``laser_pose`` (3,) (``base_from_laser``) the centre, corners,
+    facing bearing and axis of the verdict are in the robot's frame, where the robot drives.
     """
     order_raw = report.order
     order = 0 if isinstance(order_raw, float) and math.isinf(order_raw) else int(order_raw)
     center = np.asarray(report.center, dtype=np.float64).reshape(2)
     symmetric = bool(report.symmetric) and bool(np.all(np.isfinite(center)))
     corners = np.asarray(report.corners, dtype=np.float64).reshape(-1, 2)
+    if laser_pose is not None:
+        lp = _pose3(laser_pose, "laser_pose")
+        c, s = math.cos(lp[2]), math.sin(lp[2])
+        rot = np.array([[c, -s], [s, c]])
+        center = rot @ center + lp[:2]
+        corners = corners @ rot.T + lp[:2]
     facing = None
     if (symmetric and order != 0 and report.kind == "polygon") or (
         symmetric and report.kind == "rectangle" and corners.shape[0] == 4
@@ -122,12 +136,17 @@ class ReportJudge:
     ----------
     judge : callable
         ``judge(scan, **kwargs) -> SymmetryReport`` (e.g. :func:`symloc.symmetry.judge_symmetry`).
+    laser_pose : (3,) array, optional
+        The laser in the robot frame: verdicts come out in the robot frame (:func:`verdict_from`).
     **kwargs
         Passed to ``judge`` on every call (e.g. ``config=SymmetryConfig(...)``).
     """
 
-    def __init__(self, judge: Callable[..., Any], **kwargs: Any) -> None:
+    def __init__(
+        self, judge: Callable[..., Any], *, laser_pose: ArrayLike | None = None, **kwargs: Any
+    ) -> None:
         self.judge = judge
+        self.laser_pose = None if laser_pose is None else _pose3(laser_pose, "laser_pose")
         self.kwargs = kwargs
         self.last_report: Any = None
         #: judgements that raised (counted, treated as "unknown"); should stay 0.
@@ -145,7 +164,7 @@ class ReportJudge:
                 False, 0, "unknown", None, math.nan, reason=f"judge raised {self.last_error}"
             )
         self.last_report = report
-        return verdict_from(report)
+        return verdict_from(report, self.laser_pose)
 
 
 class GridScorer:
@@ -161,9 +180,19 @@ class GridScorer:
         Standard deviation [m] of the fit (nav2's ``sigma_hit`` is 0.2).
     max_beams : int
         Beams used per scan (evenly sub-sampled).
+    laser_pose : (3,) array
+        The laser in the robot frame (``base_from_laser``); the scored poses are the robot's.
     """
 
-    def __init__(self, grid: OccupancyGrid, sigma: float = 0.05, max_beams: int = 120) -> None:
+    def __init__(
+        self,
+        grid: OccupancyGrid,
+        sigma: float = 0.05,
+        max_beams: int = 120,
+        *,
+        laser_pose: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> None:
+        self.laser_pose = _pose3(laser_pose, "GridScorer.laser_pose")
         self.grid = grid
         self.sigma = check_positive(sigma, "GridScorer.sigma")
         self.max_beams = int(max_beams)
@@ -176,7 +205,7 @@ class GridScorer:
         step = max(1, len(pts.ranges) // self.max_beams)
         r = np.asarray(pts.ranges)[::step]
         a = np.asarray(pts.angles)[::step]
-        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        p = compose(np.asarray(poses, dtype=np.float64).reshape(-1, 3), self.laser_pose)
         ang = wrap_angle(p[:, 2:3] + a[None, :])
         xs = p[:, 0:1] + r[None, :] * np.cos(ang)
         ys = p[:, 1:2] + r[None, :] * np.sin(ang)
@@ -186,6 +215,13 @@ class GridScorer:
         d[inside] = self._dist[cells[inside, 0], cells[inside, 1]]
         s = np.exp(-0.5 * (d / self.sigma) ** 2).reshape(p.shape[0], -1)
         return np.asarray(s.mean(axis=1) if s.shape[1] else np.zeros(p.shape[0]))
+
+
+def _pose3(value: ArrayLike, name: str) -> FloatArray:
+    p = np.asarray(value, dtype=np.float64).reshape(-1)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ConfigurationError(f"{name}: expected finite (x [m], y [m], yaw [rad]), got {p}")
+    return p
 
 
 def _confident(result: Any) -> bool | None:

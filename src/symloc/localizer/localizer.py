@@ -32,7 +32,7 @@ from symloc._checks import check_in_range, check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, inverse, wrap_angle
 from symloc.odometry import OdometryReading, twist_between
-from symloc.scan import LaserScan, deskew
+from symloc.scan import LaserScan, deskew, sensor_twist
 
 from .centering import CentreFilter
 from .claim import Claim, ClaimGate
@@ -259,6 +259,14 @@ class Localizer:
         :func:`~symloc.localizer.map_symmetry.map_symmetries`). Where AMCL converged outside any
         known place, a rotated copy that explains the scan as well keeps the pose unearned
         (status ambiguous, the copies as candidates).
+    laser_pose : (3,) array, optional
+        Where the laser sits on the robot (``base_from_laser``: x [m], y [m], yaw [rad]; a
+        scan of a laser mounted upside down is mirrored first, :func:`symloc.scan.mirror`).
+        The localizer uses it to undo the sensor's own motion during a sweep (a laser off the
+        centre also moves sideways while the robot turns); the tracker, the judge, the scorer
+        and the claim gate are given the same pose when they are built
+        (:func:`symloc.ros.assemble.make_localizer`). Default: at the robot's origin, looking
+        along +x.
     """
 
     def __init__(
@@ -272,7 +280,15 @@ class Localizer:
         known_places: Sequence[Place] = (),
         map_symmetries: Sequence[Any] = (),
         claim_gate: ClaimGate | None = None,
+        laser_pose: FloatArray | Sequence[float] = (0.0, 0.0, 0.0),
     ) -> None:
+        lp = np.asarray(laser_pose, dtype=np.float64).reshape(-1)
+        if lp.shape != (3,) or not np.all(np.isfinite(lp)):
+            raise ConfigurationError(
+                f"Localizer.laser_pose: expected finite (x, y, yaw), got {lp.tolist()}"
+            )
+        #: the laser in the robot frame (``base_from_laser``), see the class docstring
+        self.laser_pose = lp
         self.tracker = tracker
         self.judge = judge
         self.places = places
@@ -346,7 +362,9 @@ class Localizer:
         if isinstance(scan, LaserScan) and isinstance(odom, OdometryReading):
             # a spinning lidar's beams were taken along the last motion: undo it
             if self._last_odom is not None:
-                scan = deskew(scan, *twist_between(self._last_odom, odom))
+                v, w = twist_between(self._last_odom, odom)
+                vx, vy, w = sensor_twist(v, w, self.laser_pose)
+                scan = deskew(scan, vx, w, vy=vy)
             self._last_odom = odom
         result = self.tracker.update(odom, scan)
         self._jumped = False

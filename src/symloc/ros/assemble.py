@@ -114,25 +114,30 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
     """A globally initialised localizer on ``grid`` configured by ``params``.
 
     AMCL draws from ``numpy.random.default_rng(params.seed)``, so two localizers made with the
-    same parameters and fed the same messages give the same estimates.
+    same parameters and fed the same messages give the same estimates. ``params.laser_pose``
+    (the laser on the robot; the node sets it from TF) goes to every part that reads scans:
+    AMCL, Algorithm 1's verdicts (turned into the robot frame), the scorer, the claim gate and
+    the localizer's deskewing. Scans of an upside-down laser arrive mirrored (the node does it).
     """
     from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
     from symloc.mcl.amcl import Amcl
     from symloc.symmetry import judge_symmetry
 
     amcl = Amcl(grid, params.amcl, rng=np.random.default_rng(params.seed))
+    laser = np.asarray(params.laser_pose, dtype=np.float64)
     store = places if places is not None else open_places(params)
     known = list(store.all_places()) if hasattr(store, "all_places") else []
     config = dataclasses.replace(params.localizer, allow_mapping=params.allow_mapping)
     loc = Localizer(
-        AmclTracker(amcl),
-        ReportJudge(judge_symmetry, config=params.symmetry_config()),
+        AmclTracker(amcl, laser_pose=laser),
+        ReportJudge(judge_symmetry, laser_pose=laser, config=params.symmetry_config()),
         store,
         config,
-        scorer=GridScorer(grid),
+        scorer=GridScorer(grid, laser_pose=laser),
         known_places=known,
         map_symmetries=map_symmetries(grid),
-        claim_gate=ClaimGate(surface_distance_field(grid)),
+        claim_gate=ClaimGate(surface_distance_field(grid), laser_pose=laser),
+        laser_pose=laser,
     )
     loc.reset_global()
     return loc

@@ -26,6 +26,13 @@ It also never gets stuck (each case recovers within a few scans, :mod:`symloc.ro
 Each recovery is counted in :attr:`NodeCore.recovered` and in the status.
 
 :mod:`symloc.ros.node` wraps it in rclpy; ``symloc replay`` feeds it a bag.
+
+With ``use_tf`` (the live node) it also reads TF as nav2_amcl does (:mod:`symloc.ros.tf`):
+odometry from ``odom -> base`` transforms on ``/tf`` (:meth:`NodeCore.on_tf`), the laser's
+mount from ``/tf_static`` (:meth:`NodeCore.on_tf_static`: the localizer is built for that
+pose, scans of an upside-down laser are mirrored), and it returns the ``map -> odom``
+transform to broadcast after each scan (:attr:`Outputs.tf`). Without TF the mount comes from
+the ``laser_pose`` / ``laser_upside_down`` parameters.
 """
 
 from __future__ import annotations
@@ -42,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import SymlocError
-from symloc.geometry import angle_diff, compose, wrap_angle
+from symloc.geometry import angle_diff, compose, relative, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Estimate, RequestKind, Status
 from symloc.odometry import OdometryReading
@@ -61,7 +68,15 @@ from symloc.ros.pose_msg import (
 )
 from symloc.ros.scan_msg import scan_from_msg
 from symloc.ros.status_msg import candidates_to_fields, status_to_fields
-from symloc.scan import LaserScan
+from symloc.ros.tf import (
+    LaserMount,
+    MapToOdom,
+    TransformTree,
+    laser_mount,
+    odometry_from_transform,
+    transforms_from_msg,
+)
+from symloc.scan import LaserScan, mirror
 
 __all__ = ["LocalizerFactory", "NodeCore", "Outputs"]
 
@@ -101,6 +116,8 @@ class Outputs:
     #: The tracker's best pose (3,) at this scan, earned or not (for logs such as
     #: ``replay_scans.tum``; never published as a pose).
     best_estimate: FloatArray | None = None
+    #: tf2_msgs/TFMessage fields with ``map -> odom`` (None: nothing to broadcast)
+    tf: dict[str, Any] | None = None
 
 
 @dataclass
@@ -154,6 +171,9 @@ class NodeCore:
         ``factory(grid, params) -> Localizer``; called when the first usable map arrives.
     warn : callable, optional
         Receives warning lines (the rclpy node passes its logger).
+    use_tf : bool
+        TF is fed (:meth:`on_tf`, :meth:`on_tf_static`): with ``laser_pose_source: tf`` the
+        laser's mount comes from it (scans wait for it), not from ``laser_pose``.
     """
 
     def __init__(
@@ -162,6 +182,7 @@ class NodeCore:
         *,
         factory: LocalizerFactory | None = None,
         warn: Callable[[str], object] | None = None,
+        use_tf: bool = False,
     ) -> None:
         if factory is None:
             from symloc.ros.assemble import make_localizer
@@ -188,6 +209,12 @@ class NodeCore:
         self._last_scan_stamp = -math.inf
         self._image: tuple[float, NDArray[np.uint8]] | None = None
         self._want_image_after: float | None = None
+        self.use_tf = bool(use_tf)
+        #: the frames seen on /tf_static and /tf
+        self.tf = TransformTree()
+        #: the laser's mount the localizer was built for (None until the first scan)
+        self.mount: LaserMount | None = None
+        self.map_odom = self._map_odom(params)
 
     # ------------------------------------------------------------------ bookkeeping
 
@@ -270,6 +297,8 @@ class NodeCore:
             )
             if same_geometry and np.array_equal(old.data, grid.data):
                 return True  # re-published (transient local): nothing new
+            if self.params.first_map_only:
+                return False  # nav2's first_map_only: later maps are ignored
             if not self.params.accept_map_updates:
                 self.drop(
                     "map: changed",
@@ -278,7 +307,7 @@ class NodeCore:
                 )
                 return False
         try:
-            localizer = self.factory(grid, self.params)
+            localizer = self.factory(grid, self._build_params())
         except SymlocError as err:
             self.drop("map: unusable", f"{grid.width}x{grid.height} cells: {err}")
             return False
@@ -292,6 +321,119 @@ class NodeCore:
             self.localizer.set_pose(pose, cov)
         self.warn(f"map changed to {grid.width}x{grid.height} cells: localizer rebuilt")
         return True
+
+    def _build_params(self) -> NodeParams:
+        """The parameters the localizer is built with: the laser pose is the mount's."""
+        if self.mount is None:
+            return self.params
+        return dataclasses.replace(self.params, laser_pose=tuple(float(v) for v in self.mount.pose))
+
+    @staticmethod
+    def _map_odom(params: NodeParams) -> MapToOdom:
+        return MapToOdom(
+            global_frame=params.global_frame_id,
+            odom_frame=params.odom_frame_id,
+            tolerance=params.transform_tolerance,
+            enabled=params.tf_broadcast,
+        )
+
+    def rebuild(self, why: str) -> None:
+        """Build the localizer again on the current map (new settings or a new laser mount),
+        reseeded at the tracked pose when there is one."""
+        if self.grid is None:
+            return
+        pose, cov = self._tracked_pose()
+        self.localizer = self.factory(self.grid, self._build_params())
+        if pose is not None and cov is not None:
+            self.localizer.set_pose(pose, cov)
+        self.warn(f"localizer rebuilt: {why}")
+
+    def reconfigure(self, params: NodeParams) -> None:
+        """Use new (validated) parameters from now on; the localizer is rebuilt on them."""
+        self.params = params
+        self.map_odom = self._map_odom(params)
+        if not (self.use_tf and params.laser_pose_source == "tf"):
+            # the mount from the (maybe changed) laser_pose; a TF mount stays as it is
+            self.mount = LaserMount(np.array(params.laser_pose), params.laser_upside_down)
+        self.rebuild("parameters changed")
+
+    def reinitialize_global(self) -> bool:
+        """Forget the pose and localize globally again (nav2's
+        ``reinitialize_global_localization``); False without a map."""
+        if self.localizer is None:
+            return False
+        self.localizer.reset_global()
+        self.warn("global localization requested: pose forgotten, AMCL spread over the map")
+        return True
+
+    def request_nomotion_update(self) -> bool:
+        """Update the filter with the next scan even if the robot did not move (nav2's
+        ``request_nomotion_update``); False without a localizer that can."""
+        force = getattr(getattr(self.localizer, "tracker", None), "force_update", None)
+        if force is None:
+            return False
+        force()
+        return True
+
+    # ------------------------------------------------------------------ TF
+
+    def on_tf(self, msg: Any) -> None:
+        """A tf2_msgs/TFMessage from ``/tf``: frames, and odometry from ``odom -> base``."""
+        self._on_any_tf(msg, static=False)
+
+    def on_tf_static(self, msg: Any) -> None:
+        """A tf2_msgs/TFMessage from ``/tf_static`` (the robot's geometry)."""
+        self._on_any_tf(msg, static=True)
+
+    def _on_any_tf(self, msg: Any, *, static: bool) -> None:
+        self.received["tf_static" if static else "tf"] += 1
+        try:
+            transforms = transforms_from_msg(msg)
+        except SymlocError as err:
+            self.drop("tf: malformed", str(err))
+            return
+        p = self.params
+        for t in transforms:
+            self.tf.add(t, static=static)
+            if static:
+                continue
+            reading = odometry_from_transform(
+                t, self.tf, odom_frame=p.odom_frame_id, base_frame=p.base_frame_id
+            )
+            if reading is not None:
+                self.add_odometry(reading)
+
+    def _laser_mount(self, frame: str) -> LaserMount | str:
+        """The mount of the laser whose scans carry ``frame`` (a str says why it is unknown);
+        a new or changed mount rebuilds the localizer for it."""
+        base = self.params.base_frame_id
+        if not self.use_tf or self.params.laser_pose_source != "tf" or not frame:
+            mount = LaserMount(np.array(self.params.laser_pose), self.params.laser_upside_down)
+        elif frame == base:
+            mount = LaserMount(np.zeros(3))
+        else:
+            m = self.tf.lookup(base, frame)
+            if m is None:
+                return f"no transform {base} -> {frame} on /tf_static yet"
+            mount = laser_mount(m)
+            if not mount.level:
+                return (
+                    f"the scan plane of {frame} is tilted {math.degrees(mount.tilt):.0f} deg"
+                    " from the floor; a 2D localizer needs a level laser"
+                )
+        old = self.mount
+        if (
+            old is None
+            or old.upside_down != mount.upside_down
+            or not np.allclose(old.pose, mount.pose, atol=1e-6)
+        ):
+            self.mount = mount
+            if old is not None or np.any(mount.pose != 0.0) or mount.upside_down:
+                self.rebuild(
+                    f"laser {frame or '(no frame)'} at {np.round(mount.pose, 3).tolist()}"
+                    f"{' upside down' if mount.upside_down else ''}"
+                )
+        return self.mount if self.mount is not None else mount
 
     def _tracked_pose(self) -> tuple[FloatArray | None, FloatArray | None]:
         if self.last is not None and self.last.estimate.status is Status.TRACKING:
@@ -406,12 +548,14 @@ class NodeCore:
         try:
             frame = header_frame(msg, "PoseWithCovarianceStamped")
             pose, cov = pose_with_covariance_from_msg(msg)
+            stamp = header_stamp(msg, "PoseWithCovarianceStamped")
         except SymlocError as err:
             self.drop("initialpose: malformed", str(err))
             return
         if not self._frame_ok(frame, self.params.global_frame_id, "initialpose: wrong frame"):
             return
-        self.set_initial_pose(pose, cov)
+        # as nav2_amcl: a pose given for an earlier time is moved by the odometry since then
+        self.set_initial_pose(self.carried_to_now(pose, stamp), cov)
 
     def set_initial_pose(self, pose: FloatArray, covariance: FloatArray) -> bool:
         """Reseed the localizer at ``pose`` (3,) with ``covariance`` (3, 3), if both make sense
@@ -467,6 +611,16 @@ class NodeCore:
             return f"covariance: heading variance {c[2, 2]:.3g} rad^2 exceeds (2 pi)^2"
         return None
 
+    def carried_to_now(self, pose: FloatArray, stamp: float) -> FloatArray:
+        """``pose`` (3,) given for time ``stamp``, moved by the odometry since then to the
+        newest odometry reading (as nav2_amcl treats an initial pose from the past); unchanged
+        when the odometry history does not cover ``stamp``."""
+        then = self._odom.at(stamp, self.params.transform_tolerance)
+        if isinstance(then, str) or not self._odom.stamps:
+            return np.asarray(pose, dtype=np.float64)
+        now = self._odom.poses[-1]
+        return compose(np.asarray(pose, dtype=np.float64), relative(then.pose, now))
+
     # ------------------------------------------------------------------ scans
 
     def on_scan(self, msg: Any) -> Outputs:
@@ -512,6 +666,12 @@ class NodeCore:
         if self.localizer is None:
             self.drop("scan: no map yet")
             return self.unused_scan(scan.stamp)
+        mount = self._laser_mount(scan.frame_id)
+        if isinstance(mount, str):
+            self.drop("scan: no laser pose", mount)
+            return self.unused_scan(scan.stamp)
+        if mount.upside_down:
+            scan = mirror(scan)
         odom = self._odom.at(scan.stamp, self.params.transform_tolerance)
         if isinstance(odom, str):
             self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
@@ -569,7 +729,7 @@ class NodeCore:
         else:
             est = dataclasses.replace(last, request=None, reason=f"{why}; last: {last.reason}")
         p = self.params
-        return Outputs(
+        out = Outputs(
             estimate=est,
             stamp=stamp,
             status=status_to_fields(
@@ -583,6 +743,15 @@ class NodeCore:
             ),
             used=False,
         )
+        self._add_map_to_odom(out, stamp)
+        return out
+
+    def _add_map_to_odom(self, out: Outputs, stamp: float) -> None:
+        """The status says what the broadcast ``map -> odom`` is (:mod:`symloc.ros.tf`)."""
+        for diag in out.status.get("status", []):
+            diag.setdefault("values", []).append(
+                {"key": "map_to_odom", "value": self.map_odom.describe(stamp)}
+            )
 
     def _outputs(self, est: Estimate, stamp: float, odom: OdometryReading) -> Outputs:
         p = self.params
@@ -600,6 +769,8 @@ class NodeCore:
             candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
             best_estimate=self._best_estimate(),
         )
+        out.tf = self.map_odom.step(est, stamp, odom.pose)
+        self._add_map_to_odom(out, stamp)
         particles = self._particles()
         if particles is not None:
             out.particle_cloud = pose_array_to_fields(

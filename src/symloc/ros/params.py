@@ -39,6 +39,29 @@ __all__ = ["MODES", "NodeParams"]
 MODES = ("localize", "build_visual_map")
 
 
+def _pose3(value: Any, name: str) -> tuple[float, float, float]:
+    """``(x, y, yaw)`` from a sequence of 3 numbers, or nav2's ``{x, y, z, yaw}`` mapping."""
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - {"x", "y", "z", "yaw"})
+        if unknown:
+            raise ConfigurationError(f"{name}.{unknown[0]}: unknown (expected x, y, z, yaw)")
+        value = (value.get("x", 0.0), value.get("y", 0.0), value.get("yaw", 0.0))
+    if (
+        isinstance(value, (str, bytes))
+        or not hasattr(value, "__len__")
+        or len(value) != 3
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+    ):
+        raise ConfigurationError(
+            f"{name}: expected 3 numbers x [m], y [m], yaw [rad], got {value!r}"
+        )
+    x, y, yaw = (float(v) for v in value)
+    return (x, y, yaw)
+
+
 def _block(name: str, build: Any) -> Any:
     """``build()``, with a value of the wrong type reported as a ConfigurationError."""
     try:
@@ -72,7 +95,15 @@ class NodeParams:
         (``Odometry.child_frame_id``). Messages in another frame are dropped and counted.
     laser_frame_id, camera_frame_id : str
         Frame a scan / an image must carry; empty accepts any (the sensors sit at the base
-        origin looking along +x, as in the paper).
+        origin looking along +x, as in the paper, unless TF or ``laser_pose`` says otherwise).
+    laser_pose_source : {"tf", "parameters"}
+        Where the laser's mount comes from: ``base_frame_id -> <scan frame>`` on
+        ``/tf_static`` (as nav2_amcl; scans wait for it), or ``laser_pose`` and
+        ``laser_upside_down`` (also what a bag replay without TF uses).
+    laser_pose : sequence of 3 floats
+        Where the laser sits on the robot, ``x [m], y [m], yaw [rad]`` in the base frame.
+        With ``laser_upside_down`` the laser is mounted upside down (its scans are mirrored)
+        and ``yaw`` is the heading of its x axis.
     scan_topic, odom_topic, map_topic, image_topic, compressed_image_topic, initialpose_topic
         Inputs. An empty ``image_topic`` or ``compressed_image_topic`` is not subscribed.
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
@@ -102,9 +133,36 @@ class NodeParams:
         A map whose size or origin differs from the first: rebuild the localizer on it (True),
         or drop it with a warning (False, the default; the pose is kept).
     transform_tolerance : float
-        Largest gap [s] between a scan and the newest odometry before it is used.
+        Largest gap [s] between a scan and the newest odometry before it is used; the
+        ``map -> odom`` transform is stamped this far after its scan (nav2's meaning).
+    tf_broadcast : bool
+        Broadcast ``map -> odom`` on ``/tf`` once a pose is earned (nav2's name; see
+        :mod:`symloc.ros.tf` for what is sent while the pose is not earned).
+    first_map_only : bool
+        Use the first map received and ignore every later one (nav2's name).
     max_odom_age : float
         How much odometry history [s] is kept for interpolating at scan stamps.
+    odom_source : {"tf", "topic"}
+        Odometry from ``odom_frame_id -> base_frame_id`` on ``/tf``, as nav2_amcl reads it
+        (needs ``tf2_msgs``: ``symloc ros setup``), or from ``nav_msgs/Odometry`` on
+        ``odom_topic``.
+    set_initial_pose, initial_pose : bool, sequence of 3 floats
+        nav2's names: on activation, seed the filter at ``initial_pose`` = x [m], y [m],
+        yaw [rad] (in a nav2 file the block ``initial_pose: {x, y, z, yaw}``; z is ignored).
+    always_reset_initial_pose : bool
+        nav2's name: on activation, forget the last pose instead of resuming from it.
+    save_pose_rate : float
+        nav2's name: how often [Hz] the last published pose is written to
+        ``saved_pose_filepath`` while active (<= 0: never).
+    initialize_at_saved_pose, saved_pose_filepath : bool, str
+        nav2's names (main branch): on activation, seed the filter at the pose saved there
+        (activation fails when the file is missing, as in nav2).
+    bond_heartbeat_period : float
+        nav2's name: the period [s] of the bond heartbeat to nav2's lifecycle manager while
+        active (<= 0: no bond; then set the manager's ``bond_timeout`` to 0).
+    autostart_node : bool
+        nav2's name (main branch): configure and activate at start-up, without a lifecycle
+        manager.
     max_stamp_jump : float
         A scan, odometry or image stamp further than this [s] from the node's clock (the last
         accepted stamp) is dropped, not adopted; three such stamps in a row that agree, from
@@ -118,7 +176,7 @@ class NodeParams:
         Camera images of more pixels are refused before decoding (compressed ones by the size
         their header declares).
     seed : int
-        Seed of the filter's random numbers.
+        Seed of the filter's random numbers (nav2's ``random_seed`` >= 0 sets it).
     amcl : AmclParams
     localizer : LocalizerConfig
     symmetry : dict
@@ -130,6 +188,9 @@ class NodeParams:
     base_frame_id: str = "base_link"
     laser_frame_id: str = ""
     camera_frame_id: str = ""
+    laser_pose_source: str = "tf"
+    laser_pose: tuple[float, ...] = (0.0, 0.0, 0.0)
+    laser_upside_down: bool = False
     scan_topic: str = "scan"
     odom_topic: str = "odom"
     map_topic: str = "map"
@@ -152,7 +213,18 @@ class NodeParams:
     map_yaml: str = ""
     accept_map_updates: bool = False
     transform_tolerance: float = 1.0
+    tf_broadcast: bool = True
+    first_map_only: bool = False
     max_odom_age: float = 10.0
+    odom_source: str = "tf"
+    set_initial_pose: bool = False
+    initial_pose: tuple[float, ...] = (0.0, 0.0, 0.0)
+    always_reset_initial_pose: bool = False
+    save_pose_rate: float = 0.5
+    initialize_at_saved_pose: bool = False
+    saved_pose_filepath: str = "/tmp/amcl_saved_pose"
+    bond_heartbeat_period: float = 0.25
+    autostart_node: bool = False
     max_stamp_jump: float = 5.0
     max_odom_speed: float = 10.0
     max_image_pixels: int = 5_000_000
@@ -198,6 +270,12 @@ class NodeParams:
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
             )
         object.__setattr__(self, "camera_intrinsics", tuple(float(v) for v in intr))
+        for name in ("laser_pose", "initial_pose"):
+            object.__setattr__(self, name, _pose3(getattr(self, name), name))
+        if not isinstance(self.laser_upside_down, bool):
+            raise ConfigurationError(
+                f"laser_upside_down: expected true/false, got {self.laser_upside_down!r}"
+            )
         dist = self.camera_dist_coeffs
         if isinstance(dist, (str, bytes)) or any(isinstance(v, bool) for v in dist):
             raise ConfigurationError(
@@ -220,6 +298,35 @@ class NodeParams:
         for name in ("visual_map", "map_yaml", "vocabulary"):
             if not isinstance(getattr(self, name), str):
                 raise ConfigurationError(f"{name}: expected a path string")
+        if self.laser_pose_source not in ("tf", "parameters"):
+            raise ConfigurationError(
+                f"laser_pose_source: expected 'tf' or 'parameters', got {self.laser_pose_source!r}"
+            )
+        if self.odom_source not in ("tf", "topic"):
+            raise ConfigurationError(
+                f"odom_source: expected 'tf' or 'topic', got {self.odom_source!r}"
+            )
+        for name in ("save_pose_rate", "bond_heartbeat_period"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ConfigurationError(f"{name}: expected a number, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        if not isinstance(self.saved_pose_filepath, str) or not self.saved_pose_filepath:
+            raise ConfigurationError(
+                f"saved_pose_filepath: expected a file path, got {self.saved_pose_filepath!r}"
+            )
+        for name in (
+            "tf_broadcast",
+            "first_map_only",
+            "set_initial_pose",
+            "always_reset_initial_pose",
+            "initialize_at_saved_pose",
+            "autostart_node",
+        ):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigurationError(
+                    f"{name}: expected true/false, got {getattr(self, name)!r}"
+                )
         if not isinstance(self.accept_map_updates, bool):
             raise ConfigurationError(
                 f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"

@@ -25,6 +25,8 @@ key                 value
 ``scans_used``      scans given to the localizer so far
 ``dropped``         messages dropped so far (all reasons)
 ``dropped/<why>``   messages dropped for that reason
+``map_to_odom``     what the broadcast ``map -> odom`` is: sent with this scan (and the stamp it
+                    carries), not updated since an earlier scan, or never sent
 ``recovered``       recoveries from a stuck state so far (clock jump, odometry reset, ...)
 ``recovered/<what>``  recoveries of that kind (:mod:`symloc.ros.core`)
 ==================  ==========================================================================

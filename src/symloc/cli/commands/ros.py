@@ -20,13 +20,31 @@ def register(subparsers: Any) -> None:
     sub.required = True
     node = sub.add_parser(
         "node",
-        help="run the symloc localization node",
-        description="Run the symloc node: subscribes scan, odom, map, camera, initialpose;"
-        " publishes amcl_pose, particle_cloud, symloc/status, symloc/candidates, goal_pose,"
-        " symloc/capture_request. Arguments after --ros-args (last) go to rclpy"
-        " (e.g. --ros-args -r scan:=/front/scan -r __ns:=/robot1).",
+        help="run the symloc localization node (nav2_amcl's drop-in: lifecycle node 'amcl')",
+        description="Run the symloc node, a lifecycle node named amcl that takes nav2_amcl's"
+        " place: subscribes scan, map, /tf, /tf_static (or odom), camera, initialpose;"
+        " publishes amcl_pose, particle_cloud, map -> odom on /tf, symloc/status,"
+        " symloc/candidates, goal_pose, symloc/capture_request; services"
+        " reinitialize_global_localization, request_nomotion_update, set_initial_pose."
+        " nav2's lifecycle manager configures and activates it (or --autostart). Arguments"
+        " after --ros-args (last) go to rclpy (e.g. --ros-args --params-file nav2_params.yaml"
+        " -r scan:=/front/scan -r __ns:=/robot1). Run `symloc ros setup` once first.",
     )
-    node.add_argument("--params", type=Path, required=True, help="nav2-style parameters YAML")
+    node.add_argument(
+        "--params",
+        type=Path,
+        default=None,
+        help="parameters YAML (nav2's amcl block or symloc's symloc block) giving the"
+        " defaults; --ros-args --params-file overrides them",
+    )
+    node.add_argument(
+        "--node-name", default="amcl", help="node name (default amcl, as nav2 expects)"
+    )
+    node.add_argument(
+        "--autostart",
+        action="store_true",
+        help="configure and activate at start-up (no lifecycle manager)",
+    )
     node.add_argument(
         "--ros-args",
         dest="ros_args",
@@ -35,6 +53,27 @@ def register(subparsers: Any) -> None:
         help="everything after it goes to rclpy, as in ros2 run (give it last)",
     )
     node.set_defaults(func=_run_node)
+    setup = sub.add_parser(
+        "setup",
+        help="build tf2_msgs, nav2_msgs (amcl's subset) and bond into this environment",
+        description="Build the ROS 2 interface packages the node needs and PyPI lacks"
+        " (tf2_msgs; nav2_msgs' ParticleCloud, Particle, SetInitialPose; bond's Status) from"
+        " the definitions shipped with symloc, with the ROS generator wheels of"
+        " symloc[ros], cmake and a C/C++ compiler, into the active Python environment."
+        " Idempotent: what is already there is left alone.",
+    )
+    setup.add_argument("--force", action="store_true", help="rebuild what symloc built before")
+    setup.add_argument(
+        "--packages",
+        nargs="+",
+        choices=("tf2_msgs", "nav2_msgs", "bond"),
+        default=None,
+        help="build only these (default: all three)",
+    )
+    setup.add_argument(
+        "--keep-build", type=Path, default=None, help="build in this folder and keep it (logs)"
+    )
+    setup.set_defaults(func=_setup)
     conv = sub.add_parser(
         "carmen-to-bag",
         help="convert a CARMEN laser log to a ROS bag (scan, odom, ground_truth)",
@@ -51,8 +90,12 @@ def register(subparsers: Any) -> None:
         help="ros2 (sqlite3 .db3, default), mcap (ROS 2 MCAP) or ros1 (.bag)",
     )
     conv.set_defaults(func=_carmen_to_bag)
-    check = sub.add_parser("check-params", help="validate a parameters YAML and print it")
-    check.add_argument("params", type=Path, help="nav2-style parameters YAML")
+    check = sub.add_parser(
+        "check-params",
+        help="validate a parameters YAML (nav2's amcl block or symloc's) and print it",
+    )
+    check.add_argument("params", type=Path, help="nav2's params file or symloc's layout")
+    check.add_argument("--node-name", default="amcl", help="node block to read (default amcl)")
     check.set_defaults(func=_check)
 
 
@@ -60,7 +103,22 @@ def _run_node(args: argparse.Namespace) -> int:
     from symloc.ros.node import run_node
 
     ros_args = [] if args.ros_args is None else ["--ros-args", *args.ros_args]
-    return run_node(args.params, ros_args)
+    return run_node(args.params, ros_args, node_name=args.node_name, autostart=args.autostart)
+
+
+def _setup(args: argparse.Namespace) -> int:
+    import sys
+    import time
+
+    from symloc.ros.interfaces import setup_interfaces
+
+    print(f"# symloc ros setup  prefix={sys.prefix}")
+    t0 = time.perf_counter()
+    results = setup_interfaces(packages=args.packages, force=args.force, workdir=args.keep_build)
+    for r in results:
+        print(f"  {r.package}: {r.action}" + (f" ({r.seconds:.1f} s)" if r.seconds else ""))
+    print(f"done in {time.perf_counter() - t0:.1f} s")
+    return 0
 
 
 def _carmen_to_bag(args: argparse.Namespace) -> int:
@@ -77,9 +135,9 @@ def _carmen_to_bag(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
-    from symloc.ros.params import NodeParams
+    from symloc.ros.node import _read_params
 
-    params = NodeParams.from_yaml(args.params)
+    params = _read_params(args.params, args.node_name)
     print(params)
     return 0
 

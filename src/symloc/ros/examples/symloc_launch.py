@@ -2,9 +2,10 @@
 
     ros2 launch symloc_launch.py params:=/path/to/symloc_params.yaml namespace:=robot1
 
-The node is the ``symloc`` console command, started as a process; topics are remapped here to
-the robot's names. symloc does not broadcast the map -> odom transform (tf2_msgs is not on
-PyPI); a robot that needs it can derive it from ``amcl_pose`` and odometry.
+The node is the ``symloc`` console command, started as a process and activated at once
+(``--autostart``; under nav2, its lifecycle manager activates it instead: see the README's
+"A drop-in for nav2_amcl"); topics are remapped here to the robot's names. Run
+``symloc ros setup`` once: it builds tf2_msgs (map -> odom, odometry from /tf) and the rest.
 """
 
 from launch import LaunchDescription
@@ -26,6 +27,7 @@ def generate_launch_description() -> LaunchDescription:
                     "node",
                     "--params",
                     params,
+                    "--autostart",
                     "--ros-args",
                     "-r",
                     ["__ns:=", namespace],

@@ -1,0 +1,245 @@
+"""nav2's parameter files for the node: the ``amcl: ros__parameters:`` block as ROS parameters.
+
+The node takes nav2_amcl's place, so it reads nav2's own ``nav2_params.yaml`` unchanged (the
+``amcl:`` block of nav2's humble, jazzy, kilted and main branches, through ``--ros-args
+--params-file``) and its parameters are real ROS parameters (``ros2 param get/set``). Names:
+
+- nav2_amcl's filter parameters (``alpha1`` .. ``z_short``, ``laser_model_type``,
+  ``robot_model_type``, ...) and symloc's three additions to them
+  (:class:`symloc.mcl.AmclParams`) go to :attr:`NodeParams.amcl`;
+- nav2_amcl's node parameters (frames, ``scan_topic``, ``map_topic``, ``tf_broadcast``,
+  ``transform_tolerance``, ``first_map_only``, ``set_initial_pose``, ``initial_pose.x|y|yaw``,
+  ``always_reset_initial_pose``, ``save_pose_rate``, ``initialize_at_saved_pose``,
+  ``saved_pose_filepath``, ``random_seed``) and of nav2's lifecycle nodes
+  (``bond_heartbeat_period``, ``autostart_node``) are :class:`NodeParams` fields of the same
+  name (``random_seed`` >= 0 sets ``seed``; nav2's -1, a time-based seed, keeps symloc's
+  reproducible ``seed``);
+- symloc's own settings keep their names: the other :class:`NodeParams` fields
+  (``laser_frame_id``, ``image_topic``, ``visual_map``, ``odom_source``, ...) and the dotted
+  ``localizer.<field>`` (:class:`symloc.localizer.LocalizerConfig`) and ``symmetry.<field>``
+  (:class:`symloc.symmetry.SymmetryConfig`); ``amcl.<field>`` is accepted too (symloc's own
+  nested layout);
+- accepted and without effect, each for a reason (:data:`WITHOUT_EFFECT`).
+
+Any other name raises :class:`~symloc.errors.ConfigurationError` naming it, as does any invalid
+value: nothing is reset to a default with a log line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from symloc.errors import ConfigurationError
+from symloc.localizer import LocalizerConfig
+from symloc.mcl.params import AmclParams
+from symloc.ros.params import NodeParams
+
+__all__ = [
+    "NAV2_DEFAULTS",
+    "WITHOUT_EFFECT",
+    "node_params_from_ros",
+    "parameter_defaults",
+    "read_params_block",
+    "ros_values",
+]
+
+#: nav2_amcl's defaults where they differ from :class:`NodeParams`'s.
+NAV2_DEFAULTS: dict[str, Any] = {"base_frame_id": "base_footprint"}
+
+#: nav2 names the node accepts without effect, with their nav2 default and the reason.
+WITHOUT_EFFECT: dict[str, tuple[Any, str]] = {
+    "freespace_downsampling": (
+        False,
+        "symloc's global initialisation draws from the map's free cells itself",
+    ),
+    "allow_parameter_qos_overrides": (
+        True,
+        "QoS overrides of the scan subscription are always allowed (qos_overrides.*)",
+    ),
+    "introspection_mode": ("disabled", "rclpy's lifecycle node offers no service introspection"),
+    "service_introspection_mode": (
+        "disabled",
+        "rclpy's lifecycle node offers no service introspection",
+    ),
+    "map_subscribe_transient_local": (True, "the map is always subscribed transient local"),
+    "bond_disable_heartbeat_timeout": (True, "the node never times out its manager's bond"),
+}
+
+_BLOCKS = ("amcl", "localizer", "symmetry")
+_AMCL = tuple(f.name for f in dataclasses.fields(AmclParams) if f.name != "ros_extras")
+_NODE = tuple(f.name for f in dataclasses.fields(NodeParams) if f.name not in _BLOCKS)
+_LOCALIZER = tuple(f.name for f in dataclasses.fields(LocalizerConfig))
+
+
+def _symmetry_fields() -> tuple[str, ...]:
+    from symloc.symmetry import SymmetryConfig
+
+    return tuple(f.name for f in dataclasses.fields(SymmetryConfig))
+
+
+def _ros_value(value: Any) -> Any:
+    """A value as a ROS parameter holds it (tuples as lists; empty sequences as not set)."""
+    if isinstance(value, tuple):
+        return list(value) if value else None
+    return value
+
+
+def parameter_defaults() -> dict[str, Any]:
+    """Every parameter the node declares, with its default (None: not set by default).
+
+    Flat nav2 names for the filter and node settings (nav2_amcl's defaults), ``initial_pose.*``
+    as nav2 spells it, ``localizer.*`` and ``symmetry.*`` for symloc's blocks, and the names of
+    :data:`WITHOUT_EFFECT`.
+    """
+    params = NodeParams()
+    out: dict[str, Any] = {}
+    for name in _AMCL:
+        out[name] = _ros_value(getattr(params.amcl, name))
+    for name in _NODE:
+        if name == "initial_pose":
+            x, y, yaw = params.initial_pose
+            out.update({"initial_pose.x": x, "initial_pose.y": y, "initial_pose.z": 0.0})
+            out["initial_pose.yaw"] = yaw
+            continue
+        out[name] = _ros_value(NAV2_DEFAULTS.get(name, getattr(params, name)))
+    out["random_seed"] = -1
+    for name in _LOCALIZER:
+        out[f"localizer.{name}"] = _ros_value(getattr(params.localizer, name))
+    for name in _symmetry_fields():
+        out[f"symmetry.{name}"] = None
+    for name, (default, _why) in WITHOUT_EFFECT.items():
+        out[name] = default
+    return out
+
+
+def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
+    """:class:`NodeParams` from ROS parameter values (flat names as :func:`parameter_defaults`
+    lists; a value of None is "not set").
+
+    Raises
+    ------
+    ConfigurationError
+        An unknown name (named) or an invalid value (named, with what was expected).
+    """
+    node: dict[str, Any] = {}
+    amcl: dict[str, Any] = {}
+    localizer: dict[str, Any] = {}
+    symmetry: dict[str, Any] = {}
+    initial: dict[str, Any] = {}
+    seed: Any = None
+    sym_names = set(_symmetry_fields())
+    for name, raw in values.items():
+        if raw is None or name == "use_sim_time" or name.startswith("qos_overrides."):
+            continue
+        # ROS array parameters come as array.array or numpy arrays: plain lists
+        value = raw.tolist() if hasattr(raw, "tolist") else raw
+        head, _, tail = name.partition(".")
+        if name in _AMCL:
+            amcl[name] = value
+        elif head == "amcl" and tail in _AMCL:
+            if tail in amcl and amcl[tail] != value:
+                raise ConfigurationError(f"parameter {name!r}: also given as {tail!r}, differently")
+            amcl[tail] = value
+        elif head == "localizer" and tail:
+            if tail not in _LOCALIZER:
+                raise ConfigurationError(
+                    f"parameter {name!r}: not a LocalizerConfig field (known: {list(_LOCALIZER)})"
+                )
+            localizer[tail] = value
+        elif head == "symmetry" and tail:
+            if tail not in sym_names:
+                raise ConfigurationError(
+                    f"parameter {name!r}: not a SymmetryConfig field (known: {sorted(sym_names)})"
+                )
+            symmetry[tail] = value
+        elif head == "initial_pose" and tail in ("x", "y", "z", "yaw"):
+            initial[tail] = value
+        elif name == "random_seed":
+            seed = value
+        elif name in _NODE and name != "initial_pose":
+            node[name] = value
+        elif name in WITHOUT_EFFECT:
+            continue
+        else:
+            raise ConfigurationError(
+                f"parameter {name!r}: unknown to symloc (nav2_amcl's names, symloc's node"
+                " settings, localizer.* and symmetry.* are known; see symloc.ros.nav2_params)"
+            )
+    if seed is not None:
+        if isinstance(seed, bool) or not isinstance(seed, int):
+            raise ConfigurationError(f"random_seed: expected an integer, got {seed!r}")
+        if seed >= 0:
+            node["seed"] = seed
+    if initial:
+        node["initial_pose"] = initial
+    try:
+        node["amcl"] = AmclParams.from_dict(amcl)
+        node["localizer"] = LocalizerConfig(**localizer)
+    except TypeError as err:
+        raise ConfigurationError(f"parameters: {err}") from err
+    node["symmetry"] = symmetry
+    try:
+        return NodeParams(**node)
+    except TypeError as err:
+        raise ConfigurationError(f"parameters: {err}") from err
+
+
+def ros_values(params: NodeParams) -> dict[str, Any]:
+    """The ROS parameter values of ``params`` (the inverse of :func:`node_params_from_ros`)."""
+    out: dict[str, Any] = {}
+    for name in _AMCL:
+        out[name] = _ros_value(getattr(params.amcl, name))
+    for name in _NODE:
+        if name == "initial_pose":
+            x, y, yaw = params.initial_pose
+            out.update({"initial_pose.x": x, "initial_pose.y": y, "initial_pose.yaw": yaw})
+            continue
+        out[name] = _ros_value(getattr(params, name))
+    for name in _LOCALIZER:
+        out[f"localizer.{name}"] = _ros_value(getattr(params.localizer, name))
+    for name, value in params.symmetry.items():
+        out[f"symmetry.{name}"] = _ros_value(value)
+    return out
+
+
+def _flatten(block: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in block.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            out.update(_flatten(value, name + "."))
+        else:
+            out[name] = value
+    return out
+
+
+def read_params_block(path: str | Path, node_name: str = "amcl") -> dict[str, Any]:
+    """The flat ROS parameters a ``--params-file`` gives node ``node_name``, as rcl reads it:
+    the ``ros__parameters`` of the blocks named ``/**``, ``node_name``, ``/node_name`` or
+    ``<namespace>/node_name``, later blocks overriding earlier ones, nested mappings joined
+    with dots (``initial_pose: {x: 1}`` is ``initial_pose.x``)."""
+    try:
+        doc = yaml.safe_load(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise ConfigurationError(f"params file {path}: cannot read ({err})") from err
+    if not isinstance(doc, dict):
+        raise ConfigurationError(f"params file {path}: expected a mapping of node names")
+    out: dict[str, Any] = {}
+    found = False
+    for key, value in doc.items():
+        k = str(key).strip("/")
+        if k in ("**", node_name) or k.endswith("/" + node_name):
+            if not isinstance(value, dict) or not isinstance(value.get("ros__parameters"), dict):
+                raise ConfigurationError(f"params file {path}: {key}: expected ros__parameters")
+            out.update(_flatten(value["ros__parameters"]))
+            found = True
+    if not found:
+        raise ConfigurationError(
+            f"params file {path}: no block for node {node_name!r} (keys: {sorted(map(str, doc))})"
+        )
+    return out

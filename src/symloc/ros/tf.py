@@ -1,0 +1,335 @@
+"""TF for the node, without tf2: the laser's mount, odometry from ``/tf``, and ``map -> odom``.
+
+nav2 talks to its localizer through TF. This module does what nav2_amcl does with tf2, on
+plain arrays, so that it runs (and is tested) without rclpy:
+
+- :class:`TransformTree` keeps the transforms of ``/tf_static`` (the robot's geometry) and the
+  newest of each transform on ``/tf``, and looks up ``target_from_source`` across the tree
+  (``base_footprint -> base_link -> laser``).
+- :func:`laser_mount` turns ``base_from_laser`` into the planar pose the localizer needs and
+  says whether the laser is mounted upside down (its z axis points down); such a scan is
+  mirrored (:func:`symloc.scan.mirror`) before it reaches the localizer, as nav2_amcl
+  computes its beam angles in the base frame.
+- :func:`odometry_from_transform` reads ``odom -> base`` from a ``/tf`` transform (through
+  static links when the odometry's child frame is not the base frame itself).
+- :class:`MapToOdom` decides what to broadcast as ``map -> odom`` after each scan.
+
+**What is broadcast.** ``map -> odom`` is ``map_from_base * inverse(odom_from_base)``: the pose
+the claim gate confirmed at this scan and the odometry at the scan's stamp, stamped with the
+scan time plus ``transform_tolerance`` (so that tf2 lookups up to that time succeed while
+odometry carries the robot), and sent again with every confirmed scan, as nav2_amcl does.
+
+**While symloc is not tracking** (ambiguous, deciding, lost, a claim withheld or withdrawn,
+after a kidnapping) nothing is sent: the last transform is not re-stamped. nav2_amcl re-sends
+its last transform with every scan whatever happened; symloc's promise is that what it
+publishes is right, and a re-stamped transform would tell nav2's costmaps and controllers that
+an unconfirmed pose is current. So the last earned transform ages: tf2 lookups for times past
+its stamp (the last confirmed scan plus ``transform_tolerance``) fail, nav2 stops planning and
+following paths instead of driving on a pose nobody vouches for, and ``symloc/status`` says
+why (its ``map_to_odom`` value names the stamp the transform is valid until). Before the first
+pose is earned nothing is ever sent. A momentary withheld claim costs nothing: the last
+transform stays valid for ``transform_tolerance`` after its scan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import DataFormatError
+from symloc.geometry import compose, inverse, wrap_angle
+from symloc.localizer import Estimate, Status
+from symloc.odometry import OdometryReading
+from symloc.ros.fields import field, finite_field, stamp_from_seconds
+from symloc.ros.header import header_frame, header_stamp
+
+__all__ = [
+    "MAX_TILT",
+    "LaserMount",
+    "MapToOdom",
+    "StampedTransform",
+    "TransformTree",
+    "laser_mount",
+    "map_from_odom",
+    "matrix_from_planar",
+    "odometry_from_transform",
+    "planar",
+    "tf_message_fields",
+    "transform_fields",
+    "transforms_from_msg",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Largest angle [rad] between the laser's scan plane and the floor that is still treated as
+#: level (a 2D localizer assumes a level scan; more tilt is reported by :func:`laser_mount`).
+MAX_TILT = math.radians(10.0)
+
+
+@dataclass(frozen=True)
+class StampedTransform:
+    """``parent_from_child`` as a (4, 4) homogeneous matrix, at ``stamp`` [s]."""
+
+    parent: str
+    child: str
+    stamp: float
+    matrix: FloatArray
+
+
+def _quaternion_matrix(x: float, y: float, z: float, w: float, where: str) -> FloatArray:
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    if not math.isfinite(n) or n < 1e-9:
+        raise DataFormatError(f"{where}: expected a non-zero finite quaternion, got {x, y, z, w}")
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def transform_from_msg(msg: Any, where: str = "TransformStamped") -> StampedTransform:
+    """A geometry_msgs/TransformStamped (rclpy, rosbags or look-alike) as a
+    :class:`StampedTransform`.
+
+    Raises
+    ------
+    DataFormatError
+        A field is missing or not finite, a frame is empty, or the rotation is a zero
+        quaternion.
+    """
+    parent = header_frame(msg, where)
+    child = field(msg, "child_frame_id", where)
+    if not isinstance(child, str):
+        raise DataFormatError(f"{where}.child_frame_id: expected a string, got {child!r}")
+    child = child.lstrip("/")
+    if not parent or not child:
+        raise DataFormatError(f"{where}: expected non-empty frames, got {parent!r} -> {child!r}")
+    t = [finite_field(msg, f"transform.translation.{c}", where) for c in "xyz"]
+    q = [finite_field(msg, f"transform.rotation.{c}", where) for c in "xyzw"]
+    m = np.eye(4)
+    m[:3, :3] = _quaternion_matrix(q[0], q[1], q[2], q[3], f"{where}.transform.rotation")
+    m[:3, 3] = t
+    return StampedTransform(parent, child, header_stamp(msg, where), m)
+
+
+def transforms_from_msg(msg: Any) -> list[StampedTransform]:
+    """The transforms of a tf2_msgs/TFMessage (``/tf`` or ``/tf_static``)."""
+    items = field(msg, "transforms", "TFMessage")
+    try:
+        seq = list(items)
+    except TypeError as err:
+        raise DataFormatError("TFMessage.transforms: expected a sequence") from err
+    return [transform_from_msg(t, f"TFMessage.transforms[{i}]") for i, t in enumerate(seq)]
+
+
+def planar(matrix: ArrayLike) -> FloatArray:
+    """``(x, y, yaw)`` of a (4, 4) transform: its translation in the plane and the heading of
+    its x axis projected on the plane."""
+    m = np.asarray(matrix, dtype=np.float64)
+    return np.array([m[0, 3], m[1, 3], math.atan2(m[1, 0], m[0, 0])])
+
+
+def matrix_from_planar(pose: ArrayLike) -> FloatArray:
+    """The (4, 4) transform of a planar pose ``(x, y, yaw)``."""
+    x, y, th = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
+    c, s = math.cos(th), math.sin(th)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[0, 3], m[1, 3] = x, y
+    return m
+
+
+class TransformTree:
+    """The frames of ``/tf_static`` and ``/tf``: each child's parent and the newest transform.
+
+    A frame has one parent, as in tf2; a transform that gives a frame a second parent replaces
+    the first (and is reported by :meth:`add`'s return value).
+    """
+
+    def __init__(self) -> None:
+        self._edges: dict[str, StampedTransform] = {}
+        self._static: set[str] = set()
+
+    def add(self, t: StampedTransform, *, static: bool) -> bool:
+        """Store ``t``; False when an older dynamic transform was ignored."""
+        old = self._edges.get(t.child)
+        if (
+            old is not None
+            and not static
+            and t.child not in self._static
+            and old.parent == t.parent
+            and t.stamp < old.stamp
+        ):
+            return False
+        self._edges[t.child] = t
+        if static:
+            self._static.add(t.child)
+        else:
+            self._static.discard(t.child)
+        return True
+
+    def __contains__(self, frame: str) -> bool:
+        return frame in self._edges or any(e.parent == frame for e in self._edges.values())
+
+    def _chain(self, frame: str) -> list[str]:
+        chain = [frame]
+        seen = {frame}
+        while chain[-1] in self._edges:
+            parent = self._edges[chain[-1]].parent
+            if parent in seen:  # a loop: tf2 would refuse it as well
+                break
+            chain.append(parent)
+            seen.add(parent)
+        return chain
+
+    def _root_from(self, chain: list[str]) -> FloatArray:
+        m = np.eye(4)
+        for frame in reversed(chain[:-1]):
+            m = m @ self._edges[frame].matrix
+        return m
+
+    def lookup(self, target: str, source: str) -> FloatArray | None:
+        """``target_from_source`` (4, 4) through the tree, or None when they are not linked."""
+        if target == source:
+            return np.eye(4)
+        a, b = self._chain(target), self._chain(source)
+        common = next((f for f in a if f in set(b)), None)
+        if common is None:
+            return None
+        a = a[: a.index(common) + 1]
+        b = b[: b.index(common) + 1]
+        common_from_target = self._root_from(a)
+        common_from_source = self._root_from(b)
+        return np.asarray(np.linalg.inv(common_from_target) @ common_from_source)
+
+
+@dataclass(frozen=True)
+class LaserMount:
+    """How the laser sits on the robot.
+
+    ``pose`` (3,): ``base_from_laser`` in the plane (x [m], y [m], yaw [rad] of the laser's x
+    axis), for the upright laser frame of a mirrored scan when ``upside_down``; ``tilt``
+    [rad]: the angle between the scan plane and the floor.
+    """
+
+    pose: FloatArray
+    upside_down: bool = False
+    tilt: float = 0.0
+
+    @property
+    def level(self) -> bool:
+        """True when the scan plane is within :data:`MAX_TILT` of the floor."""
+        return self.tilt <= MAX_TILT
+
+
+def laser_mount(base_from_laser: ArrayLike) -> LaserMount:
+    """The planar mount of a laser from its (4, 4) ``base_from_laser`` transform.
+
+    A laser whose z axis points down (rolled or pitched by 180 degrees) sweeps clockwise seen
+    from above: its scans are mirrored (:func:`symloc.scan.mirror`) and its pose is that of the
+    laser frame turned back upright by a roll of 180 degrees (the x axis is kept).
+    """
+    m = np.asarray(base_from_laser, dtype=np.float64)
+    z = m[:3, 2]
+    upside_down = bool(z[2] < 0.0)
+    tilt = math.acos(min(1.0, abs(float(z[2]))))
+    return LaserMount(planar(m), upside_down, tilt)
+
+
+def odometry_from_transform(
+    t: StampedTransform, tree: TransformTree, *, odom_frame: str, base_frame: str
+) -> OdometryReading | None:
+    """``odom -> base`` at ``t.stamp`` from a ``/tf`` transform ``odom -> child`` (None when
+    ``t`` is not one, or when ``child`` is not statically linked to ``base_frame``)."""
+    if t.parent != odom_frame:
+        return None
+    if t.child == base_frame:
+        odom_from_base = t.matrix
+    else:
+        child_from_base = tree.lookup(t.child, base_frame)
+        if child_from_base is None:
+            return None
+        odom_from_base = t.matrix @ child_from_base
+    return OdometryReading(planar(odom_from_base), t.stamp)
+
+
+def map_from_odom(map_from_base: ArrayLike, odom_from_base: ArrayLike) -> FloatArray:
+    """``map_from_odom`` (3,) from the robot's pose in the map and in the odometry frame."""
+    m = compose(np.asarray(map_from_base, dtype=np.float64), inverse(odom_from_base))
+    m[2] = wrap_angle(m[2])
+    return m
+
+
+def transform_fields(pose: ArrayLike, *, stamp: float, parent: str, child: str) -> dict[str, Any]:
+    """A geometry_msgs/TransformStamped field dict of a planar ``parent_from_child`` pose."""
+    x, y, th = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
+    return {
+        "header": {"stamp": stamp_from_seconds(stamp), "frame_id": parent},
+        "child_frame_id": child,
+        "transform": {
+            "translation": {"x": x, "y": y, "z": 0.0},
+            "rotation": {"x": 0.0, "y": 0.0, "z": math.sin(th / 2), "w": math.cos(th / 2)},
+        },
+    }
+
+
+def tf_message_fields(transforms: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    """A tf2_msgs/TFMessage field dict."""
+    return {"transforms": list(transforms)}
+
+
+class MapToOdom:
+    """What to broadcast as ``map -> odom`` after each scan (the policy of the module docstring).
+
+    Parameters
+    ----------
+    global_frame, odom_frame : str
+    tolerance : float
+        ``transform_tolerance`` [s]: a transform is stamped this far after its scan.
+    enabled : bool
+        nav2's ``tf_broadcast``; False never sends anything.
+    """
+
+    def __init__(
+        self, *, global_frame: str, odom_frame: str, tolerance: float, enabled: bool = True
+    ) -> None:
+        self.global_frame = global_frame
+        self.odom_frame = odom_frame
+        self.tolerance = float(tolerance)
+        self.enabled = bool(enabled)
+        #: the last transform sent: (pose (3,), the stamp it carries)
+        self.last: tuple[FloatArray, float] | None = None
+
+    def step(self, est: Estimate, stamp: float, odom_pose: ArrayLike) -> dict[str, Any] | None:
+        """The TFMessage field dict to send after the scan at ``stamp`` (None: send nothing)."""
+        if not self.enabled or est.status is not Status.TRACKING or est.pose is None:
+            return None
+        pose = map_from_odom(est.pose, odom_pose)
+        valid_until = float(stamp) + self.tolerance
+        self.last = (pose, valid_until)
+        return tf_message_fields(
+            [
+                transform_fields(
+                    pose, stamp=valid_until, parent=self.global_frame, child=self.odom_frame
+                )
+            ]
+        )
+
+    def describe(self, stamp: float) -> str:
+        """One line for the status: what the broadcast ``map -> odom`` is at ``stamp``."""
+        if not self.enabled:
+            return "not broadcast (tf_broadcast false)"
+        if self.last is None:
+            return "never sent (no pose earned yet)"
+        valid_until = self.last[1]
+        if valid_until - self.tolerance >= stamp - 1e-9:
+            return f"sent, stamped {valid_until:.3f}"
+        return f"not updated since the scan at {valid_until - self.tolerance:.3f} (stamped {valid_until:.3f})"
