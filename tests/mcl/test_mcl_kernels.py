@@ -246,3 +246,18 @@ def test_scan_cost_and_bilinear_equal_numpy() -> None:
     assert cost == float(
         0.5 * np.sum(want * want) * cfg.information_scale / (cfg.sigma * cfg.sigma)
     )
+
+
+def test_free_space_sampler_int32_cells_same_draws() -> None:
+    from symloc.mcl.recovery import FreeSpaceSampler
+
+    rng = np.random.default_rng(8)
+    grid, _ = _field(rng)
+    fs = FreeSpaceSampler(grid)
+    np.testing.assert_array_equal(fs.free_cells, np.flatnonzero(grid.free_mask.ravel()))
+    assert fs.free_cells.dtype == np.int32
+    a = fs.sample(500, np.random.default_rng(1))
+    # the former int64 list draws the same poses
+    fs._free_cells = np.flatnonzero(grid.free_mask.ravel())
+    b = fs.sample(500, np.random.default_rng(1))
+    np.testing.assert_array_equal(a, b)
