@@ -22,7 +22,9 @@ def test_distances_match_brute_force_and_clip():
     df = distance_field(g, 0.8)
     rr, cc = np.mgrid[0:20, 0:30]
     brute = np.minimum(np.hypot(rr - 5, cc - 5), np.hypot(rr - 10, cc - 20)) * 0.1
-    np.testing.assert_allclose(df.distances, np.minimum(brute, 0.8), atol=1e-9)
+    # float32 storage: within a float32 rounding of the exact distance
+    np.testing.assert_allclose(df.distances, np.minimum(brute, 0.8), rtol=1e-7, atol=0)
+    assert df.distances.dtype == np.float32
     assert df.distances.max() == pytest.approx(0.8)
     assert df.padded.shape == (22, 32)
     assert df.padded[0, 0] == pytest.approx(0.8)
@@ -84,3 +86,59 @@ def test_lookup_never_exceeds_max_and_is_finite(x, y):
     df = distance_field(_grid([(3, 4), (15, 25)]), 1.0)
     v = df.lookup([[x, y]])[0]
     assert 0.0 <= v <= 1.0 + 1e-6
+
+
+def _scipy_padded(target: np.ndarray, res: float, max_dist: float) -> np.ndarray:
+    """The former definition: scipy's EDT in float64, clipped, then float32 with a border."""
+    from scipy.ndimage import distance_transform_edt
+
+    d = (
+        np.minimum(distance_transform_edt(~target, sampling=res), max_dist)
+        if target.any()
+        else np.full(target.shape, max_dist)
+    )
+    out = np.full((d.shape[0] + 2, d.shape[1] + 2), max_dist, dtype=np.float32)
+    out[1:-1, 1:-1] = d
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    density=st.sampled_from([0.0, 0.002, 0.02, 0.2, 0.7]),
+    res=st.sampled_from([0.025, 0.03, 0.05, 0.1]),
+    max_dist=st.sampled_from([0.3, 1.0, 2.0, 3.7]),
+)
+def test_distance_field_bit_identical_to_scipy_edt(seed, density, res, max_dist):
+    rng = np.random.default_rng(seed)
+    shape = tuple(int(v) for v in rng.integers(1, 120, 2))
+    occ = rng.random(shape) < density
+    g = OccupancyGrid(np.where(occ, 100, 0).astype(np.int8), res)
+    np.testing.assert_array_equal(
+        distance_field(g, max_dist).padded, _scipy_padded(occ, res, max_dist)
+    )
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), res=st.sampled_from([0.05, 0.1]))
+def test_surface_field_identical_to_scipy_definition(seed, res):
+    from scipy.ndimage import binary_dilation
+    from skimage.morphology import skeletonize
+
+    from symloc.grid.distance_field import surface_distance_field
+
+    rng = np.random.default_rng(seed)
+    h, w = (int(v) for v in rng.integers(8, 90, 2))
+    data = np.zeros((h, w), np.int8)
+    data[rng.random((h, w)) < 0.15] = -1
+    # thick walls: random rectangles of occupied cells
+    for _ in range(int(rng.integers(0, 8))):
+        r, c = int(rng.integers(0, h)), int(rng.integers(0, w))
+        data[r : r + int(rng.integers(1, 6)), c : c + int(rng.integers(1, 30))] = 100
+    g = OccupancyGrid(data, res)
+    occ, free = g.occupied_mask, g.free_mask
+    shell = occ & binary_dilation(free, iterations=2) if free.any() else occ
+    centre = np.asarray(skeletonize(shell), dtype=bool) if shell.any() else shell
+    np.testing.assert_array_equal(
+        surface_distance_field(g, 1.0).padded, _scipy_padded(centre, res, 1.0)
+    )

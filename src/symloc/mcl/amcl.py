@@ -482,7 +482,7 @@ class Amcl:
                 self.recovery.observe(w_avg)
         else:
             w = np.full(w.size, 1.0 / w.size)
-        self._set(np.array(parts), w)
+        self._set(parts, w)  # the poses are unchanged (and read-only): no copy
         return report
 
     def _resample(self) -> int:

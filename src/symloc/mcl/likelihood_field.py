@@ -7,7 +7,8 @@ range_max``; the particle's weight is multiplied by ``1 + sum(pz^3)`` (amcl's ad
 combination, kept for compatibility). Max-range readings are ignored.
 
 The per-cell ``pz^3`` is precomputed into a padded float32 table, so a particle-beam pair costs
-a few float32 operations and one fancy index; nothing loops over particles or beams.
+a few float32 operations and one table read: a compiled loop (:mod:`symloc.mcl.kernels`) over
+particles and beams, on every core for large sets, with no temporary per pair.
 """
 
 from __future__ import annotations
@@ -17,13 +18,23 @@ from numpy.typing import NDArray
 
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import BeamSet
+from symloc.mcl.kernels import endpoint_table_sum, split_over_threads
 
-__all__ = ["endpoint_flat_indices", "laser_poses_grid", "likelihood_field_weights"]
+__all__ = [
+    "endpoint_flat_indices",
+    "endpoint_table_sums",
+    "laser_poses_grid",
+    "likelihood_field_weights",
+]
 
 FloatArray = NDArray[np.float64]
 
 #: Particle-beam pairs processed per block (about 256 kB per float32 temporary).
 CHUNK_ELEMENTS = 65536
+
+#: Padded tables with this many cells or more (a 46,000 x 46,000 map) are read in NumPy blocks:
+#: the compiled kernel indexes cells with 32-bit integers.
+_INT32_CELLS = 2**31
 
 
 def laser_poses_grid(
@@ -70,6 +81,41 @@ def endpoint_flat_indices(
     return field.padded_flat_index(x, y)
 
 
+def endpoint_table_sums(
+    field: DistanceField,
+    laser_poses: FloatArray,
+    ranges: FloatArray,
+    angles: FloatArray,
+    table: NDArray[np.float32],
+    out: FloatArray | None = None,
+) -> FloatArray:
+    """``(N,)`` sums over beams of ``table`` at every beam's end point, in float64.
+
+    The same cells as :func:`endpoint_flat_indices` and the same float64 sum as
+    ``table[idx].sum(axis=1, dtype=np.float64)``, bit for bit, without the ``(N, B)``
+    temporaries: a compiled loop, split over the cores when the set is large.
+    """
+    inv_res = 1.0 / field.grid.resolution
+    bx = np.ascontiguousarray(ranges * np.cos(angles) * inv_res, dtype=np.float32)
+    by = np.ascontiguousarray(ranges * np.sin(angles) * inv_res, dtype=np.float32)
+    poses = np.ascontiguousarray(laser_poses, dtype=np.float64)
+    n = poses.shape[0]
+    res: FloatArray = np.empty(n) if out is None else out
+    h2, w2 = field.padded.shape
+    if h2 * w2 >= _INT32_CELLS:  # beyond the kernel's 32-bit cell index: blocks in NumPy
+        step = max(1, CHUNK_ELEMENTS // max(1, bx.size))
+        for s in range(0, n, step):
+            idx = endpoint_flat_indices(field, poses[s : s + step].copy(), ranges, angles)
+            res[s : s + step] = table[idx].sum(axis=1, dtype=np.float64)
+        return res
+
+    def run(start: int, stop: int) -> None:
+        endpoint_table_sum(table, w2, h2, poses, inv_res, bx, by, start, stop, res)
+
+    split_over_threads(n, n * bx.size, run)
+    return res
+
+
 def likelihood_field_weights(
     field: DistanceField,
     particles: FloatArray,
@@ -108,11 +154,6 @@ def likelihood_field_weights(
     poses = laser_poses_grid(field, particles, lp)
     table = field.table("pz3", z_hit, z_rand, sigma_hit, beams.range_max)
     r, a = beams.ranges[hit], beams.angles[hit]
-    total: FloatArray = np.empty(n)
-    # Blocks of particles keep the (block, B) temporaries in cache; the work stays vectorised.
-    step = max(1, CHUNK_ELEMENTS // r.size)
-    for s in range(0, n, step):
-        idx = endpoint_flat_indices(field, poses[s : s + step], r, a)
-        total[s : s + step] = table[idx].sum(axis=1, dtype=np.float64)
+    total = endpoint_table_sums(field, poses, r, a, table)
     total += 1.0
     return total

@@ -24,8 +24,8 @@ from numpy.typing import NDArray
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import BeamSet
 from symloc.mcl.likelihood_field import (
-    CHUNK_ELEMENTS,
     endpoint_flat_indices,
+    endpoint_table_sums,
     laser_poses_grid,
 )
 
@@ -72,12 +72,7 @@ def likelihood_field_prob_log_weights(
     table = field.table("logpz", z_hit, z_rand, sigma_hit, beams.range_max)
     r, a = beams.ranges[hit], beams.angles[hit]
     if not do_beamskip:
-        out = np.empty(n)
-        step = max(1, CHUNK_ELEMENTS // nb)
-        for s in range(0, n, step):  # blocks of particles, see likelihood_field
-            blk = endpoint_flat_indices(field, poses[s : s + step], r, a)
-            out[s : s + step] = table[blk].sum(axis=1, dtype=np.float64)
-        return out, BeamSkipReport(nb, 0, False)
+        return endpoint_table_sums(field, poses, r, a, table), BeamSkipReport(nb, 0, False)
     idx = endpoint_flat_indices(field, poses, r, a)
     logs = table[idx]
     near = field.padded.ravel()[idx] < beam_skip_distance

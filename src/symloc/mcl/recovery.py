@@ -10,6 +10,7 @@ in amcl, both averages are reset after an injection.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,19 +58,40 @@ class RecoveryState:
 class FreeSpaceSampler:
     """Poses uniform over the free cells of a grid (position uniform inside each cell).
 
-    Raises :class:`~symloc.errors.ConfigurationError` if the grid has no free cell.
+    Raises :class:`~symloc.errors.ConfigurationError` if the grid has no free cell. The list
+    of free cells (4 bytes per free cell; 8 on maps of 2^31 cells or more) is built on the
+    first draw, so a filter that only tracks never holds it.
     """
 
     def __init__(self, grid: OccupancyGrid) -> None:
-        free = np.flatnonzero(grid.free_mask.ravel())
-        if free.size == 0:
+        n_free = int(np.count_nonzero(grid.free_mask))
+        if n_free == 0:
             raise ConfigurationError(
                 "grid: the map has no free cell (occupancy < free_thresh), so particles cannot"
                 " be spread over free space"
             )
         self.grid = grid
-        self.free_cells = free
-        self.n_free = int(free.size)
+        self.n_free = n_free
+        self._free_cells: NDArray[np.signedinteger[Any]] | None = None
+
+    @property
+    def free_cells(self) -> NDArray[np.signedinteger[Any]]:
+        """Flat indices of the free cells (row-major), ascending."""
+        if self._free_cells is None:
+            g = self.grid
+            if g.data.size >= 2**31:
+                self._free_cells = np.flatnonzero(g.free_mask.ravel())
+            else:  # row blocks: no map-sized int64 temporary
+                out = np.empty(self.n_free, dtype=np.int32)
+                rows = max(1, (1 << 22) // max(1, g.width))
+                k = 0
+                for r in range(0, g.height, rows):
+                    d = g.data[r : r + rows]
+                    idx = np.flatnonzero((d >= 0) & (d < g.free_thresh * 100.0))
+                    out[k : k + idx.size] = idx + r * g.width
+                    k += idx.size
+                self._free_cells = out
+        return self._free_cells
 
     def sample(self, n: int, rng: np.random.Generator) -> FloatArray:
         """``(n, 3)`` poses x [m], y [m], theta [rad] in the map frame."""

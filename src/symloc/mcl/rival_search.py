@@ -46,6 +46,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose, wrap_angle
 from symloc.grid.distance_field import DistanceField, distance_field
 from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import endpoint_flat_indices
 
 __all__ = ["RivalReport", "find_rival", "match_scores", "padded_field"]
@@ -99,9 +100,18 @@ def padded_field(grid: OccupancyGrid, max_dist: float) -> DistanceField:
 
 
 def match_scores(
-    field: DistanceField, poses: ArrayLike, points: ArrayLike, tol: ArrayLike
+    field: DistanceField,
+    poses: ArrayLike,
+    points: ArrayLike,
+    tol: ArrayLike,
+    *,
+    at_least: float | None = None,
 ) -> FloatArray:
     """Fraction of ``points (M, 2)`` (robot frame) within ``tol`` of an obstacle, per pose.
+
+    With ``at_least`` only scores ``>= at_least`` are exact: a pose that cannot reach it is
+    given up early and reported with some lower value (a search that keeps ``score >=
+    at_least`` gets the same poses and scores, sooner).
 
     Parameters
     ----------
@@ -125,13 +135,39 @@ def match_scores(
     t = np.broadcast_to(np.asarray(tol, dtype=np.float32), (m,))
     r = np.hypot(pts[:, 0], pts[:, 1])
     a = np.arctan2(pts[:, 1], pts[:, 0])
-    local = field.grid_frame_poses(pz)
+    local = np.ascontiguousarray(field.grid_frame_poses(pz))
     flat = field.padded.ravel()
     out = np.empty(pz.shape[0])
-    step = max(1, _CHUNK // m)
-    for s in range(0, pz.shape[0], step):
-        idx = endpoint_flat_indices(field, local[s : s + step], r, a)
-        out[s : s + step] = np.count_nonzero(flat[idx] <= t, axis=1) / m
+    h2, w2 = field.padded.shape
+    if h2 * w2 >= 2**31:  # beyond the kernel's 32-bit cell index: NumPy blocks
+        step = max(1, _CHUNK // m)
+        for s in range(0, pz.shape[0], step):
+            idx = endpoint_flat_indices(field, local[s : s + step], r, a)
+            out[s : s + step] = np.count_nonzero(flat[idx] <= t, axis=1) / m
+        return out
+    # A point whose tolerance reaches the field's clip distance passes at every pose (every
+    # value of the table is at most the clip): counted once, not looked up.
+    tt_all = np.ascontiguousarray(t, dtype=np.float32)
+    sure = tt_all >= np.float32(field.max_dist)
+    pre = int(np.count_nonzero(sure))
+    look = ~sure
+    inv_res = 1.0 / field.grid.resolution
+    bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * inv_res, dtype=np.float32)
+    by = np.ascontiguousarray(r[look] * np.sin(a[look]) * inv_res, dtype=np.float32)
+    tt = np.ascontiguousarray(tt_all[look])
+    need = 0
+    if at_least is not None and at_least > 0.0:
+        # the smallest count c with c / m >= at_least, as the float comparison decides it
+        need = max(0, min(m + 1, math.ceil(at_least * m) - 1))
+        while need <= m and need / m < at_least:
+            need += 1
+
+    def run(start: int, stop: int) -> None:
+        kernels.count_within(
+            flat, w2, h2, local, inv_res, bx, by, tt, pre, m, need, start, stop, out
+        )
+
+    kernels.split_over_threads(pz.shape[0], pz.shape[0] * max(1, bx.size), run)
     return out
 
 
@@ -250,7 +286,7 @@ def find_rival(
     cand_s: list[FloatArray] = []
     for h in heads:
         poses = np.column_stack([xy, np.full(xy.shape[0], h)])
-        sc = match_scores(field, poses, pts, loose)
+        sc = match_scores(field, poses, pts, loose, at_least=threshold)
         keep = sc >= threshold
         if keep.any():
             cand_p.append(poses[keep])
@@ -278,7 +314,7 @@ def find_rival(
         offs = np.column_stack([gx.ravel(), gy.ravel(), ga.ravel()])
         kids = (cp[:, None, :] + offs[None, :, :]).reshape(-1, 3)
         bound = tol + math.sqrt(2.0) * h_xy + rng_pts * h_a + res
-        sc = match_scores(field, kids, pts, bound)
+        sc = match_scores(field, kids, pts, bound, at_least=threshold)
         keep = (sc >= threshold) & _far(kids, est, min_distance - h_xy, min_angle - h_a)
         cp, cs = kids[keep], sc[keep]
         if cp.shape[0] == 0:

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
+from symloc.mcl import kernels
 
 __all__ = ["ScanMatch", "ScanMatchConfig", "match_scan_to_map", "scan_points"]
 
@@ -149,6 +150,18 @@ def _bilinear(field: DistanceField, pts: FloatArray) -> tuple[FloatArray, FloatA
     grid = field.grid
     res = grid.resolution
     o = grid.origin
+    if o[2] == 0.0:  # compiled, the same expressions
+        x = np.ascontiguousarray(pts[:, 0])
+        y = np.ascontiguousarray(pts[:, 1])
+        n = x.shape[0]
+        d_out = np.empty(n)
+        grad_out = np.empty((2, n))
+        h2, w2 = field.padded.shape
+        kernels.bilinear(
+            field.padded.ravel(), w2, h2, float(o[0]), float(o[1]), res, x, y,
+            d_out, grad_out[0], grad_out[1], True,
+        )  # fmt: skip
+        return d_out, grad_out.T
     if o[2] == 0.0:
         gx, gy = pts[:, 0] - o[0], pts[:, 1] - o[1]
     else:
@@ -189,6 +202,15 @@ def _cost(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatc
     """``0.5 sum d_i^2 / sigma^2`` scaled by ``information_scale``: a quadratic cost whose
     second difference along a step ``u`` is ``u^T Omega u`` for a map of straight walls."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
+    o = field.grid.origin
+    if o[2] == 0.0:  # compiled: the same expressions and NumPy's summation order
+        h2, w2 = field.padded.shape
+        p = np.ascontiguousarray(pts)
+        total = kernels.squared_distance_sum(
+            field.padded.ravel(), w2, h2, float(o[0]), float(o[1]), field.grid.resolution,
+            p, c, s, float(pose[0]), float(pose[1]), np.empty(p.shape[0]),
+        )  # fmt: skip
+        return float(0.5 * total * cfg.information_scale / (cfg.sigma * cfg.sigma))
     x = c * pts[:, 0] - s * pts[:, 1] + pose[0]
     y = s * pts[:, 0] + c * pts[:, 1] + pose[1]
     d = _bilinear(field, np.column_stack([x, y]))[0]
