@@ -67,7 +67,9 @@ def test_realistic_is_far_below_heavy_per_scan() -> None:
 def test_regime_validation_and_unknown_names() -> None:
     with pytest.raises(ConfigurationError, match="odometry regime: expected one of"):
         regime_odometry(_square_drive(), "perfect", 0)
-    with pytest.raises(ConfigurationError, match="OdometryRegime.trans_scale: expected a value > 0"):
+    with pytest.raises(
+        ConfigurationError, match=r"OdometryRegime\.trans_scale: expected a value > 0"
+    ):
         OdometryRegime("x", (0, 0, 0, 0), trans_scale=0.0)
     with pytest.raises(ConfigurationError, match=r"OdometryRegime.alphas\[2\]"):
         OdometryRegime("x", (0, 0, -1, 0))

@@ -213,6 +213,11 @@ class SlamResult:
         The final pose graph (factors and optimised values).
     n_loop_searches : int
         Loop-closure scan matches run (node, submap pairs searched).
+    rejected_loops : list of (submap, scan index, reason)
+        Loop-closure candidates that matched but were not accepted, with the test they failed.
+    warnings : list of str
+        Why the result may be doubtful (empty when nothing was found); also written into the
+        map's metadata by ``symloc map build``.
     """
 
     poses: FloatArray
@@ -227,6 +232,29 @@ class SlamResult:
     n_retries: int = 0
     graph: PoseGraph | None = None
     n_loop_searches: int = 0
+    rejected_loops: list[tuple[int, int, str]] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def doubtful(self) -> bool:
+        """True when :attr:`warnings` is not empty."""
+        return bool(self.warnings)
+
+    def summary(self) -> dict[str, object]:
+        """Plain numbers (JSON-ready): sizes, loop closures, CPU time, warnings."""
+        return {
+            "scans": int(self.poses.shape[0]),
+            "nodes": int(self.node_scans.size),
+            "submaps": int(self.n_submaps),
+            "loops_accepted": len(self.loop_closures),
+            "loops_rejected": len(self.rejected_loops),
+            "loop_searches": int(self.n_loop_searches),
+            "retries": int(self.n_retries),
+            "slam_cpu_s": float(self.timings.get("total_cpu", float("nan"))),
+            "timings_s": {k: float(v) for k, v in self.timings.items()},
+            "doubtful": self.doubtful,
+            "warnings": list(self.warnings),
+        }
 
 
 def scan_points(scan: LaserScan, max_range: float, voxel: float) -> FloatArray:
