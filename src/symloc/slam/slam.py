@@ -101,8 +101,9 @@ class SlamParams:
         Nodes between optimisations when new loop closures arrived.
     map_resolution : float
         Cell edge of the final map [m].
-    table_cache : int
-        Number of submap likelihood tables kept in memory.
+    table_cache_mb : float
+        Memory budget [MiB] of the cached submap likelihood tables (least recently matched
+        dropped first; a dropped table is rebuilt from the submap's occupied cells).
     """
 
     submap: SubmapParams = field(default_factory=SubmapParams)
@@ -146,7 +147,7 @@ class SlamParams:
     loop_constrained_distance: float = 6.0
     optimize_every: int = 20
     map_resolution: float = 0.05
-    table_cache: int = 80
+    table_cache_mb: float = 48.0
 
     def __post_init__(self) -> None:
         check_positive(self.max_range, "SlamParams.max_range")
@@ -172,7 +173,8 @@ class SlamParams:
             raise ConfigurationError(
                 f"SlamParams.loop_min_score: expected a value in [0, 1], got {self.loop_min_score}"
             )
-        for name in ("loop_every", "optimize_every", "table_cache", "loop_max_candidates"):
+        check_positive(self.table_cache_mb, "SlamParams.table_cache_mb")
+        for name in ("loop_every", "optimize_every", "loop_max_candidates"):
             v = getattr(self, name)
             if int(v) != v or v < 1:
                 raise ConfigurationError(f"SlamParams.{name}: expected an integer >= 1, got {v}")
@@ -269,18 +271,22 @@ def scan_points(scan: LaserScan, max_range: float, voxel: float) -> FloatArray:
 
 
 class _TableCache:
-    """Keeps the likelihood tables of the ``size`` most recently matched submaps."""
+    """Keeps the likelihood tables of the most recently matched submaps within a byte budget."""
 
-    def __init__(self, size: int) -> None:
-        self.size = size
+    def __init__(self, budget_mb: float) -> None:
+        self.budget = int(budget_mb * 1024 * 1024)
         self.order: OrderedDict[int, Submap] = OrderedDict()
 
     def touch(self, sm: Submap) -> None:
+        """``sm`` is about to be matched: newest; drop the oldest tables over the budget."""
         self.order.pop(sm.index, None)
         self.order[sm.index] = sm
-        while len(self.order) > self.size:
+        total = sum(s.nbytes for s in self.order.values() if s.has_table)
+        while total > self.budget and len(self.order) > 1:
             _, old = self.order.popitem(last=False)
-            old.release_table()
+            if old.has_table:
+                total -= old.nbytes
+                old.release_table()
 
 
 def run_slam(
@@ -318,7 +324,7 @@ def run_slam(
     timings = {"frontend": 0.0, "loop_search": 0.0, "optimize": 0.0, "map": 0.0}
     active = ActiveSubmaps(prm.submap)
     graph = PoseGraph(prm.graph)
-    cache = _TableCache(prm.table_cache)
+    cache = _TableCache(prm.table_cache_mb)
     local = np.zeros((n, 3))
     scores = np.zeros(n)
     global_from_local = np.zeros(3)
