@@ -154,7 +154,15 @@ def run_bench_task(task: SlamBenchTask) -> dict[str, Any]:
             entry.update(
                 {
                     k: summary[k]
-                    for k in ("loops_accepted", "loops_rejected", "doubtful", "warnings")
+                    for k in (
+                        "loops_accepted",
+                        "loops_rejected",
+                        "loops_rejected_by_reason",
+                        "degenerate_fraction",
+                        "odometry_model",
+                        "doubtful",
+                        "warnings",
+                    )
                     if k in summary
                 }
             )

@@ -2,27 +2,42 @@
 
 For every scan (Hess et al. 2016 structure, with Olson's correlative matcher):
 
-1. **Predict** its local pose from the previous one and the odometry increment.
-2. **Match** it against the oldest active submap (:func:`match_scan`, real-time window) and
-   insert it into the active submaps (:class:`ActiveSubmaps`).
-3. **Graph**: add the node, its intra-submap constraints and the odometry constraint.
+1. **Predict** its local pose from the previous one and the odometry increment, corrected by
+   the odometry's learnt calibration, with a covariance from its learnt noise
+   (:class:`~symloc.slam.odometry_model.OdometryModel`).
+2. **Match** it against the oldest active submap in a window of about three predicted
+   standard deviations (:func:`match_scan`; a wider retry when it scores poorly), and find
+   which directions the match constrains (:func:`~symloc.slam.degeneracy.analyse_match`).
+   **Fuse** match and prediction by their covariances: along a direction the scan does not
+   constrain (a corridor's axis, an open hall), the pose follows the odometry instead of
+   sliding. Insert the scan into the active submaps (:class:`ActiveSubmaps`).
+3. **Graph**: add the node, its intra-submap constraints (the match covariance: loose along
+   unconstrained directions) and the odometry constraint (the learnt noise).
 4. **Loop closure** (every ``loop_every`` nodes): match the scan against the
    ``loop_max_candidates`` nearest finished older submaps whose predicted distance is below
-   ``loop_search_distance`` with a wide window;
-   a score >= ``loop_min_score`` adds a robust loop constraint. Loop constraints are sampled
-   along the trajectory, as Cartographer samples them (its ``sampling_ratio``) but by
+   ``loop_search_distance``, in a window that grows with the drift since the last accepted
+   closure; each candidate is verified (:class:`~symloc.slam.loop_closure.LoopVerifier`:
+   score, ambiguity against the runner-up, degeneracy, consistency with the current estimate
+   and with other closures) before it enters the graph with a robust loss. Loop searches are
+   sampled along the trajectory, as Cartographer samples them (its ``sampling_ratio``) but by
    distance: a submap is searched again only after the robot travelled
    ``loop_resample_distance`` since its last search, and ``loop_constrained_distance`` after
-   a search that found a loop (the submap is then well constrained to the recent nodes).
+   a search that found a loop.
 5. **Optimise** with Levenberg-Marquardt every ``optimize_every`` nodes when new loop
-   constraints arrived, and once at the end.
+   constraints arrived, and once at the end; loops the optimised graph still disagrees with
+   are removed (:meth:`PoseGraph.check_loops`).
 
 Finally all scans are integrated at their optimised poses into one log-odds grid, returned
-as an :class:`~symloc.grid.OccupancyGrid`.
+as an :class:`~symloc.grid.OccupancyGrid`, with the warnings that make a result doubtful
+(:attr:`SlamResult.warnings`).
+
+Memory grows with the mapped area: finished submaps keep only their occupied cells, and
+likelihood tables are cached within ``table_cache_mb``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections import OrderedDict
@@ -39,7 +54,10 @@ from symloc.geometry import compose, inverse, relative
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.scan import LaserScan
-from symloc.slam.correlative_scan_matching import CsmParams, match_scan
+from symloc.slam.correlative_scan_matching import CsmParams, match_information, match_scan
+from symloc.slam.degeneracy import UNCONSTRAINED_SIGMA, MatchConstraint, analyse_match, fuse
+from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
+from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
 
@@ -50,16 +68,21 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True, slots=True)
 class SlamParams:
-    """Settings of the whole pipeline.
+    """Settings of the whole pipeline: one configuration for every log and odometry.
 
     Parameters
     ----------
     submap : SubmapParams
     local_csm : CsmParams
-        Real-time matching window around the odometry prediction.
+        Real-time matching settings; its windows are replaced per scan by ``window_sigmas``
+        predicted standard deviations, clamped to ``[min_window, local_csm.*_window]``.
+    window_sigmas : float
+        Real-time search half-width in predicted standard deviations.
+    min_linear_window, min_angular_window : float
+        Smallest real-time search half-widths [m], [rad].
     retry_csm : CsmParams
-        Wider window tried when the real-time match scores below ``retry_below`` (odometry
-        errors beyond the real-time window); the better of the two matches is kept.
+        Wider window tried when the real-time match scores below ``retry_below``; the better
+        of the two matches is kept.
     retry_below : float
         Score (0..1) under which the wider search runs.
     retry_margin : float
@@ -67,7 +90,21 @@ class SlamParams:
         corridor gives many similar scores far from the odometry; a real odometry error gives
         a clearly better one).
     loop_csm : CsmParams
-        Loop-closure window around the predicted pose in an older submap.
+        Loop-closure matching settings; its windows are the smallest ones, grown by the
+        drift since the last accepted closure up to ``max_loop_window``.
+    max_loop_window : tuple of 2 floats
+        Largest loop search half-widths ([m], [rad]).
+    odometry : OdometryModelParams
+        The learnt calibration and noise of the odometry.
+    degeneracy_threshold : float
+        Relative eigenvalue of a match's curvature below which its direction counts as
+        unconstrained (:func:`~symloc.slam.degeneracy.analyse_match`).
+    min_match_sigma : float
+        Smallest standard deviation [m] given to a scan match.
+    loop : LoopVerifierParams
+    loop_ambiguity_radius : tuple of 2 floats
+        ``(m, rad)``: the neighbourhood of the best loop match outside which the runner-up is
+        searched.
     graph : PoseGraphParams
     max_range : float
         Points farther than this [m] are not used for matching.
@@ -79,15 +116,12 @@ class SlamParams:
         node (Cartographer's motion filter); the final pose of another scan follows its last
         node. 0 and 0 make every scan a node.
     match_filtered_scans : bool
-        Also scan-match the scans the motion filter drops (their pose then follows the match,
-        not only the odometry); False saves their matching time.
+        Also scan-match the scans the motion filter drops.
     loop_every : int
         Search loop closures for every ``loop_every``-th node.
     loop_search_distance : float
         Largest distance [m] between a node's predicted position and the centre of a submap's
         nodes for a loop search.
-    loop_min_score : float
-        Minimum match score (mean likelihood, 0..1) to accept a loop closure.
     loop_skip_submaps : int
         The newest finished submaps skipped by the loop search (they are local matches).
     loop_max_candidates : int
@@ -116,6 +150,9 @@ class SlamParams:
             rotation_weight=1.0,
         )
     )
+    window_sigmas: float = 3.0
+    min_linear_window: float = 0.15
+    min_angular_window: float = math.radians(4.0)
     retry_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
             linear_window=1.5,
@@ -129,9 +166,15 @@ class SlamParams:
     retry_margin: float = 0.1
     loop_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
-            linear_window=2.0, angular_window=math.radians(15), coarse_factor=8
+            linear_window=1.0, angular_window=math.radians(8), coarse_factor=8
         )
     )
+    max_loop_window: tuple[float, float] = (3.0, math.radians(30.0))
+    odometry: OdometryModelParams = field(default_factory=OdometryModelParams)
+    degeneracy_threshold: float = 0.05
+    min_match_sigma: float = 0.01
+    loop: LoopVerifierParams = field(default_factory=LoopVerifierParams)
+    loop_ambiguity_radius: tuple[float, float] = (0.3, math.radians(3.0))
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
     max_range: float = 40.0
     voxel: float = 0.05
@@ -140,7 +183,6 @@ class SlamParams:
     match_filtered_scans: bool = False
     loop_every: int = 1
     loop_search_distance: float = 10.0
-    loop_min_score: float = 0.6
     loop_skip_submaps: int = 1
     loop_max_candidates: int = 4
     loop_resample_distance: float = 3.0
@@ -154,6 +196,11 @@ class SlamParams:
         check_positive(self.voxel, "SlamParams.voxel", allow_zero=True)
         check_positive(self.loop_search_distance, "SlamParams.loop_search_distance")
         check_positive(self.retry_margin, "SlamParams.retry_margin", allow_zero=True)
+        check_positive(self.window_sigmas, "SlamParams.window_sigmas")
+        check_positive(self.min_linear_window, "SlamParams.min_linear_window", allow_zero=True)
+        check_positive(self.min_angular_window, "SlamParams.min_angular_window", allow_zero=True)
+        check_positive(self.min_match_sigma, "SlamParams.min_match_sigma")
+        check_positive(self.table_cache_mb, "SlamParams.table_cache_mb")
         check_positive(
             self.motion_filter_distance, "SlamParams.motion_filter_distance", allow_zero=True
         )
@@ -165,15 +212,19 @@ class SlamParams:
         check_positive(
             self.loop_constrained_distance, "SlamParams.loop_constrained_distance", allow_zero=True
         )
+        for k, v in enumerate(self.max_loop_window):
+            check_positive(v, f"SlamParams.max_loop_window[{k}]")
+        for k, v in enumerate(self.loop_ambiguity_radius):
+            check_positive(v, f"SlamParams.loop_ambiguity_radius[{k}]", allow_zero=True)
+        if not 0.0 < self.degeneracy_threshold < 1.0:
+            raise ConfigurationError(
+                "SlamParams.degeneracy_threshold: expected a value in (0, 1), got"
+                f" {self.degeneracy_threshold}"
+            )
         if not 0.0 <= self.retry_below <= 1.0:
             raise ConfigurationError(
                 f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
             )
-        if not 0.0 <= self.loop_min_score <= 1.0:
-            raise ConfigurationError(
-                f"SlamParams.loop_min_score: expected a value in [0, 1], got {self.loop_min_score}"
-            )
-        check_positive(self.table_cache_mb, "SlamParams.table_cache_mb")
         for name in ("loop_every", "optimize_every", "loop_max_candidates"):
             v = getattr(self, name)
             if int(v) != v or v < 1:
@@ -183,6 +234,11 @@ class SlamParams:
                 f"SlamParams.loop_skip_submaps: expected an integer >= 0, got"
                 f" {self.loop_skip_submaps}"
             )
+
+    @property
+    def loop_min_score(self) -> float:
+        """Minimum loop-closure match score (``loop.min_score``)."""
+        return self.loop.min_score
 
 
 @dataclass(frozen=True, eq=False)
@@ -194,16 +250,16 @@ class SlamResult:
     poses : ndarray of shape (N, 3)
         Optimised global sensor pose of every scan.
     local_poses : ndarray of shape (N, 3)
-        Front-end (scan matching only) poses.
+        Front-end (scan matching fused with odometry) poses.
     grid : OccupancyGrid
         Map from all scans at the optimised poses.
     loop_closures : list of (submap, scan index)
-        Accepted loop constraints.
+        Accepted loop constraints (in the final graph).
     n_submaps : int
     node_scans : ndarray of shape (K,)
         Scan index of each graph node (the scans kept by the motion filter).
     match_scores : ndarray of shape (N,)
-        Local match score per scan (0 for the first).
+        Local match score per scan (0 when not matched).
     timings : dict of str to float
         Wall-clock seconds spent in ``frontend``, ``loop_search``, ``optimize``, ``map`` and
         ``total``; ``total_cpu`` is the process CPU time [s] (all threads), the fair measure
@@ -216,10 +272,18 @@ class SlamResult:
     n_loop_searches : int
         Loop-closure scan matches run (node, submap pairs searched).
     rejected_loops : list of (submap, scan index, reason)
-        Loop-closure candidates that matched but were not accepted, with the test they failed.
+        Loop-closure candidates that matched but were not accepted, with the test they failed
+        (``ambiguous``, ``degenerate``, ``inconsistent``, ``residual``).
     warnings : list of str
         Why the result may be doubtful (empty when nothing was found); also written into the
         map's metadata by ``symloc map build``.
+    degenerate_scans : ndarray of shape (N,)
+        Directions the scan's match left unconstrained (0-3; -1 when not matched).
+    odometry_model : dict
+        What was learnt about the odometry (calibration, noise, matcher error).
+    match_poses : ndarray of shape (N, 3)
+        Pose of each matched scan as its match alone put it, in the local frame (NaN when
+        not matched).
     """
 
     poses: FloatArray
@@ -236,6 +300,9 @@ class SlamResult:
     n_loop_searches: int = 0
     rejected_loops: list[tuple[int, int, str]] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    degenerate_scans: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, np.intp))
+    odometry_model: dict[str, float | bool | int] = field(default_factory=dict)
+    match_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def doubtful(self) -> bool:
@@ -244,16 +311,23 @@ class SlamResult:
 
     def summary(self) -> dict[str, object]:
         """Plain numbers (JSON-ready): sizes, loop closures, CPU time, warnings."""
+        reasons: dict[str, int] = {}
+        for _, _, why in self.rejected_loops:
+            reasons[why] = reasons.get(why, 0) + 1
+        matched = self.degenerate_scans[self.degenerate_scans >= 0]
         return {
             "scans": int(self.poses.shape[0]),
             "nodes": int(self.node_scans.size),
             "submaps": int(self.n_submaps),
             "loops_accepted": len(self.loop_closures),
             "loops_rejected": len(self.rejected_loops),
+            "loops_rejected_by_reason": reasons,
             "loop_searches": int(self.n_loop_searches),
             "retries": int(self.n_retries),
+            "degenerate_fraction": float(np.mean(matched > 0)) if matched.size else 0.0,
             "slam_cpu_s": float(self.timings.get("total_cpu", float("nan"))),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
+            "odometry_model": dict(self.odometry_model),
             "doubtful": self.doubtful,
             "warnings": list(self.warnings),
         }
@@ -289,6 +363,262 @@ class _TableCache:
                 old.release_table()
 
 
+def _rotate_cov(cov: FloatArray, theta: float) -> FloatArray:
+    """Covariance (3, 3) of x, y, theta expressed in a frame rotated by ``theta``."""
+    c, s = math.cos(theta), math.sin(theta)
+    j = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return j @ cov @ j.T
+
+
+def _propagate(
+    cov: FloatArray, start: FloatArray, increment: FloatArray, inc_cov: FloatArray
+) -> FloatArray:
+    """Covariance (3, 3) of ``start + increment`` (world frame) from both covariances."""
+    end = compose(start, increment)
+    jx = np.array(
+        [[1.0, 0.0, -(end[1] - start[1])], [0.0, 1.0, end[0] - start[0]], [0.0, 0.0, 1.0]]
+    )
+    return jx @ cov @ jx.T + _rotate_cov(inc_cov, float(start[2]))
+
+
+def _in_body(cov_in_parent: FloatArray, pose_in_parent: FloatArray) -> FloatArray:
+    """A covariance of ``pose`` expressed in the parent frame, re-expressed in the pose's frame."""
+    return _rotate_cov(cov_in_parent, -float(pose_in_parent[2]))
+
+
+_UNMATCHED_COV = np.diag([UNCONSTRAINED_SIGMA**2] * 2 + [UNCONSTRAINED_SIGMA**2])
+
+
+class _Run:
+    """State of one :func:`run_slam` call (split out of it to keep each step readable)."""
+
+    def __init__(self, scans: Sequence[LaserScan], odom: FloatArray, prm: SlamParams) -> None:
+        self.scans = scans
+        self.odom = odom
+        self.prm = prm
+        n = len(scans)
+        self.n = n
+        self.active = ActiveSubmaps(prm.submap)
+        self.graph = PoseGraph(prm.graph)
+        self.cache = _TableCache(prm.table_cache_mb)
+        self.model = OdometryModel(prm.odometry)
+        self.verifier = LoopVerifier(prm.loop)
+        self.local = np.zeros((n, 3))
+        self.match_pose = np.full((n, 3), np.nan)
+        self.scores = np.zeros(n)
+        self.degenerate = np.full(n, -1, dtype=np.intp)
+        self.cov = np.zeros((3, 3))  # of local[i] relative to the matching submap
+        self.global_from_local = np.zeros(3)
+        self.node_scans: list[int] = []
+        self.node_constraint: list[MatchConstraint | None] = []
+        self.match_cov = np.zeros((n, 3, 3))  # of each match, in the local frame
+        self.pending_loops = 0
+        self.n_opt = 0
+        self.n_retries = 0
+        self.n_loop_searches = 0
+        self.travel = 0.0
+        self.travel_at_loop = 0.0
+        self.next_search: dict[int, float] = {}
+        self.submap_centres: dict[int, FloatArray] = {}
+        self.timings = {"frontend": 0.0, "loop_search": 0.0, "optimize": 0.0, "map": 0.0}
+
+    # -- front end -------------------------------------------------------------------------
+    def _is_node(self, i: int, pose: FloatArray) -> bool:
+        if not self.node_scans or i == self.n - 1:
+            return True
+        moved = relative(self.local[self.node_scans[-1]], pose)
+        return (
+            float(np.hypot(moved[0], moved[1])) >= self.prm.motion_filter_distance
+            or abs(float(moved[2])) >= self.prm.motion_filter_angle
+        )
+
+    def _match_sigma(self) -> float:
+        st, _ = self.model.matcher_sigmas
+        return max(st, self.prm.min_match_sigma)
+
+    def front_end(self, i: int, pts: FloatArray) -> MatchConstraint | None:
+        """Pose of scan ``i`` in the local frame; returns its match constraint (None: none)."""
+        prm = self.prm
+        if i == 0:
+            self.local[0] = self.odom[0]
+            return None
+        inc = self.model.correct(relative(self.odom[i - 1], self.odom[i]))
+        pred = compose(self.local[i - 1], inc)
+        pred_cov = _propagate(self.cov, self.local[i - 1], inc, self.model.covariance(inc))
+        target = self.active.matching_submap
+        if (not prm.match_filtered_scans and not self._is_node(i, pred)) or (
+            target is None or pts.shape[0] < 10
+        ):
+            self.local[i] = pred
+            self.cov = pred_cov
+            return None
+        self.cache.touch(target)
+        table = target.table()
+        init = relative(target.local_pose, pred)
+        theta_s = float(target.local_pose[2])
+        cov_s = _rotate_cov(pred_cov, -theta_s)
+        sig_t = math.sqrt(max(cov_s[0, 0], cov_s[1, 1]))
+        sig_r = math.sqrt(cov_s[2, 2])
+        k = prm.window_sigmas
+        csm = dataclasses.replace(
+            prm.local_csm,
+            linear_window=min(max(k * sig_t, prm.min_linear_window), prm.local_csm.linear_window),
+            angular_window=min(
+                max(k * sig_r, prm.min_angular_window), prm.local_csm.angular_window
+            ),
+        )
+        res = match_scan(table, pts, init, csm)
+        if res.score < prm.retry_below:
+            wide = match_scan(table, pts, init, prm.retry_csm)
+            self.n_retries += 1
+            if wide.score > res.score + prm.retry_margin:
+                res = wide
+                # a real odometry error beyond the window: trust the match
+                cov_s = cov_s + np.diag([prm.retry_csm.linear_window**2] * 2 + [0.0])
+        info = match_information(table, pts, res.pose)
+        mc = analyse_match(info, pts, self._match_sigma(), threshold=prm.degeneracy_threshold)
+        fused, post = fuse(init, cov_s, res.pose, mc.covariance)
+        self.local[i] = compose(target.local_pose, fused)
+        self.cov = _rotate_cov(post, theta_s)
+        self.match_pose[i] = compose(target.local_pose, res.pose)
+        self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
+        self.scores[i] = res.score
+        self.degenerate[i] = mc.n_degenerate
+        return mc
+
+    def add_node(self, i: int, mc: MatchConstraint | None) -> int:
+        """Insert scan ``i`` as a graph node; returns the node index."""
+        k = len(self.node_scans)
+        self.node_scans.append(i)
+        self.node_constraint.append(mc)
+        n_before = len(self.active.submaps)
+        touched = self.active.insert(k, self.local[i], self.scans[i])
+        self.graph.add_node(k, compose(self.global_from_local, self.local[i]))
+        for sm in self.active.submaps[n_before:]:
+            self.graph.add_submap(sm.index, compose(self.global_from_local, sm.local_pose))
+        for sm in touched:
+            z = sm.node_poses[-1]
+            if mc is None:
+                cov = _UNMATCHED_COV if sm.n_scans > 1 else None
+            else:
+                # the match covariance, from the local frame into the node's frame
+                cov = _in_body(self.match_cov[i], self.local[i])
+            self.graph.add_intra(sm.index, k, z, cov)
+        if k > 0:
+            prev = self.node_scans[-2]
+            raw = relative(self.odom[prev], self.odom[i])
+            inc = self.model.correct(raw)
+            self.graph.add_odometry(k - 1, k, inc, self.model.covariance(inc))
+            self.travel += float(np.hypot(*(self.local[i, :2] - self.local[prev, :2])))
+        good = mc is not None and not mc.degenerate and self.scores[i] >= self.prm.retry_below
+        self.model.add_node(self.odom[i], self.match_pose[i] if good else None)
+        return k
+
+    # -- loop closure ----------------------------------------------------------------------
+    def loop_search(self, i: int, k: int, pts: FloatArray) -> None:
+        """Search, verify and add loop closures of node ``k`` (scan ``i``)."""
+        prm = self.prm
+        if k % prm.loop_every != 0 or pts.shape[0] < 10:
+            return
+        finished = [s for s in self.active.submaps if s.finished and k not in s.nodes]
+        if prm.loop_skip_submaps:
+            finished = finished[: -prm.loop_skip_submaps]
+        if not finished:
+            return
+        node_g = compose(self.global_from_local, self.local[i])
+        since = self.travel - self.travel_at_loop
+        dt, dr = self.verifier.drift_rates()
+        csm = dataclasses.replace(
+            prm.loop_csm,
+            linear_window=min(prm.loop_csm.linear_window + dt * since, prm.max_loop_window[0]),
+            angular_window=min(prm.loop_csm.angular_window + dr * since, prm.max_loop_window[1]),
+        )
+        candidates = []
+        for sm in finished:
+            if sm.index not in self.submap_centres:
+                self.submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
+            init = relative(self.graph.submap_pose(sm.index), node_g)
+            dist = float(np.hypot(*(init[:2] - self.submap_centres[sm.index])))
+            if dist <= prm.loop_search_distance:
+                candidates.append((dist, sm.index, init))
+        candidates.sort(key=lambda c: c[0])
+        for _, j, init in candidates[: prm.loop_max_candidates]:
+            if self.travel < self.next_search.get(j, -math.inf):
+                continue  # sampled: searched (or constrained) too recently
+            sm = self.active.submaps[j]
+            self.cache.touch(sm)
+            table = sm.table()
+            res = match_scan(table, pts, init, csm, runner_up_exclusion=prm.loop_ambiguity_radius)
+            self.n_loop_searches += 1
+            found = False
+            if res.score >= prm.loop.min_score:
+                info = match_information(table, pts, res.pose)
+                mc = analyse_match(
+                    info, pts, self._match_sigma(), threshold=prm.degeneracy_threshold
+                )
+                cand = LoopCandidate(
+                    submap=j,
+                    node=k,
+                    measurement=res.pose,
+                    covariance=_in_body(mc.covariance, res.pose),
+                    score=res.score,
+                    runner_up=res.runner_up_score,
+                    degenerate=mc.degenerate,
+                    correction=relative(init, res.pose),
+                    travel=self.travel,
+                    since_loop=since,
+                )
+                accepted = self.verifier.submit(cand, k)
+                for c in accepted:
+                    self.graph.add_loop(c.submap, c.node, c.measurement, c.covariance)
+                    self.pending_loops += 1
+                    self.travel_at_loop = self.travel
+                found = bool(accepted)
+            wait = prm.loop_constrained_distance if found else prm.loop_resample_distance
+            self.next_search[j] = self.travel + wait
+
+    def optimize(self, i: int, k: int) -> None:
+        """Optimise, drop the loops the graph disagrees with, re-anchor the local frame."""
+        self.graph.optimize()
+        self.n_opt += 1
+        self.graph.check_loops()
+        self.pending_loops = 0
+        self.global_from_local = compose(self.graph.node_pose(k), inverse(self.local[i]))
+
+
+def _warnings(run: _Run, rejected: list[tuple[int, int, str]]) -> list[str]:
+    """Why the result may be doubtful (see :attr:`SlamResult.warnings`)."""
+    out: list[str] = []
+    matched = run.degenerate[run.degenerate >= 0]
+    if matched.size:
+        frac = float(np.mean(matched > 0))
+        if frac > 0.25:
+            out.append(
+                f"{100 * frac:.0f} % of the matched scans left a direction unconstrained"
+                " (corridors, open space, few returns): positions there follow the odometry"
+            )
+        low = float(np.mean(run.scores[run.degenerate >= 0] < run.prm.retry_below))
+        if low > 0.2:
+            out.append(f"{100 * low:.0f} % of the scans matched their submap poorly (score)")
+    n_acc = len(run.graph.loops)
+    by_reason: dict[str, int] = {}
+    for _, _, why in rejected:
+        by_reason[why] = by_reason.get(why, 0) + 1
+    if n_acc == 0 and rejected:
+        out.append(f"no loop closure accepted, {len(rejected)} rejected: drift is not corrected")
+    if by_reason.get("residual", 0):
+        out.append(
+            f"{by_reason['residual']} loop closures disagreed with the optimised graph and were"
+            " removed"
+        )
+    if n_acc and by_reason.get("inconsistent", 0) > n_acc:
+        out.append(
+            f"more unconfirmed loop candidates ({by_reason['inconsistent']}) than accepted"
+            f" closures ({n_acc}): look-alike places"
+        )
+    return out
+
+
 def run_slam(
     scans: Sequence[LaserScan],
     odometry: ArrayLike,
@@ -321,124 +651,37 @@ def run_slam(
         raise ConfigurationError(f"odometry: expected one pose per scan ({n}), got {odom.shape[0]}")
     t_start = time.perf_counter()
     cpu_start = time.process_time()
-    timings = {"frontend": 0.0, "loop_search": 0.0, "optimize": 0.0, "map": 0.0}
-    active = ActiveSubmaps(prm.submap)
-    graph = PoseGraph(prm.graph)
-    cache = _TableCache(prm.table_cache_mb)
-    local = np.zeros((n, 3))
-    scores = np.zeros(n)
-    global_from_local = np.zeros(3)
-    pending_loops = 0
-    n_opt = 0
-    n_retries = 0
-    n_loop_searches = 0
-    submap_centres: dict[int, FloatArray] = {}
-    node_scans: list[int] = []
-    travel = 0.0  # trajectory length [m] of the nodes (front-end poses)
-    next_search: dict[int, float] = {}  # submap -> travel from which it is searched again
-
+    run = _Run(scans, odom, prm)
+    timings = run.timings
     bar = tqdm(total=n, desc=desc, unit="scan", disable=not progress, leave=False)
     for i in range(n):
         t0 = time.perf_counter()
         pts = scan_points(scans[i], prm.max_range, prm.voxel)
-
-        def _is_node(pose: FloatArray, i: int = i) -> bool:
-            if not node_scans or i == n - 1:
-                return True
-            moved = relative(local[node_scans[-1]], pose)
-            return (
-                float(np.hypot(moved[0], moved[1])) >= prm.motion_filter_distance
-                or abs(float(moved[2])) >= prm.motion_filter_angle
-            )
-
-        if i == 0:
-            local[0] = odom[0]
-        else:
-            pred = compose(local[i - 1], relative(odom[i - 1], odom[i]))
-            target = active.matching_submap
-            if not prm.match_filtered_scans and not _is_node(pred):
-                local[i] = pred  # dropped by the motion filter: odometry since the last scan
-            elif target is not None and pts.shape[0] >= 3:
-                cache.touch(target)
-                init = relative(target.local_pose, pred)
-                table = target.table()
-                res = match_scan(table, pts, init, prm.local_csm)
-                if res.score < prm.retry_below:
-                    wide = match_scan(table, pts, init, prm.retry_csm)
-                    n_retries += 1
-                    if wide.score > res.score + prm.retry_margin:
-                        res = wide
-                local[i] = compose(target.local_pose, res.pose)
-                scores[i] = res.score
-            else:
-                local[i] = pred
-        is_node = _is_node(local[i])
-        if not is_node:
+        mc = run.front_end(i, pts)
+        if not run._is_node(i, run.local[i]):
             timings["frontend"] += time.perf_counter() - t0
             bar.update(1)
             continue
-        k = len(node_scans)
-        node_scans.append(i)
-        n_before = len(active.submaps)
-        touched = active.insert(k, local[i], scans[i])
-        graph.add_node(k, compose(global_from_local, local[i]))
-        for sm in active.submaps[n_before:]:
-            graph.add_submap(sm.index, compose(global_from_local, sm.local_pose))
-        for sm in touched:
-            graph.add_intra(sm.index, k, sm.node_poses[-1])
-        if k > 0:
-            prev = node_scans[-2]
-            graph.add_odometry(k - 1, k, relative(odom[prev], odom[i]))
-            travel += float(np.hypot(*(local[i, :2] - local[prev, :2])))
+        k = run.add_node(i, mc)
         timings["frontend"] += time.perf_counter() - t0
-
-        # loop closures against older finished submaps
         t1 = time.perf_counter()
-        if k % prm.loop_every == 0 and pts.shape[0] >= 10:
-            finished = [s for s in active.submaps if s.finished and k not in s.nodes]
-            if prm.loop_skip_submaps:
-                finished = finished[: -prm.loop_skip_submaps]
-            node_g = compose(global_from_local, local[i])
-            candidates = []
-            for sm in finished:
-                if sm.index not in submap_centres:
-                    submap_centres[sm.index] = np.mean(np.array(sm.node_poses)[:, :2], axis=0)
-                init = relative(graph.submap_pose(sm.index), node_g)
-                dist = float(np.hypot(*(init[:2] - submap_centres[sm.index])))
-                if dist <= prm.loop_search_distance:
-                    candidates.append((dist, sm.index, init))
-            candidates.sort(key=lambda c: c[0])
-            for _, j, init in candidates[: prm.loop_max_candidates]:
-                if travel < next_search.get(j, -math.inf):
-                    continue  # sampled: searched (or constrained) too recently
-                sm = active.submaps[j]
-                cache.touch(sm)
-                res = match_scan(sm.table(), pts, init, prm.loop_csm)
-                n_loop_searches += 1
-                found = res.score >= prm.loop_min_score
-                if found:
-                    graph.add_loop(sm.index, k, res.pose)
-                    pending_loops += 1
-                wait = prm.loop_constrained_distance if found else prm.loop_resample_distance
-                next_search[sm.index] = travel + wait
+        run.loop_search(i, k, pts)
         timings["loop_search"] += time.perf_counter() - t1
-
-        if pending_loops and (k + 1) % prm.optimize_every == 0:
+        if run.pending_loops and (k + 1) % prm.optimize_every == 0:
             t2 = time.perf_counter()
-            graph.optimize()
-            n_opt += 1
-            pending_loops = 0
-            global_from_local = compose(graph.node_pose(k), inverse(local[i]))
+            run.optimize(i, k)
             timings["optimize"] += time.perf_counter() - t2
         bar.update(1)
     bar.close()
     t2 = time.perf_counter()
-    graph.optimize()
-    n_opt += 1
+    run.verifier.finish()
+    run.optimize(run.node_scans[-1], len(run.node_scans) - 1)
+    graph = run.graph
     node_poses = graph.node_poses()
-    nodes = np.array(node_scans, dtype=np.intp)
+    nodes = np.array(run.node_scans, dtype=np.intp)
     # every scan follows its last node: node pose composed with the front-end motion since it
     owner = np.searchsorted(nodes, np.arange(n), side="right") - 1
+    local = run.local
     poses = compose(node_poses[owner], relative(local[nodes[owner]], local))
     timings["optimize"] += time.perf_counter() - t2
 
@@ -458,17 +701,24 @@ def run_slam(
     timings["map"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t_start
     timings["total_cpu"] = time.process_time() - cpu_start
+    rejected = [(c.submap, int(nodes[c.node]), c.reason) for c in run.verifier.rejected]
+    rejected += [(j, int(nodes[k]), "residual") for j, k, _ in graph.removed_loops]
     return SlamResult(
         poses=poses,
         local_poses=local,
         grid=occ,
         loop_closures=[(j, int(nodes[k])) for j, k in graph.loops],
-        n_submaps=len(active.submaps),
+        n_submaps=len(run.active.submaps),
         node_scans=nodes,
-        match_scores=scores,
+        match_scores=run.scores,
         timings=timings,
-        n_optimizations=n_opt,
-        n_retries=n_retries,
-        n_loop_searches=n_loop_searches,
+        n_optimizations=run.n_opt,
+        n_retries=run.n_retries,
+        n_loop_searches=run.n_loop_searches,
         graph=graph,
+        rejected_loops=rejected,
+        warnings=_warnings(run, rejected),
+        degenerate_scans=run.degenerate,
+        odometry_model=run.model.summary(),
+        match_poses=run.match_pose,
     )
