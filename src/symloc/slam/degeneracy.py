@@ -2,16 +2,21 @@
 
 A scan matched against a long featureless corridor fixes its distance to the walls and its
 heading, but not its position along the corridor; in an open hall or with few returns it
-may fix nothing. The curvature of the match (:func:`~symloc.slam.correlative_scan_matching.
-match_information`, ``J^T J / N``) says which: after scaling the heading by a length ``L``
-(the median range of the scan's points, so that a radian and a metre weigh what they move
-the points), its eigenvectors with small eigenvalues are the unconstrained directions (Zhang,
-Kaess and Singh 2016, "On degeneracy of optimization-based state estimation problems").
+may fix nothing. The scan's own geometry says which (:func:`scan_information`): each point
+with close neighbours along the scan has a surface normal ``n``, and moving the scan by
+``(dx, dy, dtheta)`` moves it off its surfaces by ``n . (dx, dy) + dtheta * (p x n)``; the
+3 x 3 ``J^T J / N`` of these point-to-line residuals (the Hessian of point-to-line ICP) has
+small eigenvalues along the directions no surface faces. After scaling the heading by a
+length ``L`` (the median range of the points, so that a radian and a metre weigh what they
+move the points), its eigenvectors with small eigenvalues are the unconstrained directions
+(Zhang, Kaess and Singh 2016, "On degeneracy of optimization-based state estimation
+problems"). The scan is used rather than the submap: a submap's walls end where the map ends,
+which a match reads as a feature that is not there.
 
-:func:`analyse_match` turns the curvature into a :class:`MatchConstraint`: the covariance of
-the match, ``sigma^2`` (the matcher's own error) in every constrained direction divided by
+:func:`analyse_match` turns the information into a :class:`MatchConstraint`: the covariance
+of the match, ``sigma^2`` (the matcher's own error) in every constrained direction divided by
 its relative strength, and effectively infinite along degenerate ones (relative eigenvalue
-below ``threshold``, or a weak match overall). :func:`fuse` combines the match with the
+below ``threshold``, or too few points with a surface). :func:`fuse` combines the match with the
 odometry prediction by their covariances (one Kalman update): along a degenerate direction
 the prediction is kept, so the position along a corridor drifts only as the odometry does.
 """
@@ -26,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc.geometry import wrap_angle
 
-__all__ = ["MatchConstraint", "analyse_match", "fuse"]
+__all__ = ["UNCONSTRAINED_SIGMA", "MatchConstraint", "analyse_match", "fuse", "scan_information"]
 
 FloatArray = NDArray[np.float64]
 
@@ -64,6 +69,31 @@ class MatchConstraint:
         return self.n_degenerate > 0
 
 
+def scan_information(
+    points: ArrayLike, *, max_gap: float = 0.3, gap_per_metre: float = 0.05
+) -> tuple[FloatArray, int]:
+    """``(J^T J / N (3, 3), points with a normal)`` of a scan's point-to-line residuals.
+
+    ``points`` (N, 2) [m] in beam order (sensor frame). A point gets the normal of the chord
+    between its two neighbours when both lie within ``max_gap + gap_per_metre * range`` [m]
+    of it; others (isolated points, edges) contribute nothing.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if pts.shape[0] < 3:
+        return np.zeros((3, 3)), 0
+    prev, cur, nxt = pts[:-2], pts[1:-1], pts[2:]
+    rng = np.hypot(cur[:, 0], cur[:, 1])
+    gap = max_gap + gap_per_metre * rng
+    ok = (np.hypot(*(cur - prev).T) <= gap) & (np.hypot(*(nxt - cur).T) <= gap)
+    chord = nxt[ok] - prev[ok]
+    norm = np.hypot(chord[:, 0], chord[:, 1])
+    good = norm > 1e-9
+    chord, c = chord[good], cur[ok][good]
+    n = np.column_stack([-chord[:, 1], chord[:, 0]]) / norm[good][:, None]
+    jac = np.column_stack([n[:, 0], n[:, 1], c[:, 0] * n[:, 1] - c[:, 1] * n[:, 0]])
+    return np.asarray(jac.T @ jac / pts.shape[0], dtype=np.float64), int(jac.shape[0])
+
+
 def analyse_match(
     information: ArrayLike,
     points: ArrayLike,
@@ -77,7 +107,7 @@ def analyse_match(
     Parameters
     ----------
     information : array of shape (3, 3)
-        ``J^T J / N`` of the match.
+        ``J^T J / N`` of the scan (:func:`scan_information`) or of the match.
     points : array of shape (N, 2)
         The matched points (sensor frame) [m], for the length scale.
     sigma_trans : float
@@ -85,7 +115,9 @@ def analyse_match(
     threshold : float
         Relative eigenvalue below which a direction counts as unconstrained.
     min_strength : float
-        Largest eigenvalue [1/m^2] below which the whole match counts as unconstrained.
+        Largest eigenvalue below which the whole match counts as unconstrained (in the units
+        of ``information``; for :func:`scan_information`, the fraction of points with a
+        surface facing the best-constrained direction).
     """
     info = np.asarray(information, dtype=np.float64).reshape(3, 3)
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)

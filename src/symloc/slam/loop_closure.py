@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import relative, wrap_angle
 
 __all__ = ["LoopCandidate", "LoopVerifier", "LoopVerifierParams"]
 
@@ -189,6 +189,4 @@ class LoopVerifier:
 
     def correction_of(self, estimate_in_submap: ArrayLike, measurement: ArrayLike) -> FloatArray:
         """``nu``: the measured node pose in the frame of its estimate (both in the submap)."""
-        from symloc.geometry import relative
-
         return np.asarray(relative(estimate_in_submap, measurement), dtype=np.float64)

@@ -94,8 +94,8 @@ class OdometryModelParams:
 
 def _motion(increment: FloatArray) -> tuple[float, float]:
     """(translation [m], total absolute rotation [rad]) of an increment (3,)."""
-    r1, tr, r2 = rot_trans_rot(np.zeros(3), increment)
-    r1, tr, r2 = float(r1), float(tr), float(r2)
+    a, b, c = rot_trans_rot(np.zeros(3), increment)
+    r1, tr, r2 = float(a), float(b), float(c)
     if tr < 0.05:  # a turn on the spot: the direction of travel is meaningless
         return tr, abs(float(wrap_angle(increment[2])))
     q1 = min(abs(r1), math.pi - abs(r1))
@@ -156,9 +156,11 @@ class OdometryModel:
                 d_odo.append(relative(odo[j], odo[k]))
                 d_mat.append(relative(mj, mk))
                 d_feat.append(cum[k] - cum[j])
-        return np.array(d_odo).reshape(-1, 3), np.array(d_mat).reshape(-1, 3), np.array(
-            d_feat
-        ).reshape(-1, 2)
+        return (
+            np.array(d_odo).reshape(-1, 3),
+            np.array(d_mat).reshape(-1, 3),
+            np.array(d_feat).reshape(-1, 2),
+        )
 
     def _fit(self) -> None:
         odo, mat, feat = self._pairs()

@@ -154,6 +154,7 @@ class PoseGraph:
         return [(lp.submap, lp.node) for lp in self._loops]
 
     def _robust(self, base: gtsam.noiseModel.Base) -> gtsam.noiseModel.Base:
+        est: gtsam.noiseModel.mEstimator.Base
         if self.params.robust == "huber":
             est = gtsam.noiseModel.mEstimator.Huber.Create(self.params.huber_k)
         else:
@@ -194,6 +195,7 @@ class PoseGraph:
         of motion.
         """
         d = np.asarray(k_in_i, dtype=np.float64)
+        noise: gtsam.noiseModel.Base
         if covariance is None:
             s = self.params.odom_scale
             trans = float(np.hypot(d[0], d[1]))

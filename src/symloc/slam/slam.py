@@ -54,8 +54,14 @@ from symloc.geometry import compose, inverse, relative
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.scan import LaserScan
-from symloc.slam.correlative_scan_matching import CsmParams, match_information, match_scan
-from symloc.slam.degeneracy import UNCONSTRAINED_SIGMA, MatchConstraint, analyse_match, fuse
+from symloc.slam.correlative_scan_matching import CsmParams, match_scan
+from symloc.slam.degeneracy import (
+    UNCONSTRAINED_SIGMA,
+    MatchConstraint,
+    analyse_match,
+    fuse,
+    scan_information,
+)
 from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
@@ -78,6 +84,10 @@ class SlamParams:
         predicted standard deviations, clamped to ``[min_window, local_csm.*_window]``.
     window_sigmas : float
         Real-time search half-width in predicted standard deviations.
+    min_submap_scans : int
+        Scans a submap needs before scans are matched against it (the first scans of a run
+        follow the odometry: one scan's far walls are dotted, which a match reads as
+        features).
     min_linear_window, min_angular_window : float
         Smallest real-time search half-widths [m], [rad].
     retry_csm : CsmParams
@@ -97,8 +107,11 @@ class SlamParams:
     odometry : OdometryModelParams
         The learnt calibration and noise of the odometry.
     degeneracy_threshold : float
-        Relative eigenvalue of a match's curvature below which its direction counts as
-        unconstrained (:func:`~symloc.slam.degeneracy.analyse_match`).
+        Relative eigenvalue of a scan's point-to-line information below which its direction
+        counts as unconstrained (:func:`~symloc.slam.degeneracy.analyse_match`).
+    min_surface_fraction : float
+        A scan whose strongest direction is faced by fewer than this fraction of its points
+        constrains nothing (few returns).
     min_match_sigma : float
         Smallest standard deviation [m] given to a scan match.
     loop : LoopVerifierParams
@@ -151,6 +164,7 @@ class SlamParams:
         )
     )
     window_sigmas: float = 3.0
+    min_submap_scans: int = 1
     min_linear_window: float = 0.15
     min_angular_window: float = math.radians(4.0)
     retry_csm: CsmParams = field(
@@ -172,6 +186,7 @@ class SlamParams:
     max_loop_window: tuple[float, float] = (3.0, math.radians(30.0))
     odometry: OdometryModelParams = field(default_factory=OdometryModelParams)
     degeneracy_threshold: float = 0.05
+    min_surface_fraction: float = 0.05
     min_match_sigma: float = 0.01
     loop: LoopVerifierParams = field(default_factory=LoopVerifierParams)
     loop_ambiguity_radius: tuple[float, float] = (0.3, math.radians(3.0))
@@ -200,6 +215,9 @@ class SlamParams:
         check_positive(self.min_linear_window, "SlamParams.min_linear_window", allow_zero=True)
         check_positive(self.min_angular_window, "SlamParams.min_angular_window", allow_zero=True)
         check_positive(self.min_match_sigma, "SlamParams.min_match_sigma")
+        check_positive(
+            self.min_surface_fraction, "SlamParams.min_surface_fraction", allow_zero=True
+        )
         check_positive(self.table_cache_mb, "SlamParams.table_cache_mb")
         check_positive(
             self.motion_filter_distance, "SlamParams.motion_filter_distance", allow_zero=True
@@ -225,7 +243,7 @@ class SlamParams:
             raise ConfigurationError(
                 f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
             )
-        for name in ("loop_every", "optimize_every", "loop_max_candidates"):
+        for name in ("loop_every", "optimize_every", "loop_max_candidates", "min_submap_scans"):
             v = getattr(self, name)
             if int(v) != v or v < 1:
                 raise ConfigurationError(f"SlamParams.{name}: expected an integer >= 1, got {v}")
@@ -367,7 +385,7 @@ def _rotate_cov(cov: FloatArray, theta: float) -> FloatArray:
     """Covariance (3, 3) of x, y, theta expressed in a frame rotated by ``theta``."""
     c, s = math.cos(theta), math.sin(theta)
     j = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return j @ cov @ j.T
+    return np.asarray(j @ cov @ j.T, dtype=np.float64)
 
 
 def _propagate(
@@ -378,7 +396,7 @@ def _propagate(
     jx = np.array(
         [[1.0, 0.0, -(end[1] - start[1])], [0.0, 1.0, end[0] - start[0]], [0.0, 0.0, 1.0]]
     )
-    return jx @ cov @ jx.T + _rotate_cov(inc_cov, float(start[2]))
+    return np.asarray(jx @ cov @ jx.T + _rotate_cov(inc_cov, float(start[2])), dtype=np.float64)
 
 
 def _in_body(cov_in_parent: FloatArray, pose_in_parent: FloatArray) -> FloatArray:
@@ -412,6 +430,7 @@ class _Run:
         self.node_scans: list[int] = []
         self.node_constraint: list[MatchConstraint | None] = []
         self.match_cov = np.zeros((n, 3, 3))  # of each match, in the local frame
+        self._constraint_cache: tuple[int, MatchConstraint | None] = (0, None)
         self.pending_loops = 0
         self.n_opt = 0
         self.n_retries = 0
@@ -436,6 +455,23 @@ class _Run:
         st, _ = self.model.matcher_sigmas
         return max(st, self.prm.min_match_sigma)
 
+    def _constraint(self, pts: FloatArray) -> MatchConstraint:
+        """What a match of these points can constrain (from the scan's own geometry)."""
+        key = id(pts)
+        if self._constraint_cache[0] != key:
+            info, _ = scan_information(pts)
+            mc = analyse_match(
+                info,
+                pts,
+                self._match_sigma(),
+                threshold=self.prm.degeneracy_threshold,
+                min_strength=self.prm.min_surface_fraction,
+            )
+            self._constraint_cache = (key, mc)
+        cached = self._constraint_cache[1]
+        assert cached is not None
+        return cached
+
     def front_end(self, i: int, pts: FloatArray) -> MatchConstraint | None:
         """Pose of scan ``i`` in the local frame; returns its match constraint (None: none)."""
         prm = self.prm
@@ -446,8 +482,11 @@ class _Run:
         pred = compose(self.local[i - 1], inc)
         pred_cov = _propagate(self.cov, self.local[i - 1], inc, self.model.covariance(inc))
         target = self.active.matching_submap
-        if (not prm.match_filtered_scans and not self._is_node(i, pred)) or (
-            target is None or pts.shape[0] < 10
+        if (
+            (not prm.match_filtered_scans and not self._is_node(i, pred))
+            or target is None
+            or target.n_scans < prm.min_submap_scans
+            or pts.shape[0] < 10
         ):
             self.local[i] = pred
             self.cov = pred_cov
@@ -475,8 +514,7 @@ class _Run:
                 res = wide
                 # a real odometry error beyond the window: trust the match
                 cov_s = cov_s + np.diag([prm.retry_csm.linear_window**2] * 2 + [0.0])
-        info = match_information(table, pts, res.pose)
-        mc = analyse_match(info, pts, self._match_sigma(), threshold=prm.degeneracy_threshold)
+        mc = self._constraint(pts)
         fused, post = fuse(init, cov_s, res.pose, mc.covariance)
         self.local[i] = compose(target.local_pose, fused)
         self.cov = _rotate_cov(post, theta_s)
@@ -552,10 +590,7 @@ class _Run:
             self.n_loop_searches += 1
             found = False
             if res.score >= prm.loop.min_score:
-                info = match_information(table, pts, res.pose)
-                mc = analyse_match(
-                    info, pts, self._match_sigma(), threshold=prm.degeneracy_threshold
-                )
+                mc = self._constraint(pts)
                 cand = LoopCandidate(
                     submap=j,
                     node=k,
