@@ -19,7 +19,7 @@ def _corridor_run(regime: str, seed: int) -> tuple[np.ndarray, np.ndarray, np.nd
     """Drive 20 m along the middle of a 60 m x 2 m corridor (ends beyond the 15 m lidar)."""
     room = hallway(60.0, 2.0, textured=False)
     rng = np.random.default_rng(seed)
-    x = np.arange(-10.0, 10.0 + 1e-9, 0.25)
+    x = np.arange(-10.0, 10.0 + 1e-9, 0.4)
     truth = np.column_stack([x, 0.05 * np.sin(x / 3.0), np.zeros_like(x)])
     scans = [simulate_scan(room.world, p, PAPER_15M, rng) for p in truth]
     odom = regime_odometry(truth, regime, rng)

@@ -168,28 +168,51 @@ class LikelihoodTable:
         sig = check_positive(sigma, "sigma")
         res = float(resolution)
         lim = 4.0 * sig if max_distance is None else float(max_distance)
-        pad = 0
-        if margin > 0:
-            pad = int(margin) + math.ceil(lim / res) + 1
-            occ = np.pad(occ, pad)
+        reach = math.ceil(lim / res)
+        pad = int(margin) + reach + 1 if margin > 0 else 0
         origin = np.asarray(origin_xy, dtype=np.float64).reshape(2) - pad * res
-        if not occ.any():
-            return cls(np.zeros(occ.shape, np.float32), res, origin, margin=int(margin))
-        d = ndimage.distance_transform_edt(~occ).astype(np.float32) * np.float32(res)
-        val = np.exp(np.float32(-0.5) * (np.minimum(d, np.float32(lim)) / np.float32(sig)) ** 2)
-        val[d >= lim] = 0.0
-        return cls(val.astype(np.float32, copy=False), res, origin, margin=int(margin))
+        h, w = occ.shape[0] + 2 * pad, occ.shape[1] + 2 * pad
+        values = np.zeros((h, w), np.float32)
+        rows = np.flatnonzero(occ.any(axis=1))
+        if rows.size == 0:
+            return cls(values, res, origin, margin=int(margin))
+        cols = np.flatnonzero(occ.any(axis=0))
+        # only the occupied cells' bounding box plus the likelihood's reach can be non-zero
+        r0, r1 = max(rows[0] + pad - reach, 0), min(rows[-1] + pad + reach + 1, h)
+        c0, c1 = max(cols[0] + pad - reach, 0), min(cols[-1] + pad + reach + 1, w)
+        box = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+        sr0, sc0 = r0 - pad, c0 - pad  # box origin in occ's own cells
+        o0, o1 = max(sr0, 0), min(sr0 + box.shape[0], occ.shape[0])
+        q0, q1 = max(sc0, 0), min(sc0 + box.shape[1], occ.shape[1])
+        box[o0 - sr0 : o1 - sr0, q0 - sc0 : q1 - sc0] = occ[o0:o1, q0:q1]
+        d2 = _squared_distance(box, reach) * np.float32(res * res)
+        val = np.exp(np.float32(-0.5 / (sig * sig)) * d2)
+        val[d2 >= np.float32(lim * lim)] = 0.0
+        values[r0:r1, c0:c1] = val
+        return cls(values, res, origin, margin=int(margin))
 
     def coarse(self, factor: int) -> NDArray[np.float32]:
         """Table whose cell ``(r, c)`` holds the max over cells ``[r, r+f) x [c, c+f)``."""
         if factor not in self._coarse:
-            self._coarse[factor] = (
-                self.values
-                if factor == 1
-                else ndimage.maximum_filter(
-                    self.values, size=factor, origin=-(factor // 2), mode="constant", cval=0.0
-                )
-            )
+            if factor == 1:
+                self._coarse[factor] = self.values
+            else:
+                # the max of a window ending at the box of non-zero cells: compute there only
+                v = self.values
+                rows = np.flatnonzero(v.any(axis=1))
+                out = np.zeros_like(v)
+                if rows.size:
+                    cols = np.flatnonzero(v.any(axis=0))
+                    r0, r1 = max(rows[0] - factor, 0), rows[-1] + 1
+                    c0, c1 = max(cols[0] - factor, 0), cols[-1] + 1
+                    out[r0:r1, c0:c1] = ndimage.maximum_filter(
+                        v[r0 : r1 + factor, c0 : c1 + factor],
+                        size=factor,
+                        origin=-(factor // 2),
+                        mode="constant",
+                        cval=0.0,
+                    )[: r1 - r0, : c1 - c0]
+                self._coarse[factor] = out
         return self._coarse[factor]
 
     def interpolate(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -246,6 +269,28 @@ class MatchResult:
     n_candidates: int
     n_total: int
     runner_up_score: float = -1.0
+
+
+def _squared_distance(occupied: NDArray[np.bool_], reach: int) -> NDArray[np.float32]:
+    """Squared distance [cells^2] to the nearest occupied cell, exact up to ``reach`` cells.
+
+    Two separable passes of shifted minima (Felzenszwalb and Huttenlocher's decomposition of
+    the squared Euclidean distance, restricted to offsets of at most ``reach`` cells per axis,
+    which holds every distance up to ``reach``); farther cells get a value above ``reach^2``.
+    """
+    big = np.float32((reach + 1) ** 2 * 2)
+    f = np.where(occupied, np.float32(0.0), big)
+    g = f.copy()
+    for k in range(1, reach + 1):
+        kk = np.float32(k * k)
+        np.minimum(g[:, k:], f[:, :-k] + kk, out=g[:, k:])
+        np.minimum(g[:, :-k], f[:, k:] + kk, out=g[:, :-k])
+    out = g.copy()
+    for k in range(1, reach + 1):
+        kk = np.float32(k * k)
+        np.minimum(out[k:, :], g[:-k, :] + kk, out=out[k:, :])
+        np.minimum(out[:-k, :], g[k:, :] + kk, out=out[:-k, :])
+    return out
 
 
 def _rotate(points: FloatArray, theta: FloatArray) -> FloatArray:

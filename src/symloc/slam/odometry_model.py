@@ -92,15 +92,15 @@ class OdometryModelParams:
         check_positive(self.max_calibration_error, "OdometryModelParams.max_calibration_error")
 
 
-def _motion(increment: FloatArray) -> tuple[float, float]:
-    """(translation [m], total absolute rotation [rad]) of an increment (3,)."""
-    a, b, c = rot_trans_rot(np.zeros(3), increment)
-    r1, tr, r2 = float(a), float(b), float(c)
-    if tr < 0.05:  # a turn on the spot: the direction of travel is meaningless
-        return tr, abs(float(wrap_angle(increment[2])))
-    q1 = min(abs(r1), math.pi - abs(r1))
-    q2 = min(abs(r2), math.pi - abs(r2))
-    return tr, q1 + q2
+def _motions(increments: FloatArray) -> FloatArray:
+    """``(K, 2)`` translation [m] and total absolute rotation [rad] of increments (K, 3)."""
+    inc = np.asarray(increments, dtype=np.float64).reshape(-1, 3)
+    r1, tr, r2 = rot_trans_rot(np.zeros((inc.shape[0], 3)), inc)
+    q1 = np.minimum(np.abs(r1), math.pi - np.abs(r1))
+    q2 = np.minimum(np.abs(r2), math.pi - np.abs(r2))
+    # a turn on the spot: the direction of travel is meaningless, the turn is the heading
+    rot = np.where(tr < 0.05, np.abs(wrap_angle(inc[:, 2])), q1 + q2)
+    return np.column_stack([tr, rot])
 
 
 class OdometryModel:
@@ -136,31 +136,20 @@ class OdometryModel:
 
     def _pairs(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Raw odometry and match increments (P, 3) of matched pairs, and (P, 2) motion sums."""
-        odo = list(self._odo)
-        mat = list(self._match)
-        steps = [np.zeros(3)] + [relative(odo[k - 1], odo[k]) for k in range(1, len(odo))]
-        feats = np.array([_motion(self.correct(st)) for st in steps]) ** 2  # (W, 2)
-        cum = np.cumsum(feats, axis=0)
-        d_odo, d_mat, d_feat = [], [], []
-        for k in range(len(odo)):
-            mk = mat[k]
-            if mk is None:
-                continue
-            for lag in range(1, self.params.max_lag + 1):
-                j = k - lag
-                if j < 0:
-                    break
-                mj = mat[j]
-                if mj is None:
-                    continue
-                d_odo.append(relative(odo[j], odo[k]))
-                d_mat.append(relative(mj, mk))
-                d_feat.append(cum[k] - cum[j])
-        return (
-            np.array(d_odo).reshape(-1, 3),
-            np.array(d_mat).reshape(-1, 3),
-            np.array(d_feat).reshape(-1, 2),
-        )
+        odo = np.array(self._odo)
+        has = np.array([m is not None for m in self._match])
+        mat = np.array([m if m is not None else np.zeros(3) for m in self._match])
+        steps = np.vstack([np.zeros((1, 3)), relative(odo[:-1], odo[1:])])
+        cum = np.cumsum(_motions(self.correct_many(steps)) ** 2, axis=0)
+        js, ks = [], []
+        for lag in range(1, self.params.max_lag + 1):
+            k = np.arange(lag, odo.shape[0])
+            ok = has[k] & has[k - lag]
+            js.append(k[ok] - lag)
+            ks.append(k[ok])
+        j = np.concatenate(js)
+        k = np.concatenate(ks)
+        return relative(odo[j], odo[k]), relative(mat[j], mat[k]), cum[k] - cum[j]
 
     def _fit(self) -> None:
         odo, mat, feat = self._pairs()
@@ -179,7 +168,7 @@ class OdometryModel:
         if tn.sum() >= self.params.min_pairs // 2:
             s = float(np.sum(r_m[tn] * r_o[tn]) / np.sum(r_o[tn] ** 2))
             self.rot_scale = min(max(s, 1 - lim), 1 + lim)
-        corrected = np.array([self.correct(o) for o in odo])
+        corrected = self.correct_many(odo)
         e = relative(corrected, mat)
         y_t = 0.5 * (e[:, 0] ** 2 + e[:, 1] ** 2)
         y_r = wrap_angle(e[:, 2]) ** 2
@@ -206,9 +195,27 @@ class OdometryModel:
             dtype=np.float64,
         )
 
+    def correct_many(self, increments: ArrayLike) -> FloatArray:
+        """Increments (K, 3) with the learnt calibration applied."""
+        inc = np.asarray(increments, dtype=np.float64).reshape(-1, 3)
+        if self.trans_scale == 1.0 and self.rot_scale == 1.0:
+            return inc.copy()
+        zero = np.zeros((inc.shape[0], 3))
+        r1, tr, r2 = rot_trans_rot(zero, inc)
+        out = np.asarray(
+            rot_trans_rot_to_pose(
+                zero, r1 * self.rot_scale, tr * self.trans_scale, r2 * self.rot_scale
+            ),
+            dtype=np.float64,
+        ).reshape(-1, 3)
+        spot = tr < 0.05  # on the spot: scale the turn only
+        out[spot, :2] = inc[spot, :2]
+        out[spot, 2] = wrap_angle(inc[spot, 2] * self.rot_scale)
+        return out
+
     def sigmas(self, increment: ArrayLike) -> tuple[float, float]:
         """``(sigma_trans [m] per axis, sigma_rot [rad])`` of a (corrected) increment (3,)."""
-        tr, rot = _motion(np.asarray(increment, dtype=np.float64).reshape(3))
+        tr, rot = _motions(np.asarray(increment, dtype=np.float64).reshape(1, 3))[0]
         x = np.array([0.0, tr * tr, rot * rot])
         st = math.sqrt(max(float(self.coef_trans @ x), 0.0))
         sr = math.sqrt(max(float(self.coef_rot @ x), 0.0))

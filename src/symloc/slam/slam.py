@@ -40,7 +40,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -94,7 +94,11 @@ class SlamParams:
         Wider window tried when the real-time match scores below ``retry_below``; the better
         of the two matches is kept.
     retry_below : float
-        Score (0..1) under which the wider search runs.
+        Score (0..1) under which the wider search runs, or ``retry_relative`` times the
+        median score of the last 50 matches if that is lower (scans of another scanner, or
+        logged a metre apart, match less well everywhere: a low score is relative).
+    retry_relative : float
+        See ``retry_below``.
     retry_margin : float
         The wide match replaces the real-time one only if it scores this much higher (a
         corridor gives many similar scores far from the odometry; a real odometry error gives
@@ -177,6 +181,7 @@ class SlamParams:
         )
     )
     retry_below: float = 0.6
+    retry_relative: float = 0.85
     retry_margin: float = 0.1
     loop_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
@@ -431,6 +436,8 @@ class _Run:
         self.node_constraint: list[MatchConstraint | None] = []
         self.match_cov = np.zeros((n, 3, 3))  # of each match, in the local frame
         self._constraint_cache: tuple[int, MatchConstraint | None] = (0, None)
+        self.recent_scores: deque[float] = deque(maxlen=50)
+        self.poor = np.zeros(n, dtype=bool)
         self.pending_loops = 0
         self.n_opt = 0
         self.n_retries = 0
@@ -450,6 +457,13 @@ class _Run:
             float(np.hypot(moved[0], moved[1])) >= self.prm.motion_filter_distance
             or abs(float(moved[2])) >= self.prm.motion_filter_angle
         )
+
+    def poor_score(self) -> float:
+        """Match score below which a match is poor (see ``SlamParams.retry_below``)."""
+        if len(self.recent_scores) < 10:
+            return self.prm.retry_below
+        med = float(np.median(self.recent_scores))
+        return min(self.prm.retry_below, self.prm.retry_relative * med)
 
     def _match_sigma(self) -> float:
         st, _ = self.model.matcher_sigmas
@@ -507,7 +521,8 @@ class _Run:
             ),
         )
         res = match_scan(table, pts, init, csm)
-        if res.score < prm.retry_below:
+        poor = self.poor_score()
+        if res.score < poor:
             wide = match_scan(table, pts, init, prm.retry_csm)
             self.n_retries += 1
             if wide.score > res.score + prm.retry_margin:
@@ -521,6 +536,8 @@ class _Run:
         self.match_pose[i] = compose(target.local_pose, res.pose)
         self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
         self.scores[i] = res.score
+        self.poor[i] = res.score < poor
+        self.recent_scores.append(res.score)
         self.degenerate[i] = mc.n_degenerate
         return mc
 
@@ -548,7 +565,7 @@ class _Run:
             inc = self.model.correct(raw)
             self.graph.add_odometry(k - 1, k, inc, self.model.covariance(inc))
             self.travel += float(np.hypot(*(self.local[i, :2] - self.local[prev, :2])))
-        good = mc is not None and not mc.degenerate and self.scores[i] >= self.prm.retry_below
+        good = mc is not None and not mc.degenerate and not self.poor[i]
         self.model.add_node(self.odom[i], self.match_pose[i] if good else None)
         return k
 
@@ -632,9 +649,12 @@ def _warnings(run: _Run, rejected: list[tuple[int, int, str]]) -> list[str]:
                 f"{100 * frac:.0f} % of the matched scans left a direction unconstrained"
                 " (corridors, open space, few returns): positions there follow the odometry"
             )
-        low = float(np.mean(run.scores[run.degenerate >= 0] < run.prm.retry_below))
+        low = float(np.mean(run.poor[run.degenerate >= 0]))
         if low > 0.2:
-            out.append(f"{100 * low:.0f} % of the scans matched their submap poorly (score)")
+            out.append(
+                f"{100 * low:.0f} % of the scans matched their submap poorly (score below"
+                f" {run.poor_score():.2f})"
+            )
     n_acc = len(run.graph.loops)
     by_reason: dict[str, int] = {}
     for _, _, why in rejected:
