@@ -106,8 +106,14 @@ def _row(s: dict[str, Any]) -> str:
         f"{s['name']:<14} scans {s['scans']:>5}  ATE {s['ate_rmse_m']:.3f} m"
         f" (odom {s['ate_odometry_rmse_m']:.3f})  RPE {s['rpe_trans_rmse_m']:.3f} m"
         f" {s['rpe_rot_rmse_deg']:.2f} deg  loops {s['loop_closures']:>4}"
+        f" (rejected {s['loops_rejected']})"
         f"{speed}{agree}"
     )
+
+
+def _print_warnings(s: dict[str, Any]) -> None:
+    for w in s.get("warnings", []):
+        print(f"{'':<14} doubtful: {w}")
 
 
 def _world_index(world: str, k: int) -> int:
@@ -166,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
         s = r.summary()
         rows.append(s)
         print(_row(s))
+        _print_warnings(s)
         sys.stdout.flush()
         map_trajectory_figure(
             r.result.grid,
@@ -193,6 +200,7 @@ def run(args: argparse.Namespace) -> int:
                 s = r.summary()
                 rows.append(s)
                 print(_row(s))
+                _print_warnings(s)
                 sys.stdout.flush()
                 # the reference in the SLAM map frame (inverse of the ATE alignment)
                 aligned_ref = compose(inverse(r.ate.alignment), r.reference)

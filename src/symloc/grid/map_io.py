@@ -299,6 +299,18 @@ def load_map(path: str | Path) -> OccupancyGrid:
     )
 
 
+def _yaml_float(value: float) -> str:
+    """``repr`` of a float that YAML 1.1 (PyYAML, yaml-cpp) reads back as a float.
+
+    ``repr(1e-10)`` is ``1e-10``, which YAML 1.1 reads as a string: the mantissa needs a dot.
+    """
+    text = repr(float(value))
+    mant, sep, exp = text.partition("e")
+    if sep and "." not in mant:
+        text = f"{mant}.0e{exp}"
+    return text
+
+
 def save_map(
     grid: OccupancyGrid,
     path: str | Path,
@@ -308,6 +320,7 @@ def save_map(
     free_thresh: float | None = None,
     occupied_thresh: float | None = None,
     write_size: bool = True,
+    extra: dict[str, Any] | None = None,
 ) -> Path:
     """Write ``grid`` as ``<stem>.yaml`` + ``<stem>.pgm`` (``.png`` for scale mode).
 
@@ -324,6 +337,9 @@ def save_map(
         Written thresholds (default: the grid's).
     write_size : bool
         Also write ``width`` and ``height`` (ignored by map_server, checked by :func:`load_map`).
+    extra : dict, optional
+        More top-level YAML keys (plain data), e.g. how the map was made and whether it is
+        doubtful; map_server and :func:`load_map` ignore keys they do not know.
 
     Returns
     -------
@@ -351,13 +367,16 @@ def save_map(
     lines = [
         f"image: {image_path.name}",
         f"mode: {mode}",
-        f"resolution: {grid.resolution!r}",
-        f"origin: [{float(o[0])!r}, {float(o[1])!r}, {float(o[2])!r}]",
+        f"resolution: {_yaml_float(grid.resolution)}",
+        f"origin: [{_yaml_float(o[0])}, {_yaml_float(o[1])}, {_yaml_float(o[2])}]",
         "negate: 0",
-        f"occupied_thresh: {occ!r}",
-        f"free_thresh: {free!r}",
+        f"occupied_thresh: {_yaml_float(occ)}",
+        f"free_thresh: {_yaml_float(free)}",
     ]
     if write_size:
         lines += [f"width: {grid.width}", f"height: {grid.height}"]
-    yaml_path.write_text("\n".join(lines) + "\n")
+    text = "\n".join(lines) + "\n"
+    if extra:
+        text += yaml.safe_dump(dict(extra), sort_keys=False, default_flow_style=False)
+    yaml_path.write_text(text)
     return yaml_path

@@ -332,6 +332,15 @@ class SlamResult:
         """True when :attr:`warnings` is not empty."""
         return bool(self.warnings)
 
+    def map_metadata(self) -> dict[str, object]:
+        """What a saved map should carry about how it was made (``symloc_slam`` YAML key)."""
+        s = self.summary()
+        keep = ("scans", "nodes", "loops_accepted", "loops_rejected", "degenerate_fraction")
+        meta: dict[str, object] = {k: s[k] for k in keep}
+        meta["doubtful"] = self.doubtful
+        meta["warnings"] = list(self.warnings)
+        return {"symloc_slam": meta}
+
     def summary(self) -> dict[str, object]:
         """Plain numbers (JSON-ready): sizes, loop closures, CPU time, warnings."""
         reasons: dict[str, int] = {}

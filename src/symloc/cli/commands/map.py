@@ -91,7 +91,9 @@ def _build(args: argparse.Namespace) -> int:
         reference = compose(inverse(run.ate.alignment), run.reference)
     s = run.summary()
     out = Path(args.out)
-    yaml_path = save_map(run.result.grid, out / args.name, mode=args.mode)
+    yaml_path = save_map(
+        run.result.grid, out / args.name, mode=args.mode, extra=run.result.map_metadata()
+    )
     png = map_trajectory_figure(
         run.result.grid,
         run.result.poses,
@@ -113,6 +115,13 @@ def _build(args: argparse.Namespace) -> int:
             f"map agreement with the rasterised world: {s['map_agreement']:.3f} exact,"
             f" {s['map_agreement_tol1']:.3f} within one cell"
         )
+    res = run.result
+    print(
+        f"loop closures accepted {len(res.loop_closures)}, rejected {len(res.rejected_loops)};"
+        f" result {'DOUBTFUL' if res.doubtful else 'consistent'}"
+    )
+    for w in res.warnings:
+        print(f"  warning: {w}")
     print(
         f"wrote {yaml_path}, {yaml_path.with_suffix('.pgm' if args.mode != 'scale' else '.png')}, {png}"
     )
