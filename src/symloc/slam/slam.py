@@ -102,7 +102,16 @@ class SlamParams:
     retry_margin : float
         The wide match replaces the real-time one only if it scores this much higher (a
         corridor gives many similar scores far from the odometry; a real odometry error gives
-        a clearly better one).
+        a clearly better one) and is not poor itself. A match that stays poor is not used:
+        the scan follows the odometry.
+    match_gate_chi2 : float
+        The odometry gate: a match whose difference from the prediction exceeds this squared
+        Mahalanobis distance (prediction and match covariances; default the 99.9 % quantile
+        of chi-square with 3 degrees of freedom) is not used, and the scan follows the
+        odometry...
+    gate_recovery : int
+        ... unless the ``gate_recovery`` matches before it were refused too: matches that keep
+        disagreeing mean the odometry was wrong (a wheel slipped), and the match is taken.
     loop_csm : CsmParams
         Loop-closure matching settings; its windows are the smallest ones, grown by the
         drift since the last accepted closure up to ``max_loop_window``.
@@ -183,6 +192,8 @@ class SlamParams:
     retry_below: float = 0.6
     retry_relative: float = 0.85
     retry_margin: float = 0.1
+    match_gate_chi2: float = 16.27
+    gate_recovery: int = 2
     loop_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
             linear_window=1.0, angular_window=math.radians(8), coarse_factor=8
@@ -247,6 +258,11 @@ class SlamParams:
         if not 0.0 <= self.retry_below <= 1.0:
             raise ConfigurationError(
                 f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
+            )
+        check_positive(self.match_gate_chi2, "SlamParams.match_gate_chi2")
+        if int(self.gate_recovery) != self.gate_recovery or self.gate_recovery < 0:
+            raise ConfigurationError(
+                f"SlamParams.gate_recovery: expected an integer >= 0, got {self.gate_recovery}"
             )
         for name in ("loop_every", "optimize_every", "loop_max_candidates", "min_submap_scans"):
             v = getattr(self, name)
@@ -447,6 +463,8 @@ class _Run:
         self._constraint_cache: tuple[int, MatchConstraint | None] = (0, None)
         self.recent_scores: deque[float] = deque(maxlen=50)
         self.poor = np.zeros(n, dtype=bool)
+        self.gated = np.zeros(n, dtype=bool)
+        self.n_gated = 0  # consecutive matches the gate refused
         self.pending_loops = 0
         self.n_opt = 0
         self.n_retries = 0
@@ -534,20 +552,41 @@ class _Run:
         if res.score < poor:
             wide = match_scan(table, pts, init, prm.retry_csm)
             self.n_retries += 1
-            if wide.score > res.score + prm.retry_margin:
+            if wide.score >= poor and wide.score > res.score + prm.retry_margin:
                 res = wide
-                # a real odometry error beyond the window: trust the match
-                cov_s = cov_s + np.diag([prm.retry_csm.linear_window**2] * 2 + [0.0])
         mc = self._constraint(pts)
-        fused, post = fuse(init, cov_s, res.pose, mc.covariance)
-        self.local[i] = compose(target.local_pose, fused)
-        self.cov = _rotate_cov(post, theta_s)
-        self.match_pose[i] = compose(target.local_pose, res.pose)
-        self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
         self.scores[i] = res.score
         self.poor[i] = res.score < poor
         self.recent_scores.append(res.score)
         self.degenerate[i] = mc.n_degenerate
+        self.match_pose[i] = compose(target.local_pose, res.pose)
+        # the gate: a match the prediction cannot explain is not trusted at once
+        innov = res.pose - init
+        innov[2] = math.remainder(float(innov[2]), 2.0 * math.pi)
+        d2 = float(innov @ np.linalg.solve(cov_s + mc.covariance, innov))
+        gated = d2 > prm.match_gate_chi2
+        self.gated[i] = gated
+        if self.poor[i] or (gated and self.n_gated < prm.gate_recovery):
+            self.n_gated += int(gated)
+            self.local[i] = pred
+            self.cov = pred_cov
+            unmatched = MatchConstraint(
+                covariance=_UNMATCHED_COV.copy(),
+                strengths=mc.strengths,
+                directions=mc.directions,
+                n_degenerate=3,
+                length=mc.length,
+            )
+            self.match_cov[i] = _UNMATCHED_COV
+            return unmatched
+        if gated:
+            # the matches kept disagreeing: the odometry was wrong, follow the match
+            cov_s = cov_s + np.eye(3) * 1.0e2
+        self.n_gated = 0
+        fused, post = fuse(init, cov_s, res.pose, mc.covariance)
+        self.local[i] = compose(target.local_pose, fused)
+        self.cov = _rotate_cov(post, theta_s)
+        self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
         return mc
 
     def add_node(self, i: int, mc: MatchConstraint | None) -> int:
@@ -574,7 +613,7 @@ class _Run:
             inc = self.model.correct(raw)
             self.graph.add_odometry(k - 1, k, inc, self.model.covariance(inc))
             self.travel += float(np.hypot(*(self.local[i, :2] - self.local[prev, :2])))
-        good = mc is not None and not mc.degenerate and not self.poor[i]
+        good = mc is not None and not self.poor[i] and self.degenerate[i] == 0
         self.model.add_node(self.odom[i], self.match_pose[i] if good else None)
         return k
 
@@ -668,6 +707,12 @@ def _warnings(run: _Run, rejected: list[tuple[int, int, str]]) -> list[str]:
     by_reason: dict[str, int] = {}
     for _, _, why in rejected:
         by_reason[why] = by_reason.get(why, 0) + 1
+    gated = int(run.gated.sum())
+    if gated > 0.05 * max(len(run.node_scans), 1):
+        out.append(
+            f"{gated} scan matches disagreed with the odometry beyond its learnt noise"
+            " (the gate refused them)"
+        )
     if n_acc == 0 and rejected:
         out.append(f"no loop closure accepted, {len(rejected)} rejected: drift is not corrected")
     if by_reason.get("residual", 0):
