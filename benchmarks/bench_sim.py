@@ -3,8 +3,12 @@
 World: the paper's square room (3 m x 3 m of 0.4 m boards) with 4 furniture boxes inside a
 12-segment textured lab; 32 wall segments in all. Times one 360-beam scan (LDS-01) and one
 800-beam scan (RPLIDAR A2), both the bare ray cast and ``simulate_scan`` (ray cast + noise +
-dropouts + LaserScan), and one 640 x 480 camera image. Prints medians in ms.
-Targets (issue 2): a scan under 1 ms, an image under 30 ms.
+dropouts + LaserScan), the same scans from a ``realistic`` regime's lidar (all faults, motion
+skew while driving at 0.3 m/s and turning at 0.5 rad/s, in the same room with one wall made
+glass and one dark), one 640 x 480 camera image with ideal sensors and one with the
+``realistic`` regime (distortion, vignetting, exposure and white balance, motion blur), and the
+cost of building one procedural wall texture. Prints medians in ms.
+Targets (issue 2 and issue 11): a scan under 1 ms, an image under 30-40 ms.
 
 Run: ``python benchmarks/bench_sim.py [--repeats R] [--seed S]``
 """
@@ -13,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import time
 from collections.abc import Callable
 
@@ -20,8 +25,12 @@ import numpy as np
 
 from symloc.sim.camera import Camera
 from symloc.sim.lidar import LDS01, LIDAR_MOUNT_HEIGHT, RPLIDAR_A2, simulate_scan
+from symloc.sim.poster import procedural_texture
 from symloc.sim.raycast import raycast
+from symloc.sim.regimes import REGIMES
 from symloc.sim.rooms import build_room
+from symloc.sim.textures import load_photo
+from symloc.sim.world import MATERIAL_DARK, MATERIAL_GLASS, World
 
 
 def median_ms(fn: Callable[[int], object], repeats: int) -> tuple[float, float]:
@@ -53,7 +62,7 @@ def main() -> None:
     poses = np.column_stack(
         [rng.uniform(-0.8, 0.8, 64), rng.uniform(-0.8, 0.8, 64), rng.uniform(-np.pi, np.pi, 64)]
     )
-    print(f"# bench_sim seed={args.seed} repeats={args.repeats}")
+    print(f"# bench_sim seed={args.seed} repeats={args.repeats} load={os.getloadavg()[0]:.2f}")
     print(
         f"# world: {world.n_walls} wall segments, {world.n_circles} circles (square + 4 boxes + lab)"
     )
@@ -84,12 +93,60 @@ def main() -> None:
                 1.0,
             )
         )
+    realistic = REGIMES["realistic"]
+    mats = np.asarray(world.wall_materials).copy()
+    mats[0] = MATERIAL_GLASS
+    mats[1] = MATERIAL_DARK
+    faulty = World(
+        world.walls,
+        world.wall_heights,
+        mats,
+        world.circles,
+        world.circle_heights,
+        world.circle_materials,
+        world.wall_tex_u,
+    )
+    for preset in (LDS01, RPLIDAR_A2):
+        lidar = realistic.lidar(preset, rng)
+        rows.append(
+            (
+                f"realistic lidar {preset.name} (all faults)",
+                median_ms(
+                    lambda i, ld=lidar: ld.scan(faulty, poses[i % 64], twist=(0.3, 0.5)),
+                    args.repeats,
+                ),
+                1.0,
+            )
+        )
     cam = Camera()
     rows.append(
         (
             f"camera render {cam.width}x{cam.height}",
             median_ms(lambda i: cam.render(world, poses[i % 64], rng), max(20, args.repeats // 5)),
             30.0,
+        )
+    )
+    real_cam = realistic.camera(rng)
+    session = realistic.camera_session(rng, "query")
+    rows.append(
+        (
+            f"realistic camera {real_cam.width}x{real_cam.height}",
+            median_ms(
+                lambda i: real_cam.render(
+                    world, poses[i % 64], rng, conditions=session.conditions(rng), twist=(0.2, 0.5)
+                ),
+                max(20, args.repeats // 5),
+            ),
+            40.0,
+        )
+    )
+    for k in range(16):
+        load_photo(k, 768)
+    rows.append(
+        (
+            "one procedural wall texture 768x768",
+            median_ms(lambda i: procedural_texture(16 + i, 768, load_photo), 40),
+            50.0,
         )
     )
     print(f"{'what':<42} {'wall ms':>9} {'cpu ms':>9} {'target':>7}  (medians)")

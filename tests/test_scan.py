@@ -91,3 +91,45 @@ def test_to_points_never_emits_non_finite(values: list[float]) -> None:
     p = scan.to_points()
     assert np.all(np.isfinite(p.points))
     assert len(p.points) + p.n_dropped == len(values)
+
+
+def test_deskew_undoes_a_spinning_lidars_motion() -> None:
+    from symloc.scan import deskew
+    from symloc.sim.lidar import RPLIDAR_A2, LidarFaults, SimulatedLidar
+    from symloc.sim.rooms import rectangle_room
+
+    room = rectangle_room(6.0, 4.0)
+    pose = np.array([0.4, -0.3, 0.2])
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+
+    def off_wall_p95(scan: LaserScan) -> float:
+        p = scan.to_points().points
+        world = np.column_stack(
+            [pose[0] + c * p[:, 0] - s * p[:, 1], pose[1] + s * p[:, 0] + c * p[:, 1]]
+        )
+        return float(np.percentile(room.world.distance(world), 95))
+
+    still = SimulatedLidar(RPLIDAR_A2, LidarFaults(), 1).scan(room.world, pose)
+    noise = off_wall_p95(still)  # the data-sheet range noise alone
+    for twist in ((0.0, 1.0), (0.3, 0.0), (0.3, -0.8)):
+        skewed = SimulatedLidar(RPLIDAR_A2, LidarFaults(motion_skew=True), 1).scan(
+            room.world, pose, twist=twist
+        )
+        fixed = off_wall_p95(deskew(skewed, *twist))
+        assert fixed < 1.3 * noise
+        assert off_wall_p95(skewed) > 1.3 * fixed
+    assert deskew(still, 0.3, 1.0) is still  # no time_increment: an instantaneous scan
+
+
+def test_twist_between_readings() -> None:
+    from symloc.odometry import OdometryReading, twist_between
+
+    a = OdometryReading(np.array([1.0, 1.0, np.pi / 2]), 10.0)
+    b = OdometryReading(np.array([1.0, 1.03, np.pi / 2 + 0.05]), 10.1)
+    v, w = twist_between(a, b)
+    assert v == pytest.approx(0.3)
+    assert w == pytest.approx(0.5)
+    back = OdometryReading(np.array([1.0, 0.97, np.pi / 2]), 10.1)
+    assert twist_between(a, back)[0] == pytest.approx(-0.3)
+    assert twist_between(b, a) == (0.0, 0.0)  # out of order
+    assert twist_between(a, OdometryReading(b.pose, 12.0)) == (0.0, 0.0)  # too old

@@ -18,7 +18,13 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import DataFormatError
 from symloc.geometry import angle_diff, relative, wrap_angle
 
-__all__ = ["OdometryIncrement", "OdometryReading", "rot_trans_rot", "rot_trans_rot_to_pose"]
+__all__ = [
+    "OdometryIncrement",
+    "OdometryReading",
+    "rot_trans_rot",
+    "rot_trans_rot_to_pose",
+    "twist_between",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -115,3 +121,20 @@ def rot_trans_rot_to_pose(
     x = p[..., 0] + tr * np.cos(heading)
     y = p[..., 1] + tr * np.sin(heading)
     return np.stack([x, y, wrap_angle(heading + r2)], axis=-1)
+
+
+def twist_between(
+    earlier: OdometryReading, later: OdometryReading, *, max_gap: float = 0.5
+) -> tuple[float, float]:
+    """The robot's forward speed [m/s] and turn rate [rad/s] between two odometry readings.
+
+    ``(0, 0)`` when the readings are not in time order or more than ``max_gap`` [s] apart
+    (no recent motion to extrapolate). Backward motion gives a negative speed.
+    """
+    gap = float(later.stamp) - float(earlier.stamp)
+    if not (0.0 < gap <= max_gap):
+        return 0.0, 0.0
+    d = relative(earlier.pose, later.pose)
+    dist = math.hypot(float(d[0]), float(d[1]))
+    v = (dist if d[0] >= 0.0 else -dist) / gap
+    return v, float(d[2]) / gap

@@ -35,6 +35,7 @@ __all__ = [
     "Episode",
     "RobotBody",
     "drive_command",
+    "drive_waypoints",
     "go_to_centre",
     "run_episode",
 ]
@@ -67,6 +68,8 @@ class RobotBody:
     def __init__(self, robot: Any) -> None:
         self.robot = robot
         self.collisions = 0
+        #: the last commanded (v [m/s], w [rad/s]) (a spinning lidar's motion skew)
+        self.twist = (0.0, 0.0)
 
     @property
     def pose(self) -> FloatArray:
@@ -85,6 +88,7 @@ class RobotBody:
         cfg = self.robot.config
         v = float(np.clip(v, -cfg.max_v, cfg.max_v))
         w = float(np.clip(w, -cfg.max_w, cfg.max_w))
+        self.twist = (v, w)
         if not self.robot.step(v, w, dt):
             self.collisions += 1
         return self.odom
@@ -259,6 +263,52 @@ def drive_command(
         )
         return 0.0, w
     return 0.0, 0.0
+
+
+def drive_waypoints(
+    body: Body,
+    waypoints: FloatArray,
+    *,
+    laps: float = 1.0,
+    dt: float = 0.1,
+    speed: float = 0.3,
+    turn_rate: float = 0.8,
+    on_step: Callable[[FloatArray], Any] | None = None,
+) -> int:
+    """Drive ``body`` through ``waypoints`` (V, 2) [m], ``laps`` times round, from the nearest.
+
+    Turn on the spot towards each waypoint, then drive straight to it (open loop in the true
+    pose, as a teleoperator would). ``on_step(true_pose)`` is called after every step of
+    ``dt`` [s] (e.g. to record a scan). A waypoint the robot cannot reach because a motion
+    is refused (an obstacle) is skipped; returns how many were skipped.
+    """
+    wp = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    if wp.shape[0] == 0:
+        return 0
+    first = int(np.argmin(np.hypot(*(wp - body.pose[:2]).T)))
+    order = [(first + k) % wp.shape[0] for k in range(math.ceil(laps * wp.shape[0]) + 1)]
+    skipped = 0
+    for k in order:
+        goal = wp[k]
+        pose = body.pose
+        turn = float(wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - pose[2]))
+        for _ in range(max(1, math.ceil(abs(turn) / (turn_rate * dt)))):
+            step = float(np.clip(turn, -turn_rate * dt, turn_rate * dt))
+            body.drive(0.0, step / dt, dt)
+            turn -= step
+            if on_step is not None:
+                on_step(body.pose)
+        dist = float(np.hypot(*(goal - body.pose[:2])))
+        for _ in range(max(1, math.ceil(dist / (speed * dt)))):
+            before = body.pose
+            d = min(speed * dt, float(np.hypot(*(goal - before[:2]))))
+            body.drive(d / dt, 0.0, dt)
+            if on_step is not None:
+                on_step(body.pose)
+            if float(np.hypot(*(body.pose[:2] - before[:2]))) < 1e-9 and d > 1e-9:
+                skipped += 1  # refused: an obstacle in the way
+                break
+    return skipped
 
 
 def run_episode(

@@ -19,6 +19,9 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.bench.table3 import store_place, wall_headings
+from symloc.sim.camera import Camera
+from symloc.sim.rooms import build_room
+from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.orb import OrbExtractor
 from symloc.vision.visual_map import VisualMap
 from symloc.vision.vocabulary import Vocabulary
@@ -98,9 +101,6 @@ def run_keyframes(
     rng: np.random.Generator | int | None = 0,
 ) -> list[KeyframePolicyResult]:
     """Store one full turn with M images and with a keyframe every ``step_deg`` degrees."""
-    from symloc.sim.camera import Camera
-    from symloc.sim.rooms import build_room
-    from symloc.vision.default_vocabulary import default_vocabulary
 
     gen = as_rng(rng)
     voc = vocabulary or default_vocabulary()

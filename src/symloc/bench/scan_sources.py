@@ -15,8 +15,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, DataFormatError
+from symloc.io.carmen import read_carmen
+from symloc.io.rosbag import BagTopics, bag_topics, read_bag, resolve_bag_path
 from symloc.scan import LaserScan
+from symloc.sim.lidar import PRESETS, simulate_scan
+from symloc.sim.rooms import ROOM_NAMES, build_room, points_in_polygon
+from symloc.symmetry.config import SymmetryConfig
 
 __all__ = ["SourcedScan", "bag_scan", "carmen_scan", "room_scan"]
 
@@ -69,7 +75,6 @@ def carmen_scan(path: str | Path, index: int = 0) -> SourcedScan:
     ConfigurationError
         The index is not an integer.
     """
-    from symloc.io.carmen import read_carmen
 
     idx = _check_index(index)
     p = Path(path)
@@ -107,7 +112,6 @@ def bag_scan(path: str | Path, topic: str | None = None, index: int = 0) -> Sour
     DataFormatError
         Not a bag, no such topic, the topic is not a LaserScan, or fewer scans than the index.
     """
-    from symloc.io.rosbag import BagTopics, bag_topics, read_bag, resolve_bag_path
 
     idx = _check_index(index)
     if idx < 0:
@@ -180,9 +184,6 @@ def room_scan(
     ConfigurationError
         Unknown room or sensor, bad G-V distance or pose, or a pose outside the room.
     """
-    from symloc._checks import as_rng
-    from symloc.sim.lidar import PRESETS, simulate_scan
-    from symloc.sim.rooms import ROOM_NAMES, build_room, points_in_polygon
 
     if room not in ROOM_NAMES:
         raise ConfigurationError(f"room: expected one of {ROOM_NAMES}, got {room!r}")
@@ -216,7 +217,6 @@ def room_scan(
         "center": center_sensor,
         "gv_distance": float(r.gv_distance),
     }
-    from symloc.symmetry.config import SymmetryConfig
 
     cfg = SymmetryConfig.from_lidar(preset)
     return SourcedScan(

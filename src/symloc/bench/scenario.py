@@ -26,17 +26,38 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError, SymlocError
+from symloc.errors import ConfigurationError, SymlocError, WorldError
 from symloc.geometry import angle_diff
+from symloc.geometry import compose as _compose
+from symloc.geometry import inverse as _inverse
+from symloc.grid.distance_field import surface_distance_field
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.centering import CenteringConfig
+from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
+from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
-from symloc.odometry import OdometryReading
+from symloc.mcl import Amcl, AmclParams
+from symloc.odometry import OdometryReading, twist_between
+from symloc.scan import deskew
+from symloc.sim.camera import Camera
+from symloc.sim.gyro import L3G4200D, GyroOdometryBody, SimulatedGyro
+from symloc.sim.lidar import RPLIDAR_A2
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
+from symloc.sim.rooms import Room, build_room, hallway, with_lab
+from symloc.sim.world import World
+from symloc.slam import run_slam
+from symloc.symmetry import SymmetryConfig, judge_symmetry
+from symloc.vision import OrbExtractor, VisualMap, Vocabulary
+from symloc.vision.default_vocabulary import default_vocabulary
 
-from .episode import Episode, RobotBody, run_episode
+from .episode import Episode, RobotBody, drive_waypoints, run_episode
+from .exploration import exploration_path
+from .explore import ExploreDrive
 from .mapping_trip import MappedPlace, map_place
+from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
 
 __all__ = [
     "DEFAULT_GV",
@@ -72,10 +93,6 @@ MAP_SOURCE = (
     "visual map poses: simulator ground truth (a real run takes both from SLAM)"
 )
 
-#: odometry noise alpha1..4 of the kidnapped robot (as ``symloc experiment amcl-symmetric``);
-#: both methods' AMCL use the same alphas (matched to the robot, as nav2's tuning guide asks)
-ODOM_ALPHA = 0.05
-
 POSITION_TOL = 0.1
 HEADING_TOL = math.radians(5.0)
 
@@ -83,8 +100,6 @@ HEADING_TOL = math.radians(5.0)
 def _vocabulary(rng: np.random.Generator) -> Any:
     """The shipped vocabulary if the vision part provides one, else a small one trained here."""
     try:
-        from symloc.vision.default_vocabulary import default_vocabulary
-
         return default_vocabulary()
     except (ImportError, OSError, SymlocError):
         return _trained_vocabulary()
@@ -101,8 +116,6 @@ def _trained_vocabulary() -> Any:
         return _VOCAB_CACHE["v"]
     import cv2
     from skimage import data
-
-    from symloc.vision import OrbExtractor, Vocabulary
 
     names = [
         "astronaut",
@@ -155,38 +168,81 @@ class Scenario:
     slam_seconds: float = 0.0
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
+    #: the sensor regime of the robot (:mod:`symloc.sim.regimes`)
+    regime: str = "ideal"
+    #: the one simulated robot that maps this world and is localized in it
+    hardware: RobotHardware | None = None
+    #: pose of the world frame in the map frame (3,): identity for a ground-truth raster; for a
+    #: SLAM map, fixed by the mapping trip's first pose; graders compare claims with
+    #: ``compose(map_from_world, true_pose)``
+    map_from_world: FloatArray = field(default_factory=lambda: np.zeros(3))
+
+    def to_map(self, world_pose: FloatArray) -> FloatArray:
+        """A true pose (3,) in the map frame (where the localizer's claims live)."""
+        return np.asarray(_compose(self.map_from_world, world_pose), dtype=np.float64)
+
     _map_symmetries: list[Any] | None = None
+
+    def sensors(self, rng: np.random.Generator, session: str = "query") -> SensorSetup:
+        """The robot's sensors in one ``session`` (``"mapping"`` or ``"query"``)."""
+        if self.hardware is None:
+            raise ConfigurationError("Scenario.hardware: no robot drawn for this scenario")
+        return self.hardware.session(rng, session)
 
     def robot(self, start: FloatArray, rng: np.random.Generator) -> RobotBody:
         """The kidnapped robot at ``start`` with odometry noise ``odom_alpha``."""
-        from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 
         a = self.odom_alpha
         cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
         return RobotBody(DiffDriveRobot(start, cfg, rng, world=self.room.world))
 
+    def world_at(self, t: float) -> World:
+        """What the sensors see at time ``t`` [s]: the static world plus anything moving."""
+        moving = getattr(self.room, "world_at", None)
+        world: World = self.room.world if moving is None else moving(t)
+        return world
+
+    def localizer(
+        self, rng: np.random.Generator, config: LocalizerConfig | None = None
+    ) -> Localizer:
+        """symloc's localizer on this scenario's maps (AMCL with ``amcl_params``)."""
+        amcl = Amcl(self.grid, self.amcl_params, rng)
+        p = self.amcl_params
+        gate = ClaimGate(
+            surface_distance_field(self.grid), (p.alpha1, p.alpha2, p.alpha3, p.alpha4)
+        )
+        return Localizer(
+            AmclTracker(amcl),
+            self.judge,
+            self.store,
+            config,
+            scorer=GridScorer(self.grid),
+            known_places=self.store.all_places(),
+            map_symmetries=self.map_symmetries(),
+            claim_gate=gate,
+        )
+
     def map_symmetries(self) -> list[Any]:
         """Rotational symmetries of the occupancy grid (computed once)."""
         if self._map_symmetries is None:
-            from symloc.localizer.map_symmetry import map_symmetries
-
             self._map_symmetries = map_symmetries(self.grid)
         return self._map_symmetries
 
     def plain_amcl_params(self) -> Any:
         """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
-        from symloc.mcl import AmclParams
 
         a = self.odom_alpha
         return AmclParams(alpha1=a, alpha2=a, alpha3=a, alpha4=a)
 
-    def scan_at(self, rng: np.random.Generator) -> Any:
-        from symloc.sim.lidar import simulate_scan
+    def scan_at(self, rng: np.random.Generator, session: str = "query") -> Any:
+        """``scan(true_pose)`` of a robot standing still in the static world."""
+        setup = self.sensors(rng, session)
+        return lambda pose: setup.scan(self.room.world, pose, (0.0, 0.0), 0.0)
 
-        return lambda pose: simulate_scan(self.room.world, pose, self.preset, rng)
-
-    def image_at(self, rng: np.random.Generator) -> Any:
-        return lambda pose: self.camera.render(self.room.world, pose, rng)
+    def image_at(self, rng: np.random.Generator, session: str = "query") -> Any:
+        """``image(true_pose)`` of a robot standing still in the static world."""
+        setup = self.sensors(rng, session)
+        return lambda pose: setup.image(self.room.world, pose, (0.0, 0.0))
 
     def random_pose(self, rng: np.random.Generator, margin: float = 0.35) -> FloatArray:
         """A random pose inside the room, at least ``margin`` [m] from every obstacle."""
@@ -201,7 +257,7 @@ class Scenario:
 
 
 def build_scenario(
-    room_name: str,
+    room_name: str | Room,
     *,
     textured: bool = True,
     rng: np.random.Generator | int | None = None,
@@ -211,8 +267,17 @@ def build_scenario(
     mapping_start: FloatArray | None = None,
     map_source: str = "slam",
     gyro: Any = "default",
+    explore_laps: float = 0.0,
+    regime: str = "ideal",
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
+
+    ``room_name`` is a name of :data:`symloc.sim.rooms.ROOM_NAMES` (built with
+    :data:`DEFAULT_GV` inside the textured lab), ``"hallway_40m"``, or a ready
+    :class:`~symloc.sim.rooms.Room` (e.g. from a world file or the world generator).
+    ``explore_laps`` > 0 adds a drive along the room's outline after the mapping stage, so that
+    SLAM sees rooms that the trip to the centre does not (concave rooms, furniture).
+    ``regime`` names the sensors of the mapping robot (:func:`symloc.bench.sensors.sensor_setup`).
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
     the centre with Algorithm 2 and stores M images (the mapping stage). ``map_source``
@@ -229,37 +294,31 @@ def build_scenario(
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
-    from symloc.mcl import AmclParams
-    from symloc.sim.camera import Camera
-    from symloc.sim.lidar import RPLIDAR_A2
-    from symloc.sim.rasterize import world_to_grid
-    from symloc.sim.robot import DiffDriveRobot
-    from symloc.sim.rooms import build_room
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
-    from symloc.vision import VisualMap
 
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
-    gv = DEFAULT_GV.get(room_name, 2.0)
-    long_hallway = room_name == LONG_HALLWAY
-    if long_hallway:
-        from symloc.sim.rooms import hallway, with_lab
-
-        room = with_lab(hallway(*LONG_HALLWAY_SIZE, textured=textured), textured=textured)
-        map_source = "raster"  # see the note below
+    if isinstance(room_name, Room):
+        room = room_name
+        room_name = room.name
+        long_hallway = False
     else:
-        room = build_room(room_name, gv, lab=True, textured=textured)
+        gv = DEFAULT_GV.get(room_name, 2.0)
+        long_hallway = room_name == LONG_HALLWAY
+        if long_hallway:
+            room = with_lab(hallway(*LONG_HALLWAY_SIZE, textured=textured), textured=textured)
+            map_source = "raster"  # see the note below
+        else:
+            room = build_room(room_name, gv, lab=True, textured=textured)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
-    camera = Camera()
-    f = camera.focal
-    K = np.array([[f, 0.0, camera.width / 2.0], [0.0, f, camera.height / 2.0], [0.0, 0.0, 1.0]])
+    hardware = robot_hardware(regime, preset, Camera(), gen)
+    camera = hardware.camera
     judge = ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(preset))
     wd = Path(workdir) if workdir is not None else Path(tempfile.mkdtemp(prefix="symloc-"))
     wd.mkdir(parents=True, exist_ok=True)
     db = wd / f"visual_map_{room_name}_{'textured' if textured else 'plain'}.sqlite"
     if db.exists():
         db.unlink()
-    store = VisionPlaceStore(VisualMap(db), _vocabulary(gen), K)
+    store = VisionPlaceStore(VisualMap(db), _vocabulary(gen), hardware.calibration)
     scen = Scenario(
         room=room,
         grid=grid,
@@ -278,15 +337,17 @@ def build_scenario(
         ),
         workdir=wd,
         notes=[MAP_SOURCE],
+        regime=regime,
+        hardware=hardware,
     )
     start = mapping_start if mapping_start is not None else scen.random_pose(gen)
     dt = 1.0 / float(preset.scan_rate)
     if map_source == "raster":
-        robot = RobotBody(DiffDriveRobot(start, rng=gen, world=room.world))
+        robot = RobotBody(DiffDriveRobot(start, hardware.robot_config, gen, world=room.world))
         scen.mapped = map_place(
             robot,
-            scen.scan_at(gen),
-            scen.image_at(gen),
+            scen.scan_at(gen, "mapping"),
+            scen.image_at(gen, "mapping"),
             judge,
             store.add_place,
             map_pose=lambda: robot.pose,
@@ -294,10 +355,8 @@ def build_scenario(
             true_centre=room.center,
         )
     else:
-        from symloc.sim.gyro import L3G4200D
-
         spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
-        scen.mapped = _map_with_slam(scen, start, gen, dt, spec)
+        scen.mapped = _map_with_slam(scen, start, gen, dt, spec, explore_laps=explore_laps)
     if long_hallway:
         scen.notes.append(
             f"{room_name}: a {LONG_HALLWAY_SIZE[0]:g} m x {LONG_HALLWAY_SIZE[1]:g} m corridor; "
@@ -315,7 +374,13 @@ def build_scenario(
 
 
 def _map_with_slam(
-    scen: Scenario, start: FloatArray, gen: np.random.Generator, dt: float, gyro: Any = None
+    scen: Scenario,
+    start: FloatArray,
+    gen: np.random.Generator,
+    dt: float,
+    gyro: Any = None,
+    *,
+    explore_laps: float = 0.0,
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -325,24 +390,32 @@ def _map_with_slam(
     The odometry starts at the robot's true start pose, so the SLAM map frame is anchored there
     and errors can be graded in world coordinates.
     """
-    from symloc.geometry import compose as _compose
-    from symloc.geometry import inverse as _inverse
-    from symloc.sim.lidar import simulate_scan
-    from symloc.sim.robot import DiffDriveRobot
-    from symloc.slam import run_slam
 
-    robot: Any = RobotBody(DiffDriveRobot(start, rng=gen, world=scen.room.world, odom_origin=start))
+    assert scen.hardware is not None
+    robot: Any = RobotBody(
+        DiffDriveRobot(
+            start, scen.hardware.robot_config, gen, world=scen.room.world, odom_origin=start
+        )
+    )
+    session = scen.sensors(gen, "mapping")
     if gyro is not None:
-        from symloc.sim.gyro import GyroOdometryBody, SimulatedGyro
-
         robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
     odoms: list[FloatArray] = []
+    truths: list[FloatArray] = []
+
+    last_odom: list[OdometryReading] = []
 
     def scan_rec(pose: FloatArray) -> Any:
-        s = simulate_scan(scen.room.world, pose, scen.preset, gen)
+        odom = robot.odom
+        s = session.scan(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0)), odom.stamp)
+        # the mapping software undoes the lidar's motion skew as the localizer does
+        if last_odom:
+            s = deskew(s, *twist_between(last_odom[-1], odom))
+        last_odom[:] = [odom]
         scans.append(s)
-        odoms.append(np.asarray(robot.odom.pose))
+        odoms.append(np.asarray(odom.pose))
+        truths.append(np.asarray(pose, dtype=np.float64))
         return s
 
     marks: list[int] = []
@@ -363,20 +436,37 @@ def _map_with_slam(
     mapped = map_place(
         robot,
         scan_rec,
-        scen.image_at(gen),
+        lambda pose: session.image(scen.room.world, pose, (0.0, 0.0)),
         scen.judge,
         add_later,
         map_pose=map_pose,
         dt=dt,
         true_centre=scen.room.center,
     )
+    if explore_laps > 0:
+        try:
+            path = exploration_path(scen.room, margin=0.5)
+        except WorldError as err:
+            scen.notes.append(f"mapping stage: no exploration drive ({err})")
+        else:
+            refused = drive_waypoints(robot, path, laps=explore_laps, dt=dt, on_step=scan_rec)
+            scen.notes.append(
+                f"mapping stage: drove {explore_laps:g} lap(s) along the room outline"
+                + (f" ({refused} waypoints unreachable)" if refused else "")
+            )
     t0 = time.perf_counter()
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
+    # the SLAM map frame is defined by the trip's first pose (SLAM holds it fixed): the truth
+    # is expressed in that frame, so whatever SLAM got wrong later (map distortion, a round
+    # room's unobservable heading) is error the localizer inherits
+    scen.map_from_world = np.asarray(
+        _compose(np.asarray(slam.poses)[0], _inverse(truths[0])), dtype=np.float64
+    )
     scen.notes[0] = (
-        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip "
-        f"({scen.slam_seconds:.1f} s); visual map poses: SLAM poses"
+        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "
+        "visual map poses: SLAM poses"
     )
     if mapped is None or not deferred:
         return None
@@ -522,9 +612,6 @@ def run_plain_amcl(
     AMCL counts as confident by :func:`amcl_confident` (the project's one definition,
     ``locally_confident``: what nav2's filter alone can tell its user).
     """
-    from symloc.mcl import Amcl
-
-    from .explore import ExploreDrive
 
     if drive not in ("explore", "spin"):
         raise ConfigurationError(f"drive: expected 'explore' or 'spin', got {drive!r}")
@@ -617,18 +704,8 @@ def run_symloc(
     config: LocalizerConfig | None = None,
 ) -> SymlocRun:
     """Kidnap the robot to ``start`` and run the localizer until it settles (or ``max_time``)."""
-    from symloc.mcl import Amcl
 
-    tracker = AmclTracker(Amcl(scen.grid, scen.amcl_params, rng))
-    loc = Localizer(
-        tracker,
-        scen.judge,
-        scen.store,
-        config,
-        scorer=GridScorer(scen.grid),
-        known_places=scen.store.all_places(),
-        map_symmetries=scen.map_symmetries(),
-    )
+    loc = scen.localizer(rng, config)
     loc.reset_global()
     robot = scen.robot(start, rng)
     ep = run_episode(

@@ -30,18 +30,23 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng, check_positive
-from symloc.bench.episode import drive_command
+from symloc.bench.episode import RobotBody, drive_command
+from symloc.bench.scenario import build_scenario
 from symloc.errors import ConfigurationError
+from symloc.grid.map_io import save_map
 from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.io.tum import TrajectoryPoint, write_tum
 from symloc.localizer import Estimate, Status
+from symloc.localizer.centering import CenteringConfig
 from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.grid_msg import grid_to_fields
 from symloc.ros.image_msg import compressed_image_to_fields, image_to_fields
 from symloc.ros.odometry_msg import odometry_to_fields
 from symloc.ros.params import NodeParams
-from symloc.ros.scan_msg import scan_to_fields
+from symloc.ros.scan_msg import scan_from_msg, scan_to_fields
+from symloc.sim.lidar import simulate_scan
+from symloc.sim.robot import DiffDriveRobot
 
 __all__ = [
     "SimRecording",
@@ -77,10 +82,6 @@ class SimRecording:
 
 
 def _save_map(grid: Any, assets: Path) -> Path | None:
-    try:
-        from symloc.grid.map_io import save_map
-    except ImportError:
-        return None
     path = assets / "map.yaml"
     save_map(grid, path)
     return path
@@ -117,7 +118,6 @@ class SimSession:
 
     def scan(self) -> Any:
         """A lidar scan from the true pose, stamped with the current time, frame ``laser``."""
-        from symloc.sim.lidar import simulate_scan
 
         return simulate_scan(
             self.scenario.room.world,
@@ -157,10 +157,6 @@ def prepare_session(
     ``param_changes`` override :class:`NodeParams` fields in ``params.yaml``.
     """
     import dataclasses
-
-    from symloc.bench.episode import RobotBody
-    from symloc.bench.scenario import build_scenario
-    from symloc.sim.robot import DiffDriveRobot
 
     assets_dir = Path(assets).resolve()  # params.yaml holds absolute paths
     if assets_dir.exists() and any(assets_dir.iterdir()):
@@ -238,7 +234,6 @@ def record_sim_run(
         ``build_visual_map`` runs the node in its visual-map building mode against a new, empty
         ``places_built.db`` in the assets folder, so the place is mapped (Algorithm 5 step 11).
     """
-    from symloc.localizer.centering import CenteringConfig
 
     check_positive(max_time, "max_time")
     out = Path(out)
@@ -352,7 +347,6 @@ def record_sim_run(
 
 def core_scan(msg: Any) -> Any:
     """The symloc scan of a LaserScan message (what the node's localizer saw)."""
-    from symloc.ros.scan_msg import scan_from_msg
 
     return scan_from_msg(msg)
 

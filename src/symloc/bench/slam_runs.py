@@ -20,12 +20,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.exploration import simulate_exploration
 from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.io.carmen import CarmenLog, read_carmen
 from symloc.sim.odometry_noise import ODOMETRY_REGIMES, OdometryRegime, regime_odometry
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.rooms import build_room
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
 __all__ = [
@@ -273,10 +276,6 @@ def run_simulated(
     progress: bool = True,
 ) -> SlamRun:
     """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`)."""
-    from symloc.bench.exploration import simulate_exploration
-    from symloc.sim.rasterize import world_to_grid
-    from symloc.sim.rooms import build_room
-
     if world not in SIM_WORLDS:
         raise ConfigurationError(f"world: expected one of {sorted(SIM_WORLDS)}, got {world!r}")
     regime = _regime(odometry)

@@ -19,6 +19,10 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.localizer.adapters import ReportJudge
 from symloc.localizer.centering import CenteringConfig
+from symloc.sim.lidar import simulate_scan
+from symloc.sim.robot import DiffDriveRobot
+from symloc.sim.rooms import build_room
+from symloc.symmetry import SymmetryConfig, judge_symmetry
 
 from .episode import CenteringRun, RobotBody, go_to_centre
 
@@ -90,10 +94,6 @@ def run_table2(
     margin : float
         Clearance [m] of the start positions from the walls (the robot's radius plus a bit).
     """
-    from symloc.sim.lidar import simulate_scan
-    from symloc.sim.robot import DiffDriveRobot
-    from symloc.sim.rooms import build_room
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
 
     gen = as_rng(rng)
     room = build_room("square", side / math.sqrt(2.0), lab=True)

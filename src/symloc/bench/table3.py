@@ -20,7 +20,10 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.geometry import angle_diff, wrap_angle
-from symloc.vision.orb import OrbExtractor
+from symloc.sim.camera import Camera
+from symloc.sim.rooms import build_room
+from symloc.vision.default_vocabulary import default_vocabulary
+from symloc.vision.orb import OrbExtractor, OrbSettings
 from symloc.vision.orientation import (
     OrientationConfig,
     OrientationDecision,
@@ -267,10 +270,6 @@ def run_table3(
     """
     from tqdm import tqdm
 
-    from symloc.sim.camera import Camera
-    from symloc.sim.rooms import build_room
-    from symloc.vision.default_vocabulary import default_vocabulary
-
     gen = as_rng(rng)
     voc = vocabulary or default_vocabulary()
     cfg = config or OrientationConfig()
@@ -288,7 +287,6 @@ def run_table3(
         "camera": f"{cam.width}x{cam.height}, hfov {math.degrees(cam.hfov):.0f} deg, noise {cam.noise_sigma}",
         "orientation": cfg.__dict__,
     }
-    from symloc.vision.orb import OrbSettings
 
     result_cfg["sensitive_fast_threshold"] = sensitive_fast_threshold
     worlds: list[tuple[str, bool, OrbExtractor]] = [("textured", True, ext)]

@@ -21,6 +21,15 @@ For each log in ``../shared/data/carmen/`` (intel, aces, freiburg-079):
    (``confident_outside_tolerance``). The previous ad-hoc definition (a single well-weighted
    hypothesis, ``n_hypotheses == 1``, with position std < 0.3 m and heading std < 15 degrees)
    is still counted as ``*_covariance_only`` for comparison.
+
+Beside plain AMCL, **symloc** runs on the same scans and odometry: the
+:class:`~symloc.localizer.Localizer` with its claim gate (:mod:`symloc.localizer.claim`), which
+publishes a pose as tracking only when the laser confirms it at that scan. Its claims are graded
+against the corrected poses: *confident wrong* beyond 1 m or 30 degrees, *outside the
+tolerance* beyond 0.1 m or 5 degrees; for each claim outside the tolerance the scan's fit to the
+map (share of beams within 0.1 m of a surface) is measured at the claimed and at the reference
+pose, so that a reference that lags (a corrected pose that fits the scan worse than the claim)
+is told apart from a claim that is wrong.
 """
 
 from __future__ import annotations
@@ -29,7 +38,7 @@ import argparse
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -162,6 +171,105 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
     }
 
 
+def _fit(field: Any, pose: FloatArray, scan: Any) -> float:
+    """Share of the scan's returning beams within 0.1 m of a map surface at ``pose``."""
+    from symloc.mcl.beams import select_beams
+    from symloc.mcl.scan_to_map import scan_points
+
+    b = select_beams(scan, max(len(scan), 2))
+    pts = scan_points(b.ranges[b.hit], b.angles[b.hit], (0.0, 0.0, 0.0))
+    if pts.shape[0] == 0:
+        return math.nan
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    world = np.column_stack(
+        [pose[0] + c * pts[:, 0] - s * pts[:, 1], pose[1] + s * pts[:, 0] + c * pts[:, 1]]
+    )
+    return float(np.mean(np.abs(field.lookup(world)) <= 0.1))
+
+
+def symloc_claims(
+    data: _LogData,
+    params: Any,
+    odom: FloatArray,
+    start: int,
+    stop: int,
+    rng: np.random.Generator,
+    *,
+    known_start: bool,
+) -> dict[str, Any]:
+    """symloc's localizer over scans ``start..stop-1``: what it publishes as tracking, graded.
+
+    ``known_start`` gives it the corrected first pose (tracking); else it starts lost (global).
+    """
+    from symloc.grid.distance_field import surface_distance_field
+    from symloc.localizer import Localizer, Status
+    from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+    from symloc.localizer.claim import ClaimGate
+    from symloc.mcl import Amcl
+    from symloc.odometry import OdometryReading
+    from symloc.ros.assemble import MemoryPlaces
+    from symloc.symmetry import SymmetryConfig, judge_symmetry
+
+    field = surface_distance_field(data.grid)
+    alphas = (params.alpha1, params.alpha2, params.alpha3, params.alpha4)
+    loc = Localizer(
+        AmclTracker(Amcl(data.grid, params, rng)),
+        ReportJudge(judge_symmetry, config=SymmetryConfig()),
+        cast(Any, MemoryPlaces()),  # no visual map: the logs have no images
+        scorer=GridScorer(data.grid),
+        claim_gate=ClaimGate(field, alphas),
+    )
+    if known_start:
+        loc.set_pose(data.truth[start], np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2]))
+    else:
+        loc.reset_global()
+    n = stop - start
+    claims = np.full((n, 3), np.nan)
+    for k, i in enumerate(range(start, stop)):
+        scan = data.log.scans[i]
+        est = loc.update(OdometryReading(odom[i], scan.stamp), scan.scan)
+        if est.status is Status.TRACKING and est.pose is not None:
+            claims[k] = est.pose
+    claimed = np.isfinite(claims[:, 0])
+    truth = data.truth[start:stop]
+    dxy = np.full(n, np.nan)
+    dth = np.full(n, np.nan)
+    if claimed.any():
+        dxy[claimed], dth[claimed] = _errors(claims[claimed], truth[claimed])
+    outside = claimed & ((dxy > 0.1) | (dth > math.radians(5.0)))
+    gross = claimed & ((dxy > 1.0) | (dth > math.radians(30.0)))
+    causes = []
+    for j in np.flatnonzero(outside).tolist():
+        scan = data.log.scans[start + j].scan
+        at_claim, at_ref = _fit(field, claims[j], scan), _fit(field, truth[j], scan)
+        causes.append(
+            {
+                "scan": int(start + j),
+                "error_m": float(dxy[j]),
+                "heading_error_deg": float(np.degrees(dth[j])),
+                "fit_at_claim": at_claim,
+                "fit_at_reference": at_ref,
+                "reference_fits_worse": bool(at_ref < at_claim),
+            }
+        )
+    return {
+        "scans": int(n),
+        "claimed_scans": int(claimed.sum()),
+        "first_claim": int(np.flatnonzero(claimed)[0]) if claimed.any() else None,
+        "mean_error_m": float(np.nanmean(dxy)) if claimed.any() else None,
+        "p95_error_m": float(np.nanpercentile(dxy, 95)) if claimed.any() else None,
+        "p95_heading_error_deg": float(np.degrees(np.nanpercentile(dth, 95)))
+        if claimed.any()
+        else None,
+        "confident_wrong_scans": int(gross.sum()),
+        "outside_tolerance_scans": int(outside.sum()),
+        "outside_tolerance_reference_fits_worse": int(
+            sum(c["reference_fits_worse"] for c in causes)
+        ),
+        "outside_tolerance": causes,
+    }
+
+
 @dataclass
 class _LogData:
     name: str
@@ -181,7 +289,9 @@ def tracking(data: _LogData, params: Any, alphas: tuple[float, ...], rng: Any) -
     out = _run_filter(amcl, data.log, odom, 0, len(data.truth))
     dxy, dth = _errors(out["estimate"], data.truth)
     odo_xy, _ = _errors(odom, data.truth)
+    sy = symloc_claims(data, params, odom, 0, len(data.truth), gen, known_start=True)
     return {
+        "symloc": sy,
         "scans": len(dxy),
         "mean_error_m": float(dxy.mean()),
         "median_error_m": float(np.median(dxy)),
@@ -272,6 +382,7 @@ def global_localization(
                 "final_error_m": float(dxy[-1]),
             }
         )
+        runs[-1]["symloc"] = symloc_claims(data, params, odom, s, stop, gen, known_start=False)
         if trace is not None:
             trace.append({"start_scan": int(s), "dxy": dxy, "dth": dth, **out})
     conv = [r for r in runs if r["converged"]]
@@ -312,6 +423,25 @@ def global_localization(
         else None,
         "runs_with_confident_wrong_covariance_only": int(
             sum(r["confident_wrong_scans_covariance_only"] > 0 for r in runs)
+        ),
+        "symloc_runs_claimed": int(sum(r["symloc"]["claimed_scans"] > 0 for r in runs)),
+        "symloc_runs_claimed_correctly_at_end": int(
+            sum(
+                r["symloc"]["claimed_scans"] > 0 and r["symloc"]["outside_tolerance_scans"] == 0
+                for r in runs
+            )
+        ),
+        "symloc_runs_confident_wrong": int(
+            sum(r["symloc"]["confident_wrong_scans"] > 0 for r in runs)
+        ),
+        "symloc_runs_outside_tolerance": int(
+            sum(r["symloc"]["outside_tolerance_scans"] > 0 for r in runs)
+        ),
+        "symloc_outside_tolerance_scans": int(
+            sum(r["symloc"]["outside_tolerance_scans"] for r in runs)
+        ),
+        "symloc_outside_tolerance_reference_fits_worse": int(
+            sum(r["symloc"]["outside_tolerance_reference_fits_worse"] for r in runs)
         ),
         "runs": runs,
     }
@@ -412,6 +542,15 @@ def run(args: argparse.Namespace) -> int:
         tr = tracking(data, track_p, alphas, rng_track)
         est = tr.pop("_estimate")
         entry: dict[str, Any] = {"log": name, "scans": len(truth), "tracking": tr}
+        sy = tr["symloc"]
+        print(
+            f"{name}: symloc tracking claims {sy['claimed_scans']}/{sy['scans']} scans, mean"
+            f" error {sy['mean_error_m']} m, p95 {sy['p95_error_m']} m /"
+            f" {sy['p95_heading_error_deg']} deg; outside 0.1 m / 5 deg:"
+            f" {sy['outside_tolerance_scans']} scans ({sy['outside_tolerance_reference_fits_worse']}"
+            f" where the reference fits the scan worse); confident wrong (> 1 m / 30 deg):"
+            f" {sy['confident_wrong_scans']}"
+        )
         print(
             f"{name}: tracking mean {tr['mean_error_m']:.3f} m (median {tr['median_error_m']:.3f},"
             f" p95 {tr['p95_error_m']:.3f}, max {tr['max_error_m']:.3f}),"
@@ -444,6 +583,14 @@ def run(args: argparse.Namespace) -> int:
                 f" median {gl['median_scans_to_confident']} scans to the first confident one;"
                 f" old covariance-only definition: {gl['runs_with_confident_wrong_covariance_only']}"
                 " runs confident wrong"
+            )
+            print(
+                f"{name}: symloc global: claimed in {gl['symloc_runs_claimed']}/{gl['starts']}"
+                f" starts; confident wrong (> 1 m / 30 deg) in {gl['symloc_runs_confident_wrong']};"
+                f" outside 0.1 m / 5 deg in {gl['symloc_runs_outside_tolerance']} starts"
+                f" ({gl['symloc_outside_tolerance_scans']} scans, of which"
+                f" {gl['symloc_outside_tolerance_reference_fits_worse']} where the reference"
+                " fits the scan worse than the claim)"
             )
         results.append(entry)
         fig_logs.append(

@@ -34,7 +34,7 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError
+from symloc.errors import ConfigurationError, WorldError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import transform_points
 
@@ -113,19 +113,26 @@ def _build_fp_room(spec: FPRoom, gv: float, rng: np.random.Generator) -> Any:
         v = v - v.mean(axis=0)
         walls = polygon_walls(v, name=spec.family)
         world = World(walls, rooms.WALL_HEIGHT)
-        return rooms.Room(
-            name=spec.family,
-            kind=spec.family,
-            world=world,
-            boundary=v,
-            corners=v.copy(),
-            center=np.zeros(2),
-            gv_distance=float(np.max(np.hypot(*v.T))),
-            shape_order=spec.true_order,
-            order=spec.true_order,
-            regular=False,
-            room_world=world,
+        room = rooms.with_truth(
+            rooms.Room(
+                name=spec.family,
+                kind=spec.family,
+                world=world,
+                boundary=v,
+                corners=v.copy(),
+                center=np.zeros(2),
+                gv_distance=float(np.max(np.hypot(*v.T))),
+                shape_order=spec.true_order,
+                order=spec.true_order,
+                regular=False,
+                room_world=world,
+            )
         )
+        if room.order != spec.true_order:
+            raise WorldError(
+                f"FPRoom {label!r}: the geometry has order {room.order}, not {spec.true_order}"
+            )
+        return room
     if spec.family == "l_shaped":
         arm = float(label.split()[1])
         unit = rooms.l_shaped_room(1.0, arm=arm)

@@ -27,19 +27,30 @@ def plot_world(ax: Any, world: Any, *, lidar_height: float | None = None) -> Non
     """Draw a :class:`~symloc.sim.world.World` seen from above on a matplotlib axis.
 
     Walls are coloured by material (boards tan, plain walls grey, photographed walls dark
-    blue, furniture brown); primitives no taller than ``lidar_height`` [m] are dashed (the lidar
-    does not see them).
+    blue, furniture brown, glass light blue, dark surfaces black, people orange); primitives no
+    taller than ``lidar_height`` [m] are dashed (the lidar does not see them).
     """
-    from symloc.sim.world import MATERIAL_BOARD, MATERIAL_FURNITURE, MATERIAL_PHOTO
+    from symloc.sim.world import (
+        MATERIAL_BOARD,
+        MATERIAL_DARK,
+        MATERIAL_FURNITURE,
+        MATERIAL_GLASS,
+        MATERIAL_PERSON,
+        MATERIAL_PHOTO,
+    )
+
+    plain = {
+        MATERIAL_BOARD: "tan",
+        MATERIAL_FURNITURE: "saddlebrown",
+        MATERIAL_GLASS: "deepskyblue",
+        MATERIAL_DARK: "black",
+        MATERIAL_PERSON: "darkorange",
+    }
 
     def color(m: int) -> str:
-        if m == MATERIAL_BOARD:
-            return "tan"
-        if m == MATERIAL_FURNITURE:
-            return "saddlebrown"
         if m >= MATERIAL_PHOTO:
             return "navy"
-        return "0.45"
+        return plain.get(m, "0.45")
 
     for seg, h, m in zip(world.walls, world.wall_heights, world.wall_materials, strict=True):
         low = lidar_height is not None and h <= lidar_height

@@ -19,18 +19,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.ndimage import distance_transform_edt
+from scipy.ndimage import binary_dilation, distance_transform_edt
+from skimage.morphology import skeletonize
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose, inverse
 from symloc.grid.occupancy_grid import OccupancyGrid
 
-__all__ = ["DistanceField", "clear_distance_field_cache", "distance_field"]
+__all__ = [
+    "DistanceField",
+    "clear_distance_field_cache",
+    "distance_field",
+    "surface_distance_field",
+]
 
 FloatArray = NDArray[np.float64]
 
 _CACHE: weakref.WeakKeyDictionary[OccupancyGrid, dict[float, DistanceField]] = (
+    weakref.WeakKeyDictionary()
+)
+_SURFACE_CACHE: weakref.WeakKeyDictionary[OccupancyGrid, dict[float, DistanceField]] = (
     weakref.WeakKeyDictionary()
 )
 _LOCK = threading.Lock()
@@ -190,7 +199,54 @@ def distance_field(grid: OccupancyGrid, max_dist: float = 2.0) -> DistanceField:
     return df
 
 
+def _compute_surface(grid: OccupancyGrid, max_dist: float) -> DistanceField:
+    occ = grid.occupied_mask
+    free = grid.free_mask
+    # the occupied cells that face free space (within two cells of it): a wall's band of hits
+    # seen from the room, or the skin of a filled obstacle
+    shell = occ & binary_dilation(free, iterations=2) if free.any() else occ
+    centre: NDArray[np.bool_] = shell
+    if shell.any():
+        centre = np.asarray(skeletonize(shell), dtype=np.bool_)  # type: ignore[no-untyped-call]
+    if centre.any():
+        d = distance_transform_edt(~centre, sampling=grid.resolution)
+        d = np.minimum(d, max_dist)
+    else:
+        d = np.full(occ.shape, max_dist)
+    d = np.asarray(d, dtype=np.float64)
+    d.setflags(write=False)
+    padded = np.full((d.shape[0] + 2, d.shape[1] + 2), max_dist, dtype=np.float32)
+    padded[1:-1, 1:-1] = d
+    padded.setflags(write=False)
+    return DistanceField(grid, max_dist, d, padded)
+
+
+def surface_distance_field(grid: OccupancyGrid, max_dist: float = 1.0) -> DistanceField:
+    """The (cached) distance [m] to the map's obstacle surfaces, as lines one cell thin.
+
+    A laser map draws a wall as a band of occupied cells two or three cells thick (the hits
+    of many scans straddle the surface), so the distance to the nearest occupied cell is zero
+    across the whole band and says nothing about where in it the surface is. Here the band's
+    cells that face free space are thinned to their centre line
+    (:func:`skimage.morphology.skeletonize`) and the distance is measured to that line: zero
+    on the surface's best estimate, with a gradient on both sides of it. Clipped at
+    ``max_dist``; off the map reads ``max_dist``. Used by scan-to-map alignment
+    (:mod:`symloc.mcl.scan_to_map`).
+    """
+    if not isinstance(grid, OccupancyGrid):
+        raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
+    md = check_positive(max_dist, "max_dist")
+    with _LOCK:
+        per_grid = _SURFACE_CACHE.setdefault(grid, {})
+        df = per_grid.get(md)
+        if df is None:
+            df = _compute_surface(grid, md)
+            per_grid[md] = df
+    return df
+
+
 def clear_distance_field_cache() -> None:
     """Forget every cached distance field."""
     with _LOCK:
         _CACHE.clear()
+        _SURFACE_CACHE.clear()

@@ -299,18 +299,6 @@ def load_map(path: str | Path) -> OccupancyGrid:
     )
 
 
-def _yaml_float(value: float) -> str:
-    """``repr`` of a float that YAML 1.1 (PyYAML, yaml-cpp) reads back as a float.
-
-    ``repr(1e-10)`` is ``1e-10``, which YAML 1.1 reads as a string: the mantissa needs a dot.
-    """
-    text = repr(float(value))
-    mant, sep, exp = text.partition("e")
-    if sep and "." not in mant:
-        text = f"{mant}.0e{exp}"
-    return text
-
-
 def save_map(
     grid: OccupancyGrid,
     path: str | Path,
@@ -380,3 +368,13 @@ def save_map(
         text += yaml.safe_dump(dict(extra), sort_keys=False, default_flow_style=False)
     yaml_path.write_text(text)
     return yaml_path
+
+
+def _yaml_float(value: float) -> str:
+    """``repr`` of a finite float that YAML 1.1 (PyYAML, map_server) reads back as a float:
+    an exponent needs a dot in its mantissa (``1e-300`` would be read as a string)."""
+    text = repr(float(value))
+    mantissa, e, exponent = text.partition("e")
+    if e and "." not in mantissa:
+        return f"{mantissa}.0e{exponent}"
+    return text

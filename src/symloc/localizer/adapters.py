@@ -44,6 +44,10 @@ class AmclTracker:
     def initialize_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         self.amcl.initialize_pose(pose, covariance)
 
+    def force_update(self) -> None:
+        """Integrate the next scan whatever the robot moved (a claim was withdrawn)."""
+        self.amcl.request_nomotion_update()
+
     def update(self, odom: Any, scan: Any) -> TrackerResult:
         r = self.amcl.update(odom, scan)
         self.last = r

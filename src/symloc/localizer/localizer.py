@@ -31,9 +31,11 @@ from numpy.typing import NDArray
 from symloc._checks import check_in_range, check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, inverse, wrap_angle
-from symloc.odometry import OdometryReading
+from symloc.odometry import OdometryReading, twist_between
+from symloc.scan import LaserScan, deskew
 
 from .centering import CentreFilter
+from .claim import Claim, ClaimGate
 from .directions import directions_for
 from .types import (
     Decision,
@@ -81,8 +83,13 @@ class LocalizerConfig:
     rotate_tolerance : a ROTATE request is done when odometry turned within this [rad].
     flip_patience : consecutive non-symmetric verdicts before the trip to the centre is dropped.
     max_centering_updates : updates allowed for going to the centre and facing.
+    relocalize_after : consecutive filter updates, while lost, at which the scan contradicts
+        AMCL's estimate before AMCL is spread over the whole map again (a kidnapped robot's
+        particles may all be in the wrong place, and nav2's filter has no recovery by default).
     allow_mapping : build a visual map for a place that matches nothing (Algorithm 5 step 11).
-    reseed_xy_std, reseed_theta_std : covariance of the AMCL reseed after a decision.
+    reseed_xy_std, reseed_theta_std : smallest spread of the AMCL reseed after a decision.
+    decision_xy_std, decision_theta_std : how well a visual decision knows the pose before the
+        laser sets it (the stored centre's and the decided heading's std) [m], [rad].
     """
 
     min_cluster_weight: float = 0.05
@@ -99,9 +106,12 @@ class LocalizerConfig:
     rotate_tolerance: float = math.radians(3.0)
     flip_patience: int = 5
     max_centering_updates: int = 600
+    relocalize_after: int = 100
     allow_mapping: bool = False
     reseed_xy_std: float = 0.03
     reseed_theta_std: float = math.radians(2.0)
+    decision_xy_std: float = 0.15
+    decision_theta_std: float = math.radians(2.0)
     centre_smoothing: float = 0.5
 
     def __post_init__(self) -> None:
@@ -116,13 +126,20 @@ class LocalizerConfig:
             "rotate_tolerance",
             "reseed_xy_std",
             "reseed_theta_std",
+            "decision_xy_std",
+            "decision_theta_std",
         ):
             check_positive(getattr(self, name), f"LocalizerConfig.{name}")
         check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
         check_in_range(self.converged_weight, "LocalizerConfig.converged_weight", 0.0, 1.0)
         check_in_range(self.centre_smoothing, "LocalizerConfig.centre_smoothing", 1e-6, 1.0)
         check_in_range(self.copy_score_ratio, "LocalizerConfig.copy_score_ratio", 0.0, 1.0)
-        for name in ("converged_updates", "flip_patience", "max_centering_updates"):
+        for name in (
+            "converged_updates",
+            "flip_patience",
+            "max_centering_updates",
+            "relocalize_after",
+        ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigurationError(
@@ -223,6 +240,10 @@ class Localizer:
         well as the estimate (the ambiguity is real even when AMCL has collapsed to one copy).
     known_places : sequence of Place, optional
         Symmetric places of the map (from the mapping stage) for that test.
+    claim_gate : ClaimGate, optional
+        Carries the tracker's estimate to every scan and confirms it with the laser before
+        it is published (:mod:`symloc.localizer.claim`). Without one, the tracker's estimate
+        is published unchecked: only scripted tests do that.
     map_symmetries : sequence of MapSymmetry, optional
         Rotational symmetries of the whole map (``centre``, ``order``;
         :func:`~symloc.localizer.map_symmetry.map_symmetries`). Where AMCL converged outside any
@@ -240,6 +261,7 @@ class Localizer:
         scorer: PoseScorer | None = None,
         known_places: Sequence[Place] = (),
         map_symmetries: Sequence[Any] = (),
+        claim_gate: ClaimGate | None = None,
     ) -> None:
         self.tracker = tracker
         self.judge = judge
@@ -251,6 +273,9 @@ class Localizer:
         #: map_symmetries`): a converged pose whose rotated copy fits the scan as well is not
         #: earned.
         self.map_symmetries = list(map_symmetries)
+        #: every pose published as tracking passes this gate (:mod:`symloc.localizer.claim`);
+        #: None publishes the tracker's estimate unchecked (scripted tests only)
+        self.claim_gate = claim_gate
         self.log: list[str] = []
         self._last_result: TrackerResult | None = None
         self._last_verdict: SymmetryVerdict | None = None
@@ -260,10 +285,22 @@ class Localizer:
         self.particles_at_ambiguity: FloatArray | None = None
         #: AMCL's particles just before the visual decision reseeded it (for figures).
         self.particles_before_decision: FloatArray | None = None
+        self._last_odom: OdometryReading | None = None
         self._reset_state()
         self._phase = _Phase.LOST
 
     # ------------------------------------------------------------------ public
+
+    @property
+    def _phase(self) -> _Phase:
+        return self._phase_value
+
+    @_phase.setter
+    def _phase(self, value: _Phase) -> None:
+        # a confirmed pose vouches for the next one only while tracking lasts
+        if value is not _Phase.TRACKING and self.claim_gate is not None:
+            self.claim_gate.forget_chain()
+        self._phase_value = value
 
     @property
     def phase(self) -> str:
@@ -280,6 +317,8 @@ class Localizer:
     def set_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         """A pose given by the operator (like RViz's 2D Pose Estimate): reseed and earn it."""
         self.tracker.initialize_pose(np.asarray(pose, float), np.asarray(covariance, float))
+        if self.claim_gate is not None:
+            self.claim_gate.reset()
         self._reset_state()
         self._phase = _Phase.TRACKING
         self._note("pose set by the operator")
@@ -294,7 +333,15 @@ class Localizer:
         take (a :class:`~symloc.scan.LaserScan`).
         """
         odom_pose = np.asarray(odom.pose, dtype=np.float64)
+        if isinstance(scan, LaserScan) and isinstance(odom, OdometryReading):
+            # a spinning lidar's beams were taken along the last motion: undo it
+            if self._last_odom is not None:
+                scan = deskew(scan, *twist_between(self._last_odom, odom))
+            self._last_odom = odom
         result = self.tracker.update(odom, scan)
+        self._jumped = False
+        if self.claim_gate is not None and result.updated:
+            self._jumped = not self.claim_gate.anchor(result.estimate, result.covariance, odom_pose)
         verdict = self.judge(scan)
         self._last_result = result
         self._last_verdict = verdict
@@ -313,6 +360,11 @@ class Localizer:
     # ------------------------------------------------------------------ internals
 
     def _reset_state(self) -> None:
+        self._suspended = False
+        self._suspended_scans = 0
+        self._resumed = 0
+        self._unconverged = 0
+        self._jumped = False
         self._converged_count = 0
         self._asym_count = 0
         self._centering_updates = 0
@@ -415,6 +467,89 @@ class Localizer:
     def _lost(self, reason: str, result: TrackerResult) -> Estimate:
         return Estimate(status=Status.LOST, hypotheses=result.hypotheses, reason=reason)
 
+    def _claim(self, result: TrackerResult, scan: object, reason: str) -> Estimate:
+        """Publish the tracker's estimate if the claim gate confirms it at this scan.
+
+        A withdrawn claim or a jump of the filter suspends claims: they resume only when the
+        last confirmed pose, carried by odometry, fits the scan again (a person walked past);
+        after ``patience`` scans without that the pose is given up and AMCL relocalizes
+        globally (the robot was carried away).
+        """
+        gate = self.claim_gate
+        if gate is None:
+            return self._tracking(result, reason)
+        if not gate.anchored:
+            gate.anchor(result.estimate, result.covariance, self._odom_pose)
+        if self._jumped and not self._suspended and gate.has_chain:
+            self._suspend("the filter's estimate jumped away from the tracked pose")
+        if self._suspended:
+            return self._while_suspended(result, scan, reason)
+        claim = gate.check(self._odom_pose, scan)  # type: ignore[arg-type]
+        if claim.ok:
+            return self._publish(claim, result, reason)
+        if claim.verdict == "withdrawn" and gate.has_chain:
+            self._suspend(claim.reason)
+        return self._lost(claim.reason, result)
+
+    def _publish(self, claim: Claim, result: TrackerResult, reason: str) -> Estimate:
+        assert self.claim_gate is not None
+        assert claim.pose is not None
+        assert claim.covariance is not None
+        self.claim_gate.confirmed(claim, self._odom_pose)
+        return Estimate(
+            status=Status.TRACKING,
+            pose=claim.pose,
+            covariance=claim.covariance,
+            hypotheses=result.hypotheses,
+            reason=reason,
+        )
+
+    def _suspend(self, why: str) -> None:
+        self._suspended = True
+        self._suspended_scans = 0
+        self._resumed = 0
+        self._note(f"claims suspended: {why}")
+        force = getattr(self.tracker, "force_update", None)
+        if force is not None:
+            force()
+
+    def _while_suspended(self, result: TrackerResult, scan: object, reason: str) -> Estimate:
+        gate = self.claim_gate
+        assert gate is not None
+        claim = gate.check(self._odom_pose, scan)  # type: ignore[arg-type]
+        if claim.ok:
+            self._resumed += 1
+            if self._resumed >= gate.config.resume_after:
+                self._suspended = False
+                assert claim.pose is not None
+                assert claim.covariance is not None
+                if not gate.anchor(result.estimate, result.covariance, self._odom_pose) or (
+                    self._jumped
+                ):
+                    # the filter went elsewhere while the pose continued: bring it back
+                    self.tracker.initialize_pose(claim.pose, claim.covariance)
+                gate.anchor(claim.pose, claim.covariance, self._odom_pose)
+                self._note("claims resumed: the tracked pose fits the scan again")
+                return self._publish(claim, result, reason)
+            return self._lost("claims suspended: the tracked pose fits the scan again", result)
+        self._resumed = 0
+        self._suspended_scans += 1
+        if self._suspended_scans >= gate.config.patience:
+            self.tracker.initialize_global()
+            gate.reset()
+            self._reset_state()
+            self._phase = _Phase.LOST
+            why = (
+                f"the tracked pose has not fitted the scan for {gate.config.patience} scans "
+                "(kidnapped?): global relocalization, the pose must be earned again"
+            )
+            self._note(why)
+            return self._lost(why, result)
+        force = getattr(self.tracker, "force_update", None)
+        if force is not None:
+            force()
+        return self._lost(f"claims suspended; {claim.reason}", result)
+
     def _tracking(self, result: TrackerResult, reason: str) -> Estimate:
         return Estimate(
             status=Status.TRACKING,
@@ -467,9 +602,22 @@ class Localizer:
             if self._converged_count >= self.config.converged_updates:
                 self._phase = _Phase.TRACKING
                 self._note("AMCL converged where the scan is not symmetric: pose earned")
-                return self._tracking(result, "AMCL converged; scan not symmetric")
+                return self._claim(result, scan, "AMCL converged; scan not symmetric")
             return self._lost("AMCL converging", result)
         self._converged_count = 0
+        if result.updated and self.claim_gate is not None:
+            fits = self.claim_gate.check(self._odom_pose, scan).verdict != "withdrawn"
+            self._unconverged = 0 if fits else self._unconverged + 1
+        if self._unconverged >= self.config.relocalize_after:
+            self.tracker.initialize_global()
+            if self.claim_gate is not None:
+                self.claim_gate.reset()
+            self._unconverged = 0
+            self._note(
+                f"the scan contradicted AMCL's estimate for {self.config.relocalize_after} "
+                "updates: global relocalization"
+            )
+            return self._lost("AMCL not converged; relocalizing globally", result)
         return self._lost("AMCL not converged", result)
 
     # ---- TRACKING: earned
@@ -494,7 +642,7 @@ class Localizer:
             self._phase = _Phase.LOST
             self._note("AMCL lost its pose")
             return self._lost("AMCL has no well-weighted cluster", result)
-        return self._tracking(result, "AMCL tracking")
+        return self._claim(result, scan, "AMCL tracking")
 
     # ---- ambiguity: Algorithm 2
 
@@ -636,7 +784,7 @@ class Localizer:
             place, dec = decided[0]
             if not place.heading_reliable:
                 return self._unanchored(place, dec)
-            return self._reseed(result, place, dec)
+            return self._reseed(result, place, dec, scan)
         if not candidates:
             self._outcomes.append("no_place")
         elif all(d.status == "refused" for _, d in decisions):
@@ -649,7 +797,8 @@ class Localizer:
         self._note(f"image {self._attempt + 1}: {self._outcomes[-1]} ({last})")
         return self._next_attempt(last)
 
-    def _reseed(self, result: TrackerResult, place: Place, dec: Decision) -> Estimate:
+    def _reseed(self, result: TrackerResult, place: Place, dec: Decision, scan: object) -> Estimate:
+        """The decision picked the copy; the laser sets the pose from it, then AMCL reseeds."""
         assert dec.direction is not None
         if dec.heading is not None:
             heading = float(wrap_angle(dec.heading))
@@ -659,14 +808,39 @@ class Localizer:
             )
         self.last_decision = (place, dec)
         pose = np.array([place.center[0], place.center[1], heading])
-        cov = _cov(self.config.reseed_xy_std, self.config.reseed_theta_std)
+        cov = _cov(self.config.decision_xy_std, self.config.decision_theta_std)
+        reason = f"visual decision: place {place.place_id}, direction {dec.direction}"
+        gate = self.claim_gate
+        claim = None
+        if gate is not None:
+            claim = gate.confirm(pose, cov, scan)  # type: ignore[arg-type]
+            if claim.verdict == "withdrawn":
+                self._outcomes.append("undetermined")
+                self._note(
+                    f"image {self._attempt + 1}: direction {dec.direction} of place "
+                    f"{place.place_id} rejected by the laser ({claim.reason})"
+                )
+                return self._next_attempt("the laser rejected the decided pose")
+            assert claim.pose is not None
+            assert claim.covariance is not None
+            pose, cov = claim.pose, claim.covariance
+            reason += "; pose set by the laser"
         if self._last_result is not None:
             self.particles_before_decision = self._last_result.particles
-        self.tracker.initialize_pose(pose, cov)
+        reseed_cov = np.maximum(cov, _cov(self.config.reseed_xy_std, self.config.reseed_theta_std))
+        self.tracker.initialize_pose(pose, reseed_cov)
         self._note(
             f"decided direction {dec.direction} of place {place.place_id} "
             f"(offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
         )
+        if claim is not None and gate is not None:
+            if claim.verdict == "withheld":
+                return self._settle(
+                    "undetermined: the decided pose is not certain enough for the tolerance "
+                    f"({claim.reason.removeprefix('claim withheld: ')}); pose not claimed"
+                )
+            gate.anchor(pose, cov, self._odom_pose)
+            gate.confirmed(claim, self._odom_pose)
         self._reset_state()
         self._phase = _Phase.TRACKING
         return Estimate(
@@ -674,7 +848,7 @@ class Localizer:
             pose=pose,
             covariance=cov,
             hypotheses=(Hypothesis(pose=pose, weight=1.0),),
-            reason=f"visual decision: place {place.place_id}, direction {dec.direction}",
+            reason=reason,
         )
 
     def _unanchored(self, place: Place, dec: Decision) -> Estimate:

@@ -37,13 +37,18 @@ class VisionPlaceStore:
     visual_map : VisualMap
     vocabulary : Vocabulary
     intrinsics : (3, 3) array or camera object
-        For the heading offset read from the homography.
+        For the heading offset read from the homography (a
+        :class:`symloc.camera_model.CameraModel` brings its distortion coefficients too).
     gv_tolerance : float
         G-V index tolerance [m]: a place matches when its G-V distance is within this.
     gv_relative_tolerance : float
         Added tolerance as a fraction of the G-V distance.
     keep_images : bool
         Store the images themselves (PNG) with the features (for figures).
+    dist_coeffs : sequence of 4 or 5 floats, optional
+        The camera's lens distortion ``(k1, k2, p1, p2[, k3])`` (OpenCV order); keypoints are
+        undistorted before every homography. Default: ``intrinsics.dist_coeffs`` if the camera
+        object has them, else none.
     """
 
     def __init__(
@@ -57,12 +62,15 @@ class VisionPlaceStore:
         orientation_config: Any = None,
         extractor: Any = None,
         keep_images: bool = True,
+        dist_coeffs: Any = None,
     ) -> None:
         from symloc.vision.orb import OrbExtractor
+        from symloc.vision.orientation import dist_coeffs_of
 
         self.visual_map = visual_map
         self.vocabulary = vocabulary
         self.intrinsics = intrinsics
+        self.dist_coeffs = dist_coeffs_of(intrinsics, dist_coeffs)
         self.gv_tolerance = check_positive(gv_tolerance, "gv_tolerance")
         self.gv_relative_tolerance = check_positive(
             gv_relative_tolerance, "gv_relative_tolerance", allow_zero=True
@@ -114,6 +122,7 @@ class VisionPlaceStore:
             self.intrinsics,
             cfg,
             extractor=self.extractor,
+            dist_coeffs=self.dist_coeffs,
         )
         self.last_decision = d
         status: str = d.status

@@ -277,6 +277,11 @@ class Amcl:
         self._set(parts)
         self._reset_after_init()
 
+    def request_nomotion_update(self) -> None:
+        """Integrate the next scan even if the robot has not moved (nav2's service of the same
+        name): the next :meth:`update` runs the sensor update whatever the odometry says."""
+        self._force_update = True
+
     # ---------------------------------------------------------------- update
     def update(
         self,

@@ -25,9 +25,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError, DataFormatError
-from symloc.geometry import angle_diff, wrap_angle
+from symloc.geometry import angle_diff, compose, relative, wrap_angle
 
-__all__ = ["MOTION_VARIANTS", "odometry_delta", "sample_motion_model_odometry"]
+__all__ = [
+    "MOTION_VARIANTS",
+    "carry_by_odometry",
+    "odometry_delta",
+    "sample_motion_model_odometry",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -129,3 +134,46 @@ def sample_motion_model_odometry(
     res[:, 1] = y
     res[:, 2] = wrap_angle(th)
     return res
+
+
+def carry_by_odometry(
+    pose: FloatArray,
+    covariance: FloatArray,
+    odom_prev: FloatArray,
+    odom_curr: FloatArray,
+    alphas: tuple[float, float, float, float],
+) -> tuple[FloatArray, FloatArray]:
+    """Move a pose estimate by the odometry increment; grow its covariance by the motion model.
+
+    The increment ``odom_prev -> odom_curr`` is split into ``rot1, trans, rot2`` (Thrun et
+    al. 2005, Table 5.6) and applied to ``pose`` (3,); the covariance (3, 3) is propagated to
+    first order, ``F C F^T + G Q G^T``, with ``Q = diag(a1 rot1^2 + a2 trans^2,
+    a3 trans^2 + a4 (rot1^2 + rot2^2), a1 rot2^2 + a2 trans^2)`` (the variances of the
+    ``diff-corrected`` model, backward motion folded as nav2 folds it). The mean is the exact
+    composition ``pose * (odom_prev^-1 * odom_curr)``. Returns
+    ``(pose (3,), covariance (3, 3))``: what a ``map -> odom`` transform gives between filter
+    updates, with its uncertainty.
+    """
+    a1, a2, a3, a4 = (float(a) for a in alphas)
+    prev = np.asarray(odom_prev, dtype=np.float64)
+    delta = odometry_delta(prev, odom_curr)
+    trans = float(np.hypot(delta[0], delta[1]))
+    rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
+    rot2 = float(angle_diff(delta[2], rot1))
+    r1n = min(abs(angle_diff(rot1, 0.0)), abs(angle_diff(rot1, np.pi)))
+    r2n = min(abs(angle_diff(rot2, 0.0)), abs(angle_diff(rot2, np.pi)))
+    q = np.diag(
+        [
+            a1 * r1n * r1n + a2 * trans * trans,
+            a3 * trans * trans + a4 * (r1n * r1n + r2n * r2n),
+            a1 * r2n * r2n + a2 * trans * trans,
+        ]
+    )
+    p = np.asarray(pose, dtype=np.float64)
+    heading = float(p[2]) + rot1
+    c, s = np.cos(heading), np.sin(heading)
+    out = compose(p, relative(prev, np.asarray(odom_curr, dtype=np.float64)))
+    f = np.array([[1.0, 0.0, -trans * s], [0.0, 1.0, trans * c], [0.0, 0.0, 1.0]])
+    g = np.array([[-trans * s, c, 0.0], [trans * c, s, 0.0], [1.0, 0.0, 1.0]])
+    cov = f @ np.asarray(covariance, dtype=np.float64) @ f.T + g @ q @ g.T
+    return out, 0.5 * (cov + cov.T)

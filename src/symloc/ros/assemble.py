@@ -17,7 +17,10 @@ from numpy.typing import NDArray
 from symloc.camera_model import pinhole_matrix
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
+from symloc.grid.distance_field import surface_distance_field
 from symloc.localizer import Decision, Localizer, Place
+from symloc.localizer.claim import ClaimGate
+from symloc.localizer.map_symmetry import map_symmetries
 from symloc.ros.params import NodeParams
 
 __all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
@@ -93,7 +96,10 @@ def open_places(params: NodeParams) -> Any:
 
         vocab = default_vocabulary()
     return VisionPlaceStore(
-        VisualMap(path, create=params.allow_mapping), vocab, camera_matrix(params)
+        VisualMap(path, create=params.allow_mapping),
+        vocab,
+        camera_matrix(params),
+        dist_coeffs=params.camera_dist_coeffs or None,
     )
 
 
@@ -111,6 +117,7 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
     store = places if places is not None else open_places(params)
     known = list(store.all_places()) if hasattr(store, "all_places") else []
     config = dataclasses.replace(params.localizer, allow_mapping=params.allow_mapping)
+    a = params.amcl
     loc = Localizer(
         AmclTracker(amcl),
         ReportJudge(judge_symmetry, config=params.symmetry_config()),
@@ -118,6 +125,10 @@ def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = Non
         config,
         scorer=GridScorer(grid),
         known_places=known,
+        map_symmetries=map_symmetries(grid),
+        claim_gate=ClaimGate(
+            surface_distance_field(grid), (a.alpha1, a.alpha2, a.alpha3, a.alpha4)
+        ),
     )
     loc.reset_global()
     return loc

@@ -29,6 +29,7 @@ from typing import Any
 
 import yaml
 
+from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
 from symloc.localizer import LocalizerConfig
 from symloc.mcl.params import AmclParams
@@ -78,6 +79,10 @@ class NodeParams:
         one. It must be the vocabulary the visual map was built with.
     camera_intrinsics : sequence of 4 floats
         ``fx, fy, cx, cy`` [px] of the camera; empty: the simulator's 640 x 480, 65 deg camera.
+    camera_dist_coeffs : sequence of 4 or 5 floats
+        The lens distortion ``k1, k2, p1, p2[, k3]`` (OpenCV / camera_info ``plumb_bob`` order)
+        from the camera's calibration; empty: none. Keypoints are undistorted before the
+        orientation decision's homographies.
     lidar_preset : str
         ``lds01``, ``rplidar_a2`` or ``paper_15m``: sets Algorithm 1's range noise from the
         scanner's data sheet; ``""``: Algorithm 1's defaults.
@@ -120,6 +125,7 @@ class NodeParams:
     visual_map: str = ""
     vocabulary: str = ""
     camera_intrinsics: tuple[float, ...] = ()
+    camera_dist_coeffs: tuple[float, ...] = ()
     lidar_preset: str = ""
     map_yaml: str = ""
     accept_map_updates: bool = False
@@ -156,6 +162,17 @@ class NodeParams:
                 f"camera_intrinsics: expected 4 numbers fx, fy, cx, cy > 0 [px], got {intr!r}"
             )
         object.__setattr__(self, "camera_intrinsics", tuple(float(v) for v in intr))
+        dist = self.camera_dist_coeffs
+        if isinstance(dist, (str, bytes)) or any(isinstance(v, bool) for v in dist):
+            raise ConfigurationError(
+                f"camera_dist_coeffs: expected 4 or 5 numbers k1, k2, p1, p2[, k3], got {dist!r}"
+            )
+        if tuple(dist):
+            object.__setattr__(
+                self, "camera_dist_coeffs", check_dist_coeffs(dist, "camera_dist_coeffs")
+            )
+        else:
+            object.__setattr__(self, "camera_dist_coeffs", ())
         if self.lidar_preset not in ("", "lds01", "rplidar_a2", "paper_15m"):
             raise ConfigurationError(
                 "lidar_preset: expected '', 'lds01', 'rplidar_a2' or 'paper_15m',"

@@ -24,18 +24,67 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from symloc._checks import as_rng
-from symloc.camera_model import DEFAULT_HFOV, focal_from_hfov
+from symloc._checks import as_rng, check_finite_scalar
+from symloc.camera_model import DEFAULT_HFOV, CameraModel, check_dist_coeffs, focal_from_hfov
 from symloc.errors import ConfigurationError
 from symloc.geometry import as_pose
 from symloc.sim.raycast import RayHits, ray_intersections
 from symloc.sim.textures import texture_atlas
-from symloc.sim.world import MATERIAL_PHOTO, World
+from symloc.sim.world import MATERIAL_GLASS, MATERIAL_PHOTO, World
 
-__all__ = ["CAMERA_MOUNT_HEIGHT", "Camera", "render"]
+__all__ = ["CAMERA_MOUNT_HEIGHT", "Camera", "CameraConditions", "render"]
 
 CAMERA_MOUNT_HEIGHT = 0.2
 """Default camera height [m]: below the lidar (0.3 m) and the 0.4 m boards, as in the paper."""
+
+
+@dataclass(frozen=True)
+class CameraConditions:
+    """The conditions of one capture: exposure, white balance, noise and shutter time.
+
+    A regime (:mod:`symloc.sim.regimes`) draws them per capture and per session (mapping and
+    query sessions see different light). The defaults change nothing.
+
+    Parameters
+    ----------
+    exposure : float
+        Brightness relative to the nominal exposure (exposure time x gain x scene light), > 0.
+    white_balance : tuple of 3 float
+        Gain of the R, G and B channels, each > 0 (1, 1, 1: neutral).
+    noise_sigma : float or None
+        Pixel noise [grey levels] (None: the camera's ``noise_sigma``).
+    exposure_time : float
+        Shutter time [s] >= 0, for motion blur from the robot's turn rate.
+    """
+
+    exposure: float = 1.0
+    white_balance: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    noise_sigma: float | None = None
+    exposure_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        e = check_finite_scalar(self.exposure, "CameraConditions.exposure")
+        if e <= 0:
+            raise ConfigurationError(f"CameraConditions.exposure: expected a value > 0, got {e}")
+        wb = tuple(self.white_balance)
+        if len(wb) != 3 or not all(
+            isinstance(c, (int, float)) and math.isfinite(c) and c > 0 for c in wb
+        ):
+            raise ConfigurationError(
+                f"CameraConditions.white_balance: expected 3 channel gains > 0, got {wb!r}"
+            )
+        object.__setattr__(self, "white_balance", tuple(float(c) for c in wb))
+        if self.noise_sigma is not None:
+            n = check_finite_scalar(self.noise_sigma, "CameraConditions.noise_sigma")
+            if n < 0:
+                raise ConfigurationError(
+                    f"CameraConditions.noise_sigma: expected a value >= 0 grey levels, got {n}"
+                )
+        t = check_finite_scalar(self.exposure_time, "CameraConditions.exposure_time")
+        if t < 0:
+            raise ConfigurationError(
+                f"CameraConditions.exposure_time: expected a value >= 0 s, got {t}"
+            )
 
 
 @dataclass(frozen=True)
@@ -58,6 +107,11 @@ class Camera:
         RGB of the plain floor and of whatever lies above the walls (the ceiling).
     near : float
         Surfaces closer than this [m] are clipped.
+    dist_coeffs : tuple of float
+        Lens distortion ``(k1, k2, p1, p2, k3)`` (OpenCV order; empty or zeros: none). The
+        rendered image is distorted; :attr:`calibration` gives the matching calibration.
+    vignetting : float
+        Fraction of brightness lost in the image corners, in [0, 1) (0: none).
     """
 
     width: int = 640
@@ -69,8 +123,17 @@ class Camera:
     floor_color: tuple[int, int, int] = (118, 112, 104)
     sky_color: tuple[int, int, int] = (232, 232, 236)
     near: float = 0.05
+    dist_coeffs: tuple[float, ...] = ()
+    vignetting: float = 0.0
 
     def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "dist_coeffs", check_dist_coeffs(self.dist_coeffs, "Camera.dist_coeffs")
+        )
+        if not (math.isfinite(self.vignetting) and 0.0 <= self.vignetting < 1.0):
+            raise ConfigurationError(
+                f"Camera.vignetting: expected a fraction in [0, 1), got {self.vignetting}"
+            )
         for name in ("width", "height"):
             val = getattr(self, name)
             if int(val) != val or val < 8:
@@ -114,6 +177,25 @@ class Camera:
         )
 
     @property
+    def calibration(self) -> CameraModel:
+        """The camera's calibration as a robot would have it: intrinsics and distortion."""
+        f = self.focal
+        return CameraModel(
+            int(self.width),
+            int(self.height),
+            f,
+            f,
+            self.width / 2.0,
+            self.height / 2.0,
+            self.dist_coeffs,
+        )
+
+    @property
+    def has_distortion(self) -> bool:
+        """True if the lens distorts (any non-zero coefficient)."""
+        return any(c != 0.0 for c in self.dist_coeffs)
+
+    @property
     def vfov(self) -> float:
         """Vertical field of view [rad] (square pixels)."""
         return 2.0 * math.atan((self.height / 2.0) / self.focal)
@@ -129,24 +211,79 @@ class Camera:
         world: World,
         pose: ArrayLike,
         rng: np.random.Generator | int | None = None,
+        *,
+        conditions: CameraConditions | None = None,
+        twist: tuple[float, float] = (0.0, 0.0),
     ) -> NDArray[np.uint8]:
         """Render the view from the robot at ``pose`` (x [m], y [m], theta [rad]).
 
-        Returns an ``(H, W, 3)`` uint8 RGB image; ``rng`` drives the pixel noise.
+        Parameters
+        ----------
+        world : World
+        pose : array of shape (3,)
+        rng : Generator, int or None
+            Drives the pixel noise.
+        conditions : CameraConditions, optional
+            Exposure, white balance, noise and shutter time of this capture (default: the
+            camera's own gain and noise, no blur).
+        twist : (v, w)
+            The robot's speed [m/s] and turn rate [rad/s] while the shutter is open (motion
+            blur, with ``conditions.exposure_time``).
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), uint8
+            RGB image.
         """
         p = as_pose(pose)
+        cond = conditions if conditions is not None else _NOMINAL
         W, H = int(self.width), int(self.height)
+        if self.has_distortion:
+            warp = _distortion_maps(W, H, self.focal, self.dist_coeffs)
+            img = self._radiance(world, p, warp.canvas_w, warp.canvas_h)
+        else:
+            img = self._radiance(world, p, W, H)
+        blur = self.focal * abs(float(twist[1])) * cond.exposure_time
+        if blur >= 0.5:
+            img = _box_blur_x(img, blur)
+        if self.has_distortion:
+            img = np.asarray(
+                cv2.remap(
+                    img, warp.map1, warp.map2, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+                ),
+                dtype=np.float32,
+            )
+        if self.vignetting > 0.0:
+            img *= _vignette(W, H, float(self.vignetting))[:, :, None]
+        gain = float(self.gain) * cond.exposure
+        wb = np.asarray(cond.white_balance, dtype=np.float32) * np.float32(gain)
+        if np.any(wb != 1.0):
+            img *= wb
+        sigma = self.noise_sigma if cond.noise_sigma is None else cond.noise_sigma
+        if sigma > 0:
+            n = img.size
+            bank = _noise_bank(n)
+            off = int(as_rng(rng).integers(0, n))
+            cv2.scaleAdd(bank[off : off + n].reshape(img.shape), float(sigma), img, img)
+        np.clip(img, 0, 255, out=img)
+        return img.astype(np.uint8)
+
+    def _radiance(
+        self, world: World, p: NDArray[np.float64], W: int, H: int
+    ) -> NDArray[np.float32]:
+        """The ideal pinhole image ``(H, W, 3)`` float32 (before gain and noise) of a ``W x H``
+        canvas with this camera's focal length, centred on the optical axis."""
         f = self.focal
         cy = H / 2.0
         hc = self.mount_height
-        alpha = self.column_angles
-        hits = ray_intersections(world, p[:2], p[2] + alpha)
+        u = np.arange(W) + 0.5
+        alpha = np.arctan((W / 2.0 - u) / f)
+        hits = ray_intersections(world, p[:2], p[2] + alpha, skip_materials=(MATERIAL_GLASS,))
         P = hits.t.shape[-1]
-        gain = np.float32(self.gain)
         img = np.empty((H, W, 3), dtype=np.float32)
         n_above = int(np.count_nonzero(np.arange(H) + 0.5 < cy))
-        img[:n_above] = np.asarray(self.sky_color, dtype=np.float32) * gain
-        img[n_above:] = np.asarray(self.floor_color, dtype=np.float32) * gain
+        img[:n_above] = np.asarray(self.sky_color, dtype=np.float32)
+        img[n_above:] = np.asarray(self.floor_color, dtype=np.float32)
         if P:
             cos_a = np.cos(alpha)[:, None]
             z = hits.t * cos_a  # (W, P) depth along the optical axis
@@ -176,15 +313,8 @@ class Camera:
             has = label1 > 0
             if np.any(has):
                 colors = self._shade_walls(hits, order, z, h, label1)
-                colors *= gain
                 np.copyto(img, colors, where=has[:, :, None])
-        if self.noise_sigma > 0:
-            n = img.size
-            bank = _noise_bank(n)
-            off = int(as_rng(rng).integers(0, n))
-            cv2.scaleAdd(bank[off : off + n].reshape(img.shape), float(self.noise_sigma), img, img)
-        np.clip(img, 0, 255, out=img)
-        return img.astype(np.uint8)
+        return img
 
     def _shade_walls(
         self,
@@ -251,6 +381,73 @@ class Camera:
         return np.asarray(colors, dtype=np.float32)
 
 
+_NOMINAL = CameraConditions()
+
+
+@dataclass(frozen=True)
+class _Warp:
+    """Remap tables from a distorted ``W x H`` image to the ideal canvas it is sampled from."""
+
+    canvas_w: int
+    canvas_h: int
+    map1: NDArray[np.int16]
+    map2: NDArray[np.uint16]
+
+
+@lru_cache(maxsize=8)
+def _distortion_maps(w: int, h: int, focal: float, dist: tuple[float, ...]) -> _Warp:
+    """For each output pixel (OpenCV pixel coordinates, principal point ``(w/2, h/2)``), the
+    position in the ideal canvas that shows its undistorted direction (fixed-point maps)."""
+    K = np.array([[focal, 0.0, w / 2.0], [0.0, focal, h / 2.0], [0.0, 0.0, 1.0]])
+    uu, vv = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    pts = np.column_stack([uu.ravel(), vv.ravel()]).reshape(-1, 1, 2)
+    und = cv2.undistortPoints(pts, K, np.asarray(dist), criteria=_UNDISTORT_CRITERIA)
+    xn = und.reshape(h, w, 2)
+    ext_x = float(np.max(np.abs(xn[:, :, 0]))) * focal
+    ext_y = float(np.max(np.abs(xn[:, :, 1]))) * focal
+    cw = 2 * math.ceil(ext_x + 2.0)
+    ch = 2 * math.ceil(ext_y + 2.0)
+    # a canvas pixel index i looks along (i + 0.5 - cw / 2) / f
+    mx = (xn[:, :, 0] * focal + cw / 2.0 - 0.5).astype(np.float32)
+    my = (xn[:, :, 1] * focal + ch / 2.0 - 0.5).astype(np.float32)
+    m1, m2 = cv2.convertMaps(mx, my, cv2.CV_16SC2)
+    return _Warp(cw, ch, np.asarray(m1), np.asarray(m2))
+
+
+_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-9)
+
+
+@lru_cache(maxsize=8)
+def _vignette(w: int, h: int, v: float) -> NDArray[np.float32]:
+    """Relative brightness ``(h, w)``: ``1 - v (r / r_corner)^2`` about the image centre."""
+    x = (np.arange(w, dtype=np.float32) + 0.5 - w / 2.0) / (w / 2.0)
+    y = (np.arange(h, dtype=np.float32) + 0.5 - h / 2.0) / (w / 2.0)
+    r2 = x[None, :] ** 2 + y[:, None] ** 2
+    out = (1.0 - v * r2 / float(1.0 + (h / w) ** 2)).astype(np.float32)
+    out.setflags(write=False)
+    return out
+
+
+def _box_blur_x(img: NDArray[np.float32], length: float) -> NDArray[np.float32]:
+    """Horizontal box blur over ``length`` pixels (fractional: the end taps are weighted)."""
+    n = math.ceil(length)
+    if n % 2 == 0:
+        n += 1
+    k = np.zeros(n, dtype=np.float32)
+    full = math.floor(length)
+    if full % 2 == 0:
+        full = max(full - 1, 1)
+    c = n // 2
+    k[c - full // 2 : c + full // 2 + 1] = 1.0
+    rest = (length - full) / 2.0
+    if rest > 0 and full + 2 <= n:
+        k[c - full // 2 - 1] = rest
+        k[c + full // 2 + 1] = rest
+    k /= k.sum()
+    out = cv2.filter2D(img, -1, k[None, :], borderType=cv2.BORDER_REPLICATE)
+    return np.asarray(out, dtype=np.float32)
+
+
 @lru_cache(maxsize=4)
 def _noise_bank(n: int) -> NDArray[np.float32]:
     """``2 n`` fixed standard-normal samples; an image takes a random window of ``n`` of them.
@@ -269,7 +466,11 @@ def render(
     pose: ArrayLike,
     camera: Camera | None = None,
     rng: np.random.Generator | int | None = None,
+    *,
+    conditions: CameraConditions | None = None,
+    twist: tuple[float, float] = (0.0, 0.0),
 ) -> NDArray[np.uint8]:
     """Render ``world`` from ``pose`` with ``camera`` (default :class:`Camera`); see
     :meth:`Camera.render`."""
-    return (Camera() if camera is None else camera).render(world, pose, rng)
+    cam = Camera() if camera is None else camera
+    return cam.render(world, pose, rng, conditions=conditions, twist=twist)

@@ -121,6 +121,12 @@ class GyroOdometryBody:
     def collisions(self) -> int:
         return int(getattr(self.body, "collisions", 0))
 
+    @property
+    def twist(self) -> tuple[float, float]:
+        """The wrapped body's last commanded (v [m/s], w [rad/s])."""
+        twist: tuple[float, float] = getattr(self.body, "twist", (0.0, 0.0))
+        return twist
+
     def drive(self, v: float, w: float, dt: float) -> OdometryReading:
         true0 = self.body.pose
         wheel0 = np.asarray(self.body.odom.pose, dtype=np.float64)

@@ -1,9 +1,24 @@
 """A differential-drive robot with exact ground truth and noisy odometry.
 
-The true pose follows velocity commands ``(v, w)`` exactly (arc motion, Thrun et al.,
-*Probabilistic Robotics*, eq. 5.9). The wheel odometry it reports is the true motion between
-two steps, decomposed into ``rot1, trans, rot2`` and corrupted by
-``sample_motion_model_odometry`` (Probabilistic Robotics, Table 5.6)::
+Each step of :meth:`DiffDriveRobot.step` goes through four stages; with the default
+:class:`RobotConfig` only the last is active, and the robot is the one symloc always had (the
+true pose follows the command exactly):
+
+1. **Actuation.** The wheel speed controllers do not track the command exactly: each wheel's
+   speed is ``(1 + e)`` times its commanded speed, ``e ~ N(0, actuation_noise)`` per wheel and
+   step, so the executed ``(v, w)`` differs from the commanded one (a turn appears while driving
+   straight). The wheels turn by the executed motion (arc motion, Thrun et al., *Probabilistic
+   Robotics*, eq. 5.9).
+2. **Wheel slip.** While turning on the spot or accelerating hard, an episode of slip may start
+   (:class:`WheelSlip`): for its duration the robot moves only ``(1 - s)`` of what its wheels
+   turn. The true pose follows the slipped motion; the wheels report the full one.
+3. **Systematic calibration error** (UMBmark's error sources, Borenstein and Feng 1996): the
+   odometry converts wheel turns with slightly wrong wheel diameters and wheel base, so it
+   reports travelled distance x ``(1 + odom_scale_error)``, rotation x
+   ``(1 + odom_rotation_error)``, and a heading drift of ``odom_heading_drift`` [rad] per metre
+   (unequal wheel diameters).
+4. **Zero-mean noise** on the reported increment, decomposed into ``rot1, trans, rot2`` and
+   corrupted by ``sample_motion_model_odometry`` (Probabilistic Robotics, Table 5.6)::
 
     rot1' = rot1 + N(0, alpha1 rot1^2 + alpha2 trans^2)
     trans' = trans + N(0, alpha3 trans^2 + alpha4 (rot1^2 + rot2^2))
@@ -32,6 +47,7 @@ __all__ = [
     "DiffDriveRobot",
     "OdometryNoise",
     "RobotConfig",
+    "WheelSlip",
     "collides",
     "integrate_velocity",
     "sample_motion_model_odometry",
@@ -130,8 +146,60 @@ def collides(
 
 
 @dataclass(frozen=True)
+class WheelSlip:
+    """Episodes of wheel slip: the robot moves less than its wheels turn.
+
+    An episode can start in a step where the robot turns on the spot (``|v| < spot_speed`` and
+    ``|w| > spot_turn``) or its commanded speed changes faster than ``accel_threshold``; it
+    starts with probability ``1 - exp(-rate dt)``, lasts an exponentially distributed time of
+    mean ``duration``, and during it the robot moves ``(1 - s)`` of the wheels' motion, ``s``
+    uniform in ``[fraction_min, fraction_max]`` (drawn per episode).
+
+    Parameters
+    ----------
+    rate : float
+        Episodes per second [1/s] while a trigger holds (0: never slips).
+    duration : float
+        Mean episode length [s], > 0.
+    fraction_min, fraction_max : float
+        Range of the lost fraction of motion, 0 <= min <= max < 1.
+    spot_speed : float
+        Largest |v| [m/s] that counts as turning on the spot.
+    spot_turn : float
+        Smallest |w| [rad/s] that counts as turning on the spot.
+    accel_threshold : float
+        Smallest change of the commanded speed [m/s^2] that counts as hard acceleration.
+    """
+
+    rate: float = 0.0
+    duration: float = 0.3
+    fraction_min: float = 0.05
+    fraction_max: float = 0.2
+    spot_speed: float = 0.05
+    spot_turn: float = 0.3
+    accel_threshold: float = 0.5
+
+    def __post_init__(self) -> None:
+        check_positive(self.rate, "WheelSlip.rate", allow_zero=True)
+        check_positive(self.duration, "WheelSlip.duration")
+        for name in ("spot_speed", "spot_turn", "accel_threshold"):
+            check_positive(getattr(self, name), f"WheelSlip.{name}", allow_zero=True)
+        lo = check_finite_scalar(self.fraction_min, "WheelSlip.fraction_min")
+        hi = check_finite_scalar(self.fraction_max, "WheelSlip.fraction_max")
+        if not 0.0 <= lo <= hi < 1.0:
+            raise ConfigurationError(
+                "WheelSlip.fraction_min, fraction_max: expected 0 <= min <= max < 1, got"
+                f" {lo}, {hi}"
+            )
+
+
+@dataclass(frozen=True)
 class RobotConfig:
-    """Settings of the simulated differential-drive robot.
+    """Settings of the simulated differential-drive robot (see the module docstring).
+
+    The defaults are the robot symloc always simulated: exact actuation, no slip, no
+    calibration error, nav2 AMCL's default odometry noise. A regime of
+    :mod:`symloc.sim.regimes` draws realistic per-robot values.
 
     Parameters
     ----------
@@ -142,20 +210,60 @@ class RobotConfig:
     max_w : float
         Turn-rate limit [rad/s]; commands beyond it raise.
     noise : OdometryNoise
-        Odometry noise alphas.
+        Zero-mean odometry noise alphas.
+    wheel_base : float
+        Distance [m] between the wheels (Kobuki 0.230 m), for the per-wheel actuation error.
+    odom_scale_error : float
+        Reported distance / true wheel distance - 1 (e.g. 0.015: odometry says 1.015 m per
+        metre), in (-0.5, 0.5).
+    odom_rotation_error : float
+        Reported rotation / true rotation - 1 (wheel-base error), in (-0.5, 0.5).
+    odom_heading_drift : float
+        Heading error [rad] the odometry adds per metre travelled (unequal wheel diameters).
+    actuation_noise : float
+        Standard deviation of each wheel's speed error, a fraction of its commanded speed
+        (>= 0, < 0.5).
+    slip : WheelSlip
+        Wheel slip episodes (default: none).
     """
 
     radius: float = 0.177
     max_v: float = 0.7
     max_w: float = 3.0
     noise: OdometryNoise = OdometryNoise()
+    wheel_base: float = 0.23
+    odom_scale_error: float = 0.0
+    odom_rotation_error: float = 0.0
+    odom_heading_drift: float = 0.0
+    actuation_noise: float = 0.0
+    slip: WheelSlip = WheelSlip()
 
     def __post_init__(self) -> None:
         check_positive(self.radius, "RobotConfig.radius")
         check_positive(self.max_v, "RobotConfig.max_v")
         check_positive(self.max_w, "RobotConfig.max_w")
+        check_positive(self.wheel_base, "RobotConfig.wheel_base")
         if not isinstance(self.noise, OdometryNoise):
             raise ConfigurationError("RobotConfig.noise: expected an OdometryNoise")
+        if not isinstance(self.slip, WheelSlip):
+            raise ConfigurationError("RobotConfig.slip: expected a WheelSlip")
+        for name in ("odom_scale_error", "odom_rotation_error"):
+            v = check_finite_scalar(getattr(self, name), f"RobotConfig.{name}")
+            if not -0.5 < v < 0.5:
+                raise ConfigurationError(
+                    f"RobotConfig.{name}: expected a fraction in (-0.5, 0.5), got {v}"
+                )
+        check_finite_scalar(self.odom_heading_drift, "RobotConfig.odom_heading_drift")
+        a = check_positive(self.actuation_noise, "RobotConfig.actuation_noise", allow_zero=True)
+        if a >= 0.5:
+            raise ConfigurationError(
+                f"RobotConfig.actuation_noise: expected a fraction in [0, 0.5), got {a}"
+            )
+
+    @property
+    def has_systematic_error(self) -> bool:
+        """True if the odometry has a calibration error (scale, rotation or drift)."""
+        return bool(self.odom_scale_error or self.odom_rotation_error or self.odom_heading_drift)
 
 
 class DiffDriveRobot:
@@ -188,7 +296,12 @@ class DiffDriveRobot:
         self._pose = as_pose(pose).copy()
         self._odom = as_pose(odom_origin, "odom_origin").copy()
         self._time = 0.0
+        self._last_v = 0.0
+        self._slip_left = 0.0
+        self._slip_frac = 0.0
         self.world = world
+        #: True while the last step slipped (the robot moved less than its wheels).
+        self.slipping = False
 
     @property
     def pose(self) -> FloatArray:
@@ -215,11 +328,29 @@ class DiffDriveRobot:
         p = as_pose(pose)
         return bool(collides(self.world, p[None, :2], self.config.radius)[0])
 
+    def _slip_fraction(self, v: float, w: float, dt: float) -> float:
+        """Fraction of the wheels' motion lost to slip in this step (0 outside episodes)."""
+        sl = self.config.slip
+        if sl.rate <= 0.0:
+            return 0.0
+        if self._slip_left > 0.0:
+            self._slip_left -= dt
+            return self._slip_frac
+        spot = abs(v) < sl.spot_speed and abs(w) > sl.spot_turn
+        accel = abs(v - self._last_v) / dt > sl.accel_threshold
+        if (spot or accel) and self._rng.random() < -math.expm1(-sl.rate * dt):
+            self._slip_left = float(self._rng.exponential(sl.duration)) - dt
+            self._slip_frac = float(self._rng.uniform(sl.fraction_min, sl.fraction_max))
+            return self._slip_frac
+        return 0.0
+
     def step(self, v: float, w: float, dt: float) -> bool:
-        """Drive at ``v`` [m/s] and ``w`` [rad/s] for ``dt`` [s].
+        """Drive with the command ``v`` [m/s], ``w`` [rad/s] for ``dt`` [s].
 
         Returns False (and does not move, but time passes) if the motion would end in a
-        collision; else updates the true pose and the noisy odometry and returns True.
+        collision; else updates the true pose and the odometry and returns True. The true
+        motion differs from the command by the actuation error and slip; the odometry reports
+        the wheels' motion through the calibration error and noise (module docstring).
         """
         v = check_finite_scalar(v, "v")
         w = check_finite_scalar(w, "w")
@@ -230,16 +361,33 @@ class DiffDriveRobot:
             raise ConfigurationError(
                 f"w: |w| must be <= max_w = {self.config.max_w} rad/s, got {w}"
             )
-        new = integrate_velocity(self._pose, v, w, dt)
+        cfg = self.config
+        ve, we = v, w
+        if cfg.actuation_noise > 0.0:
+            half = 0.5 * cfg.wheel_base
+            e = self._rng.normal(0.0, cfg.actuation_noise, 2)
+            vl = (v - w * half) * (1.0 + float(e[0]))
+            vr = (v + w * half) * (1.0 + float(e[1]))
+            ve, we = 0.5 * (vl + vr), (vr - vl) / cfg.wheel_base
+        s = self._slip_fraction(v, w, dt)
+        self._last_v = v
+        self.slipping = s > 0.0
+        wheels = integrate_velocity(self._pose, ve, we, dt)
+        new = wheels if s == 0.0 else integrate_velocity(self._pose, ve * (1 - s), we * (1 - s), dt)
         self._time += dt
         if self.collides_at(new):
             return False
-        r1, tr, r2 = rot_trans_rot(self._pose, new, min_trans=1e-9)
-        if v < 0 and float(tr) > 0:  # driving backwards: heading of travel is behind us
+        r1, tr, r2 = rot_trans_rot(self._pose, wheels, min_trans=1e-9)
+        if ve < 0 and float(tr) > 0:  # driving backwards: heading of travel is behind us
             r1 = wrap_angle(r1 + math.pi)
             r2 = wrap_angle(r2 - math.pi)
             tr = -tr
-        n1, nt, n2 = sample_motion_model_odometry(r1, tr, r2, self.config.noise, self._rng)
+        if cfg.has_systematic_error:
+            tr = tr * (1.0 + cfg.odom_scale_error)
+            drift = 0.5 * cfg.odom_heading_drift * tr
+            r1 = r1 * (1.0 + cfg.odom_rotation_error) + drift
+            r2 = r2 * (1.0 + cfg.odom_rotation_error) + drift
+        n1, nt, n2 = sample_motion_model_odometry(r1, tr, r2, cfg.noise, self._rng)
         self._odom = rot_trans_rot_to_pose(self._odom, n1, nt, n2)
         self._pose = new
         return True

@@ -22,6 +22,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng, check_positive
 from symloc.errors import ConfigurationError, WorldError
+from symloc.sim.free_space import FreeSpace, free_space_grid
+from symloc.sim.people import Person, people_world
+from symloc.sim.symmetry_truth import SymmetryTruth, lidar_symmetry
 from symloc.sim.world import (
     MATERIAL_BOARD,
     MATERIAL_FURNITURE,
@@ -29,11 +32,13 @@ from symloc.sim.world import (
     MATERIAL_WALL,
     World,
     check_polygon,
+    points_in_polygon,
     polygon_walls,
 )
 
 __all__ = [
     "BOARD_HEIGHT",
+    "ROBOT_RADIUS",
     "ROOM_NAMES",
     "WALL_HEIGHT",
     "Room",
@@ -47,6 +52,7 @@ __all__ = [
     "rectangle_room",
     "regular_polygon_room",
     "with_lab",
+    "with_truth",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -57,6 +63,9 @@ WALL_HEIGHT = 2.5
 """Height [m] of full-height walls (lab walls, Gazebo-style rooms)."""
 FURNITURE_HEIGHT = 0.75
 DOOR_WIDTH = 0.8
+ROBOT_RADIUS = 0.18
+"""Default robot radius [m] for free-space queries (a TurtleBot3 Burger is 0.105 m, a Waffle
+0.177 m; the paper's robot about 0.18 m)."""
 
 _POLYGON_SIDES = {"triangle": 3, "square": 4, "pentagon": 5, "hexagon": 6, "octagon": 8}
 ROOM_NAMES = (*_POLYGON_SIDES, "circle", "rectangle", "hallway", "l_shaped")
@@ -65,20 +74,6 @@ ROOM_NAMES = (*_POLYGON_SIDES, "circle", "rectangle", "hallway", "l_shaped")
 RECTANGLE_ASPECT = 1.5
 HALLWAY_ASPECT = 6.0
 _CIRCLE_DOOR_SEGMENTS = 96
-
-
-def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
-    """``(N,)`` True where points ``(N, 2)`` lie inside the polygon ``(V, 2)`` (even-odd rule)."""
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    v = np.asarray(polygon, dtype=np.float64)
-    a = v[None, :, :]
-    b = np.roll(v, -1, axis=0)[None, :, :]
-    px, py = p[:, None, 0], p[:, None, 1]
-    straddle = (a[..., 1] > py) != (b[..., 1] > py)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_cross = a[..., 0] + (py - a[..., 1]) * (b[..., 0] - a[..., 0]) / (b[..., 1] - a[..., 1])
-    crossings = np.count_nonzero(straddle & (px < x_cross), axis=1)
-    return np.asarray((crossings % 2) == 1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,11 +99,12 @@ class Room:
         Centre to vertex [m] (the paper's G-V distance); the radius for a circle; the largest
         centre-to-corner distance for an L-shaped room.
     shape_order : int
-        Rotational symmetry order of the bare outline: n for a regular n-gon, 2 for a rectangle
-        or hallway, 1 for an L-shape, 0 for a circle (continuous symmetry).
+        Rotational symmetry order of the bare outline, computed from it: n for a regular n-gon,
+        2 for a rectangle or hallway, 1 for an L-shape, 0 for a circle (continuous symmetry).
     order : int
-        Rotational symmetry order of what the lidar sees: ``shape_order`` for a closed, empty
-        room, 1 when a door gap or furniture breaks the symmetry.
+        Rotational symmetry order of what the lidar sees, computed from the world by
+        :func:`symloc.sim.symmetry_truth.lidar_symmetry` (see :attr:`symmetry`): ``shape_order``
+        for a closed, empty room, 1 when a door gap or furniture breaks the symmetry.
     regular : bool
         True for a regular polygon or a circle.
     door : bool
@@ -117,6 +113,18 @@ class Room:
         Number of furniture items (boxes + round tables) inside.
     wall_height : float
         Height [m] of the room's own walls (0.4 m boards inside a lab, else 2.5 m).
+    room_world : World
+        The room's own walls (and closed doors), without furniture or lab.
+    people : tuple of Person
+        People walking in the room (see :meth:`world_at`); not part of :attr:`world`.
+    obstacles : tuple of ndarray of shape (V, 2)
+        Footprints [m] of solid obstacles inside the room (boxes, square pillars), whatever
+        their height: the robot cannot stand inside them.
+    obstacle_circles : ndarray of shape (C, 3)
+        Round solid obstacles ``cx, cy, r`` [m] (round tables, cylinders, round pillars).
+    symmetry : SymmetryTruth or None
+        The computed ground truth (:func:`symloc.sim.symmetry_truth.lidar_symmetry`) that
+        ``order`` comes from; None for a room assembled by hand.
     """
 
     name: str
@@ -133,6 +141,127 @@ class Room:
     n_furniture: int = 0
     wall_height: float = WALL_HEIGHT
     room_world: World = field(default_factory=World)
+    people: tuple[Person, ...] = ()
+    obstacles: tuple[FloatArray, ...] = ()
+    obstacle_circles: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    symmetry: SymmetryTruth | None = None
+    _cache: dict[tuple[float, float], FreeSpace] = field(
+        init=False, default_factory=dict, repr=False
+    )
+    _truths: dict[bool, SymmetryTruth] = field(init=False, default_factory=dict, repr=False)
+
+    def truth(self, *, glass_visible: bool = False) -> SymmetryTruth:
+        """The true symmetry of what the lidar sees, glass transparent (the default, as
+        :attr:`symmetry` and :attr:`order`) or opaque (a lidar model that sees glass like a
+        wall, e.g. the ``ideal`` sensor regime). Computed once per choice."""
+        if not glass_visible and self.symmetry is not None:
+            return self.symmetry
+        if glass_visible not in self._truths:
+            self._truths[glass_visible] = lidar_symmetry(
+                self.world, self.boundary, glass_visible=glass_visible
+            )
+        return self._truths[glass_visible]
+
+    def world_at(self, t: float) -> World:
+        """The static world plus the people where they are at time ``t`` [s]."""
+        if not self.people:
+            return self.world
+        return self.world + people_world(self.people, float(t))
+
+    def is_free(self, points: ArrayLike, clearance: float = ROBOT_RADIUS) -> NDArray[np.bool_]:
+        """``(N,)`` True where a round robot of radius ``clearance`` [m] fits at points ``(N, 2)``.
+
+        Free means: inside the room outline and at least ``clearance`` from it (the whole robot
+        is in the room, not half-way through a door), at least ``clearance`` from every static
+        wall, circle and furniture outline of any height (a robot collides with a low box the
+        lidar does not see), and not inside a solid obstacle. People are not counted (they
+        move).
+        """
+        c = check_positive(clearance, "clearance", allow_zero=True)
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        out = self.contains(p)
+        b = self.boundary
+        outline = World(np.column_stack([b, np.roll(b, -1, axis=0)]))
+        step = 20_000
+        for i in range(0, p.shape[0], step):
+            sl = slice(i, i + step)
+            idx = np.flatnonzero(out[sl]) + i
+            if idx.size:
+                q = p[idx]
+                out[idx] = (self.world.distance(q) >= c) & (outline.distance(q) >= c)
+        for poly in self.obstacles:
+            out &= ~points_in_polygon(p, poly)
+        oc = self.obstacle_circles
+        if oc.shape[0] and p.shape[0]:
+            d = np.hypot(p[:, None, 0] - oc[:, 0], p[:, None, 1] - oc[:, 1]) - oc[:, 2]
+            out &= np.all(d >= c, axis=1)
+        return out
+
+    def free_space(
+        self, clearance: float = ROBOT_RADIUS, resolution: float | None = None
+    ) -> FreeSpace:
+        """The free-space grid for a robot of radius ``clearance`` [m] (computed once, cached).
+
+        ``resolution`` [m] defaults to 5 cm, coarser for very large rooms (at most about 400 000
+        cells).
+        """
+        c = check_positive(clearance, "clearance", allow_zero=True)
+        xmin, ymin = self.boundary.min(axis=0)
+        xmax, ymax = self.boundary.max(axis=0)
+        if resolution is None:
+            res = max(0.05, math.sqrt((xmax - xmin) * (ymax - ymin) / 400_000.0))
+        else:
+            res = check_positive(resolution, "resolution")
+        key = (c, res)
+        if key not in self._cache:
+            self._cache[key] = free_space_grid(
+                self.boundary,
+                self.world,
+                solids=self.obstacles,
+                solid_circles=self.obstacle_circles,
+                resolution=res,
+                clearance=c,
+                center=self.center,
+            )
+        return self._cache[key]
+
+    def is_reachable(self, points: ArrayLike, clearance: float = ROBOT_RADIUS) -> NDArray[np.bool_]:
+        """``(N,)`` True where a robot fits and can drive to the room centre (or, if it cannot
+        stand at the centre, within the largest free region)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        ok = self.is_free(p, clearance)
+        if np.any(ok):
+            ok[ok] = self.free_space(clearance).in_reachable(p[ok])
+        return ok
+
+    def sample_pose(
+        self,
+        rng: np.random.Generator | int | None = None,
+        clearance: float = ROBOT_RADIUS,
+        *,
+        reachable: bool = True,
+    ) -> FloatArray:
+        """A uniformly random pose ``(3,)`` (x [m], y [m], theta [rad]) where the robot fits.
+
+        Positions are uniform over the free space (rejection sampling from the outline's
+        bounding box, so right up to ``clearance`` from the walls and furniture, not on a grid);
+        ``reachable`` keeps only those from which the robot can drive to the room centre (see
+        :meth:`is_reachable`); the heading is uniform in (-pi, pi].
+        """
+        gen = as_rng(rng)
+        xmin, ymin = self.boundary.min(axis=0)
+        xmax, ymax = self.boundary.max(axis=0)
+        for _ in range(200):
+            cand = np.column_stack([gen.uniform(xmin, xmax, 256), gen.uniform(ymin, ymax, 256)])
+            ok = self.is_reachable(cand, clearance) if reachable else self.is_free(cand, clearance)
+            if np.any(ok):
+                x, y = cand[int(np.flatnonzero(ok)[0])]
+                theta = math.pi - gen.uniform(0.0, 2.0 * math.pi)
+                return np.array([x, y, theta])
+        raise WorldError(
+            f"sample_pose: no place in room {self.name!r} where a robot of radius"
+            f" {clearance} m fits"
+        )
 
     @property
     def symmetric(self) -> bool:
@@ -205,7 +334,6 @@ def _room_from_polygon(
     kind: str,
     vertices: FloatArray,
     *,
-    shape_order: int,
     regular: bool,
     gv_distance: float | None,
     door: bool | float,
@@ -219,21 +347,30 @@ def _room_from_polygon(
     world = World(walls, height, _material_per_wall(len(walls), textured))
     center = _centroid(v)
     gv = float(np.max(np.hypot(*(v - center).T))) if gv_distance is None else gv_distance
-    return Room(
-        name=name,
-        kind=kind,
-        world=world,
-        boundary=v,
-        corners=v.copy(),
-        center=center,
-        gv_distance=gv,
-        shape_order=shape_order,
-        order=1 if door_arg is not None else shape_order,
-        regular=regular,
-        door=door_arg is not None,
-        wall_height=height,
-        room_world=world,
+    bare = World(polygon_walls(v, name=name), height)
+    return with_truth(
+        Room(
+            name=name,
+            kind=kind,
+            world=world,
+            boundary=v,
+            corners=v.copy(),
+            center=center,
+            gv_distance=gv,
+            shape_order=lidar_symmetry(bare, v).order,
+            order=1,
+            regular=regular,
+            door=door_arg is not None,
+            wall_height=height,
+            room_world=world,
+        )
     )
+
+
+def with_truth(room: Room) -> Room:
+    """``room`` with ``order`` and ``symmetry`` computed from its world (never declared)."""
+    truth = lidar_symmetry(room.world, room.boundary)
+    return _replace(room, order=truth.order, symmetry=truth)
 
 
 def _centroid(v: FloatArray) -> FloatArray:
@@ -271,7 +408,6 @@ def regular_polygon_room(
         names.get(n, f"{n}-gon"),
         "polygon",
         v,
-        shape_order=n,
         regular=True,
         gv_distance=r,
         door=door,
@@ -300,7 +436,6 @@ def rectangle_room(
         kind,
         kind,
         v,
-        shape_order=4 if square else 2,
         regular=square,
         gv_distance=None,
         door=door,
@@ -348,7 +483,6 @@ def l_shaped_room(
         "l_shaped",
         "l_shaped",
         v,
-        shape_order=1,
         regular=False,
         gv_distance=None,
         door=door,
@@ -379,7 +513,7 @@ def circular_room(
         world = World(
             circles=np.array([[c[0], c[1], r]]), circle_heights=height, circle_materials=mat
         )
-        order, has_door = 0, False
+        has_door = False
     else:
         k = _CIRCLE_DOOR_SEGMENTS
         a2 = -math.pi / 2 + 2 * math.pi * (np.arange(k) + 0.5) / k
@@ -398,21 +532,23 @@ def circular_room(
         u1 = (j + 1) / per_tile - tile
         mats = mat + tile if textured else np.full(k, mat)
         world = World(walls[keep], height, mats[keep], wall_tex_u=np.column_stack([u0, u1])[keep])
-        order, has_door = 1, True
-    return Room(
-        name="circle",
-        kind="circle",
-        world=world,
-        boundary=boundary,
-        corners=np.zeros((0, 2)),
-        center=c.copy(),
-        gv_distance=r,
-        shape_order=0,
-        order=order,
-        regular=True,
-        door=has_door,
-        wall_height=height,
-        room_world=world,
+        has_door = True
+    return with_truth(
+        Room(
+            name="circle",
+            kind="circle",
+            world=world,
+            boundary=boundary,
+            corners=np.zeros((0, 2)),
+            center=c.copy(),
+            gv_distance=r,
+            shape_order=lidar_symmetry(World(circles=np.array([[c[0], c[1], r]]))).order,
+            order=1,
+            regular=True,
+            door=has_door,
+            wall_height=height,
+            room_world=world,
+        )
     )
 
 
@@ -487,11 +623,13 @@ def with_lab(
     lab_world = lab(
         lw, ld, center=room.center, n_segments=n_segments, height=WALL_HEIGHT, textured=textured
     )
-    return _replace(
-        room,
-        world=World.merge([boards, furniture, lab_world]),
-        room_world=boards,
-        wall_height=bh,
+    return with_truth(
+        _replace(
+            room,
+            world=World.merge([boards, furniture, lab_world]),
+            room_world=boards,
+            wall_height=bh,
+        )
     )
 
 
@@ -529,7 +667,8 @@ def add_furniture(
     Sizes, orientations and positions are drawn from ``rng`` (None means the fixed seed 0, so
     the same call builds the same room). Items keep 0.05 m from the walls and 0.25 m from each other and
     stay at least ``keep_center_free`` [m] away from the centre, where the robot goes to look
-    around. Any furniture makes the lidar-visible geometry asymmetric (``order`` becomes 1).
+    around. The order is recomputed from the geometry (furniture taller than the lidar plane
+    placed like this breaks any symmetry, so it becomes 1).
     """
     for name, val in (("boxes", boxes), ("tables", tables)):
         if int(val) != val or val < 0:
@@ -541,6 +680,7 @@ def add_furniture(
     kinds = ["box"] * int(boxes) + ["table"] * int(tables)
     placed: list[tuple[FloatArray, float]] = []
     segs: list[FloatArray] = []
+    footprints: list[FloatArray] = []
     circles: list[list[float]] = []
     cand = room.positions_inside(400, margin=0.15)
     far = np.hypot(*(cand - room.center).T) >= keep_center_free
@@ -568,6 +708,7 @@ def add_furniture(
                 local = np.array([[-hw, -hd], [hw, -hd], [hw, hd], [-hw, hd]])
                 corners = p + local @ rot.T
                 segs.extend(polygon_walls(corners, name="furniture box"))
+                footprints.append(corners)
             else:
                 circles.append([p[0], p[1], rad])
             break
@@ -584,11 +725,14 @@ def add_furniture(
         FURNITURE_HEIGHT,
         MATERIAL_FURNITURE,
     )
-    return _replace(
-        room,
-        world=room.world + furn,
-        order=1,
-        n_furniture=room.n_furniture + len(placed),
+    return with_truth(
+        _replace(
+            room,
+            world=room.world + furn,
+            n_furniture=room.n_furniture + len(placed),
+            obstacles=(*room.obstacles, *footprints),
+            obstacle_circles=np.concatenate([room.obstacle_circles, furn.circles]),
+        )
     )
 
 

@@ -1,11 +1,21 @@
-"""Surface textures for the simulated camera: real photographs and plain materials.
+"""Surface textures for the simulated camera: a pool of wall textures and plain materials.
 
-The photographs are the ones scikit-image ships inside its wheel (``skimage.data``; nothing is
-downloaded at run time): astronaut, coffee, chelsea (a cat), rocket, the Hubble deep field, the
-left view of the Middlebury motorcycle stereo pair, an immunohistochemistry slide, the
-cameraman, coins, the moon, a clock, a brick wall, grass, gravel, a retina and a printed page.
-Material ``MATERIAL_PHOTO + k`` shows photo ``k % len(PHOTO_NAMES)``. Plain materials are a
-flat colour with faint (+-3 grey level) noise, like a matte painted surface.
+Material ``MATERIAL_PHOTO + k`` shows texture ``k % TEXTURE_POOL_SIZE`` of a deterministic pool
+of 4096 distinct textures:
+
+- ``k < 16``: the photographs scikit-image ships inside its wheel (``skimage.data``; nothing is
+  downloaded at run time): astronaut, coffee, chelsea (a cat), rocket, the Hubble deep field,
+  the left view of the Middlebury motorcycle stereo pair, an immunohistochemistry slide, the
+  cameraman, coins, the moon, a clock, a brick wall, grass, gravel, a retina and a printed page
+  (the textures of symloc's rooms since the beginning);
+- ``k >= 16``: procedural posters and walls built from crops, flips and colour changes of
+  those photos plus synthetic content (text, shapes, shelves, tiles, windows, notice boards,
+  signs), seeded by ``k`` alone (:mod:`symloc.sim.poster`).
+
+Plain materials are a flat colour with faint (+-3 grey level) noise, like a matte painted
+surface (board, wall, wood, a dark surface, glass seen head-on). ``MATERIAL_PERSON`` is a
+person: hair and face, a patterned shirt, trousers and shoes, different all around (one
+texture spans a person's circumference).
 
 Each texture is a ``TEXTURE_SIZE`` square and comes with a mip-map pyramid (each level half the
 previous one, box-filtered), so that a far wall is sampled like a camera would integrate it,
@@ -21,15 +31,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.sim.world import MATERIAL_BOARD, MATERIAL_FURNITURE, MATERIAL_PHOTO, MATERIAL_WALL
+from symloc.sim.poster import procedural_texture
+from symloc.sim.world import (
+    MATERIAL_BOARD,
+    MATERIAL_DARK,
+    MATERIAL_FURNITURE,
+    MATERIAL_GLASS,
+    MATERIAL_PERSON,
+    MATERIAL_PHOTO,
+    MATERIAL_WALL,
+)
 
 __all__ = [
     "PHOTO_NAMES",
     "PLAIN_COLORS",
+    "TEXTURE_POOL_SIZE",
     "TEXTURE_SIZE",
     "TextureAtlas",
     "load_photo",
     "material_texture",
+    "person_texture",
+    "pool_texture",
     "texture_atlas",
 ]
 
@@ -57,12 +79,18 @@ PHOTO_NAMES = (
 )
 """The ``skimage.data`` photographs, in material order."""
 
+TEXTURE_POOL_SIZE = 4096
+"""Number of distinct wall textures: ``MATERIAL_PHOTO + k`` shows texture ``k % 4096``."""
+
 PLAIN_COLORS: dict[int, tuple[int, int, int]] = {
     MATERIAL_BOARD: (196, 188, 170),
     MATERIAL_WALL: (205, 205, 200),
     MATERIAL_FURNITURE: (130, 95, 60),
+    MATERIAL_GLASS: (176, 196, 204),
+    MATERIAL_DARK: (34, 33, 36),
 }
-"""RGB of the plain materials (board, painted wall, wood)."""
+"""RGB of the plain materials (board, painted wall, wood, glass, a dark surface). The camera
+sees through glass (:mod:`symloc.sim.camera`); its colour is only used if a caller asks for it."""
 
 _N_LEVELS = 7  # 768 .. 12
 
@@ -89,16 +117,77 @@ def load_photo(index: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
     return out
 
 
+def pool_texture(k: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
+    """Texture ``k % TEXTURE_POOL_SIZE`` of the pool, ``(size, size, 3)`` uint8 RGB."""
+    i = int(k) % TEXTURE_POOL_SIZE
+    if i < len(PHOTO_NAMES):
+        return load_photo(i, size)
+    return procedural_texture(i, size, load_photo)
+
+
+def person_texture(size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
+    """A person seen all around, ``(size, size, 3)`` uint8: rows top to bottom are hair and
+    face (12 %), a shirt (12-52 %), trousers (52-94 %) and shoes; columns go once around the
+    person, with the clothes of five people side by side so that people look different from
+    different sides."""
+    rng = np.random.default_rng(0x9E0)
+    s = int(size)
+    img = np.empty((s, s, 3), dtype=np.uint8)
+    rows = (np.array([0.0, 0.05, 0.12, 0.52, 0.94, 1.0]) * s).astype(int)
+    n = 5
+    edges = np.linspace(0, s, n + 1).astype(int)
+    for i in range(n):
+        x0, x1 = edges[i], edges[i + 1]
+        hair = rng.integers(10, 110, 3)
+        skin = np.array([224, 172, 140]) * rng.uniform(0.45, 1.05)
+        shirt = rng.integers(20, 240, 3)
+        shirt2 = rng.integers(20, 240, 3)
+        trousers = rng.integers(15, 90, 3) + np.array([0, 0, int(rng.integers(0, 80))])
+        img[rows[0] : rows[1], x0:x1] = hair
+        img[rows[1] : rows[2], x0:x1] = np.clip(skin, 0, 255)
+        band = img[rows[2] : rows[3], x0:x1]
+        band[:] = shirt
+        style = i % 3
+        if style == 0:  # stripes
+            pitch = max(2, s // int(rng.integers(20, 60)))
+            band[(np.arange(band.shape[0]) // pitch) % 2 == 1] = shirt2
+        elif style == 1:  # checks
+            pitch = max(2, s // int(rng.integers(15, 40)))
+            yy, xx = np.mgrid[0 : band.shape[0], 0 : band.shape[1]]
+            band[((yy // pitch) + (xx // pitch)) % 2 == 1] = shirt2
+        else:  # a print on the front
+            cx, cy = band.shape[1] // 2, band.shape[0] // 2
+            cv2.circle(band, (cx, cy), band.shape[1] // 4, tuple(int(c) for c in shirt2), -1)
+            cv2.putText(
+                band,
+                "SYM",
+                (cx - band.shape[1] // 4, cy),
+                cv2.FONT_HERSHEY_DUPLEX,
+                s / 700.0,
+                (240, 240, 240),
+                max(1, s // 300),
+                cv2.LINE_AA,
+            )
+        img[rows[3] : rows[4], x0:x1] = trousers
+        img[rows[4] : rows[5], x0:x1] = rng.integers(5, 60, 3)
+    # folds: faint darker vertical lines
+    img[:, :: max(2, s // 48)] = (img[:, :: max(2, s // 48)] * 0.8).astype(np.uint8)
+    img.setflags(write=False)
+    return img
+
+
 @lru_cache(maxsize=32)
 def material_texture(material: int, size: int = TEXTURE_SIZE) -> NDArray[np.uint8]:
     """The ``(size, size, 3)`` uint8 texture of a material id."""
     m = int(material)
     if m >= MATERIAL_PHOTO:
-        return load_photo(m - MATERIAL_PHOTO, size)
+        return pool_texture(m - MATERIAL_PHOTO, size)
+    if m == MATERIAL_PERSON:
+        return person_texture(size)
     if m not in PLAIN_COLORS:
         raise ConfigurationError(
-            f"material: unknown material id {m}; expected one of {sorted(PLAIN_COLORS)} or"
-            f" >= {MATERIAL_PHOTO} (a photograph)"
+            f"material: unknown material id {m}; expected one of"
+            f" {sorted([*PLAIN_COLORS, MATERIAL_PERSON])} or >= {MATERIAL_PHOTO} (a wall texture)"
         )
     rng = np.random.default_rng(1000 + m)  # fixed: a material always looks the same
     base = np.array(PLAIN_COLORS[m], dtype=np.int16)
@@ -122,7 +211,7 @@ class TextureAtlas:
         For each material, all mip levels concatenated (level l is ``(size >> l)^2`` texels);
         material row ``i`` starts at ``i * row_length``.
     packed : ndarray of shape (M * L,), uint32
-        The same texels packed as R, G, B, 0 bytes.
+        The same texels packed as R, G, B, 255 bytes.
     offsets : ndarray of shape (levels,)
         Start of each level inside a material's row.
     """
@@ -138,7 +227,7 @@ class TextureAtlas:
         self.level_sizes = np.array(levels, dtype=np.int64)
         self.offsets = np.concatenate([[0], np.cumsum(self.level_sizes**2)[:-1]]).astype(np.int64)
         total = int(np.sum(self.level_sizes**2))
-        texels = np.empty((len(materials), total, 3), dtype=np.uint8)
+        packed = np.empty(len(materials) * total, dtype=np.uint32)
         for i, m in enumerate(materials):
             img = material_texture(m, self.size)
             for lvl, ls in enumerate(levels):
@@ -147,13 +236,13 @@ class TextureAtlas:
                         cv2.resize(img, (int(ls), int(ls)), interpolation=cv2.INTER_AREA),
                         dtype=np.uint8,
                     )
-                off = self.offsets[lvl]
-                texels[i, off : off + ls * ls] = img.reshape(-1, 3)
-        self.texels = texels.reshape(-1, 3)
-        rgbx = np.zeros((self.texels.shape[0], 4), dtype=np.uint8)
-        rgbx[:, :3] = self.texels
-        #: the same texels packed as one uint32 each (R, G, B, 0 bytes), for 1-D gathers
-        self.packed = rgbx.view(np.uint32).ravel()
+                off = i * total + int(self.offsets[lvl])
+                rgba = cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_RGB2RGBA)
+                packed[off : off + ls * ls] = np.asarray(rgba).view(np.uint32).ravel()
+        #: the texels packed as one uint32 each (R, G, B, 255 bytes), for 1-D gathers
+        self.packed = packed
+        #: the same texels as an ``(M * L, 3)`` view (no copy)
+        self.texels = packed.view(np.uint8).reshape(-1, 4)[:, :3]
         self.row_length = total
 
     @property

@@ -35,7 +35,9 @@ __all__ = [
     "MATERIAL_WALL",
     "World",
     "check_polygon",
+    "points_in_polygon",
     "polygon_walls",
+    "segments_cross",
 ]
 
 MATERIAL_BOARD = 0
@@ -233,7 +235,7 @@ class World:
         return float(x.min()), float(x.max()), float(y.min()), float(y.max())
 
 
-def _segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
+def segments_cross(p1: FloatArray, p2: FloatArray, q1: FloatArray, q2: FloatArray) -> bool:
     """True if closed segments p1-p2 and q1-q2 intersect (touching counts)."""
 
     def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
@@ -291,7 +293,7 @@ def check_polygon(vertices: ArrayLike, name: str = "polygon") -> FloatArray:
         for j in range(i + 1, n):
             if j == i + 1 or (i == 0 and j == n - 1):
                 continue
-            if _segments_cross(v[i], nxt[i], v[j], nxt[j]):
+            if segments_cross(v[i], nxt[i], v[j], nxt[j]):
                 raise WorldError(f"{name}: self-intersecting polygon, edge {i} crosses edge {j}")
     area2 = float(np.sum(v[:, 0] * nxt[:, 1] - nxt[:, 0] * v[:, 1]))
     scale = float(np.max(edge_len)) ** 2
@@ -339,3 +341,22 @@ def polygon_walls(
         p_hi = a + hi * (b - a)
         segs[edge : edge + 1] = [np.concatenate([a, p_lo]), np.concatenate([p_hi, b])]
     return np.array(segs, dtype=np.float64)
+
+
+def points_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
+    """``(N,)`` True where points ``(N, 2)`` lie inside the polygon ``(V, 2)`` (even-odd rule)."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    v = np.asarray(polygon, dtype=np.float64)
+    a = v[None, :, :]
+    b = np.roll(v, -1, axis=0)[None, :, :]
+    out = np.zeros(p.shape[0], dtype=bool)
+    step = max(1, 2_000_000 // max(1, v.shape[0]))  # bound the (N, V) temporaries
+    for i in range(0, p.shape[0], step):
+        px, py = p[i : i + step, None, 0], p[i : i + step, None, 1]
+        straddle = (a[..., 1] > py) != (b[..., 1] > py)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dx = (b[..., 0] - a[..., 0]) / (b[..., 1] - a[..., 1])
+            x_cross = a[..., 0] + (py - a[..., 1]) * dx
+        crossings = np.count_nonzero(straddle & (px < x_cross), axis=1)
+        out[i : i + step] = (crossings % 2) == 1
+    return out

@@ -31,7 +31,14 @@ undetermined.
 The residual heading offset (query heading minus stored heading, counter-clockwise positive) is
 read from the homography's inliers (a rotation plus a small zoom fitted to them, or optionally
 the rotation nearest to ``K^-1 H K``), so the decided heading is ``heading_j + offset``, continuous rather
-than a multiple of 360/M. When the decision is not clear, the caller turns the robot clockwise
+than a multiple of 360/M.
+
+A real lens bends straight lines, and a turn in place is a homography only between *ideal*
+pinhole images. When the camera's distortion coefficients are given (``dist_coeffs``, or a
+camera object such as :class:`symloc.camera_model.CameraModel` that carries them), the keypoint
+positions of the query and of the stored images are undistorted (``cv2.undistortPoints``)
+before the homography and the heading offset are fitted; the descriptors are unchanged. Without
+coefficients (or all zero) the positions are used as they are. When the decision is not clear, the caller turns the robot clockwise
 by 360/M and tries again (the paper's protocol), up to M times: see :func:`decide_with_retries`.
 """
 
@@ -39,13 +46,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from symloc.camera_model import check_dist_coeffs, undistort_points
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.vision.bow import BowVector
@@ -58,6 +66,7 @@ __all__ = [
     "OrientationDecision",
     "decide_orientation",
     "decide_with_retries",
+    "dist_coeffs_of",
     "intrinsics_matrix",
     "match_homography",
     "match_inliers",
@@ -219,6 +228,26 @@ def intrinsics_matrix(intrinsics: ArrayLike | object) -> NDArray[np.float64]:
             f"intrinsics: expected a 3x3 camera matrix with fx, fy > 0, got {K}"
         )
     return K
+
+
+def dist_coeffs_of(
+    intrinsics: ArrayLike | object, dist_coeffs: ArrayLike | None = None
+) -> tuple[float, ...]:
+    """Distortion coefficients ``(k1, k2, p1, p2, k3)``: ``dist_coeffs`` if given, else the
+    camera object's ``dist_coeffs`` attribute, else none (all zero)."""
+    if dist_coeffs is None:
+        dist_coeffs = getattr(intrinsics, "dist_coeffs", None)
+    return check_dist_coeffs(dist_coeffs)
+
+
+def _undistorted(
+    features: OrbFeatures, K: NDArray[np.float64], dist: tuple[float, ...]
+) -> OrbFeatures:
+    """``features`` with undistorted keypoint positions (itself when there is no distortion)."""
+    if not any(dist) or len(features) == 0:
+        return features
+    pts = undistort_points(features.points, K, dist).astype(np.float32)
+    return replace(features, points=np.ascontiguousarray(pts))
 
 
 def match_inliers(
@@ -385,6 +414,7 @@ def decide_orientation(
     *,
     extractor: OrbExtractor | None = None,
     query_bow: BowVector | None = None,
+    dist_coeffs: ArrayLike | None = None,
 ) -> OrientationDecision:
     """Decide which of the place's M stored directions the query image faces.
 
@@ -403,6 +433,10 @@ def decide_orientation(
         Used when ``query`` is an image (default settings otherwise).
     query_bow : BowVector, optional
         Precomputed BoW vector of ``query``.
+    dist_coeffs : sequence of 4 or 5 floats, optional
+        OpenCV ``(k1, k2, p1, p2[, k3])`` of the camera that took the query and the stored
+        images; default: ``intrinsics.dist_coeffs`` if it has them, else no distortion.
+        Keypoints are undistorted before the homography (module docstring).
 
     Returns
     -------
@@ -410,6 +444,7 @@ def decide_orientation(
     """
     cfg = config or OrientationConfig()
     K = intrinsics_matrix(intrinsics)
+    dist = dist_coeffs_of(intrinsics, dist_coeffs)
     feats = (
         query if isinstance(query, OrbFeatures) else (extractor or OrbExtractor()).extract(query)
     )
@@ -442,7 +477,8 @@ def decide_orientation(
         return _undecided("undetermined", bow_problem, scores, n_kp)
     # geometric verification against every stored direction (M is small), so that a second
     # view of the same scene is caught even when the BoW ranking put it far down
-    fits = [match_inliers(feats, im.features, cfg) for im in place.images]
+    qf = _undistorted(feats, K, dist)
+    fits = [match_inliers(qf, _undistorted(im.features, K, dist), cfg) for im in place.images]
     inliers = np.array([f[1].shape[0] for f in fits], np.int64)
     if bow_problem:
         best = int(np.argmax(inliers))
@@ -514,6 +550,7 @@ def decide_with_retries(
     config: OrientationConfig | None = None,
     *,
     extractor: OrbExtractor | None = None,
+    dist_coeffs: ArrayLike | None = None,
 ) -> OrientationDecision:
     """The paper's protocol: try, and if undecided turn clockwise by 360/M and try again.
 
@@ -535,7 +572,13 @@ def decide_with_retries(
     last: OrientationDecision | None = None
     for t in range(m):
         d = decide_orientation(
-            capture(t), place, vocabulary, intrinsics, config, extractor=extractor
+            capture(t),
+            place,
+            vocabulary,
+            intrinsics,
+            config,
+            extractor=extractor,
+            dist_coeffs=dist_coeffs,
         )
         if d.decided and d.direction is not None:
             return OrientationDecision(

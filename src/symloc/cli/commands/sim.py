@@ -1,9 +1,11 @@
-"""``symloc sim render``: draw a simulated room from above with the robot's lidar and camera."""
+"""``symloc sim``: draw a simulated world (``render``), write a generated world as a world file
+(``world``), and draw a gallery of generated worlds with their computed symmetry (``gallery``)."""
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -11,7 +13,7 @@ __all__ = ["register"]
 
 
 def register(subparsers: Any) -> None:
-    """Add ``sim`` with its ``render`` sub-command."""
+    """Add ``sim`` with its ``render``, ``world`` and ``gallery`` sub-commands."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "sim", help="the simulated world (rooms, lidar, camera)"
     )
@@ -23,10 +25,24 @@ def register(subparsers: Any) -> None:
     r = sub.add_parser(
         "render",
         help="top view (walls, robot, lidar points) and the camera image as one PNG",
-        description="Build a room, put the robot in it, simulate one lidar scan and one camera "
-        "image, and draw them.",
+        description="Build a room (--room, with the options below) or load a world file "
+        "(--world), put the robot in it, simulate one lidar scan and one camera image, and draw "
+        "them.",
     )
-    r.add_argument("--room", choices=ROOM_NAMES, default="square", help="room shape")
+    which = r.add_mutually_exclusive_group()
+    which.add_argument(
+        "--room", choices=ROOM_NAMES, default=None, help="room shape (default square)"
+    )
+    which.add_argument(
+        "--world",
+        type=Path,
+        default=None,
+        help="a world file (YAML, see docs/world_files.md); --gv, --no-lab, --plain, --door, "
+        "--furniture and --tables apply to --room only",
+    )
+    r.add_argument(
+        "--time", type=float, default=0.0, help="time [s]: where the world's people are (default 0)"
+    )
     r.add_argument(
         "--gv",
         type=float,
@@ -58,6 +74,63 @@ def register(subparsers: Any) -> None:
     from symloc.cli.commands.ros import add_sim_record_parser  # `sim record` (ROS part)
 
     add_sim_record_parser(sub)
+    _add_world_parser(sub)
+    _add_gallery_parser(sub)
+
+
+def _add_world_parser(sub: Any) -> None:
+    from symloc.sim.generator import FAMILIES
+    from symloc.sim.rooms import ROOM_NAMES
+
+    w = sub.add_parser(
+        "world",
+        help="write a generated world (or a named room) as a world file to edit",
+        description="Draw a world of a generator family from a seed (or take one of the named "
+        "rooms) and write it as YAML that `symloc sim render --world` and the bench load. "
+        "Prints the computed symmetry order, centre and G-V distance.",
+    )
+    src = w.add_mutually_exclusive_group()
+    src.add_argument("--family", choices=sorted(FAMILIES), help="generator family")
+    src.add_argument("--room", choices=ROOM_NAMES, help="a named room (as `sim render --room`)")
+    src.add_argument("--list", action="store_true", help="list the families and exit")
+    w.add_argument("--seed", type=int, default=0, help="world seed (printed)")
+    pert = w.add_mutually_exclusive_group()
+    pert.add_argument(
+        "--perturb",
+        dest="perturb",
+        action="store_true",
+        default=None,
+        help="always perturb (default: the seed decides)",
+    )
+    pert.add_argument(
+        "--no-perturb", dest="perturb", action="store_false", help="the bare family room"
+    )
+    w.add_argument("--gv", type=float, default=3.0, help="G-V distance [m] for --room")
+    w.add_argument("--no-lab", action="store_true", help="--room: tall walls, no lab")
+    w.add_argument("--out", type=Path, default=None, help="output YAML (default: print it)")
+    w.set_defaults(func=_world)
+
+
+def _add_gallery_parser(sub: Any) -> None:
+    from symloc.sim.generator import FAMILIES
+
+    g = sub.add_parser(
+        "gallery",
+        help="draw generated worlds in a grid with their computed symmetry order",
+        description="Generate COUNT worlds going round the families (alternately bare and "
+        "perturbed) from --seed on, and draw them from above with their computed order.",
+    )
+    g.add_argument("--out", type=Path, default=Path("gallery"), help="output folder")
+    g.add_argument("--count", type=int, default=16, help="number of worlds (default 16)")
+    g.add_argument(
+        "--families",
+        nargs="+",
+        choices=sorted(FAMILIES),
+        default=None,
+        help="families to draw from (default all)",
+    )
+    g.add_argument("--seed", type=int, default=0, help="first world seed (printed)")
+    g.set_defaults(func=_gallery)
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -68,31 +141,41 @@ def _render(args: argparse.Namespace) -> int:
     from symloc.sim.camera import Camera
     from symloc.sim.lidar import LIDAR_MOUNT_HEIGHT, PRESETS, simulate_scan
     from symloc.sim.rooms import build_room
+    from symloc.sim.world_file import load_world_file
 
     rng = np.random.default_rng(args.seed)
     print(f"# symloc sim render  seed={args.seed}")
-    room = build_room(
-        args.room,
-        args.gv,
-        lab=not args.no_lab,
-        textured=not args.plain,
-        door=args.door,
-        furniture=args.furniture,
-        tables=args.tables,
-        rng=args.seed,
-    )
+    if args.world is not None:
+        room = load_world_file(args.world).build()
+        print(f"#   world file {args.world}")
+    else:
+        room = build_room(
+            args.room or "square",
+            args.gv,
+            lab=not args.no_lab,
+            textured=not args.plain,
+            door=args.door,
+            furniture=args.furniture,
+            tables=args.tables,
+            rng=args.seed,
+        )
     rel = (0.3, 0.2, 30.0) if args.pose is None else args.pose
     pose = np.array([room.center[0] + rel[0], room.center[1] + rel[1], math.radians(rel[2])])
+    if args.pose is None and not room.is_free(pose[None, :2])[0]:
+        pose = room.sample_pose(rng)  # the default spot is taken: any free pose
+        rel = (*(pose[:2] - room.center), math.degrees(pose[2]))
     preset = PRESETS[args.lidar]
     camera = Camera(hfov=math.radians(args.hfov), gain=args.gain)
     print(
-        f"#   room={room.name} gv={room.gv_distance:.3f} m order={room.order} lab={not args.no_lab}"
-        f" textured={not args.plain} door={room.door} furniture={room.n_furniture}"
+        f"#   room={room.name} gv={room.gv_distance:.3f} m order={room.order}"
+        f" shape_order={room.shape_order} wall_height={room.wall_height} door={room.door}"
+        f" furniture={room.n_furniture} people={len(room.people)} t={args.time} s"
     )
     print(f"#   pose=({pose[0]:.3f}, {pose[1]:.3f}, {rel[2]:.1f} deg) lidar={preset.name}")
     print(f"#   camera {camera.width}x{camera.height} hfov={args.hfov} deg gain={args.gain}")
-    scan = simulate_scan(room.world, pose, preset, rng)
-    image = camera.render(room.world, pose, rng)
+    world = room.world_at(args.time)
+    scan = simulate_scan(world, pose, preset, rng)
+    image = camera.render(world, pose, rng)
     pts = scan.to_points()
     world_pts = transform_points(pose, pts.points)
     print(
@@ -100,7 +183,7 @@ def _render(args: argparse.Namespace) -> int:
         f" {pts.n_no_return} no return"
     )
     out = scene_figure(
-        room.world,
+        world,
         pose,
         world_pts,
         image,
@@ -116,4 +199,68 @@ def _render(args: argparse.Namespace) -> int:
         args.image_out.parent.mkdir(parents=True, exist_ok=True)
         cv2.imwrite(str(args.image_out), image[:, :, ::-1])
         print(f"wrote {args.image_out}")
+    return 0
+
+
+def _world(args: argparse.Namespace) -> int:
+    from symloc.sim.generator import FAMILIES, generate_world
+    from symloc.sim.world_file import room_spec, save_world_file
+
+    if args.list:
+        for name, fam in FAMILIES.items():
+            nature = "symmetric" if fam.symmetric else "asymmetric"
+            print(f"{name:<15} {nature:<11} {fam.description}")
+        return 0
+    if args.family is None and args.room is None:
+        print("symloc sim world: give --family F (or --room NAME, or --list)", file=sys.stderr)
+        return 2
+    if args.family is not None:
+        print(f"# symloc sim world  family={args.family} seed={args.seed} perturb={args.perturb}")
+        spec = generate_world(args.family, args.seed, perturb=args.perturb)
+        header = (
+            f"symloc sim world --family {args.family} --seed {args.seed}"
+            + {None: "", True: " --perturb", False: " --no-perturb"}[args.perturb]
+        )
+    else:
+        print(f"# symloc sim world  room={args.room} gv={args.gv} lab={not args.no_lab}")
+        spec = room_spec(args.room, args.gv, lab=not args.no_lab)
+        header = f"symloc sim world --room {args.room} --gv {args.gv}" + (
+            " --no-lab" if args.no_lab else ""
+        )
+    room = spec.build()
+    c = room.center
+    summary = (
+        f"order {room.order} (outline {room.shape_order}), centre ({c[0]:.3f}, {c[1]:.3f}) m,"
+        f" G-V {room.gv_distance:.3f} m"
+    )
+    print(f"#   {spec.name}: {spec.description}")
+    print(f"#   computed: {summary}")
+    if args.out is None:
+        print(spec.to_yaml(), end="")
+    else:
+        out = save_world_file(spec, args.out, header=f"{header}\n{spec.description}\n{summary}")
+        print(f"wrote {out}")
+    return 0
+
+
+def _gallery(args: argparse.Namespace) -> int:
+    from symloc.figures.worlds import gallery_figure
+    from symloc.sim.generator import FAMILIES, generate_world
+
+    families = args.families or list(FAMILIES)
+    if args.count < 1:
+        print("symloc sim gallery: --count must be >= 1", file=sys.stderr)
+        return 2
+    print(f"# symloc sim gallery  seed={args.seed} count={args.count} families={families}")
+    rooms = []
+    for i in range(args.count):
+        fam = families[i % len(families)]
+        seed = args.seed + i
+        perturb = i % 2 == 1
+        spec = generate_world(fam, seed, perturb=perturb)
+        room = spec.build()
+        rooms.append((f"{spec.name}{' (perturbed)' if perturb else ''}", room))
+        print(f"{spec.name:<22} order {room.order:>2}  {spec.description}")
+    out = gallery_figure(rooms, args.out / "worlds_gallery.png")
+    print(f"wrote {out}")
     return 0

@@ -1,0 +1,198 @@
+"""``symloc bench localization``: many worlds, each mapped anew, many trials, symloc and AMCL.
+
+A sweep is a list of :class:`WorldTask` s. Each task builds its world, maps it with its own
+seed (laser SLAM over a mapping trip and the visual map of its symmetric place:
+:func:`symloc.bench.scenario.build_scenario`), then runs its trials
+(:func:`symloc.bench.trial.run_trial`, both methods on the same start). Tasks run in parallel
+through :func:`symloc.bench.sweep.run_sweep`; a task's result depends only on the task, so the
+sweep's JSON is the same for any worker count.
+
+:func:`summarize` folds the trials into rows per (family, method) with Wilson 95 % intervals of
+each rate, median time and distance to the first claim, the 95th percentile of the tracking
+error and the coverage of the published covariance.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symloc.sim.rooms import Room
+
+from .grading import GRADES
+from .scenario import build_scenario
+from .stats import wilson_interval
+from .trial import METHODS, TrialConfig, TrialResult, TrialSpec, run_trial
+from .world_sources import WorldRef, build_world
+
+__all__ = ["WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
+
+
+@dataclass(frozen=True)
+class WorldTask:
+    """One world of a sweep: how to build it, its seed, and its trials.
+
+    ``seed`` drives the mapping run; trial ``i`` gets seed ``seed * 1000 + i`` (independent
+    of the others and of the worker that runs it).
+    """
+
+    ref: WorldRef
+    seed: int
+    trials: int
+    kinds: tuple[str, ...] = ("global", "kidnap")
+    regime: str = "ideal"
+    map_source: str = "slam"
+    config: TrialConfig = field(default_factory=TrialConfig)
+    methods: tuple[str, ...] = METHODS
+
+
+@dataclass(frozen=True)
+class WorldResult:
+    """A task's outcome: the world's truth, the mapping notes, the trials, costs [s]."""
+
+    world_id: str
+    family: str
+    order: int
+    symmetric: bool
+    mapped_place: bool
+    notes: tuple[str, ...]
+    trials: tuple[TrialResult, ...]
+    map_seconds: float
+    trial_seconds: float
+    error: str = ""
+
+
+def run_world(task: WorldTask) -> WorldResult:
+    """Build, map and run one world (the function each worker runs)."""
+    t0 = time.perf_counter()
+    room: Room = build_world(task.ref)
+    order = int(room.order)
+    with tempfile.TemporaryDirectory(prefix="symloc-bench-") as tmp:
+        scen = build_scenario(
+            room,
+            rng=task.seed,
+            workdir=Path(tmp),
+            map_source=task.map_source,
+            explore_laps=1.0,
+            regime=task.regime,
+        )
+        t1 = time.perf_counter()
+        trials = []
+        try:
+            for i in range(task.trials):
+                spec = TrialSpec(
+                    world_id=task.ref.world_id,
+                    family=task.ref.family,
+                    index=i,
+                    kind=task.kinds[i % len(task.kinds)],
+                    seed=task.seed * 1000 + i,
+                )
+                trials.append(run_trial(scen, spec, task.config, methods=task.methods))
+        finally:
+            scen.close()
+    return WorldResult(
+        world_id=task.ref.world_id,
+        family=task.ref.family,
+        order=order,
+        symmetric=order != 1,
+        mapped_place=scen.mapped is not None,
+        notes=tuple(scen.notes),
+        trials=tuple(trials),
+        map_seconds=t1 - t0,
+        trial_seconds=time.perf_counter() - t1,
+    )
+
+
+def trial_rows(results: Sequence[WorldResult]) -> list[dict[str, Any]]:
+    """One flat dict per (trial, method), for JSON and for :func:`summarize`."""
+    rows = []
+    for w in results:
+        for tr in w.trials:
+            for method, mr in tr.results.items():
+                row: dict[str, Any] = {
+                    "world": w.world_id,
+                    "family": w.family,
+                    "order": w.order,
+                    "trial": tr.spec.index,
+                    "kind": tr.spec.kind,
+                    "seed": tr.spec.seed,
+                    "method": method,
+                    "start": list(tr.start),
+                    "kidnap_to": None if tr.kidnap_to is None else list(tr.kidnap_to),
+                    "final_status": mr.final_status,
+                    "final_reason": mr.final_reason,
+                    "collisions": mr.collisions,
+                    "sim_time_s": mr.sim_time,
+                }
+                row.update(mr.grade.as_dict())
+                rows.append(row)
+    return rows
+
+
+def _median(values: list[float]) -> float:
+    v = [x for x in values if math.isfinite(x)]
+    return float(np.median(v)) if v else math.nan
+
+
+def _pooled_coverage(rows: list[dict[str, Any]]) -> float:
+    """Coverage over all claims: each trial's share weighted by its claims."""
+    num = sum(r["coverage"] * r["claims"] for r in rows if math.isfinite(r["coverage"]))
+    den = sum(r["claims"] for r in rows if math.isfinite(r["coverage"]))
+    return num / den if den else math.nan
+
+
+def summarize(rows: list[dict[str, Any]], by: str = "family") -> list[dict[str, Any]]:
+    """Rows per (``by``, method) and an ``all`` row per method, with Wilson 95 % intervals."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((str(r[by]), r["method"]), []).append(r)
+        groups.setdefault(("all", r["method"]), []).append(r)
+    out = []
+    keys = sorted(k for k in groups if k[0] != "all") + sorted(k for k in groups if k[0] == "all")
+    for key in keys:
+        group, method = key
+        g = groups[key]
+        n = len(g)
+        row: dict[str, Any] = {by: group, "method": method, "trials": n}
+        for grade in GRADES:
+            k = sum(1 for r in g if r["grade"] == grade)
+            lo, hi = wilson_interval(k, n)
+            row[grade] = k
+            row[f"{grade}_rate"] = k / n if n else math.nan
+            row[f"{grade}_ci95"] = [lo, hi]
+        claimed = [r for r in g if r["claims"] > 0]
+        row["median_time_to_claim_s"] = _median([r["time_to_claim"] for r in claimed])
+        row["median_distance_to_claim_m"] = _median([r["distance_to_claim"] for r in claimed])
+        p95 = [r["error_p95"] for r in claimed if math.isfinite(r["error_p95"])]
+        row["tracking_error_p95_m"] = float(np.percentile(p95, 50)) if p95 else math.nan
+        hp95 = [r["heading_error_p95"] for r in claimed if math.isfinite(r["heading_error_p95"])]
+        row["tracking_heading_error_p95_deg"] = (
+            math.degrees(float(np.percentile(hp95, 50))) if hp95 else math.nan
+        )
+        row["covariance_coverage"] = _pooled_coverage(claimed)
+        row["fraction_tracking"] = _median([r["fraction_tracking"] for r in g])
+        out.append(row)
+    return out
+
+
+def method_order(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``rows`` with symloc before plain AMCL inside each group (for printing)."""
+    rank = {m: i for i, m in enumerate(METHODS)}
+    return sorted(
+        rows, key=lambda r: (r.get("family", "") == "all", r.get("family", ""), rank[r["method"]])
+    )
+
+
+def world_summary(w: WorldResult) -> dict[str, Any]:
+    """What a world's JSON entry records besides its trials."""
+    d = asdict(w)
+    d.pop("trials")
+    d["notes"] = list(w.notes)
+    return d

@@ -1,0 +1,102 @@
+"""Where a sweep's worlds come from, and the dev/test split of their seeds.
+
+A :class:`WorldRef` names one world: a built-in room (``builtin``: the nine rooms of the
+README's table, each inside the textured lab), a world file (``file``), or a generated world
+(``generated``: a family of the world generator and a seed). Refs are small and picklable; a
+worker builds the world itself with :func:`build_world`.
+
+The split: world ``i`` of a family gets seed ``SPLIT_BASE[split] + i``; the ``dev`` seeds
+(0, 1, 2, ...) are the only ones thresholds and defaults are tuned on, the ``test`` seeds
+(1,000,000, 1,000,001, ...) are where figures are reported. The two never overlap.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from symloc.errors import ConfigurationError
+from symloc.sim.rooms import Room, build_room, hallway, with_lab
+
+__all__ = [
+    "BUILTIN_ROOMS",
+    "SPLIT_BASE",
+    "WorldRef",
+    "build_world",
+    "builtin_refs",
+    "split_seeds",
+]
+
+SPLIT_BASE = {"dev": 0, "test": 1_000_000}
+"""First world seed of each split."""
+
+#: The nine rooms of the README's table: name -> (builder name, G-V [m], textured lab).
+BUILTIN_ROOMS: dict[str, tuple[str, float, bool]] = {
+    "triangle": ("triangle", 2.0, True),
+    "square": ("square", 3.0 / 2**0.5, True),
+    "pentagon": ("pentagon", 2.0, True),
+    "hexagon": ("hexagon", 2.0, True),
+    "circle": ("circle", 1.7, True),
+    "rectangle": ("rectangle", 2.2, True),
+    "hallway": ("hallway", 3.2, True),
+    "hallway_40m": ("hallway_40m", 0.0, True),
+    "square_untextured": ("square", 3.0 / 2**0.5, False),
+}
+
+
+@dataclass(frozen=True)
+class WorldRef:
+    """One world of a sweep: ``source`` is ``builtin`` (``name`` a key of
+    :data:`BUILTIN_ROOMS`), ``file`` (``name`` a path) or ``generated`` (``name`` a family);
+    ``seed`` draws a generated world (unused otherwise)."""
+
+    source: str
+    name: str
+    seed: int = 0
+
+    @property
+    def family(self) -> str:
+        """The row a world's trials are counted under."""
+        if self.source == "file":
+            return f"file:{self.name.rsplit('/', 1)[-1]}"
+        return self.name
+
+    @property
+    def world_id(self) -> str:
+        """Unique within a sweep: ``family#seed``."""
+        return f"{self.family}#{self.seed}"
+
+
+def split_seeds(split: str, count: int, offset: int = 0) -> list[int]:
+    """``count`` world seeds of ``split`` (``dev`` or ``test``), from ``offset``."""
+    if split not in SPLIT_BASE:
+        raise ConfigurationError(f"split: expected 'dev' or 'test', got {split!r}")
+    if count < 1:
+        raise ConfigurationError(f"count: expected >= 1 worlds, got {count}")
+    return [SPLIT_BASE[split] + offset + i for i in range(count)]
+
+
+def builtin_refs(names: Sequence[str], seeds: Sequence[int]) -> list[WorldRef]:
+    """Every built-in room of ``names`` with every seed (a new map per seed)."""
+    bad = [n for n in names if n not in BUILTIN_ROOMS]
+    if bad:
+        raise ConfigurationError(
+            f"room: unknown {', '.join(bad)}; expected some of {', '.join(BUILTIN_ROOMS)}"
+        )
+    return [WorldRef("builtin", n, s) for n in names for s in seeds]
+
+
+def build_world(ref: WorldRef) -> Room:
+    """The :class:`~symloc.sim.rooms.Room` a ref names."""
+    if ref.source == "builtin":
+        if ref.name not in BUILTIN_ROOMS:
+            raise ConfigurationError(f"room: unknown built-in room {ref.name!r}")
+        builder, gv, textured = BUILTIN_ROOMS[ref.name]
+        if builder == "hallway_40m":
+            room = with_lab(hallway(40.0, 2.0, textured=textured), textured=textured)
+        else:
+            room = build_room(builder, gv, lab=True, textured=textured)
+        return room
+    raise ConfigurationError(
+        f"world source: expected 'builtin', 'file' or 'generated', got {ref.source!r}"
+    )

@@ -1,0 +1,76 @@
+"""Figures of the evaluation bench: outcomes per family with Wilson intervals."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symloc.figures._save import save_figure
+
+__all__ = ["outcome_figure"]
+
+_LABELS = {"symloc": "symloc", "amcl": "plain AMCL (nav2's filter alone)"}
+
+
+def outcome_figure(
+    summary: Sequence[dict[str, Any]], path: Path, *, by: str = "family", title: str = ""
+) -> Path:
+    """Stacked shares correct / confident wrong / undetermined per group, one panel per method,
+    with the confident-wrong rate's Wilson 95 % interval as an error bar (right axis)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = [m for m in _LABELS if any(r["method"] == m for r in summary)]
+    groups = list(dict.fromkeys(str(r[by]) for r in summary))
+    fig, axes = plt.subplots(
+        1,
+        len(methods),
+        figsize=(max(7.0, 0.55 * len(groups) * len(methods) + 3), 4.8),
+        sharey=True,
+        squeeze=False,
+    )
+    x = np.arange(len(groups))
+    for ax, method in zip(axes[0], methods, strict=True):
+        rows = {str(r[by]): r for r in summary if r["method"] == method}
+
+        def share(key: str, rows: dict[str, Any] = rows) -> Any:
+            return np.array([rows[g][f"{key}_rate"] if g in rows else 0.0 for g in groups])
+
+        c, w, u = share("correct"), share("confident_wrong"), share("undetermined")
+        ax.bar(x, c, color="tab:green", label="correct")
+        ax.bar(x, w, bottom=c, color="tab:red", label="confident wrong")
+        ax.bar(x, u, bottom=c + w, color="tab:gray", label="undetermined")
+        lo = np.array([rows[g]["confident_wrong_ci95"][0] if g in rows else 0.0 for g in groups])
+        hi = np.array([rows[g]["confident_wrong_ci95"][1] if g in rows else 0.0 for g in groups])
+        ax.errorbar(
+            x,
+            w,
+            yerr=[w - lo, hi - w],
+            fmt="none",
+            ecolor="black",
+            capsize=3,
+            lw=1,
+            label="confident wrong: Wilson 95 % interval",
+        )
+        n = [rows[g]["trials"] if g in rows else 0 for g in groups]
+        ax.set_xticks(
+            x,
+            [f"{g}\nn={k}" for g, k in zip(groups, n, strict=True)],
+            fontsize=7,
+            rotation=45,
+            ha="right",
+        )
+        ax.set_title(_LABELS[method])
+        ax.set_ylim(0, 1.05)
+    axes[0, 0].set_ylabel("share of trials")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.08, 1, 0.95 if title else 1))
+    return save_figure(fig, path, dpi=110)

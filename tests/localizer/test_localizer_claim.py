@@ -1,0 +1,155 @@
+"""The claim gate: a pose is published as tracking only when the laser confirms it, now."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from symloc.errors import ConfigurationError
+from symloc.grid.distance_field import surface_distance_field
+from symloc.localizer import Localizer, Status
+from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.claim import ClaimConfig, ClaimGate
+from symloc.mcl import Amcl, AmclParams
+from symloc.odometry import OdometryReading
+from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
+from symloc.sim.rooms import hallway, l_shaped_room
+from symloc.symmetry import SymmetryConfig, judge_symmetry
+
+ALPHAS = (0.05, 0.05, 0.05, 0.05)
+COV = np.diag([0.03**2, 0.03**2, math.radians(1.0) ** 2])
+
+
+@pytest.fixture(scope="module")
+def l_room():
+    room = l_shaped_room(4.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    return room, grid
+
+
+def test_claim_withdraw_and_withhold(l_room) -> None:
+    room, grid = l_room
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    truth = np.array([-0.6, -0.8, 0.4])
+    assert gate.check(np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 0)).verdict == (
+        "withheld"
+    )  # nothing to carry yet
+    gate.anchor(truth, COV, np.zeros(3))
+    claim = gate.check(np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 1))
+    assert claim.ok, claim.reason
+    assert math.hypot(*(claim.pose[:2] - truth[:2])) < 0.02
+    # the robot drove 0.3 m and the odometry says so: the carried pose is confirmed
+    moved = truth + np.array([0.3 * math.cos(0.4), 0.3 * math.sin(0.4), 0.0])
+    odom = np.array([0.3, 0.0, 0.0])
+    claim = gate.check(odom, simulate_scan(room.world, moved, RPLIDAR_A2, 2))
+    assert claim.ok, claim.reason
+    assert math.hypot(*(claim.pose[:2] - moved[:2])) < 0.02
+    # carried away while the odometry saw nothing: withdrawn, and the reason says why
+    away = np.array([0.9, -1.0, 2.5])
+    claim = gate.check(odom, simulate_scan(room.world, away, RPLIDAR_A2, 3))
+    assert claim.verdict == "withdrawn"
+    assert "claim withdrawn" in claim.reason
+
+
+def test_a_corridor_pose_is_withheld_not_claimed() -> None:
+    room = hallway(30.0, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    truth = np.array([2.0, 0.1, 0.05])
+    gate.anchor(truth, np.diag([0.3**2, 0.03**2, 0.01**2]), np.zeros(3))
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2.with_(range_max=6.0), 0)
+    claim = gate.check(np.zeros(3), scan)
+    assert claim.verdict == "withheld"
+    assert "std" in claim.reason
+
+
+def test_anchor_reports_a_jump_of_the_filter(l_room) -> None:
+    _, grid = l_room
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    assert gate.anchor(np.array([0.0, 0.0, 0.0]), COV, np.zeros(3))
+    assert gate.anchor(np.array([0.01, 0.0, 0.01]), COV, np.zeros(3))  # a small step
+    assert not gate.anchor(np.array([0.8, 0.0, 0.01]), COV, np.zeros(3))  # another place
+
+
+def test_gate_settings_follow_the_tolerance() -> None:
+    cfg = ClaimConfig(tolerance_position=0.1, gate_sigmas=5.0)
+    assert cfg.max_std_xy == pytest.approx(0.02)
+    assert cfg.max_std_theta == pytest.approx(math.radians(1.0))
+    with pytest.raises(ConfigurationError, match="gate_sigmas"):
+        ClaimConfig(gate_sigmas=0.0)
+    with pytest.raises(ConfigurationError, match="patience"):
+        ClaimConfig(patience=0)
+
+
+def _localizer(grid, seed: int = 0) -> Localizer:
+    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), seed)
+    return Localizer(
+        AmclTracker(amcl),
+        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
+        _NoPlaces(),
+        scorer=GridScorer(grid),
+        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
+    )
+
+
+class _NoPlaces:
+    def candidates(self, gv_distance, order):  # type: ignore[no-untyped-def]
+        return []
+
+    def decide(self, place, image):  # type: ignore[no-untyped-def]
+        raise AssertionError("no place to decide")
+
+    def add_place(self, *args, **kw):  # type: ignore[no-untyped-def]
+        raise AssertionError("no mapping here")
+
+
+def test_a_kidnapped_robot_stops_claiming_at_once_and_relocalizes(l_room) -> None:
+    room, grid = l_room
+    loc = _localizer(grid)
+    start = np.array([-0.7, -0.9, 0.3])
+    robot = DiffDriveRobot(start, RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)), 5)
+    loc.set_pose(start, COV)
+    rng = np.random.default_rng(6)
+    statuses = []
+    wrong = 0
+    for k in range(120):
+        if k == 40:
+            robot.teleport(np.array([0.9, -1.0, 2.5]))  # nobody tells the localizer
+        est = loc.update(robot.odometry(), simulate_scan(room.world, robot.pose, RPLIDAR_A2, rng))
+        statuses.append(est.status)
+        if est.pose is not None:
+            e = est.pose - robot.pose
+            if math.hypot(e[0], e[1]) > 0.1 or abs(
+                math.remainder(e[2], 2 * math.pi)
+            ) > math.radians(5):
+                wrong += 1
+        robot.step(0.0, 0.5, 0.1)  # turn on the spot
+    assert wrong == 0
+    assert all(s is Status.TRACKING for s in statuses[1:40])
+    assert statuses[40] is not Status.TRACKING  # the very scan after the kidnapping
+    assert any("global relocalization" in line for line in loc.log)
+
+
+def test_a_passing_occlusion_suspends_then_resumes_without_relocalizing(l_room) -> None:
+    room, grid = l_room
+    loc = _localizer(grid)
+    pose = np.array([-0.7, -0.9, 0.3])
+    loc.set_pose(pose, COV)
+    odom = OdometryReading(np.zeros(3), 0.0)
+    rng = np.random.default_rng(7)
+    out = []
+    for k in range(12):
+        scan = simulate_scan(room.world, pose, RPLIDAR_A2, rng)
+        if k in (4, 5):  # a person right in front of the lidar hides most of the room
+            r = scan.ranges.copy()
+            r[: int(0.6 * r.size)] = 0.4
+            scan = scan.with_ranges(r)
+        out.append(loc.update(odom, scan).status)
+    assert out[4] is not Status.TRACKING
+    assert out[-1] is Status.TRACKING
+    assert any("claims resumed" in line for line in loc.log)
+    assert not any("global relocalization" in line for line in loc.log)

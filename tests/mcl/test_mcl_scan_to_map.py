@@ -1,0 +1,142 @@
+"""Scan-to-map alignment: it finds the pose, knows what it cannot see, and says when it misfits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from symloc.errors import ConfigurationError
+from symloc.grid.distance_field import distance_field, surface_distance_field
+from symloc.mcl.beams import select_beams
+from symloc.mcl.motion_model import carry_by_odometry
+from symloc.mcl.scan_to_map import ScanMatchConfig, match_scan_to_map, scan_points
+from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.rooms import hallway, l_shaped_room
+
+
+def _points(world, pose, preset=RPLIDAR_A2, seed=0):
+    scan = simulate_scan(world, pose, preset, seed)
+    b = select_beams(scan, len(scan))
+    return scan_points(b.ranges[b.hit], b.angles[b.hit], (0.0, 0.0, 0.0))
+
+
+@pytest.fixture(scope="module")
+def l_room():
+    room = l_shaped_room(4.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    return room, surface_distance_field(grid)
+
+
+def test_recovers_the_pose_from_a_perturbed_start(l_room) -> None:
+    room, field = l_room
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        truth = np.array(
+            [*room.positions_inside(30, margin=0.4)[rng.integers(30)], rng.uniform(-3, 3)]
+        )
+        init = truth + np.array(
+            [rng.normal(0, 0.08), rng.normal(0, 0.08), math.radians(rng.normal(0, 4))]
+        )
+        m = match_scan_to_map(field, _points(room.world, truth, seed=int(rng.integers(99))), init)
+        assert math.hypot(*(m.pose[:2] - truth[:2])) < 0.02  # half a 5 cm cell
+        assert abs(math.remainder(m.pose[2] - truth[2], 2 * math.pi)) < math.radians(1.0)
+        assert m.inlier_fraction > 0.97
+        sx, sy, sth = np.sqrt(np.diag(m.covariance))
+        assert max(sx, sy) < 0.03
+        assert sth < math.radians(1.0)
+
+
+def test_a_corridor_leaves_its_axis_unconstrained() -> None:
+    room = hallway(30.0, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    short = RPLIDAR_A2.with_(range_max=6.0)  # the ends are out of range
+    truth = np.array([1.0, 0.2, 0.1])
+    m = match_scan_to_map(
+        field, _points(room.world, truth, short), truth + np.array([0.3, 0.05, 0.02])
+    )
+    cov = m.covariance
+    assert math.sqrt(cov[0, 0]) > 0.2  # along the corridor: ten times the claim gate's limit
+    assert math.sqrt(cov[1, 1]) < 0.02  # across it: the walls
+    assert abs(m.pose[1] - truth[1]) < 0.02
+    # a prior along the axis bounds what the scan cannot
+    prior = np.diag([0.1**2, 0.1**2, math.radians(3) ** 2])
+    m2 = match_scan_to_map(
+        field,
+        _points(room.world, truth, short),
+        truth + np.array([0.05, 0.0, 0.0]),
+        prior=(truth, prior),
+    )
+    assert math.sqrt(m2.covariance[0, 0]) == pytest.approx(0.1, rel=0.05)
+
+
+def test_a_scan_from_elsewhere_does_not_fit(l_room) -> None:
+    room, field = l_room
+    here = np.array([-0.8, -0.8, 0.3])
+    elsewhere = np.array([0.9, -1.0, 2.0])
+    m = match_scan_to_map(field, _points(room.world, elsewhere), here)
+    assert m.inlier_fraction < 0.5
+
+
+def test_surface_field_is_zero_on_the_wall_centre_line() -> None:
+    room = l_shaped_room(4.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    surf = surface_distance_field(grid)
+    plain = distance_field(grid, 1.0)
+    mids = 0.5 * (room.boundary + np.roll(room.boundary, -1, axis=0))
+    assert np.all(surf.lookup(mids) <= 0.05)
+    assert np.all(plain.lookup(mids) <= 0.05)
+    inside = room.positions_inside(20, margin=0.5)
+    assert np.all(surf.lookup(inside) > 0.3)
+
+
+def test_settings_are_validated() -> None:
+    with pytest.raises(ConfigurationError, match="information_scale"):
+        ScanMatchConfig(information_scale=0.0)
+    with pytest.raises(ConfigurationError, match="iterations"):
+        ScanMatchConfig(iterations=0)
+    grid = world_to_grid(l_shaped_room(4.0).world, 0.05)
+    with pytest.raises(ConfigurationError, match="outlier_distance"):
+        match_scan_to_map(surface_distance_field(grid, 0.2), np.zeros((5, 2)), np.zeros(3))
+    with pytest.raises(ConfigurationError, match="initial"):
+        match_scan_to_map(surface_distance_field(grid), np.zeros((5, 2)), [np.nan, 0, 0])
+
+
+def test_carry_by_odometry_composes_exactly_and_grows_the_covariance() -> None:
+    pose = np.array([1.0, 2.0, 0.5])
+    cov = np.diag([1e-4, 1e-4, 1e-4])
+    odom0 = np.array([5.0, -1.0, 1.0])
+    odom1 = np.array([5.0 + 0.5 * math.cos(1.0), -1.0 + 0.5 * math.sin(1.0), 1.3])
+    out, c = carry_by_odometry(pose, cov, odom0, odom1, (0.05, 0.05, 0.05, 0.05))
+    assert out == pytest.approx([1.0 + 0.5 * math.cos(0.5), 2.0 + 0.5 * math.sin(0.5), 0.8])
+    assert np.all(np.linalg.eigvalsh(c - cov) >= -1e-12)  # never shrinks
+    assert c[2, 2] > cov[2, 2]
+    same, c0 = carry_by_odometry(pose, cov, odom0, odom0, (0.05, 0.05, 0.05, 0.05))
+    assert same == pytest.approx(pose)
+    assert c0 == pytest.approx(cov)
+    # a heading uncertainty spreads the position of a robot that drives on
+    _, c_far = carry_by_odometry(
+        np.zeros(3), np.diag([0, 0, 0.01]), np.zeros(3), np.array([2.0, 0.0, 0.0]), (0, 0, 0, 0)
+    )
+    assert math.sqrt(c_far[1, 1]) == pytest.approx(2.0 * 0.1, rel=0.05)
+
+
+def test_a_round_room_leaves_the_rotation_about_its_centre_unconstrained() -> None:
+    from symloc.sim.rooms import circular_room
+
+    room = circular_room(2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    truth = np.array([0.6, -0.3, 0.4])
+    m = match_scan_to_map(field, _points(room.world, truth), truth)
+    # the rasterised circle ripples, but a 5-degree turn about the centre costs nothing
+    assert math.degrees(math.sqrt(m.covariance[2, 2])) > 2.0  # twice the claim gate's limit
+    _, v = np.linalg.eigh(m.information)
+    weakest = v[:, 0] / v[2, 0]  # per radian of heading
+    assert weakest[:2] == pytest.approx([-(truth[1] - 0.0), truth[0] - 0.0], abs=0.1)
+    # distance from the centre is known
+    radial = truth[:2] / np.hypot(*truth[:2])
+    assert math.sqrt(radial @ m.covariance[:2, :2] @ radial) < 0.02
