@@ -137,11 +137,16 @@ class LoopVerifier:
             and abs(float(wrap_angle(da[2]))) <= p.agree_rot
         )
 
-    def submit(self, c: LoopCandidate, node: int) -> list[LoopCandidate]:
-        """Check a candidate; returns the candidates accepted now (it and/or pending ones)."""
+    def submit(
+        self, c: LoopCandidate, node: int, *, min_score: float | None = None
+    ) -> list[LoopCandidate]:
+        """Check a candidate; returns the candidates accepted now (it and/or pending ones).
+
+        ``min_score`` overrides ``params.min_score`` (the run's own score level).
+        """
         p = self.params
         self._expire(node)
-        if c.score < p.min_score:
+        if c.score < (p.min_score if min_score is None else min_score):
             return []
         if c.runner_up >= c.score - p.ambiguity_margin:
             c.reason = "ambiguous"

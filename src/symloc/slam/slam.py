@@ -99,6 +99,13 @@ class SlamParams:
         logged a metre apart, match less well everywhere: a low score is relative).
     retry_relative : float
         See ``retry_below``.
+    unusable_relative : float
+        A match scoring below this times the run's median score (and below
+        ``retry_below * unusable_relative / retry_relative``) is not used: the scan follows
+        the odometry.
+    loop_score_relative, loop_score_floor : float
+        A loop closure needs ``loop.min_score``, or ``loop_score_relative`` times the run's
+        median real-time score if that is lower, but at least ``loop_score_floor``.
     retry_margin : float
         The wide match replaces the real-time one only if it scores this much higher (a
         corridor gives many similar scores far from the odometry; a real odometry error gives
@@ -191,6 +198,9 @@ class SlamParams:
     )
     retry_below: float = 0.6
     retry_relative: float = 0.85
+    unusable_relative: float = 0.6
+    loop_score_relative: float = 1.0
+    loop_score_floor: float = 0.35
     retry_margin: float = 0.1
     match_gate_chi2: float = 16.27
     gate_recovery: int = 2
@@ -260,6 +270,11 @@ class SlamParams:
                 f"SlamParams.retry_below: expected a value in [0, 1], got {self.retry_below}"
             )
         check_positive(self.match_gate_chi2, "SlamParams.match_gate_chi2")
+        for name in ("retry_relative", "unusable_relative", "loop_score_relative"):
+            v = getattr(self, name)
+            if not 0.0 < v <= 1.0:
+                raise ConfigurationError(f"SlamParams.{name}: expected a value in (0, 1], got {v}")
+        check_positive(self.loop_score_floor, "SlamParams.loop_score_floor")
         if int(self.gate_recovery) != self.gate_recovery or self.gate_recovery < 0:
             raise ConfigurationError(
                 f"SlamParams.gate_recovery: expected an integer >= 0, got {self.gate_recovery}"
@@ -323,6 +338,8 @@ class SlamResult:
     match_poses : ndarray of shape (N, 3)
         Pose of each matched scan as its match alone put it, in the local frame (NaN when
         not matched).
+    gated_scans : ndarray of shape (N,)
+        Scans whose match the odometry gate refused (they followed the odometry).
     """
 
     poses: FloatArray
@@ -342,6 +359,7 @@ class SlamResult:
     degenerate_scans: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, np.intp))
     odometry_model: dict[str, float | bool | int] = field(default_factory=dict)
     match_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    gated_scans: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def doubtful(self) -> bool:
@@ -373,6 +391,7 @@ class SlamResult:
             "loop_searches": int(self.n_loop_searches),
             "retries": int(self.n_retries),
             "degenerate_fraction": float(np.mean(matched > 0)) if matched.size else 0.0,
+            "gated": int(self.gated_scans.sum()),
             "slam_cpu_s": float(self.timings.get("total_cpu", float("nan"))),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
             "odometry_model": dict(self.odometry_model),
@@ -485,12 +504,36 @@ class _Run:
             or abs(float(moved[2])) >= self.prm.motion_filter_angle
         )
 
-    def poor_score(self) -> float:
-        """Match score below which a match is poor (see ``SlamParams.retry_below``)."""
+    def typical_score(self) -> float | None:
+        """Median score of the last 50 real-time matches (None before 10)."""
         if len(self.recent_scores) < 10:
+            return None
+        return float(np.median(self.recent_scores))
+
+    def poor_score(self) -> float:
+        """Match score below which a match is retried (see ``SlamParams.retry_below``)."""
+        med = self.typical_score()
+        if med is None:
             return self.prm.retry_below
-        med = float(np.median(self.recent_scores))
         return min(self.prm.retry_below, self.prm.retry_relative * med)
+
+    def unusable_score(self) -> float:
+        """Match score below which a match is not used (see ``SlamParams.unusable_relative``)."""
+        med = self.typical_score()
+        cap = self.prm.unusable_relative * self.prm.retry_below / self.prm.retry_relative
+        if med is None:
+            return cap
+        return min(cap, self.prm.unusable_relative * med)
+
+    def loop_min_score(self) -> float:
+        """Loop-closure score threshold: ``loop.min_score`` or relative to the run's scores."""
+        med = self.typical_score()
+        if med is None:
+            return self.prm.loop.min_score
+        return max(
+            self.prm.loop_score_floor,
+            min(self.prm.loop.min_score, self.prm.loop_score_relative * med),
+        )
 
     def _match_sigma(self) -> float:
         st, _ = self.model.matcher_sigmas
@@ -552,11 +595,11 @@ class _Run:
         if res.score < poor:
             wide = match_scan(table, pts, init, prm.retry_csm)
             self.n_retries += 1
-            if wide.score >= poor and wide.score > res.score + prm.retry_margin:
+            if wide.score >= self.unusable_score() and wide.score > res.score + prm.retry_margin:
                 res = wide
         mc = self._constraint(pts)
         self.scores[i] = res.score
-        self.poor[i] = res.score < poor
+        self.poor[i] = res.score < self.unusable_score()
         self.recent_scores.append(res.score)
         self.degenerate[i] = mc.n_degenerate
         self.match_pose[i] = compose(target.local_pose, res.pose)
@@ -645,6 +688,7 @@ class _Run:
             if dist <= prm.loop_search_distance:
                 candidates.append((dist, sm.index, init))
         candidates.sort(key=lambda c: c[0])
+        min_score = self.loop_min_score()
         for _, j, init in candidates[: prm.loop_max_candidates]:
             if self.travel < self.next_search.get(j, -math.inf):
                 continue  # sampled: searched (or constrained) too recently
@@ -654,7 +698,7 @@ class _Run:
             res = match_scan(table, pts, init, csm, runner_up_exclusion=prm.loop_ambiguity_radius)
             self.n_loop_searches += 1
             found = False
-            if res.score >= prm.loop.min_score:
+            if res.score >= min_score:
                 mc = self._constraint(pts)
                 cand = LoopCandidate(
                     submap=j,
@@ -668,7 +712,7 @@ class _Run:
                     travel=self.travel,
                     since_loop=since,
                 )
-                accepted = self.verifier.submit(cand, k)
+                accepted = self.verifier.submit(cand, k, min_score=min_score)
                 for c in accepted:
                     self.graph.add_loop(c.submap, c.node, c.measurement, c.covariance)
                     self.pending_loops += 1
@@ -698,10 +742,10 @@ def _warnings(run: _Run, rejected: list[tuple[int, int, str]]) -> list[str]:
                 " (corridors, open space, few returns): positions there follow the odometry"
             )
         low = float(np.mean(run.poor[run.degenerate >= 0]))
-        if low > 0.2:
+        if low > 0.1:
             out.append(
-                f"{100 * low:.0f} % of the scans matched their submap poorly (score below"
-                f" {run.poor_score():.2f})"
+                f"{100 * low:.0f} % of the scans matched their submap too poorly to be used"
+                f" (score below {run.unusable_score():.2f}): they followed the odometry"
             )
     n_acc = len(run.graph.loops)
     by_reason: dict[str, int] = {}
@@ -830,4 +874,5 @@ def run_slam(
         degenerate_scans=run.degenerate,
         odometry_model=run.model.summary(),
         match_poses=run.match_pose,
+        gated_scans=run.gated,
     )
