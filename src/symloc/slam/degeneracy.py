@@ -99,6 +99,7 @@ def analyse_match(
     points: ArrayLike,
     sigma_trans: float,
     *,
+    sigma_rot: float = 0.0,
     threshold: float = 0.05,
     min_strength: float = 0.0,
 ) -> MatchConstraint:
@@ -112,6 +113,10 @@ def analyse_match(
         The matched points (sensor frame) [m], for the length scale.
     sigma_trans : float
         Standard deviation [m] of the match along its best-constrained direction.
+    sigma_rot : float
+        Standard deviation [rad] of the match's heading on top of what ``sigma_trans`` at
+        the scan's length scale implies (a matcher's heading error is not only its
+        translation error seen from afar).
     threshold : float
         Relative eigenvalue below which a direction counts as unconstrained.
     min_strength : float
@@ -135,6 +140,7 @@ def analyse_match(
     var = np.where(bad, UNCONSTRAINED_SIGMA**2, sigma_trans**2 / np.maximum(strengths, threshold))
     cov_scaled = (vec * var[None, :]) @ vec.T
     cov = cov_scaled * scale[:, None] * scale[None, :]
+    cov[2, 2] += sigma_rot**2
     return MatchConstraint(
         covariance=0.5 * (cov + cov.T),
         strengths=strengths,

@@ -111,6 +111,9 @@ class SlamParams:
         corridor gives many similar scores far from the odometry; a real odometry error gives
         a clearly better one) and is not poor itself. A match that stays poor is not used:
         the scan follows the odometry.
+    fuse_odometry : bool
+        Fuse each match with the odometry prediction by their covariances (False: the match
+        decides every direction it constrains, the prediction only the others).
     match_gate_chi2 : float
         The odometry gate: a match whose difference from the prediction exceeds this squared
         Mahalanobis distance (prediction and match covariances; default the 99.9 % quantile
@@ -132,8 +135,8 @@ class SlamParams:
     min_surface_fraction : float
         A scan whose strongest direction is faced by fewer than this fraction of its points
         constrains nothing (few returns).
-    min_match_sigma : float
-        Smallest standard deviation [m] given to a scan match.
+    min_match_sigma, min_match_rot : float
+        Smallest standard deviations [m], [rad] given to a scan match.
     loop : LoopVerifierParams
     loop_ambiguity_radius : tuple of 2 floats
         ``(m, rad)``: the neighbourhood of the best loop match outside which the runner-up is
@@ -202,6 +205,7 @@ class SlamParams:
     loop_score_relative: float = 1.0
     loop_score_floor: float = 0.35
     retry_margin: float = 0.1
+    fuse_odometry: bool = False
     match_gate_chi2: float = 16.27
     gate_recovery: int = 2
     loop_csm: CsmParams = field(
@@ -214,6 +218,7 @@ class SlamParams:
     degeneracy_threshold: float = 0.05
     min_surface_fraction: float = 0.05
     min_match_sigma: float = 0.01
+    min_match_rot: float = math.radians(0.25)
     loop: LoopVerifierParams = field(default_factory=LoopVerifierParams)
     loop_ambiguity_radius: tuple[float, float] = (0.3, math.radians(3.0))
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
@@ -241,6 +246,7 @@ class SlamParams:
         check_positive(self.min_linear_window, "SlamParams.min_linear_window", allow_zero=True)
         check_positive(self.min_angular_window, "SlamParams.min_angular_window", allow_zero=True)
         check_positive(self.min_match_sigma, "SlamParams.min_match_sigma")
+        check_positive(self.min_match_rot, "SlamParams.min_match_rot")
         check_positive(
             self.min_surface_fraction, "SlamParams.min_surface_fraction", allow_zero=True
         )
@@ -479,7 +485,7 @@ class _Run:
         self.node_scans: list[int] = []
         self.node_constraint: list[MatchConstraint | None] = []
         self.match_cov = np.zeros((n, 3, 3))  # of each match, in the local frame
-        self._constraint_cache: tuple[int, MatchConstraint | None] = (0, None)
+        self._constraint_cache: tuple[int, MatchConstraint | None] = (-1, None)
         self.recent_scores: deque[float] = deque(maxlen=50)
         self.poor = np.zeros(n, dtype=bool)
         self.gated = np.zeros(n, dtype=bool)
@@ -535,23 +541,24 @@ class _Run:
             min(self.prm.loop.min_score, self.prm.loop_score_relative * med),
         )
 
-    def _match_sigma(self) -> float:
-        st, _ = self.model.matcher_sigmas
-        return max(st, self.prm.min_match_sigma)
+    def _match_sigmas(self) -> tuple[float, float]:
+        st, sr = self.model.matcher_sigmas
+        return max(st, self.prm.min_match_sigma), max(sr, self.prm.min_match_rot)
 
-    def _constraint(self, pts: FloatArray) -> MatchConstraint:
-        """What a match of these points can constrain (from the scan's own geometry)."""
-        key = id(pts)
-        if self._constraint_cache[0] != key:
+    def _constraint(self, i: int, pts: FloatArray) -> MatchConstraint:
+        """What a match of scan ``i`` (points ``pts``) can constrain (its own geometry)."""
+        if self._constraint_cache[0] != i:
             info, _ = scan_information(pts)
+            st, sr = self._match_sigmas()
             mc = analyse_match(
                 info,
                 pts,
-                self._match_sigma(),
+                st,
+                sigma_rot=sr,
                 threshold=self.prm.degeneracy_threshold,
                 min_strength=self.prm.min_surface_fraction,
             )
-            self._constraint_cache = (key, mc)
+            self._constraint_cache = (i, mc)
         cached = self._constraint_cache[1]
         assert cached is not None
         return cached
@@ -597,7 +604,7 @@ class _Run:
             self.n_retries += 1
             if wide.score >= self.unusable_score() and wide.score > res.score + prm.retry_margin:
                 res = wide
-        mc = self._constraint(pts)
+        mc = self._constraint(i, pts)
         self.scores[i] = res.score
         self.poor[i] = res.score < self.unusable_score()
         self.recent_scores.append(res.score)
@@ -622,8 +629,9 @@ class _Run:
             )
             self.match_cov[i] = _UNMATCHED_COV
             return unmatched
-        if gated:
-            # the matches kept disagreeing: the odometry was wrong, follow the match
+        if gated or not prm.fuse_odometry:
+            # the matches kept disagreeing (the odometry was wrong), or no fusion: the match
+            # decides every direction it constrains
             cov_s = cov_s + np.eye(3) * 1.0e2
         self.n_gated = 0
         fused, post = fuse(init, cov_s, res.pose, mc.covariance)
@@ -699,7 +707,7 @@ class _Run:
             self.n_loop_searches += 1
             found = False
             if res.score >= min_score:
-                mc = self._constraint(pts)
+                mc = self._constraint(i, pts)
                 cand = LoopCandidate(
                     submap=j,
                     node=k,
