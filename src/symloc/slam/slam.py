@@ -235,7 +235,7 @@ class SlamParams:
     loop_constrained_distance: float = 6.0
     optimize_every: int = 20
     map_resolution: float = 0.05
-    table_cache_mb: float = 48.0
+    table_cache_mb: float = 16.0
 
     def __post_init__(self) -> None:
         check_positive(self.max_range, "SlamParams.max_range")
@@ -846,6 +846,10 @@ def run_slam(
     poses = compose(node_poses[owner], relative(local[nodes[owner]], local))
     timings["optimize"] += time.perf_counter() - t2
 
+    # the submaps and their tables are done with: free them before the final map
+    n_submaps = len(run.active.submaps)
+    run.active.submaps.clear()
+    run.cache.order.clear()
     t3 = time.perf_counter()
     model = InverseSensorModel(
         p_hit=prm.submap.model.p_hit,
@@ -869,7 +873,7 @@ def run_slam(
         local_poses=local,
         grid=occ,
         loop_closures=[(j, int(nodes[k])) for j, k in graph.loops],
-        n_submaps=len(run.active.submaps),
+        n_submaps=n_submaps,
         node_scans=nodes,
         match_scores=run.scores,
         timings=timings,
