@@ -6,8 +6,9 @@ recent nodes, for every pair of matched nodes up to ``max_lag`` nodes apart, the
 the odometry reported is compared with the increment the matches found:
 
 - **calibration**: the scale of the odometry's translations and rotations
-  (``trans_match ~ s_t * trans_odo``, ``rot_match ~ s_r * rot_odo``, least squares through
-  the origin), the systematic errors of a wrong wheel diameter and wheel base (Borenstein &
+  (``trans_odo ~ trans_match / s_t``, ``rot_odo ~ rot_match / s_r``, least squares through
+  the origin with the matches as the regressor: they are far less noisy, and regressing on
+  the odometry would shrink the scales by its noise), the systematic errors of a wrong wheel diameter and wheel base (Borenstein &
   Feng 1996); applied to every increment;
 - **noise**: the variances of the remaining differences, modelled as Thrun's odometry model
   summed over the steps between the two nodes plus a constant, the matcher's own error
@@ -161,12 +162,14 @@ class OdometryModel:
         r_o = wrap_angle(odo[:, 2])
         r_m = wrap_angle(mat[:, 2])
         mv = t_o > 0.1
+        # odometry regressed on the (far less noisy) matches, then inverted: regressing the
+        # other way round would shrink the scale by the odometry's own noise
         if mv.sum() >= self.params.min_pairs // 2:
-            s = float(np.sum(t_m[mv] * t_o[mv]) / np.sum(t_o[mv] ** 2))
+            s = float(np.sum(t_m[mv] ** 2) / np.sum(t_m[mv] * t_o[mv]))
             self.trans_scale = min(max(s, 1 - lim), 1 + lim)
-        tn = (np.abs(r_o) > math.radians(10)) & (np.abs(r_o) < math.radians(150))
+        tn = (np.abs(r_m) > math.radians(10)) & (np.abs(r_m) < math.radians(150))
         if tn.sum() >= self.params.min_pairs // 2:
-            s = float(np.sum(r_m[tn] * r_o[tn]) / np.sum(r_o[tn] ** 2))
+            s = float(np.sum(r_m[tn] ** 2) / np.sum(r_m[tn] * r_o[tn]))
             self.rot_scale = min(max(s, 1 - lim), 1 + lim)
         corrected = self.correct_many(odo)
         e = relative(corrected, mat)
@@ -225,6 +228,16 @@ class OdometryModel:
         """``(3, 3)`` diagonal covariance of a (corrected) odometry increment (3,)."""
         st, sr = self.sigmas(increment)
         return np.diag([st * st, st * st, sr * sr])
+
+    def generous_covariance(self, increment: ArrayLike) -> FloatArray:
+        """The larger of :meth:`covariance` and the prior's: for decisions that must not
+        refuse a correct match because the fit is optimistic (the odometry gate)."""
+        tr, rot = _motions(np.asarray(increment, dtype=np.float64).reshape(1, 3))[0]
+        a1, a2, a3, a4 = self.params.prior
+        vt = a3 * tr * tr + a4 * rot * rot
+        vr = a2 * tr * tr + a1 * rot * rot
+        c = self.covariance(increment)
+        return np.diag([max(c[0, 0], vt), max(c[1, 1], vt), max(c[2, 2], vr)])
 
     @property
     def matcher_sigmas(self) -> tuple[float, float]:

@@ -115,10 +115,10 @@ class SlamParams:
         Fuse each match with the odometry prediction by their covariances (False: the match
         decides every direction it constrains, the prediction only the others).
     match_gate_chi2 : float
-        The odometry gate: a match whose difference from the prediction exceeds this squared
-        Mahalanobis distance (prediction and match covariances; default the 99.9 % quantile
-        of chi-square with 3 degrees of freedom) is not used, and the scan follows the
-        odometry...
+        The odometry gate: a match that scores below the run's median score and whose
+        difference from the prediction exceeds this squared Mahalanobis distance (prediction
+        and match covariances; default the 99.9 % quantile of chi-square with 3 degrees of
+        freedom) is not used, and the scan follows the odometry...
     gate_recovery : int
         ... unless the ``gate_recovery`` matches before it were refused too: matches that keep
         disagreeing mean the odometry was wrong (a wheel slipped), and the match is taken.
@@ -201,7 +201,7 @@ class SlamParams:
     )
     retry_below: float = 0.6
     retry_relative: float = 0.85
-    unusable_relative: float = 0.6
+    unusable_relative: float = 0.3
     loop_score_relative: float = 1.0
     loop_score_floor: float = 0.35
     retry_margin: float = 0.1
@@ -481,6 +481,7 @@ class _Run:
         self.scores = np.zeros(n)
         self.degenerate = np.full(n, -1, dtype=np.intp)
         self.cov = np.zeros((3, 3))  # of local[i] relative to the matching submap
+        self.gate_cov = np.zeros((3, 3))  # the same with the generous odometry model
         self.global_from_local = np.zeros(3)
         self.node_scans: list[int] = []
         self.node_constraint: list[MatchConstraint | None] = []
@@ -572,6 +573,9 @@ class _Run:
         inc = self.model.correct(relative(self.odom[i - 1], self.odom[i]))
         pred = compose(self.local[i - 1], inc)
         pred_cov = _propagate(self.cov, self.local[i - 1], inc, self.model.covariance(inc))
+        self.gate_cov = _propagate(
+            self.gate_cov, self.local[i - 1], inc, self.model.generous_covariance(inc)
+        )
         target = self.active.matching_submap
         if (
             (not prm.match_filtered_scans and not self._is_node(i, pred))
@@ -613,8 +617,12 @@ class _Run:
         # the gate: a match the prediction cannot explain is not trusted at once
         innov = res.pose - init
         innov[2] = math.remainder(float(innov[2]), 2.0 * math.pi)
-        d2 = float(innov @ np.linalg.solve(cov_s + mc.covariance, innov))
-        gated = d2 > prm.match_gate_chi2
+        gate_s = _rotate_cov(self.gate_cov, -theta_s)
+        d2 = float(innov @ np.linalg.solve(gate_s + mc.covariance, innov))
+        typical = self.typical_score()
+        # a match that explains the scan as well as matches usually do is believed even
+        # against the odometry (wheels slip); a worse one must agree with it
+        gated = d2 > prm.match_gate_chi2 and (typical is None or res.score < typical)
         self.gated[i] = gated
         if self.poor[i] or (gated and self.n_gated < prm.gate_recovery):
             self.n_gated += int(gated)
@@ -637,6 +645,7 @@ class _Run:
         fused, post = fuse(init, cov_s, res.pose, mc.covariance)
         self.local[i] = compose(target.local_pose, fused)
         self.cov = _rotate_cov(post, theta_s)
+        self.gate_cov = self.cov.copy()
         self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
         return mc
 
