@@ -180,30 +180,42 @@ def run(args: argparse.Namespace) -> int:
     load_end = os.getloadavg()
     systems = ["symloc", *[n for n, _ in peers]]
     print()
-    head = f"{'log':<13} {'seeds':>5}"
-    for sname in systems:
-        head += f" | {sname + ' ATE mean/worst/max err [m]':>34}"
-    head += " | peak MB " + "/".join(systems) + " | x real time (CPU) | loops acc/rej | doubtful"
-    print(head)
+    table = [
+        [
+            "log",
+            "runs",
+            *[f"{n} ATE mean / worst / max err [m]" for n in systems],
+            "peak MB " + " / ".join(systems),
+            "x real time (CPU) " + " / ".join(systems),
+            "symloc loops acc / rej",
+            "doubtful",
+        ]
+    ]
     for lg in sorted(summary["logs"]):
         per = summary["logs"][lg]
         sl = per.get("symloc", {})
-        line = f"{lg:<13} {sl.get('runs', 0):>5}"
+        row = [lg, str(sl.get("runs", 0))]
         for sname in systems:
             e = per.get(sname, {})
-            line += (
-                f" | {_fmt(e.get('ate_mean_m')):>10} / {_fmt(e.get('ate_worst_m')):>6}"
-                f" / {_fmt(e.get('max_error_m'), '.2f'):>5}"
-                + (f" ({e['errors']} failed)" if e.get("errors") else "          ")
+            cell = (
+                f"{_fmt(e.get('ate_mean_m'))} / {_fmt(e.get('ate_worst_m'))}"
+                f" / {_fmt(e.get('max_error_m'), '.2f')}"
             )
-        mems = "/".join(_fmt(per.get(s, {}).get("peak_rss_mb"), ".0f") for s in systems)
-        rtf = "/".join(_fmt(per.get(s, {}).get("realtime_factor_cpu"), ".0f") for s in systems)
-        line += f" | {mems:>8} | {rtf:>17}"
-        line += (
-            f" | {_fmt(sl.get('loops_accepted'), '.0f')}/{_fmt(sl.get('loops_rejected'), '.0f')}"
-            f" | {sl.get('doubtful_runs', 0)}"
+            if e.get("errors"):
+                cell += f" ({e['errors']} failed)"
+            row.append(cell)
+        row.append(" / ".join(_fmt(per.get(n, {}).get("peak_rss_mb"), ".0f") for n in systems))
+        row.append(
+            " / ".join(_fmt(per.get(n, {}).get("realtime_factor_cpu"), ".0f") for n in systems)
         )
-        print(line)
+        row.append(
+            f"{_fmt(sl.get('loops_accepted'), '.0f')} / {_fmt(sl.get('loops_rejected'), '.0f')}"
+        )
+        row.append(str(sl.get("doubtful_runs", 0)))
+        table.append(row)
+    widths = [max(len(r[c]) for r in table) for c in range(len(table[0]))]
+    for line in table:
+        print(" | ".join(v.ljust(w) for v, w in zip(line, widths, strict=True)))
     for r in rows:
         if "skipped" in r:
             print(f"{r['log']} seed {r['seed']}: skipped: {r['skipped']}")
