@@ -75,7 +75,11 @@ class CsmParams:
         Half-width of the heading search [rad].
     angular_step : float
         Heading step [rad]; 0 picks Cartographer's ``acos(1 - r^2 / (2 d^2))`` for the table
-        resolution ``r`` and the scan's 90th-percentile point range ``d``.
+        resolution ``r`` and the scan's 90th-percentile point range ``d``, at most
+        ``step_range``.
+    step_range : float
+        Largest range [m] used for that step (a 50 m hall would otherwise ask for 0.06-degree
+        steps; the refinement that follows the search is continuous).
     coarse_factor : int
         Block edge ``f`` of the low-resolution level, in cells (>= 1).
     translation_weight, rotation_weight : float
@@ -88,6 +92,7 @@ class CsmParams:
     linear_window: float = 0.3
     angular_window: float = math.radians(15.0)
     angular_step: float = 0.0
+    step_range: float = 25.0
     coarse_factor: int = 4
     translation_weight: float = 0.0
     rotation_weight: float = 0.0
@@ -98,6 +103,7 @@ class CsmParams:
         check_positive(self.linear_window, "CsmParams.linear_window", allow_zero=True)
         check_positive(self.angular_window, "CsmParams.angular_window", allow_zero=True)
         check_positive(self.angular_step, "CsmParams.angular_step", allow_zero=True)
+        check_positive(self.step_range, "CsmParams.step_range")
         check_positive(self.translation_weight, "CsmParams.translation_weight", allow_zero=True)
         check_positive(self.rotation_weight, "CsmParams.rotation_weight", allow_zero=True)
         if int(self.coarse_factor) != self.coarse_factor or self.coarse_factor < 1:
@@ -346,6 +352,7 @@ def match_scan(
     step = prm.angular_step
     if step == 0.0:
         d = max(float(np.percentile(np.hypot(pts[:, 0], pts[:, 1]), 90)), 2.0 * res)
+        d = min(d, prm.step_range)
         step = math.acos(1.0 - res * res / (2.0 * d * d))
     n_ang = math.floor(prm.angular_window / step) if prm.angular_window > 0 else 0
     dthetas = np.arange(-n_ang, n_ang + 1) * step

@@ -91,8 +91,10 @@ class SlamParams:
     min_linear_window, min_angular_window : float
         Smallest real-time search half-widths [m], [rad].
     retry_csm : CsmParams
-        Wider window tried when the real-time match scores below ``retry_below``; the better
-        of the two matches is kept.
+        Wider window tried when the real-time match scores below ``retry_below``: its
+        windows, or twice the real-time ones up to ``max_retry_window`` ([m], [rad]); the
+        better of the two matches is kept.
+    max_retry_window : tuple of 2 floats
     retry_below : float
         Score (0..1) under which the wider search runs, or ``retry_relative`` times the
         median score of the last 50 matches if that is lower (scans of another scanner, or
@@ -179,8 +181,8 @@ class SlamParams:
     submap: SubmapParams = field(default_factory=SubmapParams)
     local_csm: CsmParams = field(
         default_factory=lambda: CsmParams(
-            linear_window=0.6,
-            angular_window=math.radians(30),
+            linear_window=2.0,
+            angular_window=math.radians(45),
             coarse_factor=6,
             translation_weight=1.0,
             rotation_weight=1.0,
@@ -199,6 +201,7 @@ class SlamParams:
             rotation_weight=0.3,
         )
     )
+    max_retry_window: tuple[float, float] = (4.0, math.radians(60.0))
     retry_below: float = 0.6
     retry_relative: float = 0.85
     unusable_relative: float = 0.3
@@ -262,6 +265,8 @@ class SlamParams:
         check_positive(
             self.loop_constrained_distance, "SlamParams.loop_constrained_distance", allow_zero=True
         )
+        for k, v in enumerate(self.max_retry_window):
+            check_positive(v, f"SlamParams.max_retry_window[{k}]")
         for k, v in enumerate(self.max_loop_window):
             check_positive(v, f"SlamParams.max_loop_window[{k}]")
         for k, v in enumerate(self.loop_ambiguity_radius):
@@ -604,7 +609,18 @@ class _Run:
         res = match_scan(table, pts, init, csm)
         poor = self.poor_score()
         if res.score < poor:
-            wide = match_scan(table, pts, init, prm.retry_csm)
+            retry = dataclasses.replace(
+                prm.retry_csm,
+                linear_window=min(
+                    max(prm.retry_csm.linear_window, 2.0 * csm.linear_window),
+                    prm.max_retry_window[0],
+                ),
+                angular_window=min(
+                    max(prm.retry_csm.angular_window, 2.0 * csm.angular_window),
+                    prm.max_retry_window[1],
+                ),
+            )
+            wide = match_scan(table, pts, init, retry)
             self.n_retries += 1
             if wide.score >= self.unusable_score() and wide.score > res.score + prm.retry_margin:
                 res = wide
