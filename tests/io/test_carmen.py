@@ -144,3 +144,73 @@ def test_truncated_gzip_and_long_lines_name_the_file(tmp_path: Path) -> None:
     long.write_text("FLASER " + "1 " * (carmen.MAX_LINE // 2 + 10) + "\n")
     with pytest.raises(DataFormatError, match=r"long\.log: line 1: longer than"):
         read_carmen(long)
+
+
+def _log_with(n: int, params: list[str]) -> str:
+    return "\n".join([*params, _flaser(n=n, ranges=[1.0] * n)]) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("n", "params", "step_deg"),
+    [
+        (180, [], 1.0),  # a 181-beam sweep with the last beam dropped: pi / n
+        (181, [], 1.0),  # both ends of the sweep: pi / (n - 1)
+        (360, [], 0.5),
+        (361, [], 0.5),
+        (360, ["PARAM laser_front_laser_resolution 0.5 x 0"], 0.5),
+        (180, ["PARAM laser_frontlaser_resolution 1 0.0 nohost 0"], 1.0),  # the fhw spelling
+        (361, ["PARAM laser_front_laser_fov 3.14159 1 b21 1"], 0.5),  # radians (csail)
+        (101, ["PARAM laser_front_laser_fov 100 1 h 1"], 1.0),  # degrees, CARMEN's ini unit
+    ],
+)
+def test_beam_geometry_from_beam_count_and_params(
+    tmp_path: Path, n: int, params: list[str], step_deg: float
+) -> None:
+    p = tmp_path / "g.log"
+    p.write_text(_log_with(n, params))
+    scan = read_carmen(p).scans[0].scan
+    assert math.degrees(scan.angle_increment) == pytest.approx(step_deg, abs=1e-4)
+    fov = math.radians(100.0) if n == 101 else math.pi
+    assert scan.angle_min == pytest.approx(-fov / 2, abs=1e-5)
+    # 180 / 360 beams stop one step short of +90 deg; 181 / 361 reach it
+    last = scan.angle_min + (n - 1) * scan.angle_increment
+    assert last == pytest.approx(fov / 2 if n % 2 else fov / 2 - scan.angle_increment, abs=1e-5)
+
+
+def test_bad_geometry_params_name_the_line(tmp_path: Path) -> None:
+    p = tmp_path / "g.log"
+    p.write_text(_log_with(4, ["PARAM laser_front_laser_resolution fine x 0"]))
+    with pytest.raises(DataFormatError, match="line 1: PARAM laser_front_laser_resolution"):
+        read_carmen(p)
+    p.write_text(_log_with(800, ["PARAM laser_front_laser_resolution 1 x 0"]))
+    with pytest.raises(DataFormatError, match="line 2: FLASER with 800 readings at 1 deg"):
+        read_carmen(p)
+
+
+@pytest.mark.skipif(
+    not (SHARED / "carmen" / "orebro-corrected.log.gz").is_file(),
+    reason="shared CARMEN data not present (../shared/data/carmen or SYMLOC_SHARED_DATA)",
+)
+def test_real_181_beam_scans_fit_each_other_best_with_the_read_geometry() -> None:
+    """orebro (181 beams): scans at the corrected poses agree better with pi/(n-1) than pi/n."""
+    from scipy.spatial import cKDTree
+
+    log = read_carmen(SHARED / "carmen" / "orebro-corrected.log.gz")
+    scans = log.scans[::2]
+    n = len(scans[0].scan)
+
+    def spread(step: float) -> float:
+        halves: list[list[np.ndarray]] = [[], []]
+        for k, s in enumerate(scans):
+            r = s.scan.ranges
+            ok = (r > 0.05) & (r < 15.0)
+            a = s.laser_pose[2] + s.scan.angle_min + step * np.arange(n)[ok]
+            halves[k % 2].append(
+                s.laser_pose[:2] + r[ok, None] * np.column_stack([np.cos(a), np.sin(a)])
+            )
+        a, b = (np.vstack(h) for h in halves)
+        d, _ = cKDTree(b).query(a, distance_upper_bound=0.3)
+        return float(np.minimum(d, 0.3).mean())
+
+    assert scans[0].scan.angle_increment == pytest.approx(math.pi / (n - 1))
+    assert spread(math.pi / (n - 1)) < spread(math.pi / n) - 0.001

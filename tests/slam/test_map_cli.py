@@ -36,3 +36,15 @@ def test_experiment_slam_rejects_unknown_world(tmp_path: Path, capsys) -> None:
     code = main(["experiment", "slam", "--worlds", "attic", "--logs", "--out", str(tmp_path)])
     assert code == 2
     assert "world: expected one of" in capsys.readouterr().err
+
+
+def test_map_build_writes_how_the_map_was_made_into_its_yaml(tmp_path: Path) -> None:
+    import yaml
+
+    code = main(["map", "build", "--world", "square", "--laps", "1.1", "--out", str(tmp_path)])
+    assert code == 0
+    meta = yaml.safe_load((tmp_path / "map.yaml").read_text())["symloc_slam"]
+    assert meta["scans"] > 10
+    assert isinstance(meta["doubtful"], bool)
+    assert meta["doubtful"] == bool(meta["warnings"])
+    load_map(tmp_path / "map.yaml")  # map readers ignore the extra key

@@ -13,6 +13,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, relative
 from symloc.sim.odometry_noise import noisy_odometry
 from symloc.slam import (
+    LoopVerifierParams,
     PoseGraph,
     PoseGraphParams,
     SlamParams,
@@ -57,8 +58,8 @@ def test_run_slam_validates_inputs(room: np.ndarray) -> None:
     scans = [make_scan(room, np.array([4.0, 3.0, 0.0]))]
     with pytest.raises(ConfigurationError, match="odometry: expected one pose per scan"):
         run_slam(scans, np.zeros((2, 3)), progress=False)
-    with pytest.raises(ConfigurationError, match="loop_min_score: expected a value in"):
-        SlamParams(loop_min_score=1.5)
+    with pytest.raises(ConfigurationError, match="min_score: expected a value in"):
+        LoopVerifierParams(min_score=1.5)
     with pytest.raises(ConfigurationError, match="scans_per_submap: expected an integer >= 2"):
         SubmapParams(scans_per_submap=1)
     with pytest.raises(ConfigurationError, match=r"intra_sigmas\[2\]: expected a value > 0"):
@@ -93,9 +94,9 @@ def test_loop_sampling_searches_less_and_still_closes_the_loop(room: np.ndarray)
     assert ate(truth, sampled.poses).rmse < 0.05
 
 
-def _graph_error(huber_k: float) -> float:
+def _graph_with_a_wrong_loop(**kw: object) -> tuple[PoseGraph, np.ndarray]:
     # stiff odometry, so that a wrong loop cannot be absorbed by bending the chain
-    g = PoseGraph(PoseGraphParams(huber_k=huber_k, odom_sigmas=(0.02, 0.02, 0.01), odom_scale=0.0))
+    g = PoseGraph(PoseGraphParams(odom_sigmas=(0.02, 0.02, 0.01), odom_scale=0.0, **kw))
     truth = _loop_path(12)
     for i, p in enumerate(truth):
         g.add_node(i, p)
@@ -107,13 +108,23 @@ def _graph_error(huber_k: float) -> float:
     g.add_loop(0, 6, relative(truth[0], truth[6]) + np.array([1.5, -1.0, 0.4]))  # wrong
     g.optimize()
     assert len(g.loops) == 2
-    return ate(truth, g.node_poses()).rmse
+    return g, truth
 
 
-def test_pose_graph_huber_loss_limits_a_wrong_loop_closure() -> None:
-    robust = _graph_error(1.0)
-    quadratic = _graph_error(1e6)  # Huber with a huge threshold is the plain squared loss
-    assert robust < 0.5 * quadratic
+def test_pose_graph_robust_loss_limits_a_wrong_loop_and_check_removes_it() -> None:
+    huber, truth = _graph_with_a_wrong_loop(robust="huber", huber_k=1.0)
+    dcs, _ = _graph_with_a_wrong_loop(robust="dcs", dcs_phi=1.0)
+    quadratic, _ = _graph_with_a_wrong_loop(robust="huber", huber_k=1e6)
+    e_dcs = ate(truth, dcs.node_poses()).rmse
+    e_huber = ate(truth, huber.node_poses()).rmse
+    e_quad = ate(truth, quadratic.node_poses()).rmse
+    assert e_huber < 0.5 * e_quad
+    assert e_dcs < 0.2 * e_huber  # DCS all but ignores it
+    for g in (huber, dcs):
+        removed = g.check_loops()
+        assert [(s, n) for s, n, _ in removed] == [(0, 6)]
+        assert g.loops == [(0, 11)]
+        assert ate(truth, g.node_poses()).rmse < 0.01
 
 
 def test_noisy_odometry_is_seeded_and_starts_at_reference() -> None:

@@ -1,10 +1,12 @@
 """Complete SLAM runs with their evaluation: a CARMEN log or a simulated exploration.
 
-- :func:`run_carmen`: read a log, make odometry by adding noise to the increments of the
-  corrected poses (:func:`~symloc.sim.odometry_noise.noisy_odometry`, seeded), run SLAM,
-  and compare with the corrected poses (ATE with SE(2) alignment, RPE over consecutive scans).
-- :func:`run_simulated`: build a room, drive :func:`~symloc.bench.exploration.simulate_exploration`,
-  run SLAM and compare with the ground truth (trajectory and rasterised map).
+- :func:`run_carmen`: read a log, make odometry (:func:`carmen_odometry`: a named regime of
+  :mod:`symloc.sim.odometry_noise` applied to the increments of the corrected poses, seeded,
+  or the log's own odometry where it has real odometry), run SLAM, and compare with the
+  corrected poses (ATE with SE(2) alignment, RPE over consecutive scans).
+- :func:`run_simulated`: build a room, drive :func:`~symloc.bench.exploration.simulate_exploration`
+  with exact wheel odometry, apply the regime to the increments of the true poses at the
+  scans, run SLAM and compare with the ground truth (trajectory and rasterised map).
 """
 
 from __future__ import annotations
@@ -21,14 +23,27 @@ from symloc._checks import as_rng
 from symloc.bench.exploration import simulate_exploration
 from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
 from symloc.errors import ConfigurationError
+from symloc.geometry import compose
 from symloc.grid.occupancy_grid import OccupancyGrid
-from symloc.io.carmen import read_carmen
-from symloc.sim.odometry_noise import DEFAULT_ALPHAS, noisy_odometry
+from symloc.io.carmen import CarmenLog, read_carmen
+from symloc.sim.odometry_noise import ODOMETRY_REGIMES, OdometryRegime, regime_odometry
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.rooms import build_room
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
-__all__ = ["SIM_WORLDS", "SlamRun", "run_carmen", "run_simulated"]
+__all__ = [
+    "ODOMETRY_CHOICES",
+    "SIM_WORLDS",
+    "SlamRun",
+    "carmen_odometry",
+    "log_duration",
+    "log_odometry",
+    "run_carmen",
+    "run_simulated",
+]
+
+#: ``--odometry`` choices: the simulated regimes and the log's own odometry.
+ODOMETRY_CHOICES = (*ODOMETRY_REGIMES, "log")
 
 FloatArray = NDArray[np.float64]
 
@@ -52,15 +67,18 @@ class SlamRun:
     reference : ndarray of shape (N, 3)
         Ground truth (simulation) or corrected poses (CARMEN).
     odometry : ndarray of shape (N, 3)
-    duration : float
-        Real (or simulated) duration of the data [s].
+    duration : float or None
+        Real (or simulated) duration of the data [s]; None when the log's stamps are not
+        usable (:func:`log_duration`).
     ate, ate_odometry : AteResult
         Of the SLAM trajectory and of the raw odometry.
     rpe : RpeResult
     realtime_factor : float
-        ``duration / total CPU time`` of the SLAM run (> 1: faster than real time).
+        ``duration / total CPU time`` of the SLAM run (> 1: faster than real time); NaN
+        without a duration.
     realtime_factor_wall : float
-        ``duration / wall-clock time`` (depends on the load of the machine).
+        ``duration / wall-clock time`` (depends on the load of the machine); NaN without a
+        duration.
     map_agreement, map_agreement_tol1 : MapAgreement or None
         Against the rasterised ground truth (simulation only), exact and within one cell.
     truth_grid : OccupancyGrid or None
@@ -71,7 +89,7 @@ class SlamRun:
     result: SlamResult
     reference: FloatArray
     odometry: FloatArray
-    duration: float
+    duration: float | None
     ate: AteResult
     ate_odometry: AteResult
     rpe: RpeResult
@@ -95,6 +113,9 @@ class SlamRun:
             "rpe_trans_rmse_m": self.rpe.trans_rmse,
             "rpe_rot_rmse_deg": math.degrees(self.rpe.rot_rmse),
             "loop_closures": len(r.loop_closures),
+            "loops_rejected": len(r.rejected_loops),
+            "doubtful": r.doubtful,
+            "warnings": list(r.warnings),
             "loop_searches": r.n_loop_searches,
             "retries": r.n_retries,
             "submaps": r.n_submaps,
@@ -117,10 +138,11 @@ def _evaluate(
     result: SlamResult,
     reference: FloatArray,
     odometry: FloatArray,
-    duration: float,
+    duration: float | None,
     **extra: Any,
 ) -> SlamRun:
     t = result.timings
+    nan = float("nan")
     return SlamRun(
         name=name,
         result=result,
@@ -130,64 +152,157 @@ def _evaluate(
         ate=ate(reference, result.poses),
         ate_odometry=ate(reference, odometry),
         rpe=rpe(reference, result.poses),
-        realtime_factor=duration / max(t["total_cpu"], 1e-9),
-        realtime_factor_wall=duration / max(t["total"], 1e-9),
+        realtime_factor=nan if duration is None else duration / max(t["total_cpu"], 1e-9),
+        realtime_factor_wall=nan if duration is None else duration / max(t["total"], 1e-9),
         **extra,
     )
+
+
+def _regime(odometry: str | OdometryRegime) -> OdometryRegime | None:
+    """The regime of an ``odometry`` choice (None for ``"log"``)."""
+    if isinstance(odometry, OdometryRegime):
+        return odometry
+    if odometry == "log":
+        return None
+    if odometry not in ODOMETRY_REGIMES:
+        raise ConfigurationError(
+            f"odometry: expected one of {list(ODOMETRY_CHOICES)}, got {odometry!r}"
+        )
+    return ODOMETRY_REGIMES[odometry]
+
+
+def log_odometry(log: CarmenLog, name: str = "log") -> FloatArray:
+    """The log's own odometry of the laser ``(N, 3)``: FLASER odometry fields + mount offset.
+
+    The odometry fields are the robot's odometry pose; the laser sits ``robot_frontlaser_offset``
+    [m] ahead of it (PARAM, default 0).
+
+    Raises
+    ------
+    ConfigurationError
+        The odometry fields equal the laser poses (the "corrected" logs of the Radish repository
+        wrote the corrected pose into both): the log carries no real odometry.
+    """
+    odom = log.odom_poses
+    ref = log.laser_poses
+    if odom.shape[0] == 0 or np.allclose(odom, ref, atol=1e-6):
+        raise ConfigurationError(
+            f"odometry 'log': {name} carries no real odometry (its FLASER odometry fields equal"
+            " the corrected laser poses); use --odometry realistic or heavy"
+        )
+    try:
+        offset = float(log.params.get("robot_frontlaser_offset", "0") or 0.0)
+    except ValueError as err:
+        raise ConfigurationError(
+            f"{name}: PARAM robot_frontlaser_offset: expected a number [m]"
+        ) from err
+    return compose(odom, np.array([offset, 0.0, 0.0]))
+
+
+def carmen_odometry(
+    log: CarmenLog,
+    odometry: str | OdometryRegime,
+    rng: np.random.Generator | int | None,
+    *,
+    name: str = "log",
+) -> FloatArray:
+    """Odometry ``(N, 3)`` for every scan of ``log``: a regime on the corrected poses, or ``log``.
+
+    Deterministic for a given seed; the same input for symloc and its peers.
+    """
+    regime = _regime(odometry)
+    if regime is None:
+        return log_odometry(log, name)
+    return regime_odometry(log.laser_poses, regime, as_rng(rng))
+
+
+def log_duration(stamps: FloatArray) -> float | None:
+    """Duration [s] of a log from its scan stamps, None when they are not usable.
+
+    Usable: at least 90 % of consecutive stamps increase (orebro's are all 0 and csail's are
+    truncated to six significant digits, so neither gives a duration).
+    """
+    if stamps.size < 2:
+        return None
+    if float(np.mean(np.diff(stamps) > 0)) < 0.9:
+        return None
+    return float(stamps[-1] - stamps[0])
+
+
+def _truncated(log: CarmenLog, max_scans: int | None) -> CarmenLog:
+    if max_scans is None:
+        return log
+    return CarmenLog(log.scans[:max_scans], log.odometry, log.params, log.skipped)
 
 
 def run_carmen(
     path: str | Path,
     *,
-    alphas: tuple[float, float, float, float] = DEFAULT_ALPHAS,
+    odometry: str | OdometryRegime = "heavy",
     rng: np.random.Generator | int | None = 0,
     params: SlamParams | None = None,
     max_scans: int | None = None,
     progress: bool = True,
 ) -> SlamRun:
-    """SLAM on a CARMEN log with odometry made from its corrected poses (see module doc)."""
-
-    log = read_carmen(path)
-    scans_all = log.scans if max_scans is None else log.scans[:max_scans]
-    reference = np.array([s.laser_pose for s in scans_all])
-    scans = [s.scan for s in scans_all]
-    odom = noisy_odometry(reference, alphas, as_rng(rng))
-    name = Path(path).name.split(".")[0]
+    """SLAM on a CARMEN log with odometry from :func:`carmen_odometry` (see module doc)."""
+    name = Path(path).name.split(".")[0].removesuffix("-corrected")
+    log = _truncated(read_carmen(path), max_scans)
+    reference = log.laser_poses
+    odom = carmen_odometry(log, odometry, rng, name=name)
+    scans = [s.scan for s in log.scans]
     result = run_slam(scans, odom, params, progress=progress, desc=name)
-    duration = float(scans_all[-1].stamp - scans_all[0].stamp)
+    duration = log_duration(log.stamps)
+    regime = _regime(odometry)
     return _evaluate(
-        name, result, reference, odom, duration, config={"alphas": alphas, "log": str(path)}
+        name,
+        result,
+        reference,
+        odom,
+        duration,
+        config={
+            "odometry": regime.describe() if regime is not None else "log",
+            "log": str(path),
+        },
     )
 
 
 def run_simulated(
     world: str,
     *,
-    alphas: tuple[float, float, float, float] = DEFAULT_ALPHAS,
+    odometry: str | OdometryRegime = "heavy",
     rng: np.random.Generator | int | None = 0,
     params: SlamParams | None = None,
     laps: float = 1.3,
     progress: bool = True,
 ) -> SlamRun:
     """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`)."""
-
     if world not in SIM_WORLDS:
         raise ConfigurationError(f"world: expected one of {sorted(SIM_WORLDS)}, got {world!r}")
+    regime = _regime(odometry)
+    if regime is None:
+        raise ConfigurationError("odometry: 'log' needs a log; a simulated world takes a regime")
     room_name, gv, in_lab = SIM_WORLDS[world]
     room = build_room(room_name, gv, lab=in_lab)
     gen = as_rng(rng)
-    run = simulate_exploration(room, alphas=alphas, laps=laps, rng=gen)
-    result = run_slam(run.scans, run.odometry, params, progress=progress, desc=world)
+    run = simulate_exploration(room, alphas=(0.0, 0.0, 0.0, 0.0), laps=laps, rng=gen)
+    odom = regime_odometry(run.truth, regime, gen)
+    result = run_slam(run.scans, odom, params, progress=progress, desc=world)
     res = result.grid.resolution
     truth_grid = world_to_grid(room.world, res, free_seeds=run.truth[:1, :2])
     return _evaluate(
         world,
         result,
         run.truth,
-        run.odometry,
+        odom,
         run.duration,
         map_agreement=map_agreement(result.grid, truth_grid),
         map_agreement_tol1=map_agreement(result.grid, truth_grid, tolerance=1),
         truth_grid=truth_grid,
-        config={"alphas": alphas, "room": room_name, "gv": gv, "lab": in_lab, "laps": laps},
+        config={
+            "odometry": regime.describe(),
+            "room": room_name,
+            "gv": gv,
+            "lab": in_lab,
+            "laps": laps,
+        },
     )

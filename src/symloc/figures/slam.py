@@ -10,7 +10,7 @@ import numpy as np
 
 from symloc.figures._save import save_figure
 
-__all__ = ["map_trajectory_figure", "slam_summary_figure"]
+__all__ = ["map_trajectory_figure", "slam_bench_figure", "slam_summary_figure"]
 
 
 def _grid_image(grid: Any) -> np.ndarray:
@@ -98,5 +98,48 @@ def slam_summary_figure(rows: Sequence[dict[str, Any]], path: str | Path) -> Pat
     a2.set_xticks(x, names, rotation=20)
     a2.set_ylabel("data duration / processing time")
     a2.legend(fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def slam_bench_figure(
+    summary: dict[str, Any], path: str | Path, *, title: str = "", target: float | None = None
+) -> Path:
+    """``symloc bench slam``: per log and system, ATE RMSE (mean over seeds, bar; worst, dot)
+    and peak memory (bar), from :func:`symloc.bench.slam_bench.summarize`'s ``logs``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    logs = summary["logs"]
+    names = sorted(logs)
+    systems = sorted({s for lg in logs.values() for s in lg}, key=lambda s: (s != "symloc", s))
+    x = np.arange(len(names))
+    w = 0.8 / max(len(systems), 1)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 7), dpi=120, sharex=True)
+    for k, sname in enumerate(systems):
+        off = (k - (len(systems) - 1) / 2) * w
+        mean = [logs[n].get(sname, {}).get("ate_mean_m") for n in names]
+        worst = [logs[n].get(sname, {}).get("ate_worst_m") for n in names]
+        mem = [logs[n].get(sname, {}).get("peak_rss_mb") for n in names]
+
+        def _nan(v: list[Any]) -> list[float]:
+            return [float("nan") if u is None else float(u) for u in v]
+
+        bars = a1.bar(x + off, _nan(mean), w, label=f"{sname}: mean over seeds")
+        a1.plot(x + off, _nan(worst), "v", color=bars.patches[0].get_facecolor(), ms=5)
+        a2.bar(x + off, _nan(mem), w, label=sname)
+    if target is not None:
+        a1.axhline(target, color="k", ls="--", lw=0.8, label=f"{target:g} m target")
+    a1.set_yscale("log")
+    a1.set_ylabel("ATE RMSE [m] (triangle: worst seed)")
+    a1.legend(fontsize=8)
+    a2.axhline(300.0, color="k", ls="--", lw=0.8, label="300 MB target")
+    a2.set_ylabel("peak RSS [MB]")
+    a2.set_xticks(x, names, rotation=20)
+    a2.legend(fontsize=8)
+    if title:
+        a1.set_title(title, fontsize=10)
     fig.tight_layout()
     return save_figure(fig, path)

@@ -33,6 +33,10 @@ __all__ = ["InverseSensorModel", "LogOddsGrid", "beam_cells", "log_odds", "proba
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
+#: Beams whose free-space samples are computed at once (bounds the temporaries: a 40 m beam
+#: at 5 cm cells is 1600 samples).
+_BEAM_CHUNK = 64
+
 
 def log_odds(p: ArrayLike) -> FloatArray:
     """``log(p / (1 - p))`` for probabilities in (0, 1)."""
@@ -252,18 +256,33 @@ class LogOddsGrid:
             reach = max(reach, self.model.no_return_range)
         reach += 2 * self.resolution
         self.ensure_contains(p[:2] - reach, p[:2] + reach)
-        fy, fx, hy, hx = _raw_cells(p, scan, self.model, self.resolution, self.origin_xy)
-        if fy.size + hy.size == 0:
+        res = self.resolution
+        o = self.origin_xy
+        ang, length, hit = _beam_geometry(scan, self.model)
+        if ang.size == 0:
             self.n_scans += 1
             return
         # one update per cell: mark a window covering the scan, hits override free
-        r0 = int(min(fy.min(initial=hy.min(initial=0)), hy.min(initial=fy.min(initial=0))))
-        c0 = int(min(fx.min(initial=hx.min(initial=0)), hx.min(initial=fx.min(initial=0))))
-        r1 = int(max(fy.max(initial=hy.max(initial=0)), hy.max(initial=fy.max(initial=0)))) + 1
-        c1 = int(max(fx.max(initial=hx.max(initial=0)), hx.max(initial=fx.max(initial=0)))) + 1
+        h, w = self.values.shape
+        r0 = max(int(np.floor((p[1] - reach - o[1]) / res)), 0)
+        c0 = max(int(np.floor((p[0] - reach - o[0]) / res)), 0)
+        r1 = min(int(np.floor((p[1] + reach - o[1]) / res)) + 1, h)
+        c1 = min(int(np.floor((p[0] + reach - o[0]) / res)) + 1, w)
         mark = np.zeros((r1 - r0, c1 - c0), dtype=np.int8)
-        mark[fy - r0, fx - c0] = 1
-        mark[hy - r0, hx - c0] = 2
+        world_ang = p[2] + ang
+        c, s = np.cos(world_ang), np.sin(world_ang)
+        step = self.model.step * res
+        for b0 in range(0, ang.size, _BEAM_CHUNK):  # bounded temporaries for long beams
+            sl = slice(b0, b0 + _BEAM_CHUNK)
+            n = np.ceil(length[sl] / step).astype(np.intp)
+            beam = np.repeat(np.arange(n.size), n)
+            t = (np.arange(int(n.sum())) - (np.cumsum(n) - n)[beam]) * step
+            fx = np.floor((p[0] - o[0] + t * c[sl][beam]) / res).astype(np.intp) - c0
+            fy = np.floor((p[1] - o[1] + t * s[sl][beam]) / res).astype(np.intp) - r0
+            mark[fy, fx] = 1
+        hx = np.floor((p[0] - o[0] + length[hit] * c[hit]) / res).astype(np.intp) - c0
+        hy = np.floor((p[1] - o[1] + length[hit] * s[hit]) / res).astype(np.intp) - r0
+        mark[hy, hx] = 2
         win = self.values[r0:r1, c0:c1]
         win[mark == 1] += np.float32(self.model.l_miss)
         win[mark == 2] += np.float32(self.model.l_hit)
@@ -273,6 +292,16 @@ class LogOddsGrid:
     def probability(self) -> FloatArray:
         """``(H, W)`` occupancy probability; never-observed cells are 0.5."""
         return probability(self.values)
+
+    def occupancy_percent(self) -> NDArray[np.int8]:
+        """``(H, W)`` occupancy 0..100 (rounded), computed in float32 (half the memory)."""
+        v = self.values.astype(np.float32, copy=True)
+        np.negative(v, out=v)
+        np.exp(v, out=v)
+        v += np.float32(1.0)
+        np.divide(np.float32(100.0), v, out=v)
+        np.rint(v, out=v)
+        return v.astype(np.int8)
 
     def known_mask(self) -> NDArray[np.bool_]:
         """``(H, W)`` True where the cell was observed (log-odds not 0)."""
@@ -290,7 +319,7 @@ class LogOddsGrid:
         With ``crop_margin`` (cells), the result is cropped to the observed cells' bounding
         box plus that margin.
         """
-        occ = np.rint(self.probability() * 100.0).astype(np.int8)
+        occ = self.occupancy_percent()
         known = self.known_mask()
         occ[~known] = -1
         origin = self.origin_xy.copy()

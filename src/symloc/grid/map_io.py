@@ -395,6 +395,7 @@ def save_map(
     free_thresh: float | None = None,
     occupied_thresh: float | None = None,
     write_size: bool = True,
+    extra: dict[str, Any] | None = None,
 ) -> Path:
     """Write ``grid`` as ``<stem>.yaml`` + ``<stem>.pgm`` (``.png`` for scale mode).
 
@@ -411,6 +412,9 @@ def save_map(
         Written thresholds (default: the grid's).
     write_size : bool
         Also write ``width`` and ``height`` (ignored by map_server, checked by :func:`load_map`).
+    extra : dict, optional
+        More top-level YAML keys (plain data), e.g. how the map was made and whether it is
+        doubtful; map_server and :func:`load_map` ignore keys they do not know.
 
     Returns
     -------
@@ -446,7 +450,10 @@ def save_map(
     ]
     if write_size:
         lines += [f"width: {grid.width}", f"height: {grid.height}"]
-    yaml_path.write_text("\n".join(lines) + "\n")
+    text = "\n".join(lines) + "\n"
+    if extra:
+        text += yaml.safe_dump(dict(extra), sort_keys=False, default_flow_style=False)
+    yaml_path.write_text(text)
     return yaml_path
 
 

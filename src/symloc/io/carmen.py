@@ -7,12 +7,22 @@ Line formats (fields separated by white space)::
 
 ``x y theta`` of a ``FLASER`` line is the laser pose in the world frame (in the "corrected" logs
 of the Radish repository it is the pose a SLAM system estimated, used here as the reference
-trajectory); ``odom_*`` is the odometry pose at the scan. The ``n`` ranges [m] span a
-180-degree front field of view starting at -90 degrees; beam ``i`` points at
-``-pi/2 + i * pi / n`` (the convention of GMapping's CARMEN reader: the field of view divided
-by the number of beams). Readings at or above ``range_max`` mean "no return" (the logs use
-50, 80 or 81.91 for that). ``PARAM`` lines are collected; ``#`` comments and blank lines are
-ignored; any other message type is skipped and counted in :attr:`CarmenLog.skipped`.
+trajectory); ``odom_*`` is the odometry pose at the scan. Readings at or above ``range_max``
+mean "no return" (the logs use 50, 80 or 81.91 for that). ``PARAM`` lines are collected; ``#``
+comments and blank lines are ignored; any other message type is skipped and counted in
+:attr:`CarmenLog.skipped`.
+
+Beam geometry (:func:`carmen_beam_geometry`): the ``n`` ranges span the front field of view
+``fov`` (default 180 degrees) from ``-fov/2``; beam ``i`` points at ``-fov/2 + i * step``. The
+step is the scanner's angular resolution: the ``laser_front_laser_resolution`` PARAM [deg]
+where the log has it, else ``fov / (n - 1)`` for an odd ``n`` (a SICK LMS sweep with both ends,
+181 or 361 beams) and ``fov / n`` for an even ``n`` (180 or 360 beams: the last beam of the
+sweep dropped, beam 0 at -90 degrees). ``fov`` comes from the ``laser_front_laser_fov`` PARAM
+where present. Checked against the data: with the corrected poses, the scans of every shared
+log fit each other best with exactly this geometry (a two-parameter fit of step and centre
+offset lands on it; ``pi / n`` for 181 and 361 beams, as GMapping's CARMEN reader uses, fits
+worse: orebro 3.74 vs 3.47 cm mean point-to-point distance, acapulco 3.57 vs 3.34, csail 1.87
+vs 1.81).
 """
 
 from __future__ import annotations
@@ -36,14 +46,85 @@ __all__ = [
     "CarmenLog",
     "CarmenOdometry",
     "CarmenScan",
+    "carmen_beam_geometry",
     "iter_carmen",
     "read_carmen",
 ]
 
 FloatArray = NDArray[np.float64]
 
-#: Field of view of a CARMEN front laser [rad].
+#: Field of view of a CARMEN front laser [rad] when the log does not state it.
 CARMEN_FOV = math.pi
+
+#: PARAM names that give the front laser's angular resolution [deg] (the second spelling is
+#: the one of the fhw log).
+_RESOLUTION_PARAMS = ("laser_front_laser_resolution", "laser_frontlaser_resolution")
+#: PARAM name of the front laser's field of view (radians in the logs that have it; a value
+#: above 2 pi is read as degrees, CARMEN's ini-file unit).
+_FOV_PARAM = "laser_front_laser_fov"
+
+
+def _param_float(params: dict[str, str], name: str) -> float | None:
+    text = params.get(name)
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError as err:
+        raise DataFormatError(f"PARAM {name}: expected a number, got {text!r}") from err
+    if not (math.isfinite(value) and value > 0):
+        raise DataFormatError(f"PARAM {name}: expected a value > 0, got {text!r}")
+    return value
+
+
+def carmen_beam_geometry(n: int, params: dict[str, str] | None = None) -> tuple[float, float]:
+    """``(angle_min, angle_increment)`` [rad] of an ``n``-beam front laser scan.
+
+    Parameters
+    ----------
+    n : int
+        Number of readings of the ``FLASER`` line (>= 2).
+    params : dict, optional
+        The log's ``PARAM`` entries read so far: ``laser_front_laser_fov`` and
+        ``laser_front_laser_resolution`` are used where present (see the module docstring).
+
+    Raises
+    ------
+    DataFormatError
+        A geometry PARAM is not a positive number, or ``n`` beams at the stated resolution
+        would not fit in a full turn.
+
+    Examples
+    --------
+    >>> import math
+    >>> [round(math.degrees(v), 3) for v in carmen_beam_geometry(181)]
+    [-90.0, 1.0]
+    >>> [round(math.degrees(v), 3) for v in carmen_beam_geometry(180)]
+    [-90.0, 1.0]
+    >>> [round(math.degrees(v), 3) for v in carmen_beam_geometry(360, {"laser_front_laser_resolution": "0.5"})]
+    [-90.0, 0.5]
+    """
+    prm = params or {}
+    fov = _param_float(prm, _FOV_PARAM)
+    if fov is not None and fov > 2.0 * math.pi + 1e-6:
+        fov = math.radians(fov)
+    res_deg = next(
+        (v for v in (_param_float(prm, k) for k in _RESOLUTION_PARAMS) if v is not None), None
+    )
+    if res_deg is not None:
+        step = math.radians(res_deg)
+        if fov is None:
+            fov = step * (n - 1) if n % 2 else step * n
+    else:
+        if fov is None:
+            fov = CARMEN_FOV
+        step = fov / (n - 1) if n % 2 else fov / n
+    if step * (n - 1) > 2.0 * math.pi + 1e-6:
+        raise DataFormatError(
+            f"FLASER with {n} readings at {math.degrees(step):g} deg spacing: expected a"
+            " field of view of at most 360 deg (check the laser resolution PARAM)"
+        )
+    return -fov / 2.0, step
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -139,7 +220,9 @@ def _floats(tokens: list[str], what: str, lineno: int) -> FloatArray:
     return out
 
 
-def _parse_flaser(tokens: list[str], lineno: int, range_max: float) -> CarmenScan:
+def _parse_flaser(
+    tokens: list[str], lineno: int, range_max: float, params: dict[str, str]
+) -> CarmenScan:
     if len(tokens) < 2:
         raise DataFormatError(f"line {lineno}: FLASER: missing the number of readings")
     try:
@@ -161,9 +244,13 @@ def _parse_flaser(tokens: list[str], lineno: int, range_max: float) -> CarmenSca
     logger = _floats([tokens[10 + n]], "FLASER logger_timestamp", lineno)[0]
     if np.any(ranges < 0):
         raise DataFormatError(f"line {lineno}: FLASER ranges: expected values >= 0 m")
+    try:
+        angle_min, step = carmen_beam_geometry(n, params)
+    except DataFormatError as err:
+        raise DataFormatError(f"line {lineno}: {err}") from err
     scan = LaserScan(
-        angle_min=-CARMEN_FOV / 2.0,
-        angle_increment=CARMEN_FOV / n,
+        angle_min=angle_min,
+        angle_increment=step,
         range_min=0.0,
         range_max=range_max,
         ranges=ranges,
@@ -228,7 +315,8 @@ def iter_carmen(
     skipped : Counter, optional
         Incremented per unknown message type.
     params : dict, optional
-        Filled with ``PARAM name value`` entries.
+        Filled with ``PARAM name value`` entries (the geometry PARAMs also set the beam
+        geometry of the scans that follow them, see :func:`carmen_beam_geometry`).
 
     Raises
     ------
@@ -242,18 +330,25 @@ def iter_carmen(
         raise DataFormatError(f"CARMEN log not found: {p}")
     if not (math.isfinite(range_max) and range_max > 0):
         raise DataFormatError(f"range_max: expected > 0 m, got {range_max}")
+    seen: dict[str, str] = {}
     for lineno, raw in enumerate(_open_text(p), start=1):
         tokens = raw.split()
         if not tokens or tokens[0].startswith("#"):
             continue
         kind = tokens[0]
         if kind == "FLASER":
-            yield _parse_flaser(tokens, lineno, range_max)
+            yield _parse_flaser(tokens, lineno, range_max, seen)
         elif kind == "ODOM":
             yield _parse_odom(tokens, lineno)
         elif kind == "PARAM":
             if len(tokens) < 3:
                 raise DataFormatError(f"line {lineno}: PARAM: expected a name and a value")
+            if tokens[1] in (_FOV_PARAM, *_RESOLUTION_PARAMS):
+                try:
+                    _param_float({tokens[1]: tokens[2]}, tokens[1])
+                except DataFormatError as err:
+                    raise DataFormatError(f"line {lineno}: {err}") from err
+            seen[tokens[1]] = tokens[2]
             if params is not None:
                 params[tokens[1]] = tokens[2]
         elif skipped is not None:

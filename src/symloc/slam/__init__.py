@@ -10,9 +10,13 @@ from symloc.slam.correlative_scan_matching import (
     CsmParams,
     LikelihoodTable,
     MatchResult,
+    match_information,
     match_scan,
     refine_pose,
 )
+from symloc.slam.degeneracy import MatchConstraint, analyse_match, fuse
+from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
+from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
@@ -21,13 +25,22 @@ __all__ = [
     "ActiveSubmaps",
     "CsmParams",
     "LikelihoodTable",
+    "LoopCandidate",
+    "LoopVerifier",
+    "LoopVerifierParams",
+    "MatchConstraint",
     "MatchResult",
+    "OdometryModel",
+    "OdometryModelParams",
     "PoseGraph",
     "PoseGraphParams",
     "SlamParams",
     "SlamResult",
     "Submap",
     "SubmapParams",
+    "analyse_match",
+    "fuse",
+    "match_information",
     "match_scan",
     "refine_pose",
     "run_slam",

@@ -25,6 +25,17 @@ over the block, which keeps the bound valid.
 Refinement: Levenberg-Marquardt on residuals ``1 - T(x_p)`` with bilinear interpolation of the
 table (analytic gradients), plus weak quadratic priors tying the result to the search's pose
 (the role of Cartographer's Ceres scan matcher).
+
+Ambiguity: with ``runner_up_exclusion``, the search goes on after the best pose for the best
+score *outside* a neighbourhood of it (:attr:`MatchResult.runner_up_score`): a loop closure
+whose runner-up scores almost as well is ambiguous (a corridor, a repeated room).
+
+Information: :func:`match_information` is ``J^T J / N`` of the refinement's residuals at a
+pose, the 3 x 3 curvature of the match: its small eigenvalues are the directions the scan does
+not constrain (:mod:`symloc.slam.degeneracy`).
+
+Tables built with a ``margin`` (zero-likelihood border cells, at least the search window) are
+matched without copying them per match.
 """
 
 from __future__ import annotations
@@ -43,6 +54,7 @@ __all__ = [
     "CsmParams",
     "LikelihoodTable",
     "MatchResult",
+    "match_information",
     "match_scan",
     "refine_pose",
     "score_pose",
@@ -63,7 +75,11 @@ class CsmParams:
         Half-width of the heading search [rad].
     angular_step : float
         Heading step [rad]; 0 picks Cartographer's ``acos(1 - r^2 / (2 d^2))`` for the table
-        resolution ``r`` and the scan's 90th-percentile point range ``d``.
+        resolution ``r`` and the scan's 90th-percentile point range ``d``, at most
+        ``step_range``.
+    step_range : float
+        Largest range [m] used for that step (a 50 m hall would otherwise ask for 0.06-degree
+        steps; the refinement that follows the search is continuous).
     coarse_factor : int
         Block edge ``f`` of the low-resolution level, in cells (>= 1).
     translation_weight, rotation_weight : float
@@ -76,6 +92,7 @@ class CsmParams:
     linear_window: float = 0.3
     angular_window: float = math.radians(15.0)
     angular_step: float = 0.0
+    step_range: float = 25.0
     coarse_factor: int = 4
     translation_weight: float = 0.0
     rotation_weight: float = 0.0
@@ -86,6 +103,7 @@ class CsmParams:
         check_positive(self.linear_window, "CsmParams.linear_window", allow_zero=True)
         check_positive(self.angular_window, "CsmParams.angular_window", allow_zero=True)
         check_positive(self.angular_step, "CsmParams.angular_step", allow_zero=True)
+        check_positive(self.step_range, "CsmParams.step_range")
         check_positive(self.translation_weight, "CsmParams.translation_weight", allow_zero=True)
         check_positive(self.rotation_weight, "CsmParams.rotation_weight", allow_zero=True)
         if int(self.coarse_factor) != self.coarse_factor or self.coarse_factor < 1:
@@ -110,16 +128,30 @@ class LikelihoodTable:
         Cell edge [m].
     origin_xy : array of shape (2,)
         Position of the corner of cell (0, 0) in the table's frame [m].
+    margin : int
+        Border cells (on every side) beyond the mapped content, all far from any occupied
+        cell; a search whose window fits in it needs no padding copy.
     """
 
-    def __init__(self, values: ArrayLike, resolution: float, origin_xy: ArrayLike) -> None:
+    def __init__(
+        self, values: ArrayLike, resolution: float, origin_xy: ArrayLike, *, margin: int = 0
+    ) -> None:
         v = np.asarray(values, dtype=np.float32)
         if v.ndim != 2 or v.size == 0:
             raise ConfigurationError(f"LikelihoodTable.values: expected (H, W), got {v.shape}")
         self.values = v
         self.resolution = check_positive(resolution, "LikelihoodTable.resolution")
         self.origin_xy = np.asarray(origin_xy, dtype=np.float64).reshape(2)
+        self.margin = int(margin)
         self._coarse: dict[int, NDArray[np.float32]] = {}
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the table and its cached coarse levels [bytes]."""
+        return int(
+            self.values.nbytes
+            + sum(c.nbytes for c in self._coarse.values() if c is not self.values)
+        )
 
     @classmethod
     def from_occupied(
@@ -130,31 +162,63 @@ class LikelihoodTable:
         sigma: float,
         *,
         max_distance: float | None = None,
+        margin: int = 0,
     ) -> LikelihoodTable:
         """Build ``exp(-d^2 / (2 sigma^2))`` from an occupied-cell mask ``(H, W)``.
 
-        ``max_distance`` [m] (default ``4 sigma``) bounds the distance transform work.
+        ``max_distance`` [m] (default ``4 sigma``) bounds the distance transform work;
+        ``margin`` cells are added on every side (the table then starts ``margin`` cells
+        before ``origin_xy``), plus the few cells the likelihood needs to fall to 0.
         """
         occ = np.asarray(occupied, dtype=bool)
         sig = check_positive(sigma, "sigma")
-        if not occ.any():
-            return cls(np.zeros(occ.shape, np.float32), resolution, origin_xy)
-        d = ndimage.distance_transform_edt(~occ) * float(resolution)
+        res = float(resolution)
         lim = 4.0 * sig if max_distance is None else float(max_distance)
-        val = np.exp(-0.5 * (np.minimum(d, lim) / sig) ** 2)
-        val[d >= lim] = 0.0
-        return cls(val.astype(np.float32), resolution, origin_xy)
+        reach = math.ceil(lim / res)
+        pad = int(margin) + reach + 1 if margin > 0 else 0
+        origin = np.asarray(origin_xy, dtype=np.float64).reshape(2) - pad * res
+        h, w = occ.shape[0] + 2 * pad, occ.shape[1] + 2 * pad
+        values = np.zeros((h, w), np.float32)
+        rows = np.flatnonzero(occ.any(axis=1))
+        if rows.size == 0:
+            return cls(values, res, origin, margin=int(margin))
+        cols = np.flatnonzero(occ.any(axis=0))
+        # only the occupied cells' bounding box plus the likelihood's reach can be non-zero
+        r0, r1 = max(rows[0] + pad - reach, 0), min(rows[-1] + pad + reach + 1, h)
+        c0, c1 = max(cols[0] + pad - reach, 0), min(cols[-1] + pad + reach + 1, w)
+        box = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+        sr0, sc0 = r0 - pad, c0 - pad  # box origin in occ's own cells
+        o0, o1 = max(sr0, 0), min(sr0 + box.shape[0], occ.shape[0])
+        q0, q1 = max(sc0, 0), min(sc0 + box.shape[1], occ.shape[1])
+        box[o0 - sr0 : o1 - sr0, q0 - sc0 : q1 - sc0] = occ[o0:o1, q0:q1]
+        d2 = _squared_distance(box, reach) * np.float32(res * res)
+        val = np.exp(np.float32(-0.5 / (sig * sig)) * d2)
+        val[d2 >= np.float32(lim * lim)] = 0.0
+        values[r0:r1, c0:c1] = val
+        return cls(values, res, origin, margin=int(margin))
 
     def coarse(self, factor: int) -> NDArray[np.float32]:
         """Table whose cell ``(r, c)`` holds the max over cells ``[r, r+f) x [c, c+f)``."""
         if factor not in self._coarse:
-            self._coarse[factor] = (
-                self.values
-                if factor == 1
-                else ndimage.maximum_filter(
-                    self.values, size=factor, origin=-(factor // 2), mode="constant", cval=0.0
-                )
-            )
+            if factor == 1:
+                self._coarse[factor] = self.values
+            else:
+                # the max of a window ending at the box of non-zero cells: compute there only
+                v = self.values
+                rows = np.flatnonzero(v.any(axis=1))
+                out = np.zeros_like(v)
+                if rows.size:
+                    cols = np.flatnonzero(v.any(axis=0))
+                    r0, r1 = max(rows[0] - factor, 0), rows[-1] + 1
+                    c0, c1 = max(cols[0] - factor, 0), cols[-1] + 1
+                    out[r0:r1, c0:c1] = ndimage.maximum_filter(
+                        v[r0 : r1 + factor, c0 : c1 + factor],
+                        size=factor,
+                        origin=-(factor // 2),
+                        mode="constant",
+                        cval=0.0,
+                    )[: r1 - r0, : c1 - c0]
+                self._coarse[factor] = out
         return self._coarse[factor]
 
     def interpolate(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -200,6 +264,9 @@ class MatchResult:
         Poses whose exact score was computed.
     n_total : int
         Poses in the discrete search window.
+    runner_up_score : float
+        Best search score outside the ``runner_up_exclusion`` neighbourhood of the best pose
+        (-1 when not asked for or the window holds nothing else).
     """
 
     pose: FloatArray
@@ -207,6 +274,29 @@ class MatchResult:
     search_score: float
     n_candidates: int
     n_total: int
+    runner_up_score: float = -1.0
+
+
+def _squared_distance(occupied: NDArray[np.bool_], reach: int) -> NDArray[np.float32]:
+    """Squared distance [cells^2] to the nearest occupied cell, exact up to ``reach`` cells.
+
+    Two separable passes of shifted minima (Felzenszwalb and Huttenlocher's decomposition of
+    the squared Euclidean distance, restricted to offsets of at most ``reach`` cells per axis,
+    which holds every distance up to ``reach``); farther cells get a value above ``reach^2``.
+    """
+    big = np.float32((reach + 1) ** 2 * 2)
+    f = np.where(occupied, np.float32(0.0), big)
+    g = f.copy()
+    for k in range(1, reach + 1):
+        kk = np.float32(k * k)
+        np.minimum(g[:, k:], f[:, :-k] + kk, out=g[:, k:])
+        np.minimum(g[:, :-k], f[:, k:] + kk, out=g[:, :-k])
+    out = g.copy()
+    for k in range(1, reach + 1):
+        kk = np.float32(k * k)
+        np.minimum(out[k:, :], g[:-k, :] + kk, out=out[k:, :])
+        np.minimum(out[:-k, :], g[k:, :] + kk, out=out[:-k, :])
+    return out
 
 
 def _rotate(points: FloatArray, theta: FloatArray) -> FloatArray:
@@ -232,6 +322,8 @@ def match_scan(
     points: ArrayLike,
     initial_pose: ArrayLike,
     params: CsmParams | None = None,
+    *,
+    runner_up_exclusion: tuple[float, float] | None = None,
 ) -> MatchResult:
     """Find the pose of a scan in ``table`` near ``initial_pose``.
 
@@ -243,6 +335,9 @@ def match_scan(
     initial_pose : array of shape (3,)
         Guess of the sensor pose in the table's frame.
     params : CsmParams, optional
+    runner_up_exclusion : (float, float), optional
+        ``(distance [m], angle [rad])``: also find the best search score among the poses
+        farther than this from the best one in translation *or* heading.
 
     Returns
     -------
@@ -257,6 +352,7 @@ def match_scan(
     step = prm.angular_step
     if step == 0.0:
         d = max(float(np.percentile(np.hypot(pts[:, 0], pts[:, 1]), 90)), 2.0 * res)
+        d = min(d, prm.step_range)
         step = math.acos(1.0 - res * res / (2.0 * d * d))
     n_ang = math.floor(prm.angular_window / step) if prm.angular_window > 0 else 0
     dthetas = np.arange(-n_ang, n_ang + 1) * step
@@ -268,17 +364,28 @@ def match_scan(
     pad = n_lin + f + 1
     h, w = table.values.shape
     rot = _rotate(pts, p0[2] + dthetas) + p0[:2]
-    cells = np.floor((rot - table.origin_xy) / res).astype(np.intp)[..., ::-1] + pad
+    cells = np.floor((rot - table.origin_xy) / res).astype(np.intp)[..., ::-1]
     n_pts = pts.shape[0]
-    inside = (
-        (cells[..., 0] >= pad)
-        & (cells[..., 0] < h + pad)
-        & (cells[..., 1] >= pad)
-        & (cells[..., 1] < w + pad)
-    )
-    cells = np.where(inside[..., None], cells, 0)  # cell (0, 0) of the padded table is 0
-    fine = np.pad(table.values, pad)
-    coarse = np.pad(table.coarse(f), pad)
+    if table.margin >= pad:  # the table's own border is the padding: no copy
+        inside = (
+            (cells[..., 0] >= pad)
+            & (cells[..., 0] < h - pad)
+            & (cells[..., 1] >= pad)
+            & (cells[..., 1] < w - pad)
+        )
+        fine = table.values
+        coarse = table.coarse(f)
+    else:
+        cells = cells + pad
+        inside = (
+            (cells[..., 0] >= pad)
+            & (cells[..., 0] < h + pad)
+            & (cells[..., 1] >= pad)
+            & (cells[..., 1] < w + pad)
+        )
+        fine = np.pad(table.values, pad)
+        coarse = np.pad(table.coarse(f), pad)
+    cells = np.where(inside[..., None], cells, 0)  # masked below
     offs = -n_lin + np.arange(nb) * f
     # prior factor: best over each block (closest offset to zero), exact per candidate
     tw, rw = prm.translation_weight * res * res, prm.rotation_weight
@@ -297,41 +404,63 @@ def match_scan(
     bounds = coarse_scores * ang_prior[:, None, None] * block_prior[None, :, :]
     order = np.argsort(bounds, axis=None)[::-1]
     flat_bounds = bounds.ravel()[order]
-    best = -1.0
-    best_idx = (n_ang, n_lin, n_lin)
-    n_eval = 0
-    batch = 8
     within = np.arange(f)
-    for start in range(0, order.size, batch):
-        if flat_bounds[start] <= best:
-            break
-        ids = order[start : start + batch]
-        ids = ids[flat_bounds[start : start + batch] > best]
-        k, bi, bj = np.unravel_index(ids, bounds.shape)
-        ro = offs[bi][:, None] + within[None, :]  # (B, f) row offsets (cells)
-        co = offs[bj][:, None] + within[None, :]
-        # (B, N, f, f)
-        r_idx = cells[k, :, 0][:, :, None, None] + ro[:, None, :, None]
-        c_idx = cells[k, :, 1][:, :, None, None] + co[:, None, None, :]
-        vals = np.where(inside[k][:, :, None, None], fine[r_idx, c_idx], 0.0).sum(axis=1) / n_pts
-        in_win = (np.abs(ro) <= n_lin)[:, :, None] & (np.abs(co) <= n_lin)[:, None, :]
-        prior = ang_prior[k][:, None, None] * np.exp(
-            -tw * (ro[:, :, None] ** 2 + co[:, None, :] ** 2)
-        )
-        vals = np.where(in_win, vals * prior, -1.0)
-        n_eval += int(in_win.sum())
-        j = int(np.argmax(vals))
-        b, a1, a2 = np.unravel_index(j, vals.shape)
-        if vals[b, a1, a2] > best:
-            best = float(vals[b, a1, a2])
-            best_idx = (int(k[b]), int(ro[b, a1]), int(co[b, a2]))
+
+    def _search(
+        exclude: tuple[int, int, int, float, float] | None,
+    ) -> tuple[float, tuple[int, int, int], int]:
+        """Branch and bound; ``exclude = (k, dr, dc, r_cells, angle)`` masks a neighbourhood."""
+        best = -1.0
+        best_idx = (n_ang, n_lin, n_lin)
+        n_eval = 0
+        batch = 8
+        for start in range(0, order.size, batch):
+            if flat_bounds[start] <= best:
+                break
+            ids = order[start : start + batch]
+            ids = ids[flat_bounds[start : start + batch] > best]
+            k, bi, bj = np.unravel_index(ids, bounds.shape)
+            ro = offs[bi][:, None] + within[None, :]  # (B, f) row offsets (cells)
+            co = offs[bj][:, None] + within[None, :]
+            # (B, N, f, f)
+            r_idx = cells[k, :, 0][:, :, None, None] + ro[:, None, :, None]
+            c_idx = cells[k, :, 1][:, :, None, None] + co[:, None, None, :]
+            vals = (
+                np.where(inside[k][:, :, None, None], fine[r_idx, c_idx], 0.0).sum(axis=1) / n_pts
+            )
+            in_win = (np.abs(ro) <= n_lin)[:, :, None] & (np.abs(co) <= n_lin)[:, None, :]
+            if exclude is not None:
+                ek, er, ec, rad, ang = exclude
+                near_t = (ro[:, :, None] - er) ** 2 + (co[:, None, :] - ec) ** 2 <= rad * rad
+                near_a = np.abs(dthetas[k] - dthetas[ek]) <= ang
+                in_win &= ~(near_t & near_a[:, None, None])
+            prior = ang_prior[k][:, None, None] * np.exp(
+                -tw * (ro[:, :, None] ** 2 + co[:, None, :] ** 2)
+            )
+            vals = np.where(in_win, vals * prior, -1.0)
+            n_eval += int(in_win.sum())
+            j = int(np.argmax(vals))
+            b, a1, a2 = np.unravel_index(j, vals.shape)
+            if vals[b, a1, a2] > best:
+                best = float(vals[b, a1, a2])
+                best_idx = (int(k[b]), int(ro[b, a1]), int(co[b, a2]))
+        return best, best_idx, n_eval
+
+    best, best_idx, n_eval = _search(None)
+    runner_up = -1.0
+    if runner_up_exclusion is not None:
+        rad = float(runner_up_exclusion[0]) / res
+        runner_up, _, n2 = _search((*best_idx, rad, float(runner_up_exclusion[1])))
+        n_eval += n2
     kk, dr, dc = best_idx
     pose = np.array([p0[0] + dc * res, p0[1] + dr * res, p0[2] + dthetas[kk]])
     if prm.refine and prm.refine_iterations > 0:
         pose = refine_pose(table, pts, pose, iterations=prm.refine_iterations)
     pose[2] = math.remainder(pose[2], 2.0 * math.pi)
     score = score_pose(table, pts, pose)
-    return MatchResult(pose, score, max(best, 0.0), n_eval, int(dthetas.size * span * span))
+    return MatchResult(
+        pose, score, max(best, 0.0), n_eval, int(dthetas.size * span * span), runner_up
+    )
 
 
 def refine_pose(
@@ -389,3 +518,23 @@ def refine_pose(
             if lam > 1e6:
                 break
     return p
+
+
+def match_information(table: LikelihoodTable, points: ArrayLike, pose: ArrayLike) -> FloatArray:
+    """``(3, 3)`` curvature ``J^T J / N`` of the match residuals ``1 - T(x_p)`` at ``pose``.
+
+    ``J`` holds, per point, the gradient of the table value with respect to ``(x, y, theta)``
+    [1/m, 1/m, 1/rad]; the matrix is the Gauss-Newton information of the match per point.
+    Its eigenvectors with small eigenvalues are the directions the scan does not constrain
+    (the axis of a corridor; every direction in an open hall).
+    """
+    p = np.asarray(pose, dtype=np.float64).reshape(3)
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if pts.shape[0] == 0:
+        return np.zeros((3, 3))
+    c, s = math.cos(p[2]), math.sin(p[2])
+    rx = c * pts[:, 0] - s * pts[:, 1]
+    ry = s * pts[:, 0] + c * pts[:, 1]
+    _, grad = table.interpolate(np.column_stack([rx + p[0], ry + p[1]]))
+    jac = np.column_stack([grad[:, 0], grad[:, 1], grad[:, 0] * -ry + grad[:, 1] * rx])
+    return np.asarray(jac.T @ jac / pts.shape[0], dtype=np.float64)

@@ -5,14 +5,22 @@ the global (map) frame. Factors (``BetweenFactorPose2``):
 
 - *intra-submap*: submap ``j`` to a node inserted into it, measured by the local front end;
 - *odometry*: consecutive nodes, measured by the wheel odometry;
-- *loop closure*: an older submap to a node, measured by scan matching, with a robust Huber
-  loss so that a wrong closure cannot pull the whole graph (Hess et al. 2016, Section V).
+- *loop closure*: an older submap to a node, measured by scan matching, with a robust loss
+  (Dynamic Covariance Scaling, Agarwal et al. 2013, by default; Huber as in Hess et al. 2016
+  on request) so that a wrong closure cannot pull the whole graph.
+
+Each factor takes its own covariance (the front end's match covariance, which is huge along
+directions a scan does not constrain; the odometry's learnt noise), or the fixed sigmas of
+:class:`PoseGraphParams`. After an optimisation, :meth:`PoseGraph.check_loops` removes the loop
+closures whose Mahalanobis residual stays above ``loop_chi2`` (a closure the rest of the
+graph disagrees with) and reports them.
 
 The first node gets a tight prior. :meth:`PoseGraph.optimize` runs Levenberg-Marquardt.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import gtsam
@@ -21,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
+from symloc.geometry import relative, wrap_angle
 
 __all__ = ["PoseGraph", "PoseGraphParams"]
 
@@ -49,7 +58,20 @@ class PoseGraphParams:
     odom_scale : float
         Added standard deviation per unit of motion (fraction).
     huber_k : float
-        Huber threshold in whitened units (standard deviations) on loop closures.
+        Huber threshold in whitened units (standard deviations) on loop closures (with
+        ``robust="huber"``).
+    robust : str
+        Loss on loop closures: ``"dcs"`` (Dynamic Covariance Scaling with ``dcs_phi``) or
+        ``"huber"``.
+    dcs_phi : float
+        DCS parameter (squared whitened units; a closure starts losing weight beyond
+        ``sqrt(phi)`` standard deviations; Agarwal et al. use 1 with looser covariances).
+    loop_chi2 : float
+        A loop whose squared Mahalanobis residual exceeds this after an optimisation is
+        removed (default: the 99.9 % quantile of chi-square with 3 degrees of freedom).
+    loop_check_sigmas : tuple of 3 floats
+        Added (as variances) to a loop's covariance for that check: the error a correct
+        closure may keep in a graph whose submaps are not perfect.
     max_iterations : int
         Levenberg-Marquardt iteration limit.
     """
@@ -59,14 +81,25 @@ class PoseGraphParams:
     odom_sigmas: tuple[float, float, float] = (0.05, 0.05, 0.02)
     odom_scale: float = 0.2
     huber_k: float = 1.0
+    robust: str = "huber"
+    dcs_phi: float = 9.0
+    loop_chi2: float = 16.27
+    loop_check_sigmas: tuple[float, float, float] = (0.1, 0.1, math.radians(1.0))
     max_iterations: int = 50
 
     def __post_init__(self) -> None:
         _sigmas(self.intra_sigmas, "PoseGraphParams.intra_sigmas")
         _sigmas(self.loop_sigmas, "PoseGraphParams.loop_sigmas")
         _sigmas(self.odom_sigmas, "PoseGraphParams.odom_sigmas")
+        _sigmas(self.loop_check_sigmas, "PoseGraphParams.loop_check_sigmas")
         check_positive(self.odom_scale, "PoseGraphParams.odom_scale", allow_zero=True)
         check_positive(self.huber_k, "PoseGraphParams.huber_k")
+        check_positive(self.dcs_phi, "PoseGraphParams.dcs_phi")
+        check_positive(self.loop_chi2, "PoseGraphParams.loop_chi2")
+        if self.robust not in ("dcs", "huber"):
+            raise ConfigurationError(
+                f"PoseGraphParams.robust: expected 'dcs' or 'huber', got {self.robust!r}"
+            )
         if int(self.max_iterations) != self.max_iterations or self.max_iterations < 1:
             raise ConfigurationError(
                 f"PoseGraphParams.max_iterations: expected an integer >= 1, got"
@@ -87,6 +120,20 @@ def _pose2(p: ArrayLike) -> gtsam.Pose2:
     return gtsam.Pose2(float(a[0]), float(a[1]), float(a[2]))
 
 
+def _gaussian(covariance: ArrayLike) -> gtsam.noiseModel.Base:
+    c = np.asarray(covariance, dtype=np.float64).reshape(3, 3)
+    return gtsam.noiseModel.Gaussian.Covariance(0.5 * (c + c.T))
+
+
+@dataclass(frozen=True, slots=True)
+class _Loop:
+    submap: int
+    node: int
+    measurement: FloatArray
+    information: FloatArray
+    factor: int
+
+
 class PoseGraph:
     """Incrementally built pose graph; values are the current estimates."""
 
@@ -94,14 +141,25 @@ class PoseGraph:
         self.params = params if params is not None else PoseGraphParams()
         self.graph = gtsam.NonlinearFactorGraph()
         self.values = gtsam.Values()
-        self.loops: list[tuple[int, int]] = []
+        self._loops: list[_Loop] = []
+        self.removed_loops: list[tuple[int, int, float]] = []
         self._intra = gtsam.noiseModel.Diagonal.Sigmas(np.array(self.params.intra_sigmas))
-        base = gtsam.noiseModel.Diagonal.Sigmas(np.array(self.params.loop_sigmas))
-        self._loop = gtsam.noiseModel.Robust.Create(
-            gtsam.noiseModel.mEstimator.Huber.Create(self.params.huber_k), base
-        )
+        self._loop_base = np.diag(np.array(self.params.loop_sigmas) ** 2)
         self.n_nodes = 0
         self.n_submaps = 0
+
+    @property
+    def loops(self) -> list[tuple[int, int]]:
+        """``(submap, node)`` of the loop closures in the graph."""
+        return [(lp.submap, lp.node) for lp in self._loops]
+
+    def _robust(self, base: gtsam.noiseModel.Base) -> gtsam.noiseModel.Base:
+        est: gtsam.noiseModel.mEstimator.Base
+        if self.params.robust == "huber":
+            est = gtsam.noiseModel.mEstimator.Huber.Create(self.params.huber_k)
+        else:
+            est = gtsam.noiseModel.mEstimator.DCS.Create(self.params.dcs_phi)
+        return gtsam.noiseModel.Robust.Create(est, base)
 
     def add_node(self, i: int, initial: ArrayLike) -> None:
         """Add node ``i`` with an initial global pose (3,); the first node gets a prior."""
@@ -116,27 +174,87 @@ class PoseGraph:
         self.values.insert(_submap(j), _pose2(initial))
         self.n_submaps += 1
 
-    def add_intra(self, j: int, i: int, node_in_submap: ArrayLike) -> None:
-        """Constraint: node ``i`` sits at ``node_in_submap`` (3,) in submap ``j``."""
+    def add_intra(
+        self, j: int, i: int, node_in_submap: ArrayLike, covariance: ArrayLike | None = None
+    ) -> None:
+        """Constraint: node ``i`` sits at ``node_in_submap`` (3,) in submap ``j``.
+
+        ``covariance`` (3, 3) defaults to ``intra_sigmas``.
+        """
+        noise = self._intra if covariance is None else _gaussian(covariance)
         self.graph.add(
-            gtsam.BetweenFactorPose2(_submap(j), _node(i), _pose2(node_in_submap), self._intra)
+            gtsam.BetweenFactorPose2(_submap(j), _node(i), _pose2(node_in_submap), noise)
         )
 
-    def add_odometry(self, i: int, k: int, k_in_i: ArrayLike) -> None:
-        """Constraint from odometry: node ``k`` at ``k_in_i`` (3,) in node ``i``'s frame."""
+    def add_odometry(
+        self, i: int, k: int, k_in_i: ArrayLike, covariance: ArrayLike | None = None
+    ) -> None:
+        """Constraint from odometry: node ``k`` at ``k_in_i`` (3,) in node ``i``'s frame.
+
+        ``covariance`` (3, 3) defaults to ``odom_sigmas`` grown by ``odom_scale`` per unit
+        of motion.
+        """
         d = np.asarray(k_in_i, dtype=np.float64)
-        s = self.params.odom_scale
-        trans = float(np.hypot(d[0], d[1]))
-        sig = np.array(self.params.odom_sigmas) + s * np.array([trans, trans, abs(d[2])])
-        noise = gtsam.noiseModel.Diagonal.Sigmas(sig)
+        noise: gtsam.noiseModel.Base
+        if covariance is None:
+            s = self.params.odom_scale
+            trans = float(np.hypot(d[0], d[1]))
+            sig = np.array(self.params.odom_sigmas) + s * np.array([trans, trans, abs(d[2])])
+            noise = gtsam.noiseModel.Diagonal.Sigmas(sig)
+        else:
+            noise = _gaussian(covariance)
         self.graph.add(gtsam.BetweenFactorPose2(_node(i), _node(k), _pose2(d), noise))
 
-    def add_loop(self, j: int, i: int, node_in_submap: ArrayLike) -> None:
-        """Loop closure: node ``i`` matched at ``node_in_submap`` (3,) in older submap ``j``."""
+    def add_loop(
+        self, j: int, i: int, node_in_submap: ArrayLike, covariance: ArrayLike | None = None
+    ) -> None:
+        """Loop closure: node ``i`` matched at ``node_in_submap`` (3,) in older submap ``j``.
+
+        ``covariance`` (3, 3) defaults to ``loop_sigmas``; the robust loss is on top.
+        """
+        cov = self._loop_base if covariance is None else np.asarray(covariance, dtype=np.float64)
+        z = np.asarray(node_in_submap, dtype=np.float64).reshape(3).copy()
         self.graph.add(
-            gtsam.BetweenFactorPose2(_submap(j), _node(i), _pose2(node_in_submap), self._loop)
+            gtsam.BetweenFactorPose2(_submap(j), _node(i), _pose2(z), self._robust(_gaussian(cov)))
         )
-        self.loops.append((int(j), int(i)))
+        check = 0.5 * (cov + cov.T) + np.diag(np.array(self.params.loop_check_sigmas) ** 2)
+        self._loops.append(_Loop(int(j), int(i), z, np.linalg.inv(check), self.graph.size() - 1))
+
+    def loop_chi2(self) -> FloatArray:
+        """Squared Mahalanobis residual ``(L,)`` of every loop closure at the current values
+        (with ``loop_check_sigmas`` added to its covariance)."""
+        out = np.zeros(len(self._loops))
+        for k, lp in enumerate(self._loops):
+            est = relative(self.submap_pose(lp.submap), self.node_pose(lp.node))
+            e = relative(lp.measurement, est)
+            e[2] = float(wrap_angle(e[2]))
+            out[k] = float(e @ lp.information @ e)
+        return out
+
+    def check_loops(self, *, rounds: int = 8, share: float = 0.25) -> list[tuple[int, int, float]]:
+        """Remove, worst first, the loops the optimised graph disagrees with.
+
+        Each round removes the loops whose residual exceeds ``loop_chi2`` (at most ``share``
+        of the loops, the worst ones) and optimises again, until none exceeds it or after
+        ``rounds`` rounds: a wrong closure pulls the graph towards itself, so the residuals of
+        the right ones only show once it is gone. Call after :meth:`optimize`; returns the
+        removed loops ``(submap, node, chi2)``.
+        """
+        removed: list[tuple[int, int, float]] = []
+        for _ in range(rounds):
+            chi2 = self.loop_chi2()
+            bad = np.flatnonzero(chi2 > self.params.loop_chi2)
+            if bad.size == 0:
+                break
+            worst = bad[np.argsort(chi2[bad])[::-1]]
+            worst = worst[: max(1, int(share * len(self._loops)))]
+            for k in sorted(worst.tolist(), reverse=True):
+                lp = self._loops.pop(k)
+                self.graph.remove(lp.factor)
+                removed.append((lp.submap, lp.node, float(chi2[k])))
+            self.optimize()
+        self.removed_loops.extend(removed)
+        return removed
 
     def node_pose(self, i: int) -> FloatArray:
         """Current estimate of node ``i`` (3,)."""

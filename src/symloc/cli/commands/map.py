@@ -13,8 +13,7 @@ __all__ = ["register"]
 
 def register(subparsers: Any) -> None:
     """Add ``map`` with its ``build`` sub-command."""
-    from symloc.bench.slam_runs import SIM_WORLDS
-    from symloc.sim.odometry_noise import DEFAULT_ALPHAS
+    from symloc.bench.slam_runs import ODOMETRY_CHOICES, SIM_WORLDS
 
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "map", help="build occupancy-grid maps by laser SLAM (map_server YAML + PGM)"
@@ -35,12 +34,11 @@ def register(subparsers: Any) -> None:
     b.add_argument("--name", default="map", help="file stem of the map (default: map)")
     options.add_seed(b)
     b.add_argument(
-        "--alphas",
-        type=options.nonnegative_float,
-        nargs=4,
-        default=list(DEFAULT_ALPHAS),
-        metavar=("A1", "A2", "A3", "A4"),
-        help="odometry noise alpha1..alpha4 (simulated robot, or added to the log's increments)",
+        "--odometry",
+        choices=ODOMETRY_CHOICES,
+        default="realistic",
+        help="odometry: a simulated regime on the true / corrected increments (realistic: "
+        "calibrated wheels, heavy: GMapping's filter noise), or the log's own (log)",
     )
     b.add_argument(
         "--max-scans",
@@ -69,20 +67,25 @@ def register(subparsers: Any) -> None:
 
 def _build(args: argparse.Namespace) -> int:
     from symloc.bench.slam_runs import run_carmen, run_simulated
+    from symloc.errors import ConfigurationError
     from symloc.figures.slam import map_trajectory_figure
     from symloc.geometry import compose, inverse
     from symloc.grid.map_io import save_map
+    from symloc.sim.odometry_noise import ODOMETRY_REGIMES
     from symloc.slam.slam import SlamParams
 
-    a1, a2, a3, a4 = (float(a) for a in args.alphas)
-    alphas = (a1, a2, a3, a4)
     params = SlamParams(map_resolution=args.resolution)
     source = f"world {args.world}" if args.world else f"CARMEN log {args.carmen}"
-    print(f"# symloc map build: {source}, seed {args.seed}, alphas {alphas}")
+    regime = ODOMETRY_REGIMES.get(args.odometry)
+    odo = regime.describe() if regime is not None else "the log's own"
+    print(f"# symloc map build: {source}, seed {args.seed}, odometry {odo}")
     if args.world:
+        if regime is None:
+            print("error: --odometry log needs a CARMEN log (--carmen)")
+            return 2
         run = run_simulated(
             args.world,
-            alphas=alphas,
+            odometry=regime,
             rng=args.seed,
             params=params,
             laps=args.laps,
@@ -92,17 +95,23 @@ def _build(args: argparse.Namespace) -> int:
         if not args.carmen.is_file():
             print(f"error: CARMEN log not found: {args.carmen}")
             return 2
-        run = run_carmen(
-            args.carmen,
-            alphas=alphas,
-            rng=args.seed,
-            params=params,
-            max_scans=args.max_scans,
-        )
+        try:
+            run = run_carmen(
+                args.carmen,
+                odometry=args.odometry,
+                rng=args.seed,
+                params=params,
+                max_scans=args.max_scans,
+            )
+        except ConfigurationError as err:
+            print(f"error: {err}")
+            return 2
         reference = compose(inverse(run.ate.alignment), run.reference)
     s = run.summary()
     out = Path(args.out)
-    yaml_path = save_map(run.result.grid, out / args.name, mode=args.mode)
+    yaml_path = save_map(
+        run.result.grid, out / args.name, mode=args.mode, extra=run.result.map_metadata()
+    )
     png = map_trajectory_figure(
         run.result.grid,
         run.result.poses,
@@ -116,12 +125,21 @@ def _build(args: argparse.Namespace) -> int:
         f"scans {s['scans']}  ATE RMSE {s['ate_rmse_m']:.3f} m (odometry {s['ate_odometry_rmse_m']:.3f} m)"
         f"  RPE {s['rpe_trans_rmse_m']:.3f} m / {s['rpe_rot_rmse_deg']:.2f} deg"
         f"  loop closures {s['loop_closures']}  speed x{s['realtime_factor_cpu']:.1f} (CPU)"
+        if s["realtime_factor_cpu"] == s["realtime_factor_cpu"]
+        else f"  loop closures {s['loop_closures']}  speed: no usable timestamps"
     )
     if "map_agreement" in s:
         print(
             f"map agreement with the rasterised world: {s['map_agreement']:.3f} exact,"
             f" {s['map_agreement_tol1']:.3f} within one cell"
         )
+    res = run.result
+    print(
+        f"loop closures accepted {len(res.loop_closures)}, rejected {len(res.rejected_loops)};"
+        f" result {'DOUBTFUL' if res.doubtful else 'consistent'}"
+    )
+    for w in res.warnings:
+        print(f"  warning: {w}")
     print(
         f"wrote {yaml_path}, {yaml_path.with_suffix('.pgm' if args.mode != 'scale' else '.png')}, {png}"
     )
