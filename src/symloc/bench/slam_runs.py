@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.bench.exploration import simulate_exploration
 from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
-from symloc.errors import ConfigurationError
+from symloc.errors import ConfigurationError, DataFormatError
 from symloc.geometry import compose
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.io.carmen import CarmenLog, read_carmen
@@ -247,6 +247,11 @@ def run_carmen(
     """SLAM on a CARMEN log with odometry from :func:`carmen_odometry` (see module doc)."""
     name = Path(path).name.split(".")[0].removesuffix("-corrected")
     log = _truncated(read_carmen(path), max_scans)
+    if len(log.scans) < 2:
+        raise DataFormatError(
+            f"{path}: {len(log.scans)} laser scan(s) (FLASER / ROBOTLASER1 lines); SLAM needs at "
+            "least 2"
+        )
     reference = log.laser_poses
     odom = carmen_odometry(log, odometry, rng, name=name)
     scans = [s.scan for s in log.scans]

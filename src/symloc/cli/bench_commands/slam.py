@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from symloc.cli import options
 from symloc.cli.bench_commands._common import add_sweep_arguments, write_json
 
 __all__ = ["register"]
@@ -43,7 +44,13 @@ def register(subparsers: Any) -> None:
         "$SYMLOC_SHARED_DATA/carmen), or one log file",
     )
     p.add_argument("--logs", nargs="*", default=None, help="only these logs (names, e.g. intel)")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds (default 0)")
+    p.add_argument(
+        "--seeds",
+        type=options.nonnegative_int,
+        nargs="+",
+        default=[0],
+        help="odometry-noise seeds (default 0)",
+    )
     p.add_argument(
         "--odometry",
         choices=ODOMETRY_CHOICES,
@@ -67,9 +74,11 @@ def register(subparsers: Any) -> None:
         metavar="DIR",
         help="build folder of the peer (default ~/.cache/symloc/peers/...)",
     )
-    p.add_argument("--max-scans", type=int, default=None, help="only the first N scans")
-    p.add_argument("--timeout", type=float, default=3600.0, help="per process [s]")
-    add_sweep_arguments(p)
+    p.add_argument(
+        "--max-scans", type=options.positive_int, default=None, help="only the first N scans"
+    )
+    p.add_argument("--timeout", type=options.positive_float, default=3600.0, help="per process [s]")
+    add_sweep_arguments(p, "bench slam")
     p.set_defaults(func=run)
 
 
