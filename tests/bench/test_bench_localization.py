@@ -53,6 +53,12 @@ def test_sweep_json_is_identical_for_one_and_two_workers(tmp_path: Path) -> None
     doc = json.loads(a)
     assert doc["settings"]["world_seeds"] == [3, 4]
     assert len(doc["trials"]) == 2 * 2 * 2  # worlds x trials x methods
+    # every finished world was saved as it finished, with the same trial rows
+    lines = (tmp_path / "w2" / "bench_localization.partial.jsonl").read_text().splitlines()
+    saved = sorted(
+        json.dumps(t, sort_keys=True) for line in lines for t in json.loads(line)["trials"]
+    )
+    assert saved == sorted(json.dumps(t, sort_keys=True) for t in doc["trials"])
     assert {t["kind"] for t in doc["trials"]} == {"global", "kidnap"}
     rows = {(r["family"], r["method"]): r for r in doc["summary"]}
     assert rows[("square", "symloc")]["trials"] == 4

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 import time
@@ -107,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
         trial_rows,
         world_summary,
     )
+    from symloc.bench.stats import json_safe
     from symloc.bench.sweep import run_sweep
     from symloc.bench.trial import TrialConfig
     from symloc.bench.world_sources import family_refs, file_refs, split_seeds
@@ -162,8 +164,16 @@ def run(args: argparse.Namespace) -> int:
     total = len(tasks) * args.trials
     counts = {"correct": 0, "confident_wrong": 0, "undetermined": 0}
     bar = tqdm(total=total, unit="trial", desc="trials", file=sys.stderr)
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    # Each finished world is appended at once, so a sweep stopped after hours keeps its trials.
+    partial = out / "bench_localization.partial.jsonl"
+    partial.write_text("")
 
     def on_result(_i: int, w: WorldResult) -> None:
+        line = world_summary(w) | {"trials": trial_rows([w])}
+        with partial.open("a") as fh:
+            fh.write(json.dumps(json_safe(line)) + "\n")
         for tr in w.trials:
             mr = tr.results.get("symloc") or next(iter(tr.results.values()))
             counts[mr.grade.grade] += 1
@@ -179,8 +189,6 @@ def run(args: argparse.Namespace) -> int:
     rows = trial_rows(results)
     summary = summarize(rows)
     _print_table(method_order(summary))
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
     doc = {
         "command": "symloc bench localization",
         "settings": settings,
