@@ -158,3 +158,47 @@ def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
     # most of the scan contradicting the pose suspends claims; half of it only withholds
     assert any("claims resumed" in line for line in loc.log) is suspended
     assert not any("global relocalization" in line for line in loc.log)
+
+
+def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_next() -> None:
+    """The operator's pose chooses among a symmetric room's copies only while the robot is
+    there: after it is carried off (the pose never confirmed: too few beams returned), the
+    pose AMCL finds next is checked against the map's rotated copies like any other, so in a
+    rectangle it is never published as tracking."""
+    from symloc.localizer.map_symmetry import map_symmetries
+    from symloc.sim.rooms import rectangle_room
+
+    room = rectangle_room(4.0, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    syms = map_symmetries(grid)
+    assert any(s.order == 2 for s in syms)
+    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 3)
+    loc = Localizer(
+        AmclTracker(amcl),
+        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
+        _NoPlaces(),
+        scorer=GridScorer(grid),
+        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
+        map_symmetries=syms,
+    )
+    start = room.center + np.array([-1.2, 0.5])
+    robot = DiffDriveRobot(
+        np.array([*start, 0.4]), RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)), 5
+    )
+    loc.set_pose(robot.pose.copy(), COV)
+    rng = np.random.default_rng(8)
+    published = []
+    for k in range(150):
+        if k == 20:
+            robot.teleport(np.array([*(room.center + np.array([0.9, -0.4])), 2.0]))
+        scan = simulate_scan(room.world, robot.pose, RPLIDAR_A2, rng)
+        if k < 20:  # a lidar that returns almost nothing: the gate cannot confirm the pose
+            r = scan.ranges.copy()
+            r[10:] = 0.0
+            scan = scan.with_ranges(r)
+        est = loc.update(robot.odometry(), scan)
+        if k >= 20 and est.pose is not None:
+            published.append(k)
+        robot.step(0.1, 0.3, 0.1)
+    assert published == []
+    assert any("rotated cop" in line or "symmetric" in line for line in loc.log)

@@ -58,6 +58,7 @@ from .exploration import exploration_path
 from .explore import ExploreDrive
 from .mapping_trip import MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
+from .slam_metrics import umeyama_se2
 
 __all__ = [
     "DEFAULT_GV",
@@ -457,11 +458,12 @@ def _map_with_slam(
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
-    # the SLAM map frame is defined by the trip's first pose (SLAM holds it fixed): the truth
-    # is expressed in that frame, so whatever SLAM got wrong later (map distortion, a round
-    # room's unobservable heading) is error the localizer inherits
-    scen.map_from_world = np.asarray(
-        _compose(np.asarray(slam.poses)[0], _inverse(truths[0])), dtype=np.float64
+    # The truth is expressed in the SLAM map frame by the rigid transform that best fits the
+    # whole trip (least squares over its positions, as ATE aligns trajectories), not by the
+    # first pose alone: anchoring at the first pose would put all the drift SLAM left at the
+    # far side of the room. Whatever distortion remains is error the localizer inherits.
+    scen.map_from_world = umeyama_se2(
+        np.asarray(truths, dtype=np.float64)[:, :2], np.asarray(slam.poses)[:, :2]
     )
     in_map = np.asarray(_compose(scen.map_from_world, np.array(truths)), dtype=np.float64)
     slam_err = np.hypot(*(np.asarray(slam.poses)[:, :2] - in_map[:, :2]).T)

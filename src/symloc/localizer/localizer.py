@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from symloc._checks import check_in_range, check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, compose, inverse, wrap_angle
+from symloc.mcl.motion_model import carry_by_odometry
 from symloc.odometry import OdometryReading, twist_between
 from symloc.scan import LaserScan, deskew, sensor_twist
 
@@ -347,6 +348,13 @@ class Localizer:
             self.claim_gate.reset()
         self._reset_state()
         self._phase = _Phase.TRACKING
+        # the operator chose among any symmetric copies (the laser still confirms the pose);
+        # the odometry pose it refers to is the next update's
+        self._operator_pose = (
+            np.asarray(pose, float).copy(),
+            np.asarray(covariance, float).copy(),
+            None,
+        )
         self._note("pose set by the operator")
 
     def update(
@@ -367,6 +375,8 @@ class Localizer:
                 scan = deskew(scan, vx, w, vy=vy)
             self._last_odom = odom
         result = self.tracker.update(odom, scan)
+        if self._operator_pose is not None and self._operator_pose[2] is None:
+            self._operator_pose = (*self._operator_pose[:2], odom_pose.copy())
         self._jumped = False
         if self.claim_gate is not None and result.updated:
             self._jumped = not self.claim_gate.anchor(result.estimate, result.covariance, odom_pose)
@@ -388,6 +398,7 @@ class Localizer:
     # ------------------------------------------------------------------ internals
 
     def _reset_state(self) -> None:
+        self._operator_pose: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
         self._suspended = False
         self._suspended_scans = 0
         self._resumed = 0
@@ -485,6 +496,51 @@ class Localizer:
         own = max(float(scores[0]), 1e-12)
         return bool(np.any(scores[1:] >= self.config.copy_score_ratio * own))
 
+    def _copies_ambiguity(
+        self, result: TrackerResult, pose: FloatArray, scan: object
+    ) -> Estimate | None:
+        """None when no rotated copy of ``pose`` (about a known symmetric place's centre or a
+        near symmetry of the map) explains ``scan`` about as well; else the estimate that
+        says so (going to the place's centre, or ambiguous among the map's copies, AMCL
+        reseeded at a copy that fits clearly better). Every pose is checked so before it is
+        first published: on convergence, and when a claim chain starts while tracking."""
+        place = self._known_place_at(pose)
+        if place is not None and self._copies_fit(pose, place.center, place.order, scan):
+            self._converged_count = 0
+            return self._start_ambiguity_at_place(result, place)
+        for sym in self.map_symmetries:
+            verdict = self._copies_verdict(pose, sym.centre, sym.order, scan)
+            if verdict == "unique":
+                continue
+            self._converged_count = 0
+            self._phase = _Phase.LOST
+            copies = rotated_copies(pose, sym.centre, sym.order)
+            if isinstance(verdict, int):
+                # a rotated copy explains the scan clearly better: AMCL chose wrong
+                self.tracker.initialize_pose(
+                    copies[verdict],
+                    _cov(self.config.reseed_xy_std, self.config.reseed_theta_std),
+                )
+                why = (
+                    f"a rotated copy (order {sym.order}) of AMCL's pose explains the scan "
+                    "clearly better: AMCL reseeded there, pose not earned yet"
+                )
+            else:
+                why = (
+                    f"the map itself is symmetric (order {sym.order}, overlap "
+                    f"{100 * sym.overlap:.0f} %) and a rotated copy of AMCL's pose explains "
+                    "the scan about as well: pose not earned"
+                )
+            if not self.log or self.log[-1] != why:
+                self._note(why)
+            return Estimate(
+                status=Status.AMBIGUOUS,
+                hypotheses=tuple(Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies),
+                order=sym.order,
+                reason=why,
+            )
+        return None
+
     def _candidates(self) -> tuple[Hypothesis, ...]:
         """The ``k`` candidate poses.
 
@@ -539,12 +595,54 @@ class Localizer:
             self._suspend("the filter's estimate jumped away from the tracked pose")
         if self._suspended:
             return self._while_suspended(result, scan, reason)
+        if self._jumped:
+            return self._unearned("the filter's estimate jumped", result)
         claim = gate.check(self._odom_pose, scan)  # type: ignore[arg-type]
+        if claim.match is not None and claim.match.inlier_fraction < gate.config.min_claim_fit:
+            # the scan stopped fitting where the operator put the robot (carried off?):
+            # whatever the filter finds next is not the operator's choice among copies
+            self._operator_pose = None
         if claim.ok:
+            if not gate.has_chain and not self._at_operator_pose(claim.pose):
+                assert claim.pose is not None
+                copies = self._copies_ambiguity(result, claim.pose, scan)
+                if copies is not None:
+                    return copies
             return self._publish(claim, result, reason)
+        if claim.verdict == "withdrawn" and not gate.has_chain:
+            return self._unearned(claim.reason, result)
         if claim.verdict == "withdrawn" and gate.has_chain:
             self._suspend(claim.reason)
         return self._lost(claim.reason, result)
+
+    def _at_operator_pose(self, pose: FloatArray | None) -> bool:
+        """True when ``pose`` is the operator's initial pose carried by odometry (squared
+        Mahalanobis distance within the gate's ``max_pull`` under the gate's odometry model):
+        the operator chose among symmetric copies, so no copy check is needed. A pose the
+        filter found elsewhere (the robot was carried off) is not the operator's choice."""
+        gate = self.claim_gate
+        if self._operator_pose is None or pose is None or gate is None:
+            return False
+        op, cov, odom0 = self._operator_pose
+        if odom0 is None:
+            return False
+        carried, ccov = carry_by_odometry(op, cov, odom0, self._odom_pose, gate.alphas)
+        e = np.asarray(pose, dtype=np.float64) - carried
+        e[2] = float(wrap_angle(e[2]))
+        if float(e @ np.linalg.solve(ccov, e)) <= gate.config.max_pull:
+            return True
+        self._operator_pose = None
+        return False
+
+    def _unearned(self, why: str, result: TrackerResult) -> Estimate:
+        """Leave tracking when a pose that the laser never confirmed (an operator's initial
+        pose, a reseed) is contradicted or abandoned by the filter: there is no confirmed pose
+        to resume, and whatever the filter converges to next must be earned like any other
+        (symmetric copies, known places), not published because the phase says tracking."""
+        self._reset_state()
+        self._phase = _Phase.LOST
+        self._note(f"unconfirmed pose given up: {why}; the pose must be earned")
+        return self._lost(f"unconfirmed pose given up: {why}", result)
 
     def _publish(self, claim: Claim, result: TrackerResult, reason: str) -> Estimate:
         assert self.claim_gate is not None
@@ -629,42 +727,9 @@ class Localizer:
         if verdict.symmetric and verdict.center is not None:
             return self._start_ambiguity(result, verdict, scan, "scan symmetric, pose not earned")
         if self._converged(result):
-            place = self._known_place_at(result.estimate)
-            if place is not None and self._copies_fit(
-                result.estimate, place.center, place.order, scan
-            ):
-                self._converged_count = 0
-                return self._start_ambiguity_at_place(result, place)
-            for sym in self.map_symmetries:
-                verdict = self._copies_verdict(result.estimate, sym.centre, sym.order, scan)
-                if verdict == "unique":
-                    continue
-                self._converged_count = 0
-                copies = rotated_copies(result.estimate, sym.centre, sym.order)
-                if isinstance(verdict, int):
-                    # a rotated copy explains the scan clearly better: AMCL chose wrong
-                    self.tracker.initialize_pose(
-                        copies[verdict],
-                        _cov(self.config.reseed_xy_std, self.config.reseed_theta_std),
-                    )
-                    why = (
-                        f"a rotated copy (order {sym.order}) of AMCL's pose explains the scan "
-                        "clearly better: AMCL reseeded there, pose not earned yet"
-                    )
-                else:
-                    why = (
-                        f"the map itself is symmetric (order {sym.order}, overlap "
-                        f"{100 * sym.overlap:.0f} %) and a rotated copy of AMCL's pose explains "
-                        "the scan about as well: pose not earned"
-                    )
-                if not self.log or self.log[-1] != why:
-                    self._note(why)
-                return Estimate(
-                    status=Status.AMBIGUOUS,
-                    hypotheses=tuple(Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies),
-                    order=sym.order,
-                    reason=why,
-                )
+            copies = self._copies_ambiguity(result, result.estimate, scan)
+            if copies is not None:
+                return copies
             self._converged_count += 1
             if self._converged_count >= self.config.converged_updates:
                 self._phase = _Phase.TRACKING
