@@ -56,6 +56,8 @@ from .types import (
 __all__ = ["Localizer", "LocalizerConfig", "rotated_copies", "symmetry_consistent"]
 
 FloatArray = NDArray[np.float64]
+#: The operator's pose (3,), its covariance (3, 3) and the odometry pose (3,) it refers to.
+_OperatorPose = tuple[FloatArray, FloatArray, FloatArray | None]
 #: Poses x scan -> (K,) scores in [0, 1]: how well the scan fits the map at each pose.
 PoseScorer = Callable[[FloatArray, Any], FloatArray]
 
@@ -313,6 +315,7 @@ class Localizer:
         #: AMCL's particles just before the visual decision reseeded it (for figures).
         self.particles_before_decision: FloatArray | None = None
         self._last_odom: OdometryReading | None = None
+        self._operator_pose: _OperatorPose | None = None
         self._reset_state()
         self._phase = _Phase.LOST
 
@@ -351,8 +354,8 @@ class Localizer:
         # the operator chose among any symmetric copies (the laser still confirms the pose);
         # the odometry pose it refers to is the next update's
         self._operator_pose = (
-            np.asarray(pose, float).copy(),
-            np.asarray(covariance, float).copy(),
+            np.asarray(pose, dtype=np.float64).copy(),
+            np.asarray(covariance, dtype=np.float64).copy(),
             None,
         )
         self._note("pose set by the operator")
@@ -376,7 +379,8 @@ class Localizer:
             self._last_odom = odom
         result = self.tracker.update(odom, scan)
         if self._operator_pose is not None and self._operator_pose[2] is None:
-            self._operator_pose = (*self._operator_pose[:2], odom_pose.copy())
+            op, op_cov, _ = self._operator_pose
+            self._operator_pose = (op, op_cov, odom_pose.copy())
         self._jumped = False
         if self.claim_gate is not None and result.updated:
             self._jumped = not self.claim_gate.anchor(result.estimate, result.covariance, odom_pose)
@@ -398,7 +402,7 @@ class Localizer:
     # ------------------------------------------------------------------ internals
 
     def _reset_state(self) -> None:
-        self._operator_pose: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
+        self._operator_pose = None
         self._suspended = False
         self._suspended_scans = 0
         self._resumed = 0
