@@ -17,7 +17,10 @@ Back ends:
 
 from __future__ import annotations
 
+import ctypes
 import os
+import signal
+import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from multiprocessing import get_context
@@ -30,6 +33,8 @@ __all__ = ["default_workers", "run_sweep"]
 T = TypeVar("T")
 R = TypeVar("R")
 
+#: prctl option: the signal a process gets when its parent dies (linux/prctl.h).
+_PR_SET_PDEATHSIG = 1
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
@@ -41,8 +46,28 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def _worker_init(parent: int) -> None:
+    """Worker initializer: die with the sweep, one thread for BLAS and OpenCV."""
+    _die_with_parent(parent)
+    _single_threaded()
+
+
+def _die_with_parent(parent: int) -> None:
+    """Linux: SIGTERM this worker when the sweep's process dies, so that a sweep killed from
+    outside (``kill``, a closed terminal, a batch scheduler) leaves no orphan computing its
+    remaining tasks; elsewhere the pool's own shutdown is all there is."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+        except (OSError, AttributeError):  # pragma: no cover - no usable libc
+            pass
+    if os.getppid() != parent:  # the sweep died before the signal was armed
+        os._exit(1)
+
+
 def _single_threaded() -> None:
-    """Worker initializer: one thread per worker for BLAS and OpenCV."""
+    """One thread per worker for BLAS and OpenCV."""
     for var in _THREAD_VARS:
         os.environ[var] = "1"
     try:
@@ -107,7 +132,10 @@ def _run_processes(
 ) -> None:
     ctx = get_context("spawn")
     with ProcessPoolExecutor(
-        max_workers=min(n_workers, len(items)), mp_context=ctx, initializer=_single_threaded
+        max_workers=min(n_workers, len(items)),
+        mp_context=ctx,
+        initializer=_worker_init,
+        initargs=(os.getpid(),),
     ) as pool:
         pending: dict[Future[R], int] = {pool.submit(func, t): i for i, t in enumerate(items)}
         try:
