@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -62,7 +63,5 @@ def test_killing_the_sweep_stops_its_workers(tmp_path: Path) -> None:
         if proc.poll() is None:
             proc.kill()
         for p in tmp_path.glob("worker*.pid"):
-            try:
+            with contextlib.suppress(ProcessLookupError):
                 os.kill(int(p.read_text()), signal.SIGKILL)
-            except ProcessLookupError:
-                pass
