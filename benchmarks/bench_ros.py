@@ -24,7 +24,13 @@ from pathlib import Path
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from symloc.ros import build_rosbags, image_from_msg, image_to_fields, scan_from_msg, scan_to_fields
+from symloc.msgs import (
+    build_rosbags,
+    image_from_msg,
+    image_to_fields,
+    scan_from_msg,
+    scan_to_fields,
+)
 from symloc.scan import LaserScan
 
 
@@ -64,7 +70,7 @@ def bench_conversions(repeats: int) -> None:
     try:
         from sensor_msgs.msg import Image
 
-        from symloc.ros import build_rclpy
+        from symloc.msgs import build_rclpy
     except ImportError:
         print("rclpy absent: rclpy message building skipped (pip install 'symloc[ros]')")
         return
@@ -100,7 +106,7 @@ def bench_dds(repeats: int) -> None:
         from sensor_msgs.msg import Image
         from sensor_msgs.msg import LaserScan as ScanMsg
 
-        from symloc.ros import build_rclpy
+        from symloc.msgs import build_rclpy
     except ImportError:
         print("rclpy absent: DDS round trips skipped (pip install 'symloc[ros]')")
         return

@@ -51,8 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     from rosbags.typesys import Stores, get_typestore
 
     from symloc.grid import OccupancyGrid
-    from symloc.odometry import OdometryReading
-    from symloc.ros import (
+    from symloc.msgs import (
         build_rosbags,
         compressed_image_to_fields,
         grid_to_fields,
@@ -60,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
         pose_with_covariance_to_fields,
         scan_to_fields,
     )
+    from symloc.odometry import OdometryReading
     from symloc.ros.core import NodeCore
     from symloc.ros.params import NodeParams
     from symloc.sim.lidar import PRESETS, simulate_scan

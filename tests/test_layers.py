@@ -29,6 +29,7 @@ ROBOT_SIDE = (
     "slam",
     "vision",
     "localizer",
+    "msgs",
     "io",
     "ros",
 )

@@ -97,7 +97,7 @@ def test_map_files(tmp_path_factory: pytest.TempPathFactory) -> None:
 def test_images(tmp_path_factory: pytest.TempPathFactory) -> None:
     from types import SimpleNamespace
 
-    from symloc.ros.image_msg import compressed_image_from_msg, image_from_msg
+    from symloc.msgs.image import compressed_image_from_msg, image_from_msg
     from symloc.vision.image_files import read_image
 
     folder = tmp_path_factory.mktemp("images")
@@ -349,7 +349,7 @@ BIG_INPUTS = textwrap.dedent(
     from symloc.grid.map_io import load_map
     from symloc.image_header import read_image_file
     from symloc.io.carmen import read_carmen
-    from symloc.ros.image_msg import compressed_image_from_msg, image_from_msg
+    from symloc.msgs.image import compressed_image_from_msg, image_from_msg
     from symloc.vision.vocabulary_io import load_vocabulary
     folder = Path(sys.argv[1])
     MiB = 1 << 20

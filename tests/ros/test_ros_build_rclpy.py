@@ -9,7 +9,7 @@ import pytest
 
 from symloc.errors import DataFormatError
 from symloc.grid import OccupancyGrid
-from symloc.ros import (
+from symloc.msgs import (
     build_rclpy,
     grid_from_msg,
     grid_to_fields,

@@ -13,8 +13,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from symloc.errors import DataFormatError
 from symloc.grid import OccupancyGrid
-from symloc.odometry import OdometryReading
-from symloc.ros import (
+from symloc.msgs import (
     build_rosbags,
     compressed_image_from_msg,
     compressed_image_to_fields,
@@ -31,6 +30,7 @@ from symloc.ros import (
     scan_from_msg,
     scan_to_fields,
 )
+from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
 TS2 = get_typestore(Stores.ROS2_HUMBLE)

@@ -30,8 +30,7 @@ from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Status
 from symloc.localizer.centering import CenteringConfig
-from symloc.odometry import OdometryReading
-from symloc.ros import (
+from symloc.msgs import (
     build_rclpy,
     grid_to_fields,
     image_to_fields,
@@ -39,6 +38,7 @@ from symloc.ros import (
     pose_with_covariance_to_fields,
     scan_to_fields,
 )
+from symloc.odometry import OdometryReading
 from symloc.ros.requests import NodeStatus, status_from_msg
 
 pytestmark = pytest.mark.slow

@@ -24,8 +24,8 @@ from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
 from symloc.grid.map_io import save_map
 from symloc.localizer import Estimate, Status
+from symloc.msgs import build_rclpy, odometry_to_fields, scan_to_fields
 from symloc.odometry import OdometryReading
-from symloc.ros import build_rclpy, odometry_to_fields, scan_to_fields
 from symloc.ros.lifecycle import LocalizationNode, load_saved_pose, save_pose
 from symloc.ros.params import NodeParams
 from symloc.scan import LaserScan

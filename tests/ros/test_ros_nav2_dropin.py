@@ -46,9 +46,9 @@ from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.geometry import compose, wrap_angle
 from symloc.localizer import Status
 from symloc.localizer.centering import CenteringConfig
-from symloc.ros import build_rclpy, grid_to_fields, image_to_fields, scan_to_fields
-from symloc.ros.odometry_msg import odometry_to_fields
-from symloc.ros.pose_msg import pose_with_covariance_to_fields
+from symloc.msgs import build_rclpy, grid_to_fields, image_to_fields, scan_to_fields
+from symloc.msgs.odometry import odometry_to_fields
+from symloc.msgs.pose import pose_with_covariance_to_fields
 from symloc.ros.requests import NodeStatus, status_from_msg
 from symloc.ros.tf import transform_fields
 from symloc.scan import mirror

@@ -11,8 +11,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Estimate, Hypothesis, Request, RequestKind, Status
-from symloc.odometry import OdometryReading
-from symloc.ros import (
+from symloc.msgs import (
     build_rosbags,
     grid_to_fields,
     image_to_fields,
@@ -20,6 +19,7 @@ from symloc.ros import (
     pose_with_covariance_to_fields,
     scan_to_fields,
 )
+from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore
 from symloc.ros.params import NodeParams
 from symloc.scan import LaserScan

@@ -20,14 +20,14 @@ from rosbags.typesys import Stores, get_typestore
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
 from symloc.mcl.params import AmclParams
-from symloc.odometry import OdometryReading
-from symloc.ros import (
+from symloc.msgs import (
     build_rosbags,
     grid_to_fields,
     odometry_to_fields,
     pose_with_covariance_to_fields,
     scan_to_fields,
 )
+from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.params import NodeParams
 from symloc.sim.lidar import PRESETS, simulate_scan

@@ -14,8 +14,13 @@ from symloc.errors import DataFormatError
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Estimate, Hypothesis, Status
+from symloc.msgs import (
+    build_rosbags,
+    grid_to_fields,
+    pose_with_covariance_to_fields,
+    scan_to_fields,
+)
 from symloc.odometry import OdometryReading
-from symloc.ros import build_rosbags, grid_to_fields, pose_with_covariance_to_fields, scan_to_fields
 from symloc.ros.core import NodeCore
 from symloc.ros.params import NodeParams
 from symloc.ros.tf import (

@@ -38,13 +38,13 @@ from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.io.tum import TrajectoryPoint, write_tum
 from symloc.localizer import Estimate, Status
 from symloc.localizer.centering import CenteringConfig
+from symloc.msgs.grid import grid_to_fields
+from symloc.msgs.image import compressed_image_to_fields, image_to_fields
+from symloc.msgs.odometry import odometry_to_fields
+from symloc.msgs.scan import scan_from_msg, scan_to_fields
 from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore, Outputs
-from symloc.ros.grid_msg import grid_to_fields
-from symloc.ros.image_msg import compressed_image_to_fields, image_to_fields
-from symloc.ros.odometry_msg import odometry_to_fields
 from symloc.ros.params import NodeParams
-from symloc.ros.scan_msg import scan_from_msg, scan_to_fields
 from symloc.sim.lidar import simulate_scan
 from symloc.sim.robot import DiffDriveRobot
 

@@ -41,20 +41,20 @@ from numpy.typing import ArrayLike
 
 from symloc.errors import DataFormatError
 from symloc.grid import OccupancyGrid
-from symloc.odometry import OdometryReading
-from symloc.ros.build import build_rosbags
-from symloc.ros.grid_msg import grid_from_msg, grid_to_fields
-from symloc.ros.header import header_stamp
-from symloc.ros.image_msg import (
+from symloc.msgs.build import build_rosbags
+from symloc.msgs.grid import grid_from_msg, grid_to_fields
+from symloc.msgs.header import header_stamp
+from symloc.msgs.image import (
     MAX_IMAGE_PIXELS,
     compressed_image_from_msg,
     compressed_image_to_fields,
     image_from_msg,
     image_to_fields,
 )
-from symloc.ros.odometry_msg import odometry_from_msg, odometry_to_fields
-from symloc.ros.pose_msg import pose_with_covariance_from_msg, pose_with_covariance_to_fields
-from symloc.ros.scan_msg import scan_from_msg, scan_to_fields
+from symloc.msgs.odometry import odometry_from_msg, odometry_to_fields
+from symloc.msgs.pose import pose_with_covariance_from_msg, pose_with_covariance_to_fields
+from symloc.msgs.scan import scan_from_msg, scan_to_fields
+from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
 __all__ = [

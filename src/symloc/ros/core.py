@@ -52,21 +52,21 @@ from symloc.errors import SymlocError
 from symloc.geometry import angle_diff, compose, relative, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Estimate, RequestKind, Status
-from symloc.odometry import OdometryReading
-from symloc.ros.fields import field as msg_field
-from symloc.ros.grid_msg import grid_from_msg
-from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
-from symloc.ros.header import header_fields, header_frame, header_stamp
-from symloc.ros.image_msg import compressed_image_from_msg, image_from_msg
-from symloc.ros.odometry_msg import odometry_from_msg
-from symloc.ros.params import NodeParams
-from symloc.ros.pose_msg import (
+from symloc.msgs.fields import field as msg_field
+from symloc.msgs.grid import grid_from_msg
+from symloc.msgs.header import header_fields, header_frame, header_stamp
+from symloc.msgs.image import compressed_image_from_msg, image_from_msg
+from symloc.msgs.odometry import odometry_from_msg
+from symloc.msgs.pose import (
     pose_array_to_fields,
     pose_stamped_to_fields,
     pose_with_covariance_from_msg,
     pose_with_covariance_to_fields,
 )
-from symloc.ros.scan_msg import scan_from_msg
+from symloc.msgs.scan import scan_from_msg
+from symloc.odometry import OdometryReading
+from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
+from symloc.ros.params import NodeParams
 from symloc.ros.status_msg import candidates_to_fields, status_to_fields
 from symloc.ros.tf import (
     LaserMount,

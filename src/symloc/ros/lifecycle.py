@@ -51,12 +51,12 @@ from rclpy.parameter import Parameter
 
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import wrap_angle
-from symloc.ros.build import build_rclpy
+from symloc.msgs.build import build_rclpy
+from symloc.msgs.header import header_fields
+from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
 from symloc.ros.core import NodeCore, Outputs
-from symloc.ros.header import header_fields
 from symloc.ros.nav2_params import node_params_from_ros, parameter_defaults, ros_values
 from symloc.ros.params import NodeParams
-from symloc.ros.pose_msg import pose_fields, pose_with_covariance_from_msg
 
 __all__ = ["DEFAULT_NODE_NAME", "LocalizationNode", "load_saved_pose", "save_pose"]
 
@@ -573,7 +573,7 @@ class LocalizationNode(LifecycleNode):
         core, log = self.core, self.get_logger()
         if core is None:
             return False
-        from symloc.ros.header import header_frame, header_stamp
+        from symloc.msgs.header import header_frame, header_stamp
 
         try:
             frame = header_frame(msg, "PoseWithCovarianceStamped")

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError
 from symloc.localizer import Request, RequestKind, Status
-from symloc.ros.fields import field
+from symloc.msgs.fields import field
 
 __all__ = ["NodeStatus", "status_from_msg"]
 

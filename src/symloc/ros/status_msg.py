@@ -44,8 +44,8 @@ from typing import Any
 import numpy as np
 
 from symloc.localizer import Estimate, Request, RequestKind, Status
-from symloc.ros.header import header_fields
-from symloc.ros.pose_msg import pose_fields
+from symloc.msgs.header import header_fields
+from symloc.msgs.pose import pose_fields
 
 __all__ = ["LEVELS", "candidates_to_fields", "status_to_fields"]
 

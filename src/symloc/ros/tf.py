@@ -44,9 +44,9 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import DataFormatError
 from symloc.geometry import compose, inverse, wrap_angle
 from symloc.localizer import Estimate, Status
+from symloc.msgs.fields import field, finite_field, stamp_from_seconds
+from symloc.msgs.header import header_frame, header_stamp
 from symloc.odometry import OdometryReading
-from symloc.ros.fields import field, finite_field, stamp_from_seconds
-from symloc.ros.header import header_frame, header_stamp
 
 __all__ = [
     "MAX_TILT",

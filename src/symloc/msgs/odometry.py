@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
+from symloc.msgs.fields import field
+from symloc.msgs.header import header_fields, header_stamp
+from symloc.msgs.pose import covariance_to_ros, pose_fields, pose_from_msg
 from symloc.odometry import OdometryReading
-from symloc.ros.fields import field
-from symloc.ros.header import header_fields, header_stamp
-from symloc.ros.pose_msg import covariance_to_ros, pose_fields, pose_from_msg
 
 __all__ = ["odometry_from_msg", "odometry_to_fields"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from symloc.errors import DataFormatError
-from symloc.ros.fields import field, stamp_from_seconds, stamp_seconds
+from symloc.msgs.fields import field, stamp_from_seconds, stamp_seconds
 
 __all__ = ["header_fields", "header_frame", "header_stamp"]
 

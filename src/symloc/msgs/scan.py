@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from symloc.errors import DataFormatError
-from symloc.ros.fields import finite_field, numeric_array
-from symloc.ros.header import header_fields, header_frame, header_stamp
+from symloc.msgs.fields import finite_field, numeric_array
+from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.scan import LaserScan
 
 __all__ = ["scan_from_msg", "scan_to_fields"]

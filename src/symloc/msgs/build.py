@@ -1,6 +1,6 @@
 """Build ROS messages from nested field dicts, for rclpy or for rosbags.
 
-The ``*_to_fields`` conversions in :mod:`symloc.ros` return plain nested dicts with the ROS
+The ``*_to_fields`` conversions in :mod:`symloc.msgs` return plain nested dicts with the ROS
 field names (no ROS import needed). Two builders turn such a dict into a real message:
 
 - :func:`build_rclpy` for a live node (message classes of the ``*_msgs`` Python packages);

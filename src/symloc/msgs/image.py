@@ -21,8 +21,8 @@ from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError
 from symloc.image_header import check_image_size, image_header
-from symloc.ros.fields import field
-from symloc.ros.header import header_fields
+from symloc.msgs.fields import field
+from symloc.msgs.header import header_fields
 
 __all__ = [
     "MAX_IMAGE_PIXELS",

@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import DataFormatError
-from symloc.ros.fields import field, finite_field, quaternion_from_yaw, yaw_from_quaternion
-from symloc.ros.header import header_fields
+from symloc.msgs.fields import field, finite_field, quaternion_from_yaw, yaw_from_quaternion
+from symloc.msgs.header import header_fields
 
 __all__ = [
     "COV_INDEX",

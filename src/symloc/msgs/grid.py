@@ -12,9 +12,9 @@ import numpy as np
 
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.grid import OccupancyGrid
-from symloc.ros.fields import field, finite_field, numeric_array
-from symloc.ros.header import header_fields
-from symloc.ros.pose_msg import pose_fields, pose_from_msg
+from symloc.msgs.fields import field, finite_field, numeric_array
+from symloc.msgs.header import header_fields
+from symloc.msgs.pose import pose_fields, pose_from_msg
 
 __all__ = ["grid_from_msg", "grid_to_fields"]
 
