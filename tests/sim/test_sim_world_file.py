@@ -24,13 +24,8 @@ from symloc.sim.world import (
     MATERIAL_PHOTO,
     MATERIAL_WALL,
 )
-from symloc.sim.world_file import (
-    TEXTURE_POOL,
-    WorldSpec,
-    load_world_file,
-    room_spec,
-    save_world_file,
-)
+from symloc.sim.world_file import WorldSpec, load_world_file, room_spec, save_world_file
+from symloc.sim.world_spec import TEXTURE_POOL
 
 ISSUE_EXAMPLE = """\
 name: square-with-box

@@ -50,8 +50,9 @@ from scipy.spatial import ConvexHull
 
 from symloc.errors import ConfigurationError, WorldError
 from symloc.sim.rooms import BOARD_HEIGHT, ROBOT_RADIUS, Room
-from symloc.sim.world_build import assemble
-from symloc.sim.world_file import (
+from symloc.sim.world_build import assemble, corner_points
+from symloc.sim.world_file import WorldSpec
+from symloc.sim.world_spec import (
     TEXTURE_POOL,
     DoorSpec,
     FurnitureSpec,
@@ -59,8 +60,6 @@ from symloc.sim.world_file import (
     LabSpec,
     PersonSpec,
     RoomSpec,
-    WorldSpec,
-    corner_points,
 )
 
 __all__ = [

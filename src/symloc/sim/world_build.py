@@ -1,8 +1,9 @@
 """World files, the geometry half: from a validated spec to walls, obstacles and a Room.
 
-:mod:`symloc.sim.world_file` reads and writes the format; this module turns a
-:class:`~symloc.sim.world_file.WorldSpec` into the :class:`~symloc.sim.rooms.Room` it describes:
-the outline (with corner cuts), the walls with their door gaps and textures, furniture, pillars
+:mod:`symloc.sim.world_file` reads and writes the format into a
+:class:`~symloc.sim.world_file.WorldSpec`; this module turns it (or any
+:class:`~symloc.sim.world_spec.WorldParts`) into the :class:`~symloc.sim.rooms.Room` it
+describes: the outline (with corner cuts), the walls with their door gaps and textures, furniture, pillars
 and glass panels (checked to stand inside the room and apart), the lab around a room of boards,
 and the people's paths (checked to stay clear). Every problem is a
 :class:`~symloc.errors.WorldError` naming the file and the key path.
@@ -13,14 +14,11 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from symloc.errors import WorldError
 from symloc.sim.rooms import WALL_HEIGHT, Room, lab
-from symloc.sim.textures import TEXTURE_POOL_SIZE
 from symloc.sim.world import (
     MATERIAL_BOARD,
     MATERIAL_DARK,
@@ -32,51 +30,25 @@ from symloc.sim.world import (
     points_in_polygon,
     segments_cross,
 )
+from symloc.sim.world_spec import (
+    LAB_WALL_HEIGHT,
+    MATERIALS,
+    TEXTURE_POOL,
+    ErrorContext,
+    RoomSpec,
+    WorldParts,
+)
 
-if TYPE_CHECKING:
-    from symloc.sim.world_file import RoomSpec, WorldSpec
-
-__all__ = [
-    "DOOR_HEIGHT",
-    "LAB_WALL_HEIGHT",
-    "MATERIALS",
-    "TEXTURE_POOL",
-    "ErrorContext",
-    "assemble",
-    "bare_outline",
-    "corner_points",
-]
+__all__ = ["DOOR_HEIGHT", "assemble", "bare_outline", "corner_points"]
 
 FloatArray = NDArray[np.float64]
 
-LAB_WALL_HEIGHT = 1.0
-"""Room walls lower than this [m] are boards and the room stands in a textured lab."""
-TEXTURE_POOL = TEXTURE_POOL_SIZE
-"""Texture ids drawn from a world's seed lie in ``0 .. TEXTURE_POOL - 1`` (the distinct textures of
-:mod:`symloc.sim.textures`)."""
-MATERIALS = {
-    "wood": MATERIAL_FURNITURE,
-    "plain": MATERIAL_WALL,
-    "dark": MATERIAL_DARK,
-    "glass": MATERIAL_GLASS,
-}
-"""Material names of furniture and pillars."""
 DOOR_HEIGHT = 2.0
 """Height [m] of a closed door's leaf (lower if the walls are lower)."""
 
 _MIN_GAP = 0.01  # furniture keeps at least this [m] from walls and from each other
 _CIRCLE_SAGITTA = 0.002  # facets of a round wall deviate at most this [m] from the circle
 _BOUNDARY_VERTICES = 256  # outline of a round room for inside tests
-
-
-@dataclass(frozen=True)
-class ErrorContext:
-    """Where a world document came from: every error message starts with it."""
-
-    source: str
-
-    def error(self, path: str, message: str) -> WorldError:
-        return WorldError(f"{self.source}: {path}: {message}")
 
 
 @dataclass(frozen=True)
@@ -244,7 +216,7 @@ class _Walls:
 
 
 def _door_gaps(
-    ctx: ErrorContext, spec: WorldSpec, outline: _Outline
+    ctx: ErrorContext, spec: WorldParts, outline: _Outline
 ) -> dict[int, list[tuple[float, float, bool, int]]]:
     """Per wall, the door gaps as (start, end) [m along the wall, or rad for a circle]."""
     gaps: dict[int, list[tuple[float, float, bool, int]]] = {}
@@ -298,7 +270,7 @@ def _door_gaps(
 
 
 def _wall_materials(
-    ctx: ErrorContext, spec: WorldSpec, outline: _Outline, n_tiles: int
+    ctx: ErrorContext, spec: WorldParts, outline: _Outline, n_tiles: int
 ) -> tuple[list[int], list[int]]:
     """Materials of the walls (or round-wall tiles) and of the corner-cut facets."""
     n = n_tiles if outline.circle is not None else outline.corners.shape[0]
@@ -322,7 +294,7 @@ def _wall_materials(
 
 def _polygon_walls(
     ctx: ErrorContext,
-    spec: WorldSpec,
+    spec: WorldParts,
     outline: _Outline,
     gaps: dict[int, list[tuple[float, float, bool, int]]],
 ) -> _Walls:
@@ -352,7 +324,7 @@ def _polygon_walls(
 
 def _circle_walls(
     ctx: ErrorContext,
-    spec: WorldSpec,
+    spec: WorldParts,
     outline: _Outline,
     gaps: dict[int, list[tuple[float, float, bool, int]]],
 ) -> World:
@@ -455,7 +427,7 @@ def _gap(a: _Solid, b: _Solid) -> float:
     return float(min(wa.distance(b.outline_points()).min(), wb.distance(a.outline_points()).min()))
 
 
-def _solids(spec: WorldSpec) -> list[_Solid]:
+def _solids(spec: WorldParts) -> list[_Solid]:
     out: list[_Solid] = []
     for group, items in (("furniture", spec.furniture), ("pillars", spec.pillars)):
         for i, f in enumerate(items):
@@ -511,7 +483,7 @@ def _edges(s: _Solid) -> list[tuple[FloatArray, FloatArray]]:
     return []
 
 
-def _solid_world(spec: WorldSpec) -> World:
+def _solid_world(spec: WorldParts) -> World:
     parts: list[World] = []
     for f in (*spec.furniture, *spec.pillars):
         mat = MATERIALS[f.material]
@@ -544,7 +516,7 @@ def _area_centroid(v: FloatArray) -> FloatArray:
 
 
 def _lab_world(
-    ctx: ErrorContext, spec: WorldSpec, boundary: FloatArray, center: FloatArray
+    ctx: ErrorContext, spec: WorldParts, boundary: FloatArray, center: FloatArray
 ) -> World:
     ls = spec.lab
     w0, d0 = ls.size if ls.size is not None else (8.0, 10.0)
@@ -570,7 +542,7 @@ def _lab_world(
     return World(geo.walls, WALL_HEIGHT, np.array(mats))
 
 
-def _check_lab_keys(ctx: ErrorContext, spec: WorldSpec) -> None:
+def _check_lab_keys(ctx: ErrorContext, spec: WorldParts) -> None:
     if not spec.room.in_lab and (spec.lab.size is not None or spec.lab.margin != 1.5):
         raise ctx.error(
             "lab.size" if spec.lab.size is not None else "lab.margin",
@@ -587,7 +559,7 @@ _KIND = {
 }
 
 
-def assemble(spec: WorldSpec) -> Room:
+def assemble(spec: WorldParts) -> Room:
     """Validate ``spec`` and assemble its Room (orders not yet computed: 1, symmetry None)."""
     ctx = ErrorContext(spec.source)
     _check_lab_keys(ctx, spec)
@@ -655,7 +627,7 @@ def _bare_walls(outline: _Outline) -> World:
     return World(np.column_stack([b, np.roll(b, -1, axis=0)]))
 
 
-def _check_people(ctx: ErrorContext, spec: WorldSpec, room: Room) -> None:
+def _check_people(ctx: ErrorContext, spec: WorldParts, room: Room) -> None:
     for i, p in enumerate(spec.people):
         pts = np.array(p.path, dtype=np.float64)
         closed = np.vstack([pts, pts[:1]]) if p.loop else pts
@@ -676,6 +648,6 @@ def _check_people(ctx: ErrorContext, spec: WorldSpec, room: Room) -> None:
                 )
 
 
-def bare_outline(spec: WorldSpec) -> World:
+def bare_outline(spec: WorldParts) -> World:
     """The room's outline alone (after corner cuts, no doors): what ``shape_order`` is of."""
     return _bare_walls(_outline(ErrorContext(spec.source), spec.room))
