@@ -32,8 +32,7 @@ import skimage.data
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.orb import OrbExtractor
 from symloc.vision.visual_map import PlaceImage, VisualMap
-from symloc.vision.vocabulary import Vocabulary
-from symloc.vision.vocabulary_io import load_vocabulary, save_vocabulary
+from symloc.vision.vocabulary import Vocabulary, load_vocabulary, save_vocabulary
 
 DBOW3_MS = {
     "orb": 2.9,

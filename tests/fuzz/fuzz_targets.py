@@ -256,7 +256,7 @@ def vocabulary_files(draw: st.DrawFn) -> tuple[str, bytes]:
 
 
 def load_vocabulary_file(folder: Path, name: str, data: bytes) -> None:
-    from symloc.vision.vocabulary_io import load_vocabulary
+    from symloc.vision.vocabulary import load_vocabulary
 
     p = folder / name
     p.write_bytes(data)

@@ -350,7 +350,7 @@ BIG_INPUTS = textwrap.dedent(
     from symloc.image_header import read_image_file
     from symloc.io.carmen import read_carmen
     from symloc.msgs.image import compressed_image_from_msg, image_from_msg
-    from symloc.vision.vocabulary_io import load_vocabulary
+    from symloc.vision.vocabulary import load_vocabulary
     folder = Path(sys.argv[1])
     MiB = 1 << 20
     zeros = bytes(MiB)

@@ -9,14 +9,14 @@ import pytest
 
 from symloc.errors import VocabularyFileError
 from symloc.vision.bow import Scoring, Weighting
-from symloc.vision.vocabulary import Vocabulary
-from symloc.vision.vocabulary_io import (
-    HEADER_SIZE,
+from symloc.vision.vocabulary import (
+    Vocabulary,
     load_dbow2_text,
     load_vocabulary,
     save_dbow2_text,
     save_vocabulary,
 )
+from symloc.vision.vocabulary_io import HEADER_SIZE
 
 
 @pytest.fixture(scope="module")
@@ -161,7 +161,7 @@ def test_native_bad_parent_names_its_byte(tmp_path) -> None:  # type: ignore[no-
 
 
 def test_convert_command(voc: Vocabulary, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from symloc.vision.vocabulary_io import main
+    from symloc.vision.vocabulary import main
 
     voc.save_dbow2_text(tmp_path / "a.txt")
     assert main([str(tmp_path / "a.txt"), str(tmp_path / "b.symvoc"), "--compress"]) == 0

@@ -13,8 +13,7 @@ from symloc.vision.orientation import (
     decide_with_retries,
 )
 from symloc.vision.visual_map import Place, PlaceImage, QueryResult, VisualMap
-from symloc.vision.vocabulary import Vocabulary
-from symloc.vision.vocabulary_io import load_dbow2_text, load_vocabulary, save_vocabulary
+from symloc.vision.vocabulary import Vocabulary, load_dbow2_text, load_vocabulary, save_vocabulary
 
 __all__ = [
     "BowMatrix",

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import argparse
 import gzip
+import logging
+import sys
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -33,6 +35,8 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.vision.orb import OrbExtractor, OrbSettings, to_grey_uint8
 from symloc.vision.vocabulary import Vocabulary
+
+_log = logging.getLogger(__name__)
 
 __all__ = [
     "DEFAULT_VOCABULARY_PATH",
@@ -177,9 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=DEFAULT_VOCABULARY_PATH)
     args = ap.parse_args(argv)
-    print(f"# seed {args.seed}, k={args.k}, L={args.L} -> {args.out}")
+    logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stdout)
+    _log.info("# seed %d, k=%d, L=%d -> %s", args.seed, args.k, args.L, args.out)
     voc = build_default_vocabulary(args.out, k=args.k, L=args.L, rng=args.seed)
-    print(f"{voc!r}, {args.out.stat().st_size} bytes")
+    _log.info("%r, %d bytes", voc, args.out.stat().st_size)
     return 0
 
 

@@ -10,6 +10,8 @@ not normalise; words with weight 0 are stop words and are dropped).
 
 from __future__ import annotations
 
+import logging
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -18,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
-from symloc.errors import ConfigurationError, DataFormatError
+from symloc.errors import ConfigurationError, DataFormatError, VocabularyFileError
 from symloc.image_header import read_image_file
 from symloc.vision.bow import (
     BowMatrix,
@@ -33,11 +35,27 @@ from symloc.vision.bow import (
     score_many,
 )
 from symloc.vision.hkmeans import as_u64, hierarchical_kmeans
+from symloc.vision.vocabulary_io import (
+    VocabularyArrays,
+    read_dbow2_text,
+    read_vocabulary,
+    write_dbow2_text,
+    write_vocabulary,
+)
 
 if TYPE_CHECKING:
     from symloc.vision.orb import OrbExtractor
 
-__all__ = ["Vocabulary", "check_descriptors"]
+__all__ = [
+    "Vocabulary",
+    "check_descriptors",
+    "load_dbow2_text",
+    "load_vocabulary",
+    "save_dbow2_text",
+    "save_vocabulary",
+]
+
+_log = logging.getLogger(__name__)
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".ppm")
 
@@ -434,31 +452,34 @@ class Vocabulary:
         return cls.train(docs, progress=progress, **kwargs)
 
     # ------------------------------------------------------------------ files
-    def save(self, path: str | Path) -> None:
-        """Write the native binary format (see :mod:`symloc.vision.vocabulary_io`)."""
-        from symloc.vision.vocabulary_io import save_vocabulary
+    @classmethod
+    def from_arrays(cls, arrays: VocabularyArrays) -> Vocabulary:
+        """The vocabulary of a tree read from a file, checked; a bad tree raises
+        :class:`~symloc.errors.VocabularyFileError` naming the file and where the tree starts."""
+        a = arrays
+        try:
+            w, s = Weighting(a.weighting), Scoring(a.scoring)
+            return cls(a.k, a.L, w, s, a.parent, a.descriptors, a.weights)
+        except ValueError as err:
+            raise VocabularyFileError(f"{a.source}: {a.where}: {err}") from err
 
-        save_vocabulary(self, path)
+    def save(self, path: str | Path, *, compress: bool = False) -> None:
+        """Write the native binary format (see :mod:`symloc.vision.vocabulary_io`)."""
+        write_vocabulary(self, path, compress=compress)
 
     @classmethod
     def load(cls, path: str | Path) -> Vocabulary:
         """Read the native binary format (or a DBoW2 text file, by its content)."""
-        from symloc.vision.vocabulary_io import load_vocabulary
-
-        return load_vocabulary(path)
+        return cls.from_arrays(read_vocabulary(path))
 
     @classmethod
     def load_dbow2_text(cls, path: str | Path) -> Vocabulary:
         """Read a DBoW2 text vocabulary (ORB-SLAM's ORBvoc.txt layout)."""
-        from symloc.vision.vocabulary_io import load_dbow2_text
-
-        return load_dbow2_text(path)
+        return cls.from_arrays(read_dbow2_text(path))
 
     def save_dbow2_text(self, path: str | Path) -> None:
         """Write a DBoW2 text vocabulary (readable by DBoW2 ``loadFromTextFile``)."""
-        from symloc.vision.vocabulary_io import save_dbow2_text
-
-        save_dbow2_text(self, path)
+        write_dbow2_text(self, path)
 
     def equals(self, other: Vocabulary, *, weight_rtol: float = 0.0) -> bool:
         """True if both vocabularies have the same structure, words and (close) weights."""
@@ -471,3 +492,64 @@ class Vocabulary:
             and np.array_equal(self.descriptors[1:], other.descriptors[1:])
             and np.allclose(self.weights[1:], other.weights[1:], rtol=weight_rtol, atol=0.0)
         )
+
+
+def save_vocabulary(voc: Vocabulary, path: str | Path, *, compress: bool = False) -> None:
+    """Write ``voc`` in the native binary format (``compress``: zlib level 6 on weights and
+    parents, descriptors raw; see :mod:`symloc.vision.vocabulary_io`)."""
+    voc.save(path, compress=compress)
+
+
+def load_vocabulary(path: str | Path) -> Vocabulary:
+    """Load a vocabulary file: native binary, or DBoW2 text (detected by content).
+
+    Raises
+    ------
+    VocabularyFileError
+        The file is corrupt or truncated; the message names the byte (binary) or line (text).
+    """
+    return Vocabulary.load(path)
+
+
+def load_dbow2_text(path: str | Path) -> Vocabulary:
+    """Read a DBoW2 text vocabulary (``ORBvoc.txt``; ``.gz`` accepted).
+
+    Raises
+    ------
+    VocabularyFileError
+        Naming the line (1-based) that is malformed.
+    """
+    return Vocabulary.load_dbow2_text(path)
+
+
+def save_dbow2_text(voc: Vocabulary, path: str | Path) -> None:
+    """Write ``voc`` as a DBoW2 text vocabulary (``saveToTextFile`` layout, full precision)."""
+    voc.save_dbow2_text(path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m symloc.vision.vocabulary IN OUT``: convert between the two formats.
+
+    An OUT ending in ``.txt`` gets DBoW2 text, anything else the native binary format
+    (``--compress`` for zlib). Importing ORB-SLAM's ORBvoc.txt once this way makes later loads
+    take a fraction of a second instead of seconds.
+    """
+    import argparse
+
+    logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stdout)
+    ap = argparse.ArgumentParser(description="Convert a vocabulary (DBoW2 text <-> symloc binary).")
+    ap.add_argument("input", type=Path)
+    ap.add_argument("output", type=Path)
+    ap.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
+    args = ap.parse_args(argv)
+    voc = load_vocabulary(args.input)
+    if args.output.suffix == ".txt":
+        save_dbow2_text(voc, args.output)
+    else:
+        save_vocabulary(voc, args.output, compress=args.compress)
+    _log.info("%r -> %s (%d bytes)", voc, args.output, args.output.stat().st_size)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

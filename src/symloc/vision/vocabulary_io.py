@@ -1,5 +1,9 @@
 """Vocabulary files: symloc's fast native binary format, and DBoW2's text format.
 
+This module reads and writes the tree as arrays (:class:`VocabularyArrays`); the
+:class:`~symloc.vision.vocabulary.Vocabulary` checks them and owns ``load`` / ``save``
+(:func:`symloc.vision.vocabulary.load_vocabulary` and friends).
+
 Native format (little-endian; all offsets in bytes)::
 
     0   8s   magic b"SYMLVOC\\0"
@@ -41,24 +45,27 @@ import struct
 import warnings
 import zlib
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import VocabularyFileError
-from symloc.vision.bow import Scoring, Weighting
-from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
     "MAGIC",
     "MAX_TEXT_BYTES",
     "MAX_TEXT_LINE",
     "MAX_VOCABULARY_BYTES",
-    "load_dbow2_text",
-    "load_vocabulary",
-    "save_dbow2_text",
-    "save_vocabulary",
+    "TreeArrays",
+    "VocabularyArrays",
+    "parse_dbow2_text",
+    "read_dbow2_text",
+    "read_vocabulary",
+    "write_dbow2_text",
+    "write_vocabulary",
 ]
 
 #: Largest vocabulary file, or decompressed DBoW2 text, read (ORB-SLAM's ORBvoc.txt is 145 MB).
@@ -77,10 +84,50 @@ HEADER_SIZE = _HEADER.size  # 64
 DESC_BYTES = 32
 
 
-def save_vocabulary(voc: Vocabulary, path: str | Path, *, compress: bool = False) -> None:
+class TreeArrays(Protocol):
+    """What writing a vocabulary reads of it: a :class:`~symloc.vision.vocabulary.Vocabulary`
+    or a :class:`VocabularyArrays`."""
+
+    @property
+    def k(self) -> int: ...
+    @property
+    def L(self) -> int: ...  # noqa: N802 (DBoW2's name)
+    @property
+    def scoring(self) -> int: ...
+    @property
+    def weighting(self) -> int: ...
+    @property
+    def parent(self) -> NDArray[np.int32]: ...
+    @property
+    def descriptors(self) -> NDArray[np.uint8]: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+
+
+@dataclass(frozen=True)
+class VocabularyArrays:
+    """A vocabulary's tree as read from a file, not yet checked as a tree.
+
+    ``scoring`` and ``weighting`` are DBoW2's codes; ``source`` (the file) and ``where`` (the
+    byte or line the tree starts at) name the place in an error found when the tree is checked
+    (:meth:`symloc.vision.vocabulary.Vocabulary.from_arrays`).
+    """
+
+    k: int
+    L: int
+    scoring: int
+    weighting: int
+    parent: NDArray[np.int32]
+    descriptors: NDArray[np.uint8]
+    weights: NDArray[np.float64]
+    source: str
+    where: str
+
+
+def write_vocabulary(voc: TreeArrays, path: str | Path, *, compress: bool = False) -> None:
     """Write ``voc`` in the native binary format (``compress``: zlib level 6 on weights and
     parents, descriptors raw)."""
-    n = voc.n_nodes
+    n = int(voc.parent.size)
     parent = voc.parent.astype("<i4").copy()
     parent[0] = -1
     head = voc.weights.astype("<f8").tobytes() + parent.tobytes()
@@ -112,8 +159,8 @@ def save_vocabulary(voc: Vocabulary, path: str | Path, *, compress: bool = False
     tmp.replace(path)
 
 
-def load_vocabulary(path: str | Path) -> Vocabulary:
-    """Load a vocabulary file: native binary, or DBoW2 text (detected by content).
+def read_vocabulary(path: str | Path) -> VocabularyArrays:
+    """Read a vocabulary file: native binary, or DBoW2 text (detected by content).
 
     Raises
     ------
@@ -124,7 +171,7 @@ def load_vocabulary(path: str | Path) -> Vocabulary:
     data = _read_bounded(path)  # one read: far faster than reading a header, then the rest
     if data[: len(MAGIC)] != MAGIC:
         if path.suffix == ".gz" or data[:2] == b"\x1f\x8b" or data[:1].isdigit():
-            return load_dbow2_text(path)
+            return read_dbow2_text(path)
         raise VocabularyFileError(
             f"{path}: byte 0: not a symloc vocabulary (magic {data[:8]!r}, expected {MAGIC!r})"
             " nor a DBoW2 text vocabulary"
@@ -188,7 +235,7 @@ def _scan_text(chunks: Iterable[bytes], name: str) -> None:
         )
 
 
-def _parse_native(data: bytes, name: str) -> Vocabulary:
+def _parse_native(data: bytes, name: str) -> VocabularyArrays:
     if len(data) < HEADER_SIZE:
         raise VocabularyFileError(
             f"{name}: byte {len(data)}: truncated header ({len(data)} of {HEADER_SIZE} bytes)"
@@ -272,14 +319,11 @@ def _build(
     weights: NDArray[np.float64],
     *,
     where: str,
-) -> Vocabulary:
-    try:
-        return Vocabulary(k, L, Weighting(weighting), Scoring(scoring), parent, desc, weights)
-    except ValueError as err:
-        raise VocabularyFileError(f"{name}: {where}: {err}") from err
+) -> VocabularyArrays:
+    return VocabularyArrays(k, L, scoring, weighting, parent, desc, weights, name, where)
 
 
-def load_dbow2_text(path: str | Path) -> Vocabulary:
+def read_dbow2_text(path: str | Path) -> VocabularyArrays:
     """Read a DBoW2 text vocabulary (``ORBvoc.txt``; ``.gz`` accepted).
 
     Raises
@@ -304,8 +348,8 @@ def load_dbow2_text(path: str | Path) -> Vocabulary:
     return parse_dbow2_text(text, str(path))
 
 
-def parse_dbow2_text(text: str, name: str = "<text>") -> Vocabulary:
-    """Parse the content of a DBoW2 text vocabulary (see :func:`load_dbow2_text`)."""
+def parse_dbow2_text(text: str, name: str = "<text>") -> VocabularyArrays:
+    """Parse the content of a DBoW2 text vocabulary (see :func:`read_dbow2_text`)."""
     lines = text.split("\n")
     header = lines[0].split()
     if len(header) != 4:
@@ -436,41 +480,15 @@ def _parse_rows_fast(body: str, n_rows: int, ncol: int) -> NDArray[np.float64] |
     return out
 
 
-def save_dbow2_text(voc: Vocabulary, path: str | Path) -> None:
+def write_dbow2_text(voc: TreeArrays, path: str | Path) -> None:
     """Write ``voc`` as a DBoW2 text vocabulary (``saveToTextFile`` layout, full precision)."""
+    n = int(voc.parent.size)
     par = voc.parent.copy()
     par[0] = 0
     lines = [f"{voc.k} {voc.L}  {int(voc.scoring)} {int(voc.weighting)}"]
-    leaf = voc.is_leaf.astype(np.int64)
+    leaf = (np.bincount(voc.parent[1:], minlength=n) == 0).astype(np.int64)  # node 0 unused
     desc = voc.descriptors
-    for i in range(1, voc.n_nodes):
+    for i in range(1, n):
         d = " ".join(map(str, desc[i].tolist()))
         lines.append(f"{int(par[i])} {int(leaf[i])} {d}  {float(voc.weights[i])!r}")
     Path(path).write_text("\n".join(lines) + "\n")
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m symloc.vision.vocabulary_io IN OUT``: convert between the two formats.
-
-    An OUT ending in ``.txt`` gets DBoW2 text, anything else the native binary format
-    (``--compress`` for zlib). Importing ORB-SLAM's ORBvoc.txt once this way makes later loads
-    take a fraction of a second instead of seconds.
-    """
-    import argparse
-
-    ap = argparse.ArgumentParser(description="Convert a vocabulary (DBoW2 text <-> symloc binary).")
-    ap.add_argument("input", type=Path)
-    ap.add_argument("output", type=Path)
-    ap.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
-    args = ap.parse_args(argv)
-    voc = load_vocabulary(args.input)
-    if args.output.suffix == ".txt":
-        save_dbow2_text(voc, args.output)
-    else:
-        save_vocabulary(voc, args.output, compress=args.compress)
-    print(f"{voc!r} -> {args.output} ({args.output.stat().st_size} bytes)")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

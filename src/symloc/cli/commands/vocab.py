@@ -76,7 +76,7 @@ def register(subparsers: Any) -> None:
 
 def _save(voc: Any, out: Path, compress: bool) -> None:
     from symloc.errors import ConfigurationError
-    from symloc.vision.vocabulary_io import save_dbow2_text, save_vocabulary
+    from symloc.vision.vocabulary import save_dbow2_text, save_vocabulary
 
     if not out.parent.is_dir():
         raise ConfigurationError(f"{out}: folder {out.parent} does not exist")
@@ -118,7 +118,7 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _convert(args: argparse.Namespace) -> int:
-    from symloc.vision.vocabulary_io import load_vocabulary
+    from symloc.vision.vocabulary import load_vocabulary
 
     options.refuse_overwriting_inputs({"input": args.input}, {"output": args.output})
     voc = load_vocabulary(args.input)
@@ -128,7 +128,8 @@ def _convert(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from symloc.vision.vocabulary_io import MAGIC, load_vocabulary
+    from symloc.vision.vocabulary import load_vocabulary
+    from symloc.vision.vocabulary_io import MAGIC
 
     voc = load_vocabulary(args.path)
     with open(args.path, "rb") as fh:
