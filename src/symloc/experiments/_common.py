@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from collections.abc import Mapping
 from pathlib import Path
@@ -10,10 +9,7 @@ from typing import Any
 
 from symloc.cli import options
 
-__all__ = ["CARMEN_LOGS", "add_common_arguments", "find_carmen_dir", "print_config", "write_json"]
-
-#: The real laser logs in ``../shared/data/carmen`` (see its README).
-CARMEN_LOGS = ("intel", "aces", "freiburg-079")
+__all__ = ["add_common_arguments", "print_config", "write_json"]
 
 
 def add_common_arguments(parser: Any, name: str) -> None:
@@ -39,14 +35,3 @@ def write_json(path: Path | None, data: Mapping[str, Any]) -> None:
         return
     options.write_json(path, data)
     print(f"wrote {path}")
-
-
-def find_carmen_dir() -> Path | None:
-    """``$SYMLOC_SHARED_DATA/carmen`` or ``<repo>/../shared/data/carmen``, if it exists."""
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    cands = [Path(env) / "carmen"] if env else []
-    cands.append(Path(__file__).resolve().parents[3] / ".." / "shared" / "data" / "carmen")
-    for c in cands:
-        if c.is_dir():
-            return c.resolve()
-    return None

@@ -44,14 +44,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
+from symloc.bench.shared_data import find_carmen_dir
 from symloc.cli import options
-from symloc.experiments._common import CARMEN_LOGS as LOG_NAMES
-from symloc.experiments._common import (
-    add_common_arguments,
-    find_carmen_dir,
-    print_config,
-    write_json,
-)
+from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import compose, inverse, wrap_angle
 
 __all__ = [

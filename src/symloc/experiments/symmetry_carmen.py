@@ -35,15 +35,10 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
+from symloc.bench.shared_data import CARMEN_LOGS, find_carmen_dir
 from symloc.cli import options
 from symloc.errors import ConfigurationError, SymlocError
-from symloc.experiments._common import (
-    CARMEN_LOGS,
-    add_common_arguments,
-    find_carmen_dir,
-    print_config,
-    write_json,
-)
+from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = [
     "CARMEN_LOGS",

@@ -83,7 +83,7 @@ def register(subparsers: Any) -> None:
 
 
 def _logs(args: argparse.Namespace) -> list[Path]:
-    from symloc.experiments._common import find_carmen_dir
+    from symloc.bench.shared_data import find_carmen_dir
 
     src = args.carmen if args.carmen is not None else find_carmen_dir()
     if src is None:
