@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from symloc.errors import ConfigurationError
+
 __all__ = ["CENTROID_METHODS", "area_centroid", "centroid", "mean_centroid", "polygon_area"]
 
 FloatArray = NDArray[np.float64]
@@ -95,6 +97,4 @@ def centroid(points: ArrayLike, method: str = "area") -> FloatArray:
         return mean_centroid(points)
     if method == "area":
         return area_centroid(points)[0]
-    from symloc.errors import ConfigurationError
-
     raise ConfigurationError(f"centroid: expected one of {CENTROID_METHODS}, got {method!r}")

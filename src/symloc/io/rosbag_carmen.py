@@ -12,6 +12,8 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+from symloc.errors import DataFormatError
+from symloc.io.carmen import read_carmen
 from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.odometry import OdometryReading
 
@@ -31,9 +33,6 @@ def carmen_to_bag(
         The log is malformed (from :func:`symloc.io.carmen.read_carmen`), holds no ``FLASER``
         scan (nothing is written), or ``out`` exists.
     """
-    from symloc.errors import DataFormatError
-    from symloc.io.carmen import read_carmen
-
     data = read_carmen(log, range_max=range_max)
     if not data.scans:
         seen = (

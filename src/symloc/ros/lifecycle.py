@@ -51,12 +51,14 @@ from rclpy.parameter import Parameter
 
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import wrap_angle
+from symloc.grid.map_io import load_map
 from symloc.msgs.build import build_rclpy
-from symloc.msgs.header import header_fields
+from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.nav2_params import node_params_from_ros, parameter_defaults, ros_values
 from symloc.ros.params import NodeParams
+from symloc.ros.tf import transforms_from_msg
 
 __all__ = ["DEFAULT_NODE_NAME", "LocalizationNode", "load_saved_pose", "save_pose"]
 
@@ -271,8 +273,6 @@ class LocalizationNode(LifecycleNode):
         self._create_io()
         self._create_services()
         if params.map_yaml:
-            from symloc.grid.map_io import load_map
-
             try:
                 self.core.set_map(load_map(params.map_yaml))
             except SymlocError as err:
@@ -484,8 +484,6 @@ class LocalizationNode(LifecycleNode):
     def _static_only(self, msg: Any) -> None:
         """``/tf`` while odometry comes from the topic: frames only (no odometry from TF)."""
         assert self.core is not None
-        from symloc.ros.tf import transforms_from_msg
-
         for t in transforms_from_msg(msg):
             self.core.tf.add(t, static=False)
 
@@ -573,8 +571,6 @@ class LocalizationNode(LifecycleNode):
         core, log = self.core, self.get_logger()
         if core is None:
             return False
-        from symloc.msgs.header import header_frame, header_stamp
-
         try:
             frame = header_frame(msg, "PoseWithCovarianceStamped")
             pose, cov = pose_with_covariance_from_msg(msg)

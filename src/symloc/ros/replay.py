@@ -18,11 +18,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from symloc.errors import DataFormatError
 from symloc.grid import OccupancyGrid
 from symloc.io.rosbag import BagTopics, bag_topics, read_bag
 from symloc.io.tum import TrajectoryPoint
 from symloc.localizer import Estimate
-from symloc.ros.core import LocalizerFactory, NodeCore
+from symloc.ros.core import LocalizerFactory, NodeCore, _OdomBuffer
 from symloc.ros.params import NodeParams
 
 __all__ = ["ReplayResult", "build_map_from_bag", "replay_bag", "scans_with_odometry"]
@@ -125,8 +126,6 @@ def scans_with_odometry(
     Scans without odometry close enough in time are left out and counted in the returned
     ``dropped`` dict (reason -> count), as the node does.
     """
-    from symloc.ros.core import _OdomBuffer
-
     buf = _OdomBuffer()
     scans: list[Any] = []
     odom: list[FloatArray] = []
@@ -157,8 +156,7 @@ def build_map_from_bag(
     DataFormatError
         The bag has fewer than two scans with odometry.
     """
-    from symloc.errors import DataFormatError
-    from symloc.slam.slam import run_slam
+    from symloc.slam.slam import run_slam  # lazy: the SLAM stack (GTSAM) only for --build-map
 
     scans, odom, dropped = scans_with_odometry(path, topics=topics)
     if len(scans) < 2:

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError, DatabaseError, DataFormatError
+from symloc.geometry import wrap_angle
 from symloc.image_header import check_image_size, image_header
 from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
 from symloc.vision.orb import OrbFeatures
@@ -113,8 +114,6 @@ MAX_FEATURES = 1_000_000
 
 def direction_headings(heading0: float, m: int) -> NDArray[np.float64]:
     """Headings [rad] of the M clockwise directions: ``heading0 - j * 2 pi / M``, wrapped."""
-    from symloc.geometry import wrap_angle
-
     return np.asarray(wrap_angle(heading0 - np.arange(m) * (2.0 * math.pi / m)), np.float64)
 
 

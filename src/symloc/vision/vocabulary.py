@@ -413,7 +413,7 @@ class Vocabulary:
         import cv2
         from tqdm import tqdm
 
-        from symloc.vision.orb import OrbExtractor
+        from symloc.vision.orb import OrbExtractor  # lazy, like cv2 above: only to train on files
 
         root = Path(folder)
         if not root.is_dir():
