@@ -222,4 +222,3 @@ def candidates(inp: Inputs, visit: Visit) -> tuple[Hypothesis, ...]:
     copies = rotated_copies(inp.result.estimate, visit.centre_map, visit.order)
     w = 1.0 / len(copies)
     return tuple(Hypothesis(pose=p, weight=w) for p in copies)
-

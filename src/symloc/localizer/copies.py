@@ -180,9 +180,7 @@ def copies_fit(
     return bool(np.any(scores[1:] >= ratio * own))
 
 
-def known_place_at(
-    pose: FloatArray, places: Sequence[Place], radius_factor: float
-) -> Place | None:
+def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: float) -> Place | None:
     """The nearest known place whose disc (``radius_factor`` x its G-V distance) holds
     ``pose``'s position, or None."""
     best: Place | None = None

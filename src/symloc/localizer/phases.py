@@ -226,13 +226,17 @@ def copies_ambiguity(
     reseeded at a copy that fits clearly better). Every pose is checked so before it is
     first published: on convergence, and when a claim chain starts while tracking."""
     cfg = ctx.config
-    score = {"gate": ctx.gate, "scorer": ctx.scorer, "ratio": cfg.copy_score_ratio}
+    gate, scorer, ratio = ctx.gate, ctx.scorer, cfg.copy_score_ratio
     place = known_place_at(pose, ctx.known_places, cfg.place_radius_factor)
-    if place is not None and copies_fit(pose, place.center, place.order, inp.scan, **score):
+    if place is not None and copies_fit(
+        pose, place.center, place.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+    ):
         back.converged.reset()
         return start_ambiguity_at_place(ctx, inp, place)
     for sym in ctx.map_symmetries:
-        verdict = copies_verdict(pose, sym.centre, sym.order, inp.scan, **score)
+        verdict = copies_verdict(
+            pose, sym.centre, sym.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+        )
         if verdict.kind is CopiesKind.UNIQUE:
             continue
         back.converged.reset()
@@ -568,4 +572,3 @@ class Settled:
             ctx.note("left the symmetric place: global AMCL, pose must be earned again")
             return lost("left the symmetric place; relocalizing", inp.result), fresh
         return ambiguous(inp, self.visit, Status.AMBIGUOUS, None, self.reason), self
-
