@@ -21,7 +21,7 @@ def test_streak_counts_to_n_and_starts_over() -> None:
     assert s.reached
     s.reset()
     assert not s.reached
-    with pytest.raises(ConfigurationError, match="Streak.n"):
+    with pytest.raises(ConfigurationError, match=r"Streak\.n"):
         Streak(0)
 
 
@@ -46,5 +46,5 @@ def test_decision_status_is_an_enum_that_keeps_its_value() -> None:
     assert d.status is DecisionStatus.NO_MATCH
     assert d.status.value == "no_match"
     assert Decision(DecisionStatus.DECIDED, 1).status is DecisionStatus.DECIDED
-    with pytest.raises(ConfigurationError, match="Decision.status"):
+    with pytest.raises(ConfigurationError, match=r"Decision\.status"):
         Decision("maybe")
