@@ -11,7 +11,7 @@ from symloc.errors import ConfigurationError
 from symloc.grid.distance_field import surface_distance_field
 from symloc.localizer import Localizer, Status
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
-from symloc.localizer.claim import ClaimConfig, ClaimGate
+from symloc.localizer.claim import ClaimConfig, ClaimGate, Verdict
 from symloc.mcl import Amcl, AmclParams
 from symloc.odometry import OdometryReading
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
@@ -35,8 +35,8 @@ def test_claim_withdraw_and_withhold(l_room) -> None:
     room, grid = l_room
     gate = ClaimGate(surface_distance_field(grid), ALPHAS)
     truth = np.array([-0.6, -0.8, 0.4])
-    assert gate.check(np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 0)).verdict == (
-        "withheld"
+    assert gate.check(np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 0)).verdict is (
+        Verdict.WITHHELD
     )  # nothing to carry yet
     gate.anchor(truth, COV, np.zeros(3))
     claim = gate.check(np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 1))
@@ -51,7 +51,7 @@ def test_claim_withdraw_and_withhold(l_room) -> None:
     # carried away while the odometry saw nothing: withdrawn, and the reason says why
     away = np.array([0.9, -1.0, 2.5])
     claim = gate.check(odom, simulate_scan(room.world, away, RPLIDAR_A2, 3))
-    assert claim.verdict == "withdrawn"
+    assert claim.verdict is Verdict.WITHDRAWN
     assert "claim withdrawn" in claim.reason
 
 
@@ -63,7 +63,7 @@ def test_a_corridor_pose_is_withheld_not_claimed() -> None:
     gate.anchor(truth, np.diag([0.3**2, 0.03**2, 0.01**2]), np.zeros(3))
     scan = simulate_scan(room.world, truth, RPLIDAR_A2.with_(range_max=6.0), 0)
     claim = gate.check(np.zeros(3), scan)
-    assert claim.verdict == "withheld"
+    assert claim.verdict is Verdict.WITHHELD
     assert "std" in claim.reason
 
 

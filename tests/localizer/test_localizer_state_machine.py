@@ -39,7 +39,11 @@ def _result(poses, weights, std=0.05) -> TrackerResult:
         for p, w in sorted(zip(poses, weights, strict=True), key=lambda pw: -pw[1])
     )
     cov = np.diag([std**2, std**2, math.radians(2) ** 2])
-    return TrackerResult(estimate=hyps[0].pose, covariance=cov, hypotheses=hyps)
+    # the tracker's own verdict, as AMCL's adapter gives it: one heavy, tight cluster
+    confident = hyps[0].weight >= 0.9 and std <= 0.15
+    return TrackerResult(
+        estimate=hyps[0].pose, covariance=cov, hypotheses=hyps, confident=confident
+    )
 
 
 @dataclass
@@ -91,6 +95,7 @@ class FakeStore:
     places: list[Place] = field(default_factory=list)
     decisions: list[Decision] = field(default_factory=list)
     added: list[tuple] = field(default_factory=list)
+    headings: list[list[float] | None] = field(default_factory=list)
 
     def candidates(self, gv_distance, order):
         return [p for p in self.places if abs(p.gv_distance - gv_distance) < 0.05]
@@ -100,6 +105,7 @@ class FakeStore:
 
     def add_place(self, center, heading0, order, gv_distance, kind, images, headings=None) -> Place:
         self.added.append((center, heading0, order, gv_distance, kind, len(images)))
+        self.headings.append(None if headings is None else list(headings))
         p = Place(len(self.places), np.asarray(center), heading0, len(images), order, gv_distance)
         self.places.append(p)
         return p
@@ -394,7 +400,7 @@ def test_request_validation():
     ("field_", "value", "match"),
     [
         ("centre_tolerance", 0.0, "centre_tolerance"),
-        ("converged_weight", 1.5, "converged_weight"),
+        ("min_cluster_weight", 1.5, "min_cluster_weight"),
         ("flip_patience", 0, "flip_patience"),
         ("converged_updates", 2.5, "converged_updates"),
     ],
@@ -468,22 +474,19 @@ def test_candidates_from_scan_and_known_place_contain_the_true_pose():
         assert np.min(np.hypot(poses[:, 0] - p[0], poses[:, 1] - p[1])) < 1e-9
 
 
-class OldStore(FakeStore):
-    """A store whose add_place predates the ``headings`` keyword."""
-
-    def add_place(self, center, heading0, order, gv_distance, kind, images) -> Place:  # type: ignore[override]
-        return super().add_place(center, heading0, order, gv_distance, kind, images)
-
-
-def test_mapping_works_with_a_store_without_the_headings_keyword():
+def test_mapping_gives_the_store_the_measured_headings():
     true = np.array([2.5, 2.0, 0.7])
-    store = OldStore(places=[])
+    store = FakeStore(places=[])
     loc = Localizer(
         _ambiguous_tracker(true), SquareJudge(), store, LocalizerConfig(allow_mapping=True)
     )
     final = Driver(loc, true).run(600)
     assert len(store.added) == 1
     assert "new visual map" in final.reason
+    headings = store.headings[0]
+    assert headings is not None
+    assert len(headings) == store.added[0][5]
+    assert headings[0] == store.added[0][1]  # heading0 is the first image's heading
 
 
 def test_decision_at_a_place_without_heading_reference_claims_no_pose():

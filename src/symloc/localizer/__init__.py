@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from .localizer import Localizer, LocalizerConfig, rotated_copies, symmetry_consistent
+from .config import LocalizerConfig
+from .copies import rotated_copies, symmetry_consistent
+from .localizer import Localizer
 from .types import (
     Decision,
+    DecisionStatus,
     Estimate,
     Hypothesis,
     Place,
@@ -20,6 +23,7 @@ from .types import (
 
 __all__ = [
     "Decision",
+    "DecisionStatus",
     "Estimate",
     "Hypothesis",
     "Localizer",

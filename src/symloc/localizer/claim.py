@@ -29,6 +29,13 @@ scan goes through :meth:`ClaimGate.check`:
    the scans of a run are far from independent); otherwise the claim is *withheld*
    and the status says which bound failed.
 
+The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
+localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
+when the last confirmed pose, carried by odometry, is confirmed ``resume_after`` scans in a row
+(a person walked past), and after ``patience`` failing scans the pose is given up and the
+filter relocalizes globally (the robot was carried away). An operator's initial pose chose among
+symmetric copies, so while the filter stays on it no copy check is needed.
+
 The published covariance is the match's plus the map's own error (``map_std_xy`` /
 ``map_std_theta``), floored at ``floor_xy`` / ``floor_theta`` (map resolution and scan noise
 bound what any single scan can know). Its honesty (the share of
@@ -38,7 +45,9 @@ set on its dev split.
 
 from __future__ import annotations
 
+import enum
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +61,10 @@ from symloc.mcl.motion_model import carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.scan import LaserScan
 
-__all__ = ["Claim", "ClaimConfig", "ClaimGate"]
+from .rules import Streak
+from .types import Tracker, TrackerResult
+
+__all__ = ["Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
 
 FloatArray = NDArray[np.float64]
 
@@ -163,17 +175,25 @@ class ClaimConfig:
         return self.tolerance_heading / self.gate_sigmas
 
 
+class Verdict(enum.Enum):
+    """The gate's verdict on one scan (``.value`` as logs and JSON spell it)."""
+
+    CLAIM = "claim"  # publish the pose
+    WITHHELD = "withheld"  # the pose fits the scan but is not certain enough for the tolerance
+    WITHDRAWN = "withdrawn"  # the scan contradicts the pose
+
+
 @dataclass(frozen=True, eq=False)
 class Claim:
     """The gate's verdict on one scan.
 
-    ``verdict`` is ``"claim"`` (publish ``pose`` with ``covariance``), ``"withheld"`` (the
-    pose fits the scan but is not certain enough for the tolerance) or ``"withdrawn"`` (the
-    scan contradicts it). ``pose`` (3,) and ``covariance`` (3, 3) are the laser-confirmed
-    estimate whatever the verdict (None without an anchor); ``reason`` says why.
+    ``verdict`` is :attr:`Verdict.CLAIM` (publish ``pose`` with ``covariance``),
+    :attr:`Verdict.WITHHELD` or :attr:`Verdict.WITHDRAWN`. ``pose`` (3,) and ``covariance``
+    (3, 3) are the laser-confirmed estimate whatever the verdict (None without an anchor);
+    ``reason`` says why.
     """
 
-    verdict: str
+    verdict: Verdict
     pose: FloatArray | None
     covariance: FloatArray | None
     reason: str
@@ -182,7 +202,36 @@ class Claim:
     @property
     def ok(self) -> bool:
         """True when the pose may be published as tracking."""
-        return self.verdict == "claim"
+        return self.verdict is Verdict.CLAIM
+
+
+class Standing(enum.Enum):
+    """What the localizer does with one scan while it tracks (:meth:`ClaimGate.step`)."""
+
+    PUBLISH = "publish"  # the claim is confirmed: publish its pose
+    FIRST = "first"  # a first claim (no chain, not the operator's pose): check rotated copies,
+    # then publish it and call ClaimGate.confirmed
+    HOLD = "hold"  # publish nothing (withheld, or claims suspended); the pose is kept
+    UNEARNED = "unearned"  # a pose the laser never confirmed is given up: the pose is lost
+    RELOCALIZE = "relocalize"  # suspended for ``patience`` scans: the tracker was spread
+    # over the whole map and the gate forgot everything
+
+
+@dataclass(frozen=True, eq=False)
+class Ruling:
+    """The gate's answer for one scan: what to do (``standing``), the scan's ``claim`` (None
+    when no check was made) and a ``reason`` in words."""
+
+    standing: Standing
+    claim: Claim | None
+    reason: str
+
+
+def _force_update(tracker: Tracker) -> None:
+    """A filter update at the next scan, moved or not (trackers without one skip it)."""
+    force: Callable[[], object] | None = getattr(tracker, "force_update", None)
+    if force is not None:
+        force()
 
 
 def _std(cov: FloatArray) -> tuple[float, float]:
@@ -235,6 +284,13 @@ class ClaimGate:
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
         self._anchor: tuple[FloatArray, FloatArray, FloatArray] | None = None
         self._chain: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        # the lifecycle (step): the operator's pose (3,), its covariance (3, 3) and the
+        # odometry pose (3,) it refers to (None until the next scan); suspension and its rules
+        self._operator: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
+        self._jumped = False
+        self._suspended = False
+        self._patience = Streak(self.config.patience)
+        self._resume = Streak(self.config.resume_after)
 
     def reset(self) -> None:
         """Forget the anchor and the last confirmed pose (the pose is no longer believed)."""
@@ -264,6 +320,143 @@ class ClaimGate:
     def forget_chain(self) -> None:
         """Forget the last confirmed pose (tracking ended); the filter's anchor stays."""
         self._chain = None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def restart(self) -> None:
+        """Forget the claim's lifecycle (the localizer starts over): the operator's pose and
+        any suspension. The anchor and the chain stay (:meth:`reset` forgets those)."""
+        self._operator = None
+        self._suspended = False
+        self._patience.reset()
+        self._resume.reset()
+
+    def start_at_operator_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
+        """The operator gave ``pose`` (3,) with ``covariance`` (3, 3) (RViz's 2D Pose
+        Estimate): forget everything and remember it; it refers to the next scan's odometry.
+        The operator chose among any symmetric copies (the laser still confirms the pose)."""
+        self.reset()
+        self.restart()
+        self._operator = (
+            np.asarray(pose, dtype=np.float64).copy(),
+            np.asarray(covariance, dtype=np.float64).copy(),
+            None,
+        )
+
+    def observe(self, result: TrackerResult, odom_pose: FloatArray) -> None:
+        """Every scan, after the filter's update: anchor its estimate (a jump of the filter is
+        remembered for :meth:`step`) and date the operator's pose."""
+        odom = np.asarray(odom_pose, dtype=np.float64)
+        if self._operator is not None and self._operator[2] is None:
+            pose, cov, _ = self._operator
+            self._operator = (pose, cov, odom.copy())
+        self._jumped = False
+        if result.updated:
+            self._jumped = not self.anchor(result.estimate, result.covariance, odom)
+
+    def step(
+        self,
+        result: TrackerResult,
+        odom_pose: FloatArray,
+        scan: LaserScan,
+        tracker: Tracker,
+        note: Callable[[str], None],
+    ) -> Ruling:
+        """The claim at this scan while tracking (call :meth:`observe` first).
+
+        A withdrawn claim or a jump of the filter suspends claims: they resume only when the
+        last confirmed pose, carried by odometry, fits the scan again (a person walked past);
+        after ``patience`` scans without that the pose is given up and ``tracker``
+        relocalizes globally (the robot was carried away). While suspended, ``tracker`` is
+        made to update at every scan. ``note`` hears of suspensions and resumptions.
+        """
+        odom = np.asarray(odom_pose, dtype=np.float64)
+        if not self.anchored:
+            self.anchor(result.estimate, result.covariance, odom)
+        if self._jumped and not self._suspended and self.has_chain:
+            self._suspend("the filter's estimate jumped away from the tracked pose", tracker, note)
+        if self._suspended:
+            return self._while_suspended(result, odom, scan, tracker, note)
+        if self._jumped:
+            return Ruling(Standing.UNEARNED, None, "the filter's estimate jumped")
+        claim = self.check(odom, scan)
+        if claim.match is not None and claim.match.inlier_fraction < self.config.min_claim_fit:
+            # the scan stopped fitting where the operator put the robot (carried off?):
+            # whatever the filter finds next is not the operator's choice among copies
+            self._operator = None
+        if claim.ok:
+            if not self.has_chain and not self._at_operator_pose(claim.pose, odom):
+                return Ruling(Standing.FIRST, claim, claim.reason)
+            self.confirmed(claim, odom)
+            return Ruling(Standing.PUBLISH, claim, claim.reason)
+        if claim.verdict is Verdict.WITHDRAWN and not self.has_chain:
+            return Ruling(Standing.UNEARNED, claim, claim.reason)
+        if claim.verdict is Verdict.WITHDRAWN:
+            self._suspend(claim.reason, tracker, note)
+        return Ruling(Standing.HOLD, claim, claim.reason)
+
+    def _suspend(self, why: str, tracker: Tracker, note: Callable[[str], None]) -> None:
+        self._suspended = True
+        self._patience.reset()
+        self._resume.reset()
+        note(f"claims suspended: {why}")
+        _force_update(tracker)
+
+    def _while_suspended(
+        self,
+        result: TrackerResult,
+        odom: FloatArray,
+        scan: LaserScan,
+        tracker: Tracker,
+        note: Callable[[str], None],
+    ) -> Ruling:
+        claim = self.check(odom, scan)
+        if claim.ok:
+            if not self._resume.hit():
+                return Ruling(
+                    Standing.HOLD, claim, "claims suspended: the tracked pose fits the scan again"
+                )
+            self._suspended = False
+            assert claim.pose is not None
+            assert claim.covariance is not None
+            if not self.anchor(result.estimate, result.covariance, odom) or self._jumped:
+                # the filter went elsewhere while the pose continued: bring it back
+                tracker.initialize_pose(claim.pose, claim.covariance)
+            self.anchor(claim.pose, claim.covariance, odom)
+            note("claims resumed: the tracked pose fits the scan again")
+            self.confirmed(claim, odom)
+            return Ruling(Standing.PUBLISH, claim, claim.reason)
+        self._resume.miss()
+        if self._patience.hit():
+            tracker.initialize_global()
+            self.reset()
+            self.restart()
+            why = (
+                f"the tracked pose has not fitted the scan for {self.config.patience} scans "
+                "(kidnapped?): global relocalization, the pose must be earned again"
+            )
+            return Ruling(Standing.RELOCALIZE, claim, why)
+        _force_update(tracker)
+        return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}")
+
+    def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:
+        """True when ``pose`` is the operator's initial pose carried by odometry (squared
+        Mahalanobis distance within ``max_pull`` under the gate's odometry model): the
+        operator chose among symmetric copies, so no copy check is needed. A pose the filter
+        found elsewhere (the robot was carried off) is not the operator's choice, and the
+        operator's pose is forgotten."""
+        if self._operator is None or pose is None:
+            return False
+        op, cov, odom0 = self._operator
+        if odom0 is None:
+            return False
+        carried, ccov = carry_by_odometry(op, cov, odom0, odom, self.alphas)
+        e = np.asarray(pose, dtype=np.float64) - carried
+        e[2] = float(wrap_angle(e[2]))
+        if float(e @ np.linalg.solve(ccov, e)) <= self.config.max_pull:
+            return True
+        self._operator = None
+        return False
 
     def anchor(self, pose: FloatArray, covariance: FloatArray, odom_pose: FloatArray) -> bool:
         """The filter's estimate ``pose`` (3,) with ``covariance`` (3, 3) at odometry pose
@@ -320,7 +513,7 @@ class ClaimGate:
         elif self._anchor is not None:
             prior, p_cov = self.carried(odom)
         else:
-            return Claim("withheld", None, None, "claim withheld: no filter estimate yet")
+            return Claim(Verdict.WITHHELD, None, None, "claim withheld: no filter estimate yet")
         return self._check_at(prior, p_cov, scan, start=start)
 
     def _check_at(
@@ -335,7 +528,7 @@ class ClaimGate:
         pts = self.points(scan)
         if pts.shape[0] < cfg.min_beams:
             return Claim(
-                "withheld",
+                Verdict.WITHHELD,
                 carried,
                 c_cov,
                 f"claim withheld: {pts.shape[0]} returning beams, {cfg.min_beams} needed to "
@@ -369,7 +562,7 @@ class ClaimGate:
         cand = np.asarray(candidate, dtype=np.float64)
         cov = np.asarray(covariance, dtype=np.float64)
         if pts.shape[0] < self.config.min_beams:
-            return Claim("withheld", cand, cov, "too few returning beams to confirm the pose")
+            return Claim(Verdict.WITHHELD, cand, cov, "too few returning beams to confirm the pose")
         match = match_scan_to_map(self.field, pts, cand, self.match_config, prior=(cand, cov))
         return self._judge(cand, cov, match)
 
@@ -383,7 +576,7 @@ class ClaimGate:
         pull = float(e @ np.linalg.solve(prior_cov, e))
         if match.inlier_fraction < cfg.min_inlier_fraction:
             return Claim(
-                "withdrawn",
+                Verdict.WITHDRAWN,
                 pose,
                 cov,
                 f"claim withdrawn: the scan does not fit the map here "
@@ -394,7 +587,7 @@ class ClaimGate:
             )
         if pull > cfg.max_pull:
             return Claim(
-                "withdrawn",
+                Verdict.WITHDRAWN,
                 pose,
                 cov,
                 f"claim withdrawn: the laser pulls the pose {100 * math.hypot(e[0], e[1]):.0f} cm"
@@ -404,7 +597,7 @@ class ClaimGate:
             )
         if match.inlier_fraction < cfg.min_claim_fit:
             return Claim(
-                "withheld",
+                Verdict.WITHHELD,
                 pose,
                 cov,
                 f"claim withheld: the scan fits the map only partly here "
@@ -416,7 +609,7 @@ class ClaimGate:
         sxy, sth = _std(cov)
         if sxy > cfg.max_std_xy or sth > cfg.max_std_theta:
             return Claim(
-                "withheld",
+                Verdict.WITHHELD,
                 pose,
                 cov,
                 f"claim withheld: std {100 * sxy:.1f} cm / {math.degrees(sth):.2f} deg exceeds "
@@ -425,4 +618,4 @@ class ClaimGate:
                 f"{math.degrees(cfg.tolerance_heading):.0f} deg)",
                 match,
             )
-        return Claim("claim", pose, cov, "confirmed by the laser", match)
+        return Claim(Verdict.CLAIM, pose, cov, "confirmed by the laser", match)

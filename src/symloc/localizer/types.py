@@ -23,6 +23,7 @@ from symloc.errors import ConfigurationError
 
 __all__ = [
     "Decision",
+    "DecisionStatus",
     "Estimate",
     "Hypothesis",
     "Place",
@@ -161,8 +162,7 @@ class TrackerResult:
     ``estimate`` (3,), ``covariance`` (3, 3) of the heaviest cluster, ``hypotheses`` (every
     cluster, heaviest first), ``particles`` (N, 3) and ``weights`` (N,) for display.
     ``confident`` the tracker's own verdict (:mod:`symloc.mcl.confidence`, the project's one
-    definition) or None when the tracker gives none (then the localizer applies its
-    ``converged_*`` thresholds).
+    definition); None (a tracker that gives none) counts as not converged.
     """
 
     estimate: FloatArray
@@ -238,24 +238,42 @@ class Place:
     heading_reliable: bool = True
 
 
+class DecisionStatus(enum.Enum):
+    """The outcome of one visual decision (``.value`` as logs and JSON spell it)."""
+
+    DECIDED = "decided"
+    UNDETERMINED = "undetermined"  # no clear winner: try another direction
+    NO_MATCH = "no_match"  # the image resembles none of the place's images
+    REFUSED = "refused"  # too few features: the image cannot decide anything
+
+
 @dataclass(frozen=True, slots=True)
 class Decision:
     """The outcome of comparing one query image with one place's stored images.
 
-    ``status`` is ``"decided"``, ``"undetermined"`` (no clear winner: try another direction),
-    ``"no_match"`` (the image resembles none of the place's images) or ``"refused"`` (too few
-    features: the image cannot decide anything). ``direction`` is the stored image
+    ``status`` is a :class:`DecisionStatus` (its value is accepted too: ``"decided"``,
+    ``"undetermined"``, ``"no_match"``, ``"refused"``). ``direction`` is the stored image
     index, ``offset`` [rad] the query's heading minus that image's heading (CCW positive).
     ``heading`` [rad], when given, is the decided map heading (the stored image's own heading
     plus the offset); otherwise the localizer uses ``heading0 - direction * 2 pi / m + offset``.
     """
 
-    status: str
+    status: DecisionStatus
     direction: int | None = None
     offset: float = 0.0
     score: float = 0.0
     reason: str = ""
     heading: float | None = None
+
+    def __post_init__(self) -> None:
+        try:
+            status = DecisionStatus(self.status)
+        except ValueError as err:
+            raise ConfigurationError(
+                f"Decision.status: expected one of {[s.value for s in DecisionStatus]}, "
+                f"got {self.status!r}"
+            ) from err
+        object.__setattr__(self, "status", status)
 
 
 class PlaceStore(Protocol):
@@ -280,5 +298,5 @@ class PlaceStore(Protocol):
         """Store a new place with its ``m`` images taken clockwise from ``heading0``.
 
         ``headings`` (m,) [rad], when given, are the measured map headings of the images
-        (a turn by odometry is never exactly 360/m).
+        (a turn by odometry is never exactly 360/m); the localizer always gives them.
         """

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import check_positive
 
-from .types import Decision, Place
+from .types import Decision, DecisionStatus, Place
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
 
@@ -125,20 +125,20 @@ class VisionPlaceStore:
             dist_coeffs=self.dist_coeffs,
         )
         self.last_decision = d
-        status: str = d.status
+        status = DecisionStatus(d.status)
         if (
-            status == "undetermined"
+            status is DecisionStatus.UNDETERMINED
             and math.isfinite(d.best_score)
             and d.best_score < cfg.min_score
         ):
-            status = "no_match"
+            status = DecisionStatus.NO_MATCH
         return Decision(
             status=status,
             direction=d.direction,
             offset=0.0 if not math.isfinite(d.heading_offset) else float(d.heading_offset),
             score=0.0 if not math.isfinite(d.best_score) else float(d.best_score),
             reason=d.reason,
-            heading=float(d.heading) if d.status == "decided" else None,
+            heading=float(d.heading) if status is DecisionStatus.DECIDED else None,
         )
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:

@@ -21,6 +21,7 @@ from symloc.grid.distance_field import surface_distance_field
 from symloc.localizer import Decision, Localizer, Place
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
+from symloc.localizer.types import DecisionStatus
 from symloc.ros.params import NodeParams
 
 __all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
@@ -38,7 +39,7 @@ class MemoryPlaces:
 
     def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
         """Never called (no candidates); answers ``no_match``."""
-        return Decision(status="no_match", reason="no visual map loaded")
+        return Decision(status=DecisionStatus.NO_MATCH, reason="no visual map loaded")
 
     def add_place(
         self,
@@ -48,8 +49,10 @@ class MemoryPlaces:
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
+        headings: Sequence[float] | None = None,
     ) -> Place:
-        """Remember the place's geometry (images are dropped: no database to store them)."""
+        """Remember the place's geometry (images and their ``headings`` are dropped: no
+        database to store them)."""
         place = Place(
             place_id=len(self.places) + 1,
             center=np.asarray(center, dtype=np.float64),

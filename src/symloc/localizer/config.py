@@ -1,0 +1,92 @@
+"""The localizer's settings: one frozen dataclass that validates itself (metres, radians, counts)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from symloc._checks import check_in_range, check_positive
+from symloc.errors import ConfigurationError
+
+__all__ = ["LocalizerConfig"]
+
+
+@dataclass(frozen=True, slots=True)
+class LocalizerConfig:
+    """Settings of the localizer (units: m, rad, counts).
+
+    Whether AMCL converged is the tracker's own verdict (``TrackerResult.confident``,
+    :mod:`symloc.mcl.confidence`); the localizer only asks for it ``converged_updates`` times
+    in a row.
+
+    Attributes
+    ----------
+    min_cluster_weight : a cluster is a hypothesis when its weight is at least this.
+    converged_updates : consecutive converged updates before the pose is earned.
+    symmetry_position_tol, symmetry_angle_tol : how close a cluster must be to a rotated copy of
+        the heaviest one to count as its symmetric image [m], [rad].
+    copy_score_ratio : with a pose scorer, a rotated copy whose score is at least this fraction
+        of the estimate's own score explains the scan as well (the ambiguity is real).
+    place_radius_factor : a known place covers the disc of radius factor x its G-V distance.
+    centre_smoothing : weight of a new per-scan centre estimate (:class:`CentreFilter`).
+    centre_tolerance : the robot has reached the centre when the scan's centre is this close [m].
+    facing_tolerance : facing done when the bearing to the corner-middle is below this [rad].
+    rotate_tolerance : a ROTATE request is done when odometry turned within this [rad].
+    flip_patience : consecutive non-symmetric verdicts before the trip to the centre is dropped.
+    max_centering_updates : updates allowed for going to the centre and facing.
+    relocalize_after : consecutive filter updates, while lost, at which the scan contradicts
+        AMCL's estimate before AMCL is spread over the whole map again (a kidnapped robot's
+        particles may all be in the wrong place, and nav2's filter has no recovery by default).
+    allow_mapping : build a visual map for a place that matches nothing (Algorithm 5 step 11).
+    reseed_xy_std, reseed_theta_std : smallest spread of the AMCL reseed after a decision.
+    decision_xy_std, decision_theta_std : how well a visual decision knows the pose before the
+        laser sets it (the stored centre's and the decided heading's std) [m], [rad].
+    """
+
+    min_cluster_weight: float = 0.05
+    converged_updates: int = 3
+    symmetry_position_tol: float = 0.35
+    symmetry_angle_tol: float = math.radians(15.0)
+    copy_score_ratio: float = 0.9
+    place_radius_factor: float = 1.2
+    centre_tolerance: float = 0.01
+    facing_tolerance: float = math.radians(1.5)
+    rotate_tolerance: float = math.radians(3.0)
+    flip_patience: int = 5
+    max_centering_updates: int = 600
+    relocalize_after: int = 100
+    allow_mapping: bool = False
+    reseed_xy_std: float = 0.03
+    reseed_theta_std: float = math.radians(2.0)
+    decision_xy_std: float = 0.15
+    decision_theta_std: float = math.radians(2.0)
+    centre_smoothing: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in (
+            "symmetry_position_tol",
+            "symmetry_angle_tol",
+            "place_radius_factor",
+            "centre_tolerance",
+            "facing_tolerance",
+            "rotate_tolerance",
+            "reseed_xy_std",
+            "reseed_theta_std",
+            "decision_xy_std",
+            "decision_theta_std",
+        ):
+            check_positive(getattr(self, name), f"LocalizerConfig.{name}")
+        check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
+        check_in_range(self.centre_smoothing, "LocalizerConfig.centre_smoothing", 1e-6, 1.0)
+        check_in_range(self.copy_score_ratio, "LocalizerConfig.copy_score_ratio", 0.0, 1.0)
+        for name in (
+            "converged_updates",
+            "flip_patience",
+            "max_centering_updates",
+            "relocalize_after",
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ConfigurationError(
+                    f"LocalizerConfig.{name}: expected an integer >= 1, got {value!r}"
+                )

@@ -1,0 +1,224 @@
+"""What the localizer's phases share: its collaborators, one scan's inputs, the place visited.
+
+:class:`Context` holds the collaborators every phase reads (the tracker, the place store, the
+settings, the claim gate, the known places and the map's symmetries) and where the phases
+write what callers read afterwards (:class:`Record`, the notes). :class:`Inputs` is one scan.
+:class:`Visit` is the symmetric place being resolved, from the moment the pose becomes
+ambiguous until it is decided or given up (Algorithm 2 and 3). The estimate builders at the end
+are the only places an :class:`~symloc.localizer.types.Estimate` is made.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.geometry import compose, wrap_angle
+
+from .centering import CentreFilter
+from .claim import ClaimGate
+from .config import LocalizerConfig
+from .copies import PoseScorer, rotated_copies
+from .notes import Notes
+from .rules import Streak
+from .types import (
+    Decision,
+    Estimate,
+    Hypothesis,
+    Place,
+    PlaceStore,
+    Request,
+    Status,
+    SymmetryVerdict,
+    Tracker,
+    TrackerResult,
+)
+
+__all__ = ["Context", "Inputs", "MappingRun", "Outcome", "Record", "Visit"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass
+class Record:
+    """What the phases leave for callers (figures, the demo): the last visual decision that
+    reseeded AMCL, and AMCL's particles (N, 3) when the ambiguity was declared and just before
+    a decision reseeded it."""
+
+    last_decision: tuple[Place, Decision] | None = None
+    particles_at_ambiguity: FloatArray | None = None
+    particles_before_decision: FloatArray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Context:
+    """The localizer's collaborators, as every phase sees them.
+
+    ``known_places`` is the localizer's own list (a mapped place is appended to it);
+    ``gate`` None publishes the tracker's estimate unchecked (scripted tests only).
+    """
+
+    tracker: Tracker
+    places: PlaceStore
+    config: LocalizerConfig
+    gate: ClaimGate | None
+    scorer: PoseScorer | None
+    known_places: list[Place]
+    map_symmetries: Sequence[Any]
+    notes: Notes
+    record: Record
+
+    def note(self, text: str) -> None:
+        """Log what happened (kept in the localizer's history)."""
+        self.notes(text)
+
+    def restart(self) -> None:
+        """The localizer starts over: the claim gate forgets the claim's lifecycle."""
+        if self.gate is not None:
+            self.gate.restart()
+
+
+@dataclass(frozen=True, eq=False)
+class Inputs:
+    """One scan: the tracker's ``result``, the judge's ``verdict``, the (deskewed) ``scan``,
+    the ``image`` if one was requested, and the odometry pose ``odom_pose`` (3,)."""
+
+    result: TrackerResult
+    verdict: SymmetryVerdict
+    scan: object
+    image: NDArray[np.uint8] | None
+    odom_pose: FloatArray
+
+    def centre_in_map(self) -> FloatArray:
+        """The scan's symmetry centre (2,) in the map frame, seen from the tracker's estimate."""
+        assert self.verdict.center is not None
+        c = compose(
+            self.result.estimate, np.array([self.verdict.center[0], self.verdict.center[1], 0.0])
+        )
+        return np.asarray(c[:2], dtype=np.float64)
+
+
+@dataclass
+class MappingRun:
+    """Algorithm 5 step 11 under way: the images (and their map headings [rad]) taken so far."""
+
+    images: list[NDArray[np.uint8]] = field(default_factory=list)
+    headings: list[float] = field(default_factory=list)
+    heading0: float | None = None
+
+
+class Outcome(enum.Enum):
+    """What one image at the centre gave (``.value`` as the notes spell it)."""
+
+    NO_PLACE = "no_place"  # no stored place has this G-V distance
+    REFUSED = "refused"
+    NO_MATCH = "no_match"
+    UNDETERMINED = "undetermined"
+
+
+@dataclass
+class Visit:
+    """The symmetric place being resolved.
+
+    ``order`` k (0: a circle), ``gv`` its G-V distance [m] (re-estimated from every
+    symmetric scan on the way), ``kind``, ``centre_map`` (2,) its centre in the map frame [m],
+    ``centre`` the filter of its centre in the base frame, ``place`` the one known place it
+    matches (for candidate poses from the scan), ``flips`` the non-symmetric verdicts on the
+    way to the centre, ``attempt`` the image being tried of ``m`` directions, ``outcomes`` of
+    the images tried, ``mapping`` when the place is being mapped.
+    """
+
+    order: int
+    gv: float
+    kind: str
+    centre_map: FloatArray
+    centre: CentreFilter
+    place: Place | None
+    flips: Streak
+    attempt: int = 0
+    m: int = 0
+    outcomes: list[Outcome] = field(default_factory=list)
+    mapping: MappingRun | None = None
+
+
+# --------------------------------------------------------------------------- estimates
+
+
+def cov_from_std(xy_std: float, theta_std: float) -> FloatArray:
+    """A diagonal pose covariance (3, 3) from a position std [m] and a heading std [rad]."""
+    return np.diag([xy_std**2, xy_std**2, theta_std**2])
+
+
+def order_people(order: int) -> str:
+    """A symmetry order as people read it: ``inf`` for a circle (order 0 in the library)."""
+    return "inf" if int(order) == 0 else str(int(order))
+
+
+def people(direction: int | None) -> str:
+    """A direction index (0-based in the library) as people count it (1-based), for logs."""
+    return "?" if direction is None else str(int(direction) + 1)
+
+
+def lost(reason: str, result: TrackerResult) -> Estimate:
+    """No pose worth reporting; AMCL's clusters for display."""
+    return Estimate(status=Status.LOST, hypotheses=result.hypotheses, reason=reason)
+
+
+def tracking(result: TrackerResult, reason: str) -> Estimate:
+    """The tracker's estimate, unchecked (no claim gate)."""
+    return Estimate(
+        status=Status.TRACKING,
+        pose=np.asarray(result.estimate, dtype=np.float64).copy(),
+        covariance=np.asarray(result.covariance, dtype=np.float64).copy(),
+        hypotheses=result.hypotheses,
+        reason=reason,
+    )
+
+
+def ambiguous(
+    inp: Inputs, visit: Visit, status: Status, request: Request | None, reason: str
+) -> Estimate:
+    """The pose known up to the visited place's symmetry: its ``k`` candidate poses."""
+    return Estimate(
+        status=status,
+        hypotheses=candidates(inp, visit),
+        order=visit.order,
+        request=request,
+        reason=reason,
+    )
+
+
+def candidates(inp: Inputs, visit: Visit) -> tuple[Hypothesis, ...]:
+    """The ``k`` candidate poses.
+
+    From the scan and the place when a known place of this order and G-V distance has a
+    regular-polygon verdict with an ``axis``: the robot sees the centre at ``c`` and a corner
+    middle along ``axis`` (base frame); direction ``j`` of the place looks from the centre
+    at a corner middle along ``heading0 - j 2 pi / M``, so ``theta_j = heading0 - j 2 pi / M
+    - axis`` and ``p_j = centre_map - R(theta_j) c``. Otherwise: AMCL's estimate rotated about
+    the centre.
+    """
+    v = inp.verdict
+    place = visit.place
+    if (
+        place is not None
+        and v.symmetric
+        and v.axis is not None
+        and v.center is not None
+        and place.m == visit.order
+    ):
+        j = np.arange(place.m)
+        theta = wrap_angle(place.heading0 - j * 2.0 * np.pi / place.m - v.axis)
+        c, s = np.cos(theta), np.sin(theta)
+        x = place.center[0] - (c * v.center[0] - s * v.center[1])
+        y = place.center[1] - (s * v.center[0] + c * v.center[1])
+        poses = np.column_stack([x, y, theta])
+        return tuple(Hypothesis(pose=p, weight=1.0 / place.m) for p in poses)
+    copies = rotated_copies(inp.result.estimate, visit.centre_map, visit.order)
+    w = 1.0 / len(copies)
+    return tuple(Hypothesis(pose=p, weight=w) for p in copies)

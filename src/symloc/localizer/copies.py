@@ -1,0 +1,192 @@
+"""Rotated copies of a pose about a symmetric place, and whether they explain a scan as well.
+
+A pose inside a place of rotational order ``k`` has ``k - 1`` rotated copies that see the same
+room; AMCL may hold several of them (:func:`symmetry_consistent`) or collapse onto one. Before
+the localizer first publishes a pose it asks whether a copy fits the scan about as well
+(:func:`copies_verdict`, :func:`copies_fit`): then the pose is not earned.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.geometry import angle_diff, wrap_angle
+from symloc.scan import LaserScan
+
+from .claim import ClaimGate
+from .types import Hypothesis, Place
+
+__all__ = [
+    "CIRCLE_SAMPLES",
+    "CopiesKind",
+    "CopiesVerdict",
+    "PoseScorer",
+    "copies_fit",
+    "copies_verdict",
+    "known_place_at",
+    "rotated_copies",
+    "symmetry_consistent",
+]
+
+FloatArray = NDArray[np.float64]
+#: Poses x scan -> (K,) scores in [0, 1]: how well the scan fits the map at each pose.
+PoseScorer = Callable[[FloatArray, Any], FloatArray]
+
+#: How many candidates to list for a circle (infinite order).
+CIRCLE_SAMPLES = 8
+
+
+def rotated_copies(pose: FloatArray, center: FloatArray, order: int) -> FloatArray:
+    """The ``k`` poses ``(k, 3)`` obtained by rotating ``pose`` (3,) about ``center`` (2,).
+
+    ``order`` 0 (a circle) gives :data:`CIRCLE_SAMPLES` evenly spaced copies. Copy 0 is ``pose``.
+    """
+    k = CIRCLE_SAMPLES if order == 0 else int(order)
+    if k < 1:
+        raise ConfigurationError(f"rotated_copies: order must be >= 0, got {order}")
+    phi = 2.0 * np.pi * np.arange(k) / k
+    c, s = np.cos(phi), np.sin(phi)
+    d = np.asarray(pose[:2], dtype=np.float64) - center
+    out = np.empty((k, 3))
+    out[:, 0] = center[0] + c * d[0] - s * d[1]
+    out[:, 1] = center[1] + s * d[0] + c * d[1]
+    out[:, 2] = wrap_angle(pose[2] + phi)
+    return out
+
+
+def symmetry_consistent(
+    hypotheses: Sequence[Hypothesis],
+    center: FloatArray,
+    order: int,
+    *,
+    min_weight: float,
+    position_tol: float,
+    angle_tol: float,
+) -> int:
+    """How many well-weighted clusters are symmetric images of the heaviest one.
+
+    Counts the heaviest cluster itself, so a value >= 2 means AMCL's hypotheses are related by
+    the place's rotation of order ``order`` (0: a circle, any angle) about ``center`` (2,) [m].
+    """
+    strong = [h for h in hypotheses if h.weight >= min_weight]
+    if not strong:
+        return 0
+    ref = max(strong, key=lambda h: h.weight)
+    count = 1
+    for h in strong:
+        if h is ref:
+            continue
+        phi = float(angle_diff(h.pose[2], ref.pose[2]))
+        if order > 0:
+            step = 2.0 * np.pi / order
+            phi = round(phi / step) * step
+            if abs(float(angle_diff(h.pose[2], ref.pose[2] + phi))) > angle_tol:
+                continue
+        if abs(phi) < angle_tol:
+            continue  # the same heading: a split of one cluster, not a symmetric copy
+        expect = rotated_copies(ref.pose, center, 0 if order == 0 else order)
+        if order == 0:
+            expect = rotated_copies(ref.pose, center, 1).copy()
+            c, s = math.cos(phi), math.sin(phi)
+            d = ref.pose[:2] - center
+            expect[0, :2] = center + np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
+            expect[0, 2] = wrap_angle(ref.pose[2] + phi)
+        dist = np.hypot(expect[:, 0] - h.pose[0], expect[:, 1] - h.pose[1])
+        if float(dist.min()) <= position_tol:
+            count += 1
+    return count
+
+
+class CopiesKind(enum.Enum):
+    """How a pose's rotated copies explain a scan compared with the pose itself."""
+
+    UNIQUE = "unique"  # every copy explains it clearly worse
+    AMBIGUOUS = "ambiguous"  # some copy explains it about as well
+    BETTER = "better"  # copy ``index`` explains it clearly better
+
+
+@dataclass(frozen=True, slots=True)
+class CopiesVerdict:
+    """:func:`copies_verdict`'s answer; ``index`` is the better copy's (BETTER only)."""
+
+    kind: CopiesKind
+    index: int | None = None
+
+
+def copy_scores(
+    copies: FloatArray, scan: object, gate: ClaimGate | None, scorer: PoseScorer | None
+) -> FloatArray | None:
+    """How well ``scan`` fits the map at each pose ``(k, 3)``: with a claim gate, each is
+    first aligned to the map (a copy about an imprecise centre is a few centimetres off)
+    and scored by the share of beams that fit; else the pose scorer's score; None without
+    either."""
+    if gate is not None and isinstance(scan, LaserScan):
+        return np.array([gate.fit(c, scan)[1] for c in copies])
+    if scorer is None:
+        return None
+    return np.asarray(scorer(copies, scan), dtype=np.float64)
+
+
+def copies_verdict(
+    pose: FloatArray,
+    center: FloatArray,
+    order: int,
+    scan: object,
+    *,
+    gate: ClaimGate | None,
+    scorer: PoseScorer | None,
+    ratio: float,
+) -> CopiesVerdict:
+    """UNIQUE when every rotated copy of ``pose`` (3,) about ``center`` (2,) explains ``scan``
+    clearly worse (its score below ``ratio`` x the pose's), BETTER with the index of a copy
+    that explains it clearly better, else AMBIGUOUS (also when nothing can score)."""
+    copies = rotated_copies(pose, center, order)
+    scores = copy_scores(copies, scan, gate, scorer)
+    if scores is None:
+        return CopiesVerdict(CopiesKind.AMBIGUOUS)
+    own = max(float(scores[0]), 1e-12)
+    best = int(np.argmax(scores))
+    if best != 0 and ratio * float(scores[best]) >= own:
+        return CopiesVerdict(CopiesKind.BETTER, best)
+    if np.any(scores[1:] >= ratio * own):
+        return CopiesVerdict(CopiesKind.AMBIGUOUS)
+    return CopiesVerdict(CopiesKind.UNIQUE)
+
+
+def copies_fit(
+    pose: FloatArray,
+    center: FloatArray,
+    order: int,
+    scan: object,
+    *,
+    gate: ClaimGate | None,
+    scorer: PoseScorer | None,
+    ratio: float,
+) -> bool:
+    """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose`` (or
+    nothing can score them)."""
+    scores = copy_scores(rotated_copies(pose, center, order), scan, gate, scorer)
+    if scores is None:
+        return True
+    own = max(float(scores[0]), 1e-12)
+    return bool(np.any(scores[1:] >= ratio * own))
+
+
+def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: float) -> Place | None:
+    """The nearest known place whose disc (``radius_factor`` x its G-V distance) holds
+    ``pose``'s position, or None."""
+    best: Place | None = None
+    best_d = math.inf
+    for place in places:
+        d = float(np.hypot(*(pose[:2] - place.center)))
+        if d <= radius_factor * place.gv_distance and d < best_d:
+            best, best_d = place, d
+    return best
