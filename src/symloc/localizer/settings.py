@@ -174,7 +174,9 @@ def settings_from_leaves(
     kwargs: dict[str, Any] = {}
     for block in BLOCKS:
         changes = {
-            path.partition(".")[2]: v for path, v in values.items() if path.startswith(block + ".")
+            path.partition(".")[2]: tuple(v) if isinstance(v, list) else v
+            for path, v in values.items()
+            if path.startswith(block + ".")
         }
         current = getattr(start, block)
         if not changes:

@@ -78,6 +78,7 @@ WITHOUT_EFFECT: dict[str, tuple[Any, str]] = {
     ),
     "map_subscribe_transient_local": (True, "the map is always subscribed transient local"),
     "bond_disable_heartbeat_timeout": (True, "the node never times out its manager's bond"),
+    "initial_pose.z": (0.0, "the localizer is 2-D: the initial pose's height is ignored"),
 }
 
 _BLOCKS = (*SETTINGS_BLOCKS, "symmetry")
