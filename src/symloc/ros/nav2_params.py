@@ -114,8 +114,8 @@ def parameter_defaults() -> dict[str, Any]:
 
     Flat nav2 names for the filter and node settings (nav2_amcl's defaults), ``initial_pose.*``
     as nav2 spells it, ``confidence.*``, ``claim.*``, ``localizer.*`` and ``symmetry.*`` for
-    symloc's blocks, and the names of :data:`WITHOUT_EFFECT`. The aliases
-    (:data:`symloc.ros.params.ALIASES`) are accepted but not declared.
+    symloc's blocks, the older names of :data:`symloc.ros.params.ALIASES` (not set by
+    default), and the names of :data:`WITHOUT_EFFECT`.
     """
     params = NodeParams()
     out: dict[str, Any] = {}
@@ -134,6 +134,8 @@ def parameter_defaults() -> dict[str, Any]:
             out[f"{block}.{name}"] = _ros_value(getattr(getattr(params, block), name))
     for name in _symmetry_fields():
         out[f"symmetry.{name}"] = None
+    for name in ALIASES:
+        out[name] = None  # declared (a params file may use them), not set by default
     for name, (default, _why) in WITHOUT_EFFECT.items():
         out[name] = default
     return out
@@ -202,6 +204,18 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
             node["seed"] = seed
     if initial:
         node["initial_pose"] = initial
+    # every declared parameter has a value: an older name given beside its target's default
+    # sets the target
+    defaults = NodeParams()
+    for alias, target in ALIASES.items():
+        head, _, tail = target.partition(".")
+        given = blocks[head]
+        if (
+            alias.partition(".")[2] in blocks["localizer"]
+            and tail in given
+            and given[tail] == getattr(getattr(defaults, head), tail)
+        ):
+            del given[tail]
     split_aliases(blocks["localizer"], blocks["confidence"])
     try:
         node["amcl"] = AmclParams.from_dict(amcl)
