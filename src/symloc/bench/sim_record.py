@@ -182,7 +182,11 @@ def prepare_session(
         lidar_preset=str(scen.preset.name),
         laser_frame_id="laser",
         seed=int(seed),
-        amcl=scen.amcl_params,
+        # the bench's settings tree (Algorithm 1's comes back from lidar_preset)
+        amcl=scen.settings.amcl,
+        confidence=scen.settings.confidence,
+        claim=scen.settings.claim,
+        localizer=scen.settings.localizer,
         map_yaml=str(map_yaml) if map_yaml else "",
     )
     params = dataclasses.replace(params, **param_changes)
