@@ -274,6 +274,7 @@ def test_the_example_of_symlocs_settings_configures_after_nav2s_file(
         assert node.trigger_configure() == OK
         assert node.params is not None
         assert node.params.lidar_preset == "lds01"
-        assert node.params.localizer.converged_updates == 3
+        assert node.params.confidence.min_weight_share == 0.9
+        assert node.params.claim.gate_sigmas == 4.0
     finally:
         node.destroy_node()

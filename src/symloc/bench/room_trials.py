@@ -113,6 +113,7 @@ def run_room_trials(
         from tqdm import tqdm
 
         iterator = tqdm(iterator, desc=f"{room} ({res.lab})", leave=False)
+    localizer_judge_errors = 0
     try:
         for _ in iterator:
             start = scen.random_pose(gen)
@@ -121,6 +122,7 @@ def run_room_trials(
             )
             fin = s.episode.final
             res.collisions += s.collisions
+            localizer_judge_errors += int(getattr(s.localizer.judge, "errors", 0))
             res.symloc.append(
                 TrialRecord(
                     grade=s.outcome.grade,
@@ -154,6 +156,7 @@ def run_room_trials(
                 )
             )
     finally:
-        res.judge_errors = scen.judge.errors
+        # the mapping stage's judge and each trial's (built with the localizer)
+        res.judge_errors = scen.judge.errors + localizer_judge_errors
         scen.close()
     return res

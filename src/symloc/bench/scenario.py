@@ -15,6 +15,7 @@ ground truth: in a real run both come from SLAM. Callers print this.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 import time
@@ -30,12 +31,11 @@ from symloc.errors import ConfigurationError, SymlocError, WorldError
 from symloc.geometry import angle_diff
 from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
-from symloc.grid.distance_field import surface_distance_field
-from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.adapters import ReportJudge
+from symloc.localizer.build import build_localizer, grid_symmetries
 from symloc.localizer.centering import CenteringConfig
-from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
-from symloc.localizer.map_symmetry import map_symmetries
+from symloc.localizer.settings import LocalizerSettings
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
 from symloc.mcl import Amcl, AmclParams
@@ -160,10 +160,12 @@ class Scenario:
     grid: Any
     preset: Any
     camera: Any
+    #: Algorithm 1 as the mapping stage runs it (``settings.symmetry``)
     judge: ReportJudge
     store: VisionPlaceStore
     mapped: MappedPlace | None
-    amcl_params: Any
+    #: every setting of symloc's localizer (:func:`symloc.localizer.build.build_localizer`)
+    settings: LocalizerSettings
     workdir: Path
     notes: list[str] = field(default_factory=list)
     slam_seconds: float = 0.0
@@ -184,8 +186,6 @@ class Scenario:
         """A true pose (3,) in the map frame (where the localizer's claims live)."""
         return np.asarray(_compose(self.map_from_world, world_pose), dtype=np.float64)
 
-    _map_symmetries: list[Any] | None = None
-
     def sensors(self, rng: np.random.Generator, session: str = "query") -> SensorSetup:
         """The robot's sensors in one ``session`` (``"mapping"`` or ``"query"``)."""
         if self.hardware is None:
@@ -205,28 +205,26 @@ class Scenario:
         world: World = self.room.world if moving is None else moving(t)
         return world
 
+    @property
+    def amcl_params(self) -> Any:
+        """symloc's AMCL settings (``settings.amcl``)."""
+        return self.settings.amcl
+
     def localizer(
         self, rng: np.random.Generator, config: LocalizerConfig | None = None
     ) -> Localizer:
-        """symloc's localizer on this scenario's maps (AMCL with ``amcl_params``)."""
-        amcl = Amcl(self.grid, self.amcl_params, rng)
-        gate = ClaimGate(surface_distance_field(self.grid))
-        return Localizer(
-            AmclTracker(amcl),
-            self.judge,
-            self.store,
-            config,
-            scorer=GridScorer(self.grid),
-            known_places=self.store.all_places(),
-            map_symmetries=self.map_symmetries(),
-            claim_gate=gate,
-        )
+        """symloc's localizer on this scenario's maps, built as the node builds it
+        (:func:`~symloc.localizer.build.build_localizer` with :attr:`settings`, this
+        scenario's visual map, and ``rng``, the generator the trial draws everything from);
+        ``config`` replaces ``settings.localizer``. Not initialised yet."""
+        settings = self.settings
+        if config is not None:
+            settings = dataclasses.replace(settings, localizer=config)
+        return build_localizer(self.grid, settings, places=self.store, rng=rng)
 
     def map_symmetries(self) -> list[Any]:
-        """Rotational symmetries of the occupancy grid (computed once)."""
-        if self._map_symmetries is None:
-            self._map_symmetries = map_symmetries(self.grid)
-        return self._map_symmetries
+        """Rotational symmetries of the occupancy grid (computed once per grid)."""
+        return list(grid_symmetries(self.grid))
 
     def plain_amcl_params(self) -> Any:
         """nav2 defaults (2000/500 particles, likelihood field), alpha1..4 matched to the robot."""
@@ -312,7 +310,18 @@ def build_scenario(
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
     hardware = robot_hardware(regime, preset, Camera(), gen)
     camera = hardware.camera
-    judge = ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(preset))
+    settings = LocalizerSettings(
+        amcl=AmclParams(
+            max_particles=max_particles,
+            min_particles=500,
+            alpha1=ODOM_ALPHA,
+            alpha2=ODOM_ALPHA,
+            alpha3=ODOM_ALPHA,
+            alpha4=ODOM_ALPHA,
+        ),
+        symmetry=SymmetryConfig.from_lidar(preset),
+    )
+    judge = ReportJudge(judge_symmetry, config=settings.symmetry)
     wd = Path(workdir) if workdir is not None else Path(tempfile.mkdtemp(prefix="symloc-"))
     wd.mkdir(parents=True, exist_ok=True)
     db = wd / f"visual_map_{room_name}_{'textured' if textured else 'plain'}.sqlite"
@@ -327,14 +336,7 @@ def build_scenario(
         judge=judge,
         store=store,
         mapped=None,
-        amcl_params=AmclParams(
-            max_particles=max_particles,
-            min_particles=500,
-            alpha1=ODOM_ALPHA,
-            alpha2=ODOM_ALPHA,
-            alpha3=ODOM_ALPHA,
-            alpha4=ODOM_ALPHA,
-        ),
+        settings=settings,
         workdir=wd,
         notes=[MAP_SOURCE],
         regime=regime,

@@ -44,7 +44,7 @@ from symloc.msgs.odometry import odometry_to_fields
 from symloc.msgs.scan import scan_from_msg, scan_to_fields
 from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore, Outputs
-from symloc.ros.params import NodeParams
+from symloc.ros.params import NOT_PARAMETERS, NodeParams
 from symloc.sim.lidar import simulate_scan
 from symloc.sim.robot import DiffDriveRobot
 
@@ -182,7 +182,11 @@ def prepare_session(
         lidar_preset=str(scen.preset.name),
         laser_frame_id="laser",
         seed=int(seed),
-        amcl=scen.amcl_params,
+        # the bench's settings tree (Algorithm 1's comes back from lidar_preset)
+        amcl=scen.settings.amcl,
+        confidence=scen.settings.confidence,
+        claim=scen.settings.claim,
+        localizer=scen.settings.localizer,
         map_yaml=str(map_yaml) if map_yaml else "",
     )
     params = dataclasses.replace(params, **param_changes)
@@ -353,18 +357,21 @@ def core_scan(msg: Any) -> Any:
 
 def _params_doc(params: NodeParams) -> dict[str, Any]:
     """The ``symloc: ros__parameters:`` YAML document of ``params``."""
-    from dataclasses import asdict, fields
+    from dataclasses import fields, is_dataclass
 
-    block: dict[str, Any] = {}
-    for f in fields(params):
-        value = getattr(params, f.name)
-        if f.name == "amcl":
-            value = {
-                g.name: getattr(value, g.name) for g in fields(value) if g.name != "ros_extras"
+    def plain(value: Any) -> Any:
+        if is_dataclass(value) and not isinstance(value, type):
+            return {
+                g.name: plain(getattr(value, g.name))
+                for g in fields(value)
+                if g.name != "ros_extras"
             }
-        elif f.name == "localizer":
-            value = asdict(value)
-        elif isinstance(value, tuple):
-            value = list(value)
-        block[f.name] = value
+        if isinstance(value, tuple):
+            return [plain(v) for v in value]
+        return value
+
+    block = {f.name: plain(getattr(params, f.name)) for f in fields(params)}
+    # not parameters of their own: mode sets allow_mapping; the older converged_* names
+    for path in NOT_PARAMETERS:
+        block["localizer"].pop(path.partition(".")[2], None)
     return {"symloc": {"ros__parameters": block}}

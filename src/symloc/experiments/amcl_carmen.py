@@ -38,7 +38,7 @@ import argparse
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,6 +49,7 @@ from symloc.bench.shared_data import find_carmen_dir
 from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import compose, inverse, wrap_angle
+from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [
     "LOG_NAMES",
@@ -184,6 +185,18 @@ def _fit(field: Any, pose: FloatArray, scan: Any) -> float:
     return float(np.mean(np.abs(field.lookup(world)) <= 0.1))
 
 
+def carmen_settings(params: Any) -> LocalizerSettings:
+    """The localizer's settings on a CARMEN log: AMCL with ``params``, and the claim gate's
+    odometry error model = AMCL's alphas (the logs' odometry is this experiment's own noisy
+    odometry, drawn with those alphas; :attr:`ClaimConfig.odometry_alphas`). No images, so no
+    visual map (a :class:`~symloc.localizer.places.MemoryPlaces`); Algorithm 1 with
+    :class:`~symloc.symmetry.SymmetryConfig`'s defaults; the rest as the node's defaults."""
+    from symloc.localizer.claim import ClaimConfig
+
+    alphas = (params.alpha1, params.alpha2, params.alpha3, params.alpha4)
+    return LocalizerSettings(amcl=params, claim=ClaimConfig(odometry_alphas=alphas))
+
+
 def symloc_claims(
     data: _LogData,
     params: Any,
@@ -199,23 +212,12 @@ def symloc_claims(
     ``known_start`` gives it the corrected first pose (tracking); else it starts lost (global).
     """
     from symloc.grid.distance_field import surface_distance_field
-    from symloc.localizer import Localizer, Status
-    from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
-    from symloc.localizer.claim import ClaimGate
-    from symloc.mcl import Amcl
+    from symloc.localizer import Status
+    from symloc.localizer.build import build_localizer
     from symloc.odometry import OdometryReading
-    from symloc.ros.assemble import MemoryPlaces
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
 
     field = surface_distance_field(data.grid)
-    alphas = (params.alpha1, params.alpha2, params.alpha3, params.alpha4)
-    loc = Localizer(
-        AmclTracker(Amcl(data.grid, params, rng)),
-        ReportJudge(judge_symmetry, config=SymmetryConfig()),
-        cast(Any, MemoryPlaces()),  # no visual map: the logs have no images
-        scorer=GridScorer(data.grid),
-        claim_gate=ClaimGate(field, alphas),
-    )
+    loc = build_localizer(data.grid, carmen_settings(params), rng=rng)
     if known_start:
         loc.set_pose(data.truth[start], np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2]))
     else:

@@ -706,7 +706,8 @@ class NodeCore:
             return
         self._failures = 0
         try:
-            self.localizer = self.factory(self.grid, self.params)
+            # built for the laser mount in use, as every other build (not params.laser_pose)
+            self.localizer = self.factory(self.grid, self._build_params())
         except SymlocError as err:
             self.drop("localizer: cannot be rebuilt", str(err))
             return

@@ -15,10 +15,18 @@ The node takes nav2_amcl's place, so it reads nav2's own ``nav2_params.yaml`` un
   name (``random_seed`` >= 0 sets ``seed``; nav2's -1, a time-based seed, keeps symloc's
   reproducible ``seed``);
 - symloc's own settings keep their names: the other :class:`NodeParams` fields
-  (``laser_frame_id``, ``image_topic``, ``visual_map``, ``odom_source``, ...) and the dotted
-  ``localizer.<field>`` (:class:`symloc.localizer.LocalizerConfig`) and ``symmetry.<field>``
-  (:class:`symloc.symmetry.SymmetryConfig`); ``amcl.<field>`` is accepted too (symloc's own
-  nested layout);
+  (``laser_frame_id``, ``image_topic``, ``visual_map``, ``odom_source``, ``laser_pose``,
+  ``mode``, ``lidar_preset``, ``seed``, ...) and one dotted block per part of the localizer's
+  settings tree (:class:`symloc.localizer.settings.LocalizerSettings`):
+  ``confidence.<field>`` (:class:`symloc.mcl.ConfidenceConfig`), ``claim.<field>``
+  (:class:`symloc.localizer.claim.ClaimConfig`), ``localizer.<field>``
+  (:class:`symloc.localizer.LocalizerConfig`; ``allow_mapping`` is ``mode``) and
+  ``symmetry.<field>`` (:class:`symloc.symmetry.SymmetryConfig`, over ``lidar_preset``'s);
+  ``amcl.<field>`` is accepted too (symloc's own nested layout), and
+  ``localizer.converged_weight|converged_xy_std|converged_theta_std`` as older names of
+  ``confidence.min_weight_share|max_xy_std|max_theta_std``
+  (:data:`symloc.ros.params.ALIASES`); the block's fields are read from the dataclasses, so a
+  field added to a block is a parameter without a change here;
 - accepted and without effect, each for a reason (:data:`WITHOUT_EFFECT`).
 
 Any other name raises :class:`~symloc.errors.ConfigurationError` naming it, as does any invalid
@@ -35,9 +43,9 @@ from typing import Any
 import yaml
 
 from symloc.errors import ConfigurationError
-from symloc.localizer import LocalizerConfig
+from symloc.localizer.settings import LocalizerSettings
 from symloc.mcl.params import AmclParams
-from symloc.ros.params import NodeParams
+from symloc.ros.params import ALIASES, SETTINGS_BLOCKS, NodeParams, split_aliases
 
 __all__ = [
     "NAV2_DEFAULTS",
@@ -46,6 +54,8 @@ __all__ = [
     "parameter_defaults",
     "read_params_block",
     "ros_values",
+    "settings_from_ros",
+    "settings_to_ros",
 ]
 
 #: nav2_amcl's defaults where they differ from :class:`NodeParams`'s.
@@ -68,12 +78,22 @@ WITHOUT_EFFECT: dict[str, tuple[Any, str]] = {
     ),
     "map_subscribe_transient_local": (True, "the map is always subscribed transient local"),
     "bond_disable_heartbeat_timeout": (True, "the node never times out its manager's bond"),
+    "initial_pose.z": (0.0, "the localizer is 2-D: the initial pose's height is ignored"),
 }
 
-_BLOCKS = ("amcl", "localizer", "symmetry")
+_BLOCKS = (*SETTINGS_BLOCKS, "symmetry")
 _AMCL = tuple(f.name for f in dataclasses.fields(AmclParams) if f.name != "ros_extras")
 _NODE = tuple(f.name for f in dataclasses.fields(NodeParams) if f.name not in _BLOCKS)
-_LOCALIZER = tuple(f.name for f in dataclasses.fields(LocalizerConfig))
+#: dotted blocks (``confidence.*``, ``claim.*``, ``localizer.*``) -> their parameter fields
+_DOTTED: dict[str, tuple[str, ...]] = {
+    name: tuple(
+        f.name
+        for f in dataclasses.fields(cls)
+        if f"{name}.{f.name}" not in ALIASES and (name, f.name) != ("localizer", "allow_mapping")
+    )
+    for name, cls in SETTINGS_BLOCKS.items()
+    if name != "amcl"
+}
 
 
 def _symmetry_fields() -> tuple[str, ...]:
@@ -93,8 +113,9 @@ def parameter_defaults() -> dict[str, Any]:
     """Every parameter the node declares, with its default (None: not set by default).
 
     Flat nav2 names for the filter and node settings (nav2_amcl's defaults), ``initial_pose.*``
-    as nav2 spells it, ``localizer.*`` and ``symmetry.*`` for symloc's blocks, and the names of
-    :data:`WITHOUT_EFFECT`.
+    as nav2 spells it, ``confidence.*``, ``claim.*``, ``localizer.*`` and ``symmetry.*`` for
+    symloc's blocks, the older names of :data:`symloc.ros.params.ALIASES` (not set by
+    default), and the names of :data:`WITHOUT_EFFECT`.
     """
     params = NodeParams()
     out: dict[str, Any] = {}
@@ -108,10 +129,13 @@ def parameter_defaults() -> dict[str, Any]:
             continue
         out[name] = _ros_value(NAV2_DEFAULTS.get(name, getattr(params, name)))
     out["random_seed"] = -1
-    for name in _LOCALIZER:
-        out[f"localizer.{name}"] = _ros_value(getattr(params.localizer, name))
+    for block, names in _DOTTED.items():
+        for name in names:
+            out[f"{block}.{name}"] = _ros_value(getattr(getattr(params, block), name))
     for name in _symmetry_fields():
         out[f"symmetry.{name}"] = None
+    for name in ALIASES:
+        out[name] = None  # declared (a params file may use them), not set by default
     for name, (default, _why) in WITHOUT_EFFECT.items():
         out[name] = default
     return out
@@ -128,7 +152,7 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
     """
     node: dict[str, Any] = {}
     amcl: dict[str, Any] = {}
-    localizer: dict[str, Any] = {}
+    blocks: dict[str, dict[str, Any]] = {name: {} for name in _DOTTED}
     symmetry: dict[str, Any] = {}
     initial: dict[str, Any] = {}
     seed: Any = None
@@ -145,12 +169,14 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
             if tail in amcl and amcl[tail] != value:
                 raise ConfigurationError(f"parameter {name!r}: also given as {tail!r}, differently")
             amcl[tail] = value
-        elif head == "localizer" and tail:
-            if tail not in _LOCALIZER:
+        elif head in _DOTTED and tail:
+            if tail not in _DOTTED[head] and name not in ALIASES:
+                cls = SETTINGS_BLOCKS[head].__name__
+                why = " (set by 'mode')" if name == "localizer.allow_mapping" else ""
                 raise ConfigurationError(
-                    f"parameter {name!r}: not a LocalizerConfig field (known: {list(_LOCALIZER)})"
+                    f"parameter {name!r}: not a {cls} field{why} (known: {list(_DOTTED[head])})"
                 )
-            localizer[tail] = value
+            blocks[head][tail] = value
         elif head == "symmetry" and tail:
             if tail not in sym_names:
                 raise ConfigurationError(
@@ -168,7 +194,8 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
         else:
             raise ConfigurationError(
                 f"parameter {name!r}: unknown to symloc (nav2_amcl's names, symloc's node"
-                " settings, localizer.* and symmetry.* are known; see symloc.ros.nav2_params)"
+                " settings, confidence.*, claim.*, localizer.* and symmetry.* are known; see"
+                " symloc.ros.nav2_params)"
             )
     if seed is not None:
         if isinstance(seed, bool) or not isinstance(seed, int):
@@ -177,16 +204,27 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
             node["seed"] = seed
     if initial:
         node["initial_pose"] = initial
+    # every declared parameter has a value: an older name given beside its target's default
+    # sets the target
+    defaults = NodeParams()
+    for alias, target in ALIASES.items():
+        head, _, tail = target.partition(".")
+        given = blocks[head]
+        if (
+            alias.partition(".")[2] in blocks["localizer"]
+            and tail in given
+            and given[tail] == getattr(getattr(defaults, head), tail)
+        ):
+            del given[tail]
+    split_aliases(blocks["localizer"], blocks["confidence"])
     try:
         node["amcl"] = AmclParams.from_dict(amcl)
-        node["localizer"] = LocalizerConfig(**localizer)
     except TypeError as err:
         raise ConfigurationError(f"parameters: {err}") from err
+    for block, given in blocks.items():
+        node[block] = given
     node["symmetry"] = symmetry
-    try:
-        return NodeParams(**node)
-    except TypeError as err:
-        raise ConfigurationError(f"parameters: {err}") from err
+    return NodeParams.from_dict(node)
 
 
 def ros_values(params: NodeParams) -> dict[str, Any]:
@@ -200,11 +238,23 @@ def ros_values(params: NodeParams) -> dict[str, Any]:
             out.update({"initial_pose.x": x, "initial_pose.y": y, "initial_pose.yaw": yaw})
             continue
         out[name] = _ros_value(getattr(params, name))
-    for name in _LOCALIZER:
-        out[f"localizer.{name}"] = _ros_value(getattr(params.localizer, name))
+    for block, names in _DOTTED.items():
+        for name in names:
+            out[f"{block}.{name}"] = _ros_value(getattr(getattr(params, block), name))
     for name, value in params.symmetry.items():
         out[f"symmetry.{name}"] = _ros_value(value)
     return out
+
+
+def settings_to_ros(settings: LocalizerSettings, **others: Any) -> dict[str, Any]:
+    """The ROS parameter values that give the localizer ``settings`` (``others``: node
+    fields, e.g. ``visual_map``); the inverse of :func:`settings_from_ros`."""
+    return ros_values(NodeParams.from_settings(settings, **others))
+
+
+def settings_from_ros(values: Mapping[str, Any]) -> LocalizerSettings:
+    """The localizer's settings from ROS parameter values (:func:`node_params_from_ros`)."""
+    return node_params_from_ros(values).settings()
 
 
 def _flatten(block: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -13,8 +13,22 @@ The file has the layout of a nav2 ``params.yaml``::
         amcl:                    # nav2_amcl names and defaults (symloc.mcl.AmclParams)
           max_particles: 2000
           laser_model_type: likelihood_field
+        confidence:              # symloc.mcl.ConfidenceConfig fields
+          min_weight_share: 0.9
+        claim:                   # symloc.localizer.claim.ClaimConfig fields
+          gate_sigmas: 4.0
         localizer:               # symloc.localizer.LocalizerConfig fields
-          converged_weight: 0.9
+          flip_patience: 5
+        symmetry: {}             # symloc.symmetry.SymmetryConfig fields over lidar_preset's
+
+The localizer's settings (:class:`symloc.localizer.settings.LocalizerSettings`, what
+:meth:`NodeParams.settings` returns and :func:`symloc.localizer.build.build_localizer` builds
+from) are the blocks ``amcl``, ``confidence``, ``claim``, ``localizer`` and ``symmetry``
+(with ``lidar_preset``), ``laser_pose``, ``seed`` and ``mode`` (``build_visual_map`` is
+``localizer.allow_mapping``, which is not a parameter of its own). ``localizer.converged_weight``,
+``converged_xy_std`` and ``converged_theta_std`` are the older names of
+``confidence.min_weight_share``, ``max_xy_std`` and ``max_theta_std`` (:data:`ALIASES`): the
+confidence judgement decides convergence. The other fields are the node's plumbing.
 
 Every value is checked; an unknown or invalid one raises
 :class:`~symloc.errors.ConfigurationError` naming it. Nothing is reset to a default.
@@ -22,6 +36,7 @@ Every value is checked; an unknown or invalid one raises
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -32,11 +47,88 @@ import yaml
 from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
 from symloc.localizer import LocalizerConfig
+from symloc.localizer.claim import ClaimConfig
+from symloc.localizer.settings import LocalizerSettings
+from symloc.mcl.confidence import ConfidenceConfig
 from symloc.mcl.params import AmclParams
 
-__all__ = ["MODES", "NodeParams"]
+__all__ = [
+    "ALIASES",
+    "MODES",
+    "NOT_PARAMETERS",
+    "SETTINGS_BLOCKS",
+    "NodeParams",
+    "config_block",
+    "split_aliases",
+]
 
 MODES = ("localize", "build_visual_map")
+
+#: Blocks of :class:`NodeParams` that are localizer settings, with their classes (``symmetry``
+#: is a mapping of :class:`symloc.symmetry.SymmetryConfig` overrides of ``lidar_preset``).
+SETTINGS_BLOCKS: dict[str, type[Any]] = {
+    "amcl": AmclParams,
+    "confidence": ConfidenceConfig,
+    "claim": ClaimConfig,
+    "localizer": LocalizerConfig,
+}
+
+#: Older parameter names -> the settings leaf they set (the confidence judgement decides
+#: convergence; :class:`LocalizerConfig`'s fields of those names, while they exist, are unused).
+ALIASES: dict[str, str] = {
+    "localizer.converged_weight": "confidence.min_weight_share",
+    "localizer.converged_xy_std": "confidence.max_xy_std",
+    "localizer.converged_theta_std": "confidence.max_theta_std",
+}
+
+#: Settings leaves that are not parameters of their own (``mode`` sets allow_mapping; the
+#: aliased names set the confidence fields).
+NOT_PARAMETERS = frozenset({"localizer.allow_mapping", *ALIASES})
+
+
+def config_block(name: str, cls: type[Any], block: Any) -> Any:
+    """``cls(**block)`` from a ``name:`` mapping of its fields (an unknown or invalid field
+    raises ConfigurationError naming ``name.field``)."""
+    if isinstance(block, cls):
+        return block
+    if block is None:
+        block = {}
+    if not isinstance(block, dict):
+        raise ConfigurationError(f"{name}: expected a mapping of {cls.__name__} fields")
+    if cls is AmclParams:
+        return _block(name, lambda: AmclParams.from_dict(block))
+    known = {f.name for f in fields(cls)}
+    if name == "localizer":
+        known -= {"allow_mapping", *(a.partition(".")[2] for a in ALIASES)}
+    bad = sorted(set(block) - known)
+    if bad:
+        if name == "localizer" and bad[0] == "allow_mapping":
+            raise ConfigurationError(
+                "localizer.allow_mapping: set by 'mode' (build_visual_map maps new places)"
+            )
+        raise ConfigurationError(f"{name}.{bad[0]}: unknown (known: {sorted(known)})")
+    values = {k: tuple(v) if isinstance(v, list) else v for k, v in block.items()}
+    return _block(name, lambda: cls(**values))
+
+
+def split_aliases(localizer: dict[str, Any], confidence: dict[str, Any]) -> None:
+    """Move the aliased ``localizer`` names (:data:`ALIASES`) into ``confidence`` (in place).
+
+    Raises
+    ------
+    ConfigurationError
+        An alias and its target are both given, with different values.
+    """
+    for alias, target in ALIASES.items():
+        old, new = alias.partition(".")[2], target.partition(".")[2]
+        if old not in localizer:
+            continue
+        value = localizer.pop(old)
+        if new in confidence and confidence[new] != value:
+            raise ConfigurationError(
+                f"{alias}: the older name of {target}, which is also given, differently"
+            )
+        confidence[new] = value
 
 
 def _pose3(value: Any, name: str) -> tuple[float, float, float]:
@@ -178,7 +270,14 @@ class NodeParams:
     seed : int
         Seed of the filter's random numbers (nav2's ``random_seed`` >= 0 sets it).
     amcl : AmclParams
+        The filter (nav2_amcl's names).
+    confidence : ConfidenceConfig
+        When AMCL's estimate counts as converged (weight share, x-y std [m], heading std
+        [rad]), the scan check and the rival search (:mod:`symloc.mcl.confidence`).
+    claim : ClaimConfig
+        The claim gate (:mod:`symloc.localizer.claim`).
     localizer : LocalizerConfig
+        The state machine; its ``allow_mapping`` is set by ``mode``.
     symmetry : dict
         Fields of :class:`symloc.symmetry.SymmetryConfig` overriding the preset's.
     """
@@ -230,6 +329,8 @@ class NodeParams:
     max_image_pixels: int = 5_000_000
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
+    confidence: ConfidenceConfig = field(default_factory=ConfidenceConfig)
+    claim: ClaimConfig = field(default_factory=ClaimConfig)
     localizer: LocalizerConfig = field(default_factory=LocalizerConfig)
     symmetry: dict[str, Any] = field(default_factory=dict)
 
@@ -347,10 +448,13 @@ class NodeParams:
             raise ConfigurationError(f"max_image_pixels: expected an integer >= 1, got {px!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigurationError(f"seed: expected an integer >= 0, got {self.seed!r}")
-        if not isinstance(self.amcl, AmclParams):
-            raise ConfigurationError("amcl: expected an AmclParams")
-        if not isinstance(self.localizer, LocalizerConfig):
-            raise ConfigurationError("localizer: expected a LocalizerConfig")
+        for name, cls in SETTINGS_BLOCKS.items():
+            if not isinstance(getattr(self, name), cls):
+                raise ConfigurationError(f"{name}: expected a {cls.__name__}")
+        if self.localizer.allow_mapping and not self.allow_mapping:
+            raise ConfigurationError(
+                "localizer.allow_mapping: set by 'mode' (build_visual_map maps new places)"
+            )
 
     def symmetry_config(self) -> Any:
         """The :class:`symloc.symmetry.SymmetryConfig` of Algorithm 1 (preset + overrides)."""
@@ -376,9 +480,50 @@ class NodeParams:
         """Whether the localizer may build visual maps of unmatched places."""
         return self.mode == "build_visual_map"
 
+    def settings(self) -> LocalizerSettings:
+        """The localizer's settings (:class:`~symloc.localizer.settings.LocalizerSettings`):
+        the blocks, ``lidar_preset`` + ``symmetry``, ``laser_pose``, ``seed``, and ``mode`` as
+        ``localizer.allow_mapping``."""
+        return LocalizerSettings(
+            amcl=self.amcl,
+            confidence=self.confidence,
+            claim=self.claim,
+            localizer=dataclasses.replace(self.localizer, allow_mapping=self.allow_mapping),
+            symmetry=self.symmetry_config(),
+            laser_pose=(self.laser_pose[0], self.laser_pose[1], self.laser_pose[2]),
+            seed=self.seed,
+        )
+
+    @classmethod
+    def from_settings(cls, settings: LocalizerSettings, **others: Any) -> NodeParams:
+        """Node parameters whose :meth:`settings` are ``settings`` (``others``: plumbing
+        fields such as ``visual_map``); Algorithm 1's settings become explicit ``symmetry``
+        overrides with no ``lidar_preset``."""
+        sym = {
+            f.name: getattr(settings.symmetry, f.name)
+            for f in fields(settings.symmetry)
+            if getattr(settings.symmetry, f.name) is not None
+        }
+        mode = "build_visual_map" if settings.localizer.allow_mapping else "localize"
+        kwargs: dict[str, Any] = {
+            "amcl": settings.amcl,
+            "confidence": settings.confidence,
+            "claim": settings.claim,
+            "localizer": settings.localizer,
+            "symmetry": sym,
+            "lidar_preset": "",
+            "laser_pose": settings.laser_pose,
+            "seed": settings.seed,
+            "mode": mode,
+        }
+        kwargs.update(others)
+        params: NodeParams = _block("parameters", lambda: cls(**kwargs))
+        return params
+
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> NodeParams:
-        """From a ``ros__parameters`` mapping (nested ``amcl`` and ``localizer`` blocks)."""
+        """From a ``ros__parameters`` mapping (nested ``amcl``, ``confidence``, ``claim``,
+        ``localizer`` and ``symmetry`` blocks)."""
         if not isinstance(values, dict):
             raise ConfigurationError("ros__parameters: expected a mapping")
         own = {f.name for f in fields(cls)}
@@ -391,17 +536,20 @@ class NodeParams:
                     f"parameter {key!r}: unknown to symloc (known: {sorted(own)})"
                 )
             kwargs[key] = value
-        if "amcl" in kwargs:
-            kwargs["amcl"] = _block("amcl", lambda: AmclParams.from_dict(kwargs["amcl"] or {}))
-        if "localizer" in kwargs:
-            block = kwargs["localizer"] or {}
-            if not isinstance(block, dict):
-                raise ConfigurationError("localizer: expected a mapping of LocalizerConfig fields")
-            known = {f.name for f in fields(LocalizerConfig)}
-            bad = sorted(set(block) - known)
-            if bad:
-                raise ConfigurationError(f"localizer.{bad[0]}: unknown (known: {sorted(known)})")
-            kwargs["localizer"] = _block("localizer", lambda: LocalizerConfig(**block))
+        for name in ("localizer", "confidence"):
+            if name in kwargs and not isinstance(kwargs[name] or {}, dict):
+                cls_name = SETTINGS_BLOCKS[name].__name__
+                raise ConfigurationError(f"{name}: expected a mapping of {cls_name} fields")
+        if isinstance(kwargs.get("localizer"), dict):
+            localizer = dict(kwargs["localizer"])
+            confidence = dict(kwargs.get("confidence") or {})
+            split_aliases(localizer, confidence)
+            kwargs["localizer"] = localizer
+            if confidence:
+                kwargs["confidence"] = confidence
+        for name, block_cls in SETTINGS_BLOCKS.items():
+            if name in kwargs:
+                kwargs[name] = config_block(name, block_cls, kwargs[name])
         params: NodeParams = _block("ros__parameters", lambda: cls(**kwargs))
         return params
 

@@ -139,6 +139,7 @@ def _check(args: argparse.Namespace) -> int:
 
     params = _read_params(args.params, args.node_name)
     print(params)
+    print(f"# the localizer is built from: {params.settings()}")
     return 0
 
 

@@ -1,0 +1,95 @@
+"""The one function that builds the localizer, for every caller (rule 12).
+
+:func:`build_localizer` joins AMCL (:class:`symloc.mcl.Amcl`), Algorithm 1
+(:func:`symloc.symmetry.judge_symmetry`), the grid scorer, the map's own symmetries, the claim
+gate and a place store with the localizer's adapters, every part configured from one
+:class:`~symloc.localizer.settings.LocalizerSettings`. The ROS node and bag replay
+(:func:`symloc.ros.assemble.make_localizer`), the bench and the demo
+(:meth:`symloc.bench.scenario.Scenario.localizer`) and the experiments
+(:func:`symloc.experiments.amcl_carmen.symloc_claims`) all call it: what the bench measures is
+what ``symloc ros node`` runs when both are given the same settings.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from symloc.grid import OccupancyGrid
+from symloc.grid.distance_field import surface_distance_field
+from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.claim import ClaimGate
+from symloc.localizer.localizer import Localizer
+from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
+from symloc.localizer.places import MemoryPlaces
+from symloc.localizer.settings import LocalizerSettings
+from symloc.mcl.amcl import Amcl
+from symloc.symmetry import judge_symmetry
+
+__all__ = ["build_localizer", "grid_symmetries"]
+
+_SYMMETRIES: weakref.WeakKeyDictionary[OccupancyGrid, list[MapSymmetry]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def grid_symmetries(grid: OccupancyGrid) -> list[MapSymmetry]:
+    """:func:`~symloc.localizer.map_symmetry.map_symmetries` of ``grid``, computed once per
+    grid object (grids are immutable; the cache lets the grid go)."""
+    found = _SYMMETRIES.get(grid)
+    if found is None:
+        found = map_symmetries(grid)
+        _SYMMETRIES[grid] = found
+    return found
+
+
+def build_localizer(
+    grid: OccupancyGrid,
+    settings: LocalizerSettings,
+    *,
+    places: Any = None,
+    rng: np.random.Generator | None = None,
+) -> Localizer:
+    """The localizer on ``grid`` configured by ``settings``; not initialised yet.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (AMCL's, the scorer's, the claim gate's and the map-symmetry search's).
+    settings : LocalizerSettings
+        Every setting (:mod:`symloc.localizer.settings`).
+    places : PlaceStore, optional
+        Where places are looked up and mapped (a
+        :class:`~symloc.localizer.vision_store.VisionPlaceStore` over a visual map); None: a
+        :class:`~symloc.localizer.places.MemoryPlaces` (no visual map). Its stored places
+        (``all_places()``, when it has them) are the localizer's known places.
+    rng : numpy.random.Generator, optional
+        AMCL's random numbers; None: ``numpy.random.default_rng(settings.seed)``. The bench
+        passes the generator its trial draws everything from.
+
+    The caller starts it: :meth:`Localizer.reset_global` (lost, AMCL over the whole map) or
+    :meth:`Localizer.set_pose`. ``settings.laser_pose`` goes to every part that reads scans:
+    AMCL, Algorithm 1's verdicts (turned into the robot frame), the scorer, the claim gate and
+    the localizer's deskewing.
+    """
+    gen = np.random.default_rng(settings.seed) if rng is None else rng
+    amcl = Amcl(grid, settings.amcl, gen, confidence_config=settings.confidence)
+    laser = np.asarray(settings.laser_pose, dtype=np.float64)
+    store = places if places is not None else MemoryPlaces()
+    all_places = getattr(store, "all_places", None)
+    known = list(all_places()) if all_places is not None else []
+    # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
+    judge_laser = laser if np.any(laser != 0.0) else None
+    return Localizer(
+        AmclTracker(amcl, laser_pose=laser),
+        ReportJudge(judge_symmetry, laser_pose=judge_laser, config=settings.symmetry),
+        store,
+        settings.localizer,
+        scorer=GridScorer(grid, laser_pose=laser),
+        known_places=known,
+        map_symmetries=grid_symmetries(grid),
+        claim_gate=ClaimGate(surface_distance_field(grid), config=settings.claim, laser_pose=laser),
+        laser_pose=laser,
+    )
