@@ -14,7 +14,7 @@ from mcl_fixtures import asymmetric_room, synthetic_scan
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import distance_field
+from symloc.grid.fields import distance_field
 from symloc.mcl import (
     Amcl,
     AmclParams,

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from symloc.camera_model import pinhole_matrix
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import surface_distance_field
+from symloc.grid.fields import surface_distance_field
 from symloc.localizer import Decision, Localizer, Place
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
