@@ -38,7 +38,6 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
-
 @dataclass(frozen=True, eq=False)
 class DistanceField:
     """Distance [m] from each cell to the nearest occupied cell, clipped at ``max_dist``.

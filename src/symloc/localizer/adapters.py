@@ -256,4 +256,3 @@ def _pose3(value: ArrayLike, name: str) -> FloatArray:
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ConfigurationError(f"{name}: expected finite (x [m], y [m], yaw [rad]), got {p}")
     return p
-

@@ -582,7 +582,9 @@ class ConfidenceJudge:
         self.amcl = amcl
         self.config = ConfidenceConfig() if config is None else config
         if not isinstance(self.config, ConfidenceConfig):
-            raise ConfigurationError("confidence_config: expected a ConfidenceConfig")
+            raise ConfigurationError(
+                f"config: expected a ConfidenceConfig, got {type(self.config).__name__}"
+            )
         self.n_rival_searches = 0
         tol = self.config.consistency_sigmas * amcl.params.sigma_hit
         own = amcl.field

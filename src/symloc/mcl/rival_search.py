@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, wrap_angle
+from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
