@@ -417,7 +417,7 @@ def update_bench(args: argparse.Namespace, tmp: Path) -> None:
 
 def laser_ns(n: int, seed: int) -> float:
     """symloc's laser step alone, one thread: ns per particle-beam (thread CPU time)."""
-    from symloc.grid.distance_field import distance_field
+    from symloc.grid.fields import distance_field
     from symloc.mcl import kernels
     from symloc.mcl.likelihood_field import endpoint_table_sums, laser_poses_grid
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import distance_field, surface_distance_field
+from symloc.grid.fields import distance_field, surface_distance_field
 
 
 def office_map(rows: int, cols: int, seed: int) -> OccupancyGrid:

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import clear_distance_field_cache, distance_field
+from symloc.grid.fields import clear_distance_field_cache, distance_field
 
 
 def _grid(occ_cells, shape=(20, 30), res=0.1, origin=(0.0, 0.0, 0.0)):
@@ -34,7 +34,7 @@ def test_cached_per_grid_and_max_dist():
     g = _grid([(1, 1)])
     assert distance_field(g, 2.0) is distance_field(g, 2.0)
     assert distance_field(g, 1.0) is not distance_field(g, 2.0)
-    clear_distance_field_cache()
+    clear_distance_field_cache(g)
     a = distance_field(g, 2.0)
     assert a is distance_field(g, 2.0)
 
@@ -125,7 +125,7 @@ def test_surface_field_identical_to_scipy_definition(seed, res):
     from scipy.ndimage import binary_dilation
     from skimage.morphology import skeletonize
 
-    from symloc.grid.distance_field import surface_distance_field
+    from symloc.grid.fields import surface_distance_field
 
     rng = np.random.default_rng(seed)
     h, w = (int(v) for v in rng.integers(8, 90, 2))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
-from symloc.grid.distance_field import surface_distance_field
+from symloc.grid.fields import surface_distance_field
 from symloc.localizer import Localizer, Status
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.claim import ClaimConfig, ClaimGate, Verdict

@@ -14,11 +14,12 @@ from mcl_fixtures import asymmetric_room, synthetic_scan
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import distance_field
+from symloc.grid.fields import distance_field
 from symloc.mcl import (
     Amcl,
     AmclParams,
     ConfidenceConfig,
+    ConfidenceJudge,
     RivalReport,
     ScanConsistency,
     assess,
@@ -325,9 +326,7 @@ def test_match_scores_and_rival_errors():
 
 
 # ------------------------------------------------------------------------- on the filter
-def test_amcl_exposes_confidence_and_keeps_its_outputs():
-    grid = asymmetric_room()
-    rng = np.random.default_rng(4)
+def _amcl(grid: OccupancyGrid) -> Amcl:
     a = 0.002
     params = AmclParams(
         max_particles=800,
@@ -338,42 +337,46 @@ def test_amcl_exposes_confidence_and_keeps_its_outputs():
         alpha3=a,
         alpha4=a,
     )
-    amcl = Amcl(grid, params, rng=5)
-    assert amcl.confidence() is None
+    return Amcl(grid, params, rng=5)
+
+
+def test_the_judge_follows_the_filter_and_resets_with_it():
+    grid = asymmetric_room()
+    rng = np.random.default_rng(4)
+    amcl = _amcl(grid)
+    judge = ConfidenceJudge(amcl)
+    assert judge.verdict is None
     true = np.array([5.0, 3.0, 0.3])
     amcl.initialize_pose(true, np.diag([0.01, 0.01, 0.001]))
     odom = np.array([1.0, 1.0, 0.0])
-    res = None
+    conf = None
     for i in range(6):
         step = np.array([0.3, 0.0, 0.0]) if i % 2 == 0 else np.array([0.0, 0.0, 0.3])
-        res = amcl.update(OdometryReading(odom), synthetic_scan(grid, true, rng))
+        res, conf = judge.update(OdometryReading(odom), synthetic_scan(grid, true, rng))
         true, odom = compose(true, step), compose(odom, step)
-    assert res is not None
-    assert res.confidence is amcl.confidence()
-    assert res.confidence.confident, res.confidence.reason
+    assert conf is not None
+    assert conf is judge.verdict
+    assert conf.confident, conf.reason
     assert res.estimate.shape == (3,)
     assert res.n_hypotheses == 1
-    assert amcl.counters.n_rival_searches == 1
+    assert judge.n_rival_searches == 1
+    # a new initialisation of the filter starts a new judgement, as a reset would
     amcl.initialize_global()
-    assert amcl.confidence() is None
+    assert judge.verdict is None
+    assert judge.n_rival_searches == 1  # counted over the judge's life
 
 
-def test_amcl_rejects_a_bad_confidence_config():
-    with pytest.raises(ConfigurationError, match="confidence_config: expected a ConfidenceConfig"):
-        Amcl(asymmetric_room(), confidence_config={"hold_updates": 2})  # type: ignore[arg-type]
+def test_the_filter_update_judges_nothing():
+    grid = asymmetric_room()
+    rng = np.random.default_rng(4)
+    amcl = _amcl(grid)
+    amcl.initialize_pose([5.0, 3.0, 0.3], np.diag([0.01, 0.01, 0.001]))
+    res = amcl.update(OdometryReading([1.0, 1.0, 0.0]), synthetic_scan(grid, [5.0, 3.0, 0.3], rng))
+    assert not hasattr(res, "confidence")
+    assert not hasattr(amcl, "confidence")
+    assert amcl.counters.n_initializations == 1
 
 
-def test_rival_searches_back_off_while_ambiguous():
-    cfg = ConfidenceConfig(rival_recheck=2)
-    amb = RivalReport(True, 0.98, 0.98, np.array([1.0, 1.0, 0.0]), 4, 80)
-    prev = None
-    searched_at = []
-    for k in range(1, 20):
-        c = assess(_result(), GOOD, cfg, previous=prev)
-        if c.rival_due:
-            c = assess(_result(), GOOD, cfg, previous=prev, rival=amb)
-            searched_at.append(k)
-        prev = c
-    assert searched_at == [3, 5, 9, 17]  # waits 2, 4, 8 updates
-    assert not prev.confident
-    assert prev.locally_confident
+def test_the_judge_rejects_a_bad_config():
+    with pytest.raises(ConfigurationError, match="config: expected a ConfidenceConfig"):
+        ConfidenceJudge(Amcl(asymmetric_room()), {"hold_updates": 2})  # type: ignore[arg-type]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import distance_field
+from symloc.grid.fields import distance_field
 from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import (
     endpoint_flat_indices,
@@ -212,7 +212,7 @@ def test_pairwise_sum_equals_numpy_sum(n: int) -> None:
 
 
 def test_scan_cost_and_bilinear_equal_numpy() -> None:
-    from symloc.grid.distance_field import surface_distance_field
+    from symloc.grid.fields import surface_distance_field
     from symloc.mcl import scan_to_map as stm
 
     rng = np.random.default_rng(2)

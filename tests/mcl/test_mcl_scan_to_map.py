@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
-from symloc.grid.distance_field import distance_field, surface_distance_field
+from symloc.grid.fields import distance_field, surface_distance_field
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatchConfig, match_scan_to_map, scan_points

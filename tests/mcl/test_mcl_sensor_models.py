@@ -5,7 +5,7 @@ import pytest
 
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import distance_field
+from symloc.grid.fields import distance_field
 from symloc.mcl.beam_model import beam_model_weights, raycast_grid
 from symloc.mcl.beams import select_beams
 from symloc.mcl.likelihood_field import likelihood_field_weights

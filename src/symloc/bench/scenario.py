@@ -38,7 +38,7 @@ from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copie
 from symloc.localizer.settings import LocalizerSettings
 from symloc.localizer.types import Estimate, Status
 from symloc.localizer.vision_store import UNANCHORED_LABEL, VisionPlaceStore
-from symloc.mcl import Amcl, AmclParams
+from symloc.mcl import Amcl, AmclParams, Confidence, ConfidenceJudge
 from symloc.odometry import OdometryReading, twist_between
 from symloc.scan import deskew
 from symloc.sim.camera import Camera
@@ -626,6 +626,7 @@ def run_plain_amcl(
     if drive not in ("explore", "spin"):
         raise ConfigurationError(f"drive: expected 'explore' or 'spin', got {drive!r}")
     amcl = Amcl(scen.grid, scen.plain_amcl_params() if params is None else params, rng)
+    judge = ConfidenceJudge(amcl)  # the verdict, judged after every filter update
     amcl.initialize_global()
     robot = scen.robot(start, rng)
     scan_at = scen.scan_at(rng)
@@ -637,19 +638,19 @@ def run_plain_amcl(
     dist = 0.0
     path = [robot.pose]
     for _ in range(n):
-        amcl.update(odom, scan_at(robot.pose))
+        judge.update(odom, scan_at(robot.pose))
         v_i, w_i = driver.command(robot.pose, dt) if drive == "explore" else (0.0, w)
         before = robot.pose
         odom = robot.drive(v_i, w_i, dt)
         dist += float(np.hypot(*(robot.pose[:2] - before[:2])))
         path.append(robot.pose)
         t += dt
-    result = amcl.update(odom, scan_at(robot.pose))
+    result, conf = judge.update(odom, scan_at(robot.pose))
     cov = np.asarray(result.covariance)
     xy_std = math.sqrt(max(cov[0, 0], cov[1, 1]))
     th_std = math.sqrt(cov[2, 2])
     weight = float(result.weight)
-    converged, rule = amcl_confident(result)
+    converged, rule = amcl_confident(conf)
     truth = robot.pose
     outcome = classify(
         np.asarray(result.estimate), converged, truth, scen.room.center, _order(scen), weight
@@ -671,8 +672,9 @@ def run_plain_amcl(
     )
 
 
-def amcl_confident(result: Any) -> tuple[bool, str]:
-    """Whether plain AMCL's result is confident the way a nav2 user can know, and why.
+def amcl_confident(conf: Confidence | None) -> tuple[bool, str]:
+    """Whether plain AMCL's verdict ``conf`` (its :class:`~symloc.mcl.ConfidenceJudge`'s on
+    the last result) is confident the way a nav2 user can know, and why.
 
     The project's one definition, :mod:`symloc.mcl.confidence`, in its
     ``locally_confident`` form (checks 1-4: one dominant tight hypothesis whose scan agrees
@@ -680,10 +682,9 @@ def amcl_confident(result: Any) -> tuple[bool, str]:
     (a search of the whole map for a rival pose) is symloc's own addition and is used by the
     localizer before it claims a pose from AMCL alone; the reason string reports it too.
     """
-    conf = result.confidence
     if conf is None:
         return False, "no confidence verdict"
-    local = bool(getattr(conf, "locally_confident", conf.confident))
+    local = bool(conf.locally_confident)
     return local, str(conf.reason)
 
 

@@ -40,7 +40,7 @@ from symloc.errors import ConfigurationError, WorldError
 from symloc.geometry import compose, relative
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.types import Request, RequestKind, Status
-from symloc.mcl import Amcl
+from symloc.mcl import Amcl, ConfidenceJudge
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 from symloc.sim.robot import DiffDriveRobot
@@ -300,6 +300,8 @@ class _AmclRunner:
 
     def __init__(self, scen: Scenario, rng: np.random.Generator) -> None:
         self.amcl = Amcl(scen.grid, scen.plain_amcl_params(), rng)
+        #: judges every filter result (forgets its verdict when the filter is re-initialised)
+        self.judge = ConfidenceJudge(self.amcl)
         self._anchor: tuple[FloatArray, FloatArray] | None = None
 
     def start(self, known: FloatArray | None) -> None:
@@ -312,13 +314,13 @@ class _AmclRunner:
     def update(
         self, odom: OdometryReading, scan: LaserScan, image: NDArray[np.uint8] | None
     ) -> Published:
-        res = self.amcl.update(odom, scan)
+        res, conf = self.judge.update(odom, scan)
         odom_pose = np.asarray(odom.pose, dtype=np.float64)
         if res.updated or self._anchor is None:
             self._anchor = (np.asarray(res.estimate, dtype=np.float64), odom_pose.copy())
         est, odom_then = self._anchor
         carried = compose(est, relative(odom_then, odom_pose))
-        confident, reason = amcl_confident(res)
+        confident, reason = amcl_confident(conf)
         status = "tracking" if confident else "not_confident"
         cov = np.asarray(res.covariance, dtype=np.float64)
         return status, carried if confident else None, cov if confident else None, reason, None

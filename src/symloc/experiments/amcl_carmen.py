@@ -125,8 +125,12 @@ def _errors(est: FloatArray, truth: FloatArray) -> tuple[FloatArray, FloatArray]
 
 
 def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) -> dict[str, Any]:
-    """Feed scans ``start..stop-1``; per scan the pose estimate and the filter's confidence."""
+    """Feed scans ``start..stop-1``; per scan the pose estimate and the filter's confidence
+    (judged after each update by a :class:`~symloc.mcl.confidence.ConfidenceJudge`)."""
+    from symloc.mcl.confidence import ConfidenceJudge
     from symloc.odometry import OdometryReading
+
+    judge = ConfidenceJudge(amcl)
 
     n = stop - start
     est = np.empty((n, 3))
@@ -141,12 +145,11 @@ def _run_filter(amcl: Any, log: Any, odom: FloatArray, start: int, stop: int) ->
     last_est: FloatArray | None = None
     last_odom: FloatArray = odom[start]
     for k, i in enumerate(range(start, stop)):
-        res = amcl.update(OdometryReading(odom[i], log.scans[i].stamp), log.scans[i].scan)
+        res, c = judge.update(OdometryReading(odom[i], log.scans[i].stamp), log.scans[i].scan)
         if res.updated or last_est is None:
             last_est, last_odom = res.estimate, odom[i]
         # nav2's map->odom: the last estimate moved by the odometry since that update
         est[k] = compose(last_est, compose(inverse(last_odom), odom[i]))
-        c = res.confidence
         conf[k] = c.confident
         checks[k] = c.checks_pass
         reasons.append(c.reason)
@@ -211,7 +214,7 @@ def symloc_claims(
 
     ``known_start`` gives it the corrected first pose (tracking); else it starts lost (global).
     """
-    from symloc.grid.distance_field import surface_distance_field
+    from symloc.grid.fields import surface_distance_field
     from symloc.localizer import Status
     from symloc.localizer.build import build_localizer
     from symloc.odometry import OdometryReading

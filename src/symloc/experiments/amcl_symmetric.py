@@ -142,7 +142,7 @@ def run_trial(
     tol_theta: float,
 ) -> TrialResult:
     """One global-localization trial in ``room`` (see the module docstring)."""
-    from symloc.mcl import Amcl
+    from symloc.mcl import Amcl, ConfidenceJudge
     from symloc.sim.lidar import simulate_scan
     from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 
@@ -150,12 +150,13 @@ def run_trial(
     noise = OdometryNoise(odom_alpha, odom_alpha, odom_alpha, odom_alpha)
     robot = DiffDriveRobot(start, RobotConfig(noise=noise), rng, world=room.world)
     amcl = Amcl(grid, params, rng)
+    judge = ConfidenceJudge(amcl)  # the verdict, judged after every filter update
     amcl.initialize_global()
     dt = 0.1
     steps_per_scan = max(1, round(scan_period / dt))
     n_steps = max(1, round(duration / dt))
     v, w = 0.3, 0.0
-    res = amcl.update(robot.odometry(), simulate_scan(room.world, robot.pose, preset, rng))
+    res, conf = judge.update(robot.odometry(), simulate_scan(room.world, robot.pose, preset, rng))
     turning = 0
     for i in range(n_steps):
         if i % 10 == 0 and turning == 0:
@@ -171,13 +172,12 @@ def run_trial(
                 turning = int(rng.integers(5, 15))
         if (i + 1) % steps_per_scan == 0:
             scan = simulate_scan(room.world, robot.pose, preset, rng, stamp=robot.time)
-            res = amcl.update(robot.odometry(), scan)
+            res, conf = judge.update(robot.odometry(), scan)
     true = robot.pose
     images = symmetric_images(true, room.center, room.order if room.order > 1 else 1)
     outcome, j = classify(res.estimate, images, tol_xy, tol_theta)
     sxy, sth = _std_from_cov(res.covariance)
     sxy_set, sth_set = _std_from_cov(_set_covariance(res.particles, res.weights))
-    conf = res.confidence
     return TrialResult(
         room=room.name,
         true_pose=true,
@@ -190,9 +190,9 @@ def run_trial(
         std_theta_set=sth_set,
         n_hypotheses=res.n_hypotheses,
         weight=res.weight,
-        confident=bool(conf is not None and conf.confident),
-        confident_without_rival_check=bool(conf is not None and conf.locally_confident),
-        confidence_reason="" if conf is None else conf.reason,
+        confident=bool(conf.confident),
+        confident_without_rival_check=bool(conf.locally_confident),
+        confidence_reason=conf.reason,
         particles=np.array(res.particles),
         weights=np.array(res.weights),
     )

@@ -2,8 +2,8 @@
 
 The likelihood-field sensor model (Thrun, Burgard and Fox, *Probabilistic Robotics*, 2005,
 Table 6.3; ROS amcl's ``map_update_cspace``) needs, for every cell, the distance [m] to the
-nearest occupied cell, clipped at ``laser_likelihood_max_dist``. It is computed once per grid
-and cached: OpenCV's exact Euclidean distance transform (``cv2.distanceTransform`` with
+nearest occupied cell, clipped at ``laser_likelihood_max_dist``. This module computes it;
+:class:`symloc.grid.fields.MapFields` computes it once per map and shares it. OpenCV's exact Euclidean distance transform (``cv2.distanceTransform`` with
 ``DIST_MASK_PRECISE``, Felzenszwalb and Huttenlocher's algorithm) gives the squared distance in
 cells, and a small table maps each squared distance to metres exactly as
 :func:`scipy.ndimage.distance_transform_edt` with ``sampling`` computes them. A 30-million-cell
@@ -17,8 +17,6 @@ point off the map reads the maximum distance exactly as nav2_amcl does (``!MAP_V
 
 from __future__ import annotations
 
-import threading
-import weakref
 from dataclasses import dataclass, field
 
 import cv2
@@ -33,27 +31,19 @@ from symloc.grid.occupancy_grid import OccupancyGrid
 
 __all__ = [
     "DistanceField",
-    "clear_distance_field_cache",
-    "distance_field",
-    "surface_distance_field",
+    "compute_distance_field",
+    "compute_surface_distance_field",
 ]
 
 FloatArray = NDArray[np.float64]
-
-_CACHE: weakref.WeakKeyDictionary[OccupancyGrid, dict[float, DistanceField]] = (
-    weakref.WeakKeyDictionary()
-)
-_SURFACE_CACHE: weakref.WeakKeyDictionary[OccupancyGrid, dict[float, DistanceField]] = (
-    weakref.WeakKeyDictionary()
-)
-_LOCK = threading.Lock()
 
 
 @dataclass(frozen=True, eq=False)
 class DistanceField:
     """Distance [m] from each cell to the nearest occupied cell, clipped at ``max_dist``.
 
-    Build it with :func:`distance_field` (cached per grid and ``max_dist``).
+    Get it from :meth:`symloc.grid.fields.MapFields.distance` (computed once per map and
+    ``max_dist``).
 
     Attributes
     ----------
@@ -220,42 +210,21 @@ def _padded_distances(
     return padded
 
 
-def _compute(grid: OccupancyGrid, max_dist: float) -> DistanceField:
+def compute_distance_field(grid: OccupancyGrid, max_dist: float) -> DistanceField:
+    """The distance field of ``grid`` clipped at ``max_dist`` [m], computed now (no cache).
+
+    Callers want :meth:`symloc.grid.fields.MapFields.distance`, which computes it once per map.
+    """
     padded = _padded_distances(grid.occupied_mask, grid.resolution, max_dist)
     padded.setflags(write=False)
     return DistanceField(grid, max_dist, padded)
 
 
-def distance_field(grid: OccupancyGrid, max_dist: float = 2.0) -> DistanceField:
-    """The (cached) distance field of ``grid`` clipped at ``max_dist`` [m].
+def compute_surface_distance_field(grid: OccupancyGrid, max_dist: float) -> DistanceField:
+    """The distance [m] to the map's obstacle surfaces, computed now (no cache).
 
-    Parameters
-    ----------
-    grid : OccupancyGrid
-        Cells with occupancy above ``occupied_thresh`` are obstacles; unknown and free cells
-        are not (as ROS amcl's ``map_update_cspace``).
-    max_dist : float
-        Clip distance [m] > 0, nav2's ``laser_likelihood_max_dist`` (default 2.0).
-
-    Returns
-    -------
-    DistanceField
-        Computed once per (grid, max_dist) and reused; the grid is immutable so the cache
-        cannot go stale. A grid with no occupied cell gives ``max_dist`` everywhere.
+    Callers want :meth:`symloc.grid.fields.MapFields.surface` (see there for the definition).
     """
-    if not isinstance(grid, OccupancyGrid):
-        raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
-    md = check_positive(max_dist, "laser_likelihood_max_dist")
-    with _LOCK:
-        per_grid = _CACHE.setdefault(grid, {})
-        df = per_grid.get(md)
-        if df is None:
-            df = _compute(grid, md)
-            per_grid[md] = df
-    return df
-
-
-def _compute_surface(grid: OccupancyGrid, max_dist: float) -> DistanceField:
     occ = grid.occupied_mask
     free = grid.free_mask
     # the occupied cells that face free space (within two cells of it, 4-connected steps): a
@@ -287,34 +256,3 @@ def _skeleton(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     out = np.zeros(mask.shape, dtype=np.bool_)
     out[r0:r1, c0:c1] = skeletonize(mask[r0:r1, c0:c1])  # type: ignore[no-untyped-call]
     return out
-
-
-def surface_distance_field(grid: OccupancyGrid, max_dist: float = 1.0) -> DistanceField:
-    """The (cached) distance [m] to the map's obstacle surfaces, as lines one cell thin.
-
-    A laser map draws a wall as a band of occupied cells two or three cells thick (the hits
-    of many scans straddle the surface), so the distance to the nearest occupied cell is zero
-    across the whole band and says nothing about where in it the surface is. Here the band's
-    cells that face free space are thinned to their centre line
-    (:func:`skimage.morphology.skeletonize`) and the distance is measured to that line: zero
-    on the surface's best estimate, with a gradient on both sides of it. Clipped at
-    ``max_dist``; off the map reads ``max_dist``. Used by scan-to-map alignment
-    (:mod:`symloc.mcl.scan_to_map`).
-    """
-    if not isinstance(grid, OccupancyGrid):
-        raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
-    md = check_positive(max_dist, "max_dist")
-    with _LOCK:
-        per_grid = _SURFACE_CACHE.setdefault(grid, {})
-        df = per_grid.get(md)
-        if df is None:
-            df = _compute_surface(grid, md)
-            per_grid[md] = df
-    return df
-
-
-def clear_distance_field_cache() -> None:
-    """Forget every cached distance field."""
-    with _LOCK:
-        _CACHE.clear()
-        _SURFACE_CACHE.clear()

@@ -98,6 +98,13 @@ class OccupancyGrid:
         object.__setattr__(self, "resolution", res)
         object.__setattr__(self, "origin", o)
 
+    def __getstate__(self) -> dict[str, object]:
+        """Pickle and copy the map only: its fields cache (:class:`symloc.grid.fields.MapFields`,
+        stored on the grid) is recomputed where it is needed."""
+        state = dict(self.__dict__)
+        state.pop("_map_fields", None)
+        return state
+
     @property
     def height(self) -> int:
         """Number of rows (cells along the grid's y)."""

@@ -1,7 +1,8 @@
 """Adapters from the real parts (AMCL, Algorithm 1, the occupancy grid) to the localizer's Protocols.
 
-- :class:`AmclTracker` wraps :class:`symloc.mcl.Amcl` and returns a
-  :class:`~symloc.localizer.types.TrackerResult`.
+- :class:`AmclTracker` wraps :class:`symloc.mcl.Amcl` and its
+  :class:`~symloc.mcl.confidence.ConfidenceJudge` (the verdict, judged after each filter
+  update) and returns a :class:`~symloc.localizer.types.TrackerResult`.
 - :class:`ReportJudge` wraps :func:`symloc.symmetry.judge_symmetry` (or any function returning a
   report with ``symmetric, order, kind, center, corners, gv_distance, reason``) and adds the
   bearing of the middle between two adjacent corners that Algorithm 2 faces.
@@ -17,12 +18,14 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.ndimage import distance_transform_edt
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose, wrap_angle
 from symloc.grid import OccupancyGrid
+from symloc.grid.fields import MapFields
+from symloc.mcl.amcl import Amcl, AmclResult
+from symloc.mcl.confidence import Confidence, ConfidenceConfig, ConfidenceJudge
 from symloc.scan import LaserScan
 
 from .types import Hypothesis, SymmetryVerdict, TrackerResult
@@ -35,20 +38,48 @@ FloatArray = NDArray[np.float64]
 class AmclTracker:
     """:class:`symloc.mcl.Amcl` as a :class:`~symloc.localizer.types.Tracker`.
 
-    ``laser_pose`` (3,): the laser in the robot frame (``base_from_laser``), given to every
-    filter update.
+    Each :meth:`update` runs the filter update (bounded cost), then its
+    :class:`~symloc.mcl.confidence.ConfidenceJudge` on the result (the verdict, with the rival
+    search when it is due), which fills ``TrackerResult.confident``.
+
+    Parameters
+    ----------
+    amcl : Amcl
+    laser_pose : (3,) array
+        The laser in the robot frame (``base_from_laser``), given to every filter update.
+    confidence : ConfidenceConfig, optional
+        Thresholds of the verdict (default :class:`ConfidenceConfig()`).
+
+    Attributes
+    ----------
+    judge : ConfidenceJudge
+        Judges every filter result; starts afresh when the filter is re-initialised.
+    last : AmclResult or None
+        The filter's last result.
+    last_confidence : Confidence or None
+        The verdict on it.
     """
 
-    def __init__(self, amcl: Any, *, laser_pose: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+    def __init__(
+        self,
+        amcl: Amcl,
+        *,
+        laser_pose: ArrayLike = (0.0, 0.0, 0.0),
+        confidence: ConfidenceConfig | None = None,
+    ) -> None:
         self.amcl = amcl
         self.laser_pose = _pose3(laser_pose, "AmclTracker.laser_pose")
-        self.last: Any = None
+        self.judge = ConfidenceJudge(amcl, confidence)
+        self.last: AmclResult | None = None
+        self.last_confidence: Confidence | None = None
 
     def initialize_global(self) -> None:
         self.amcl.initialize_global()
+        self.judge.reset()
 
     def initialize_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         self.amcl.initialize_pose(pose, covariance)
+        self.judge.reset()
 
     def force_update(self) -> None:
         """Integrate the next scan whatever the robot moved (a claim was withdrawn)."""
@@ -56,7 +87,8 @@ class AmclTracker:
 
     def update(self, odom: Any, scan: Any) -> TrackerResult:
         r = self.amcl.update(odom, scan, laser_pose=self.laser_pose)
-        self.last = r
+        conf = self.judge(r, odom, scan, laser_pose=self.laser_pose)
+        self.last, self.last_confidence = r, conf
         hyps = tuple(
             Hypothesis(pose=np.asarray(h.mean, dtype=np.float64), weight=float(h.weight))
             for h in r.hypotheses
@@ -70,7 +102,7 @@ class AmclTracker:
             particles=np.asarray(r.particles),
             weights=np.asarray(r.weights),
             updated=bool(r.updated),
-            confident=_confident(r),
+            confident=bool(conf.confident),
         )
 
 
@@ -175,7 +207,9 @@ class GridScorer:
 
     Parameters
     ----------
-    grid : OccupancyGrid
+    grid : OccupancyGrid or MapFields
+        The map, or its shared fields (the unclipped distance to the nearest occupied cell is
+        read from :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
     sigma : float
         Standard deviation [m] of the fit (nav2's ``sigma_hit`` is 0.2).
     max_beams : int
@@ -186,18 +220,18 @@ class GridScorer:
 
     def __init__(
         self,
-        grid: OccupancyGrid,
+        grid: OccupancyGrid | MapFields,
         sigma: float = 0.05,
         max_beams: int = 120,
         *,
         laser_pose: ArrayLike = (0.0, 0.0, 0.0),
     ) -> None:
         self.laser_pose = _pose3(laser_pose, "GridScorer.laser_pose")
-        self.grid = grid
+        fields = MapFields.of(grid)
+        self.grid = fields.grid
         self.sigma = check_positive(sigma, "GridScorer.sigma")
         self.max_beams = int(max_beams)
-        occ = grid.occupied_mask
-        self._dist = distance_transform_edt(~occ) * grid.resolution
+        self._dist = fields.obstacle_distance()
 
     def __call__(self, poses: FloatArray, scan: LaserScan) -> FloatArray:
         """Scores (K,) in [0, 1] of ``scan`` at ``poses`` (K, 3)."""
@@ -222,9 +256,3 @@ def _pose3(value: ArrayLike, name: str) -> FloatArray:
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ConfigurationError(f"{name}: expected finite (x [m], y [m], yaw [rad]), got {p}")
     return p
-
-
-def _confident(result: Any) -> bool | None:
-    """AMCL's own confidence verdict (:mod:`symloc.mcl.confidence`), None if it gives none."""
-    conf = getattr(result, "confidence", None)
-    return None if conf is None else bool(conf.confident)

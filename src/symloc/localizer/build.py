@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from symloc.grid import OccupancyGrid
-from symloc.grid.distance_field import surface_distance_field
+from symloc.grid.fields import MapFields
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer
@@ -75,7 +75,8 @@ def build_localizer(
     the localizer's deskewing.
     """
     gen = np.random.default_rng(settings.seed) if rng is None else rng
-    amcl = Amcl(grid, settings.amcl, gen, confidence_config=settings.confidence)
+    fields = MapFields.of(grid)  # every part below shares the map's fields
+    amcl = Amcl(fields, settings.amcl, gen)
     laser = np.asarray(settings.laser_pose, dtype=np.float64)
     store = places if places is not None else MemoryPlaces()
     all_places = getattr(store, "all_places", None)
@@ -83,13 +84,13 @@ def build_localizer(
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     return Localizer(
-        AmclTracker(amcl, laser_pose=laser),
+        AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
         ReportJudge(judge_symmetry, laser_pose=judge_laser, config=settings.symmetry),
         store,
         settings.localizer,
-        scorer=GridScorer(grid, laser_pose=laser),
+        scorer=GridScorer(fields, laser_pose=laser),
         known_places=known,
         map_symmetries=grid_symmetries(grid),
-        claim_gate=ClaimGate(surface_distance_field(grid), config=settings.claim, laser_pose=laser),
+        claim_gate=ClaimGate(fields.surface(), config=settings.claim, laser_pose=laser),
         laser_pose=laser,
     )

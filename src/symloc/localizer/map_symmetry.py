@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import distance_transform_edt
 
 from symloc._checks import check_in_range, check_positive
 from symloc.grid import OccupancyGrid
+from symloc.grid.fields import MapFields
 
 __all__ = ["MapSymmetry", "map_symmetries"]
 
@@ -40,7 +40,7 @@ class MapSymmetry:
 
 
 def map_symmetries(
-    grid: OccupancyGrid,
+    grid: OccupancyGrid | MapFields,
     orders: tuple[int, ...] = (2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12),
     *,
     tolerance: float = 0.1,
@@ -50,7 +50,9 @@ def map_symmetries(
 
     Parameters
     ----------
-    grid : OccupancyGrid
+    grid : OccupancyGrid or MapFields
+        The map, or its shared fields (the distance to the nearest occupied cell is read from
+        :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
     orders : tuple of int
         Orders k (>= 2) to test (rotation by ``2 pi / k``).
     tolerance : float
@@ -65,12 +67,14 @@ def map_symmetries(
     """
     check_positive(tolerance, "tolerance")
     check_in_range(min_overlap, "min_overlap", 1e-9, 1.0)
+    fields = MapFields.of(grid)
+    grid = fields.grid
     occ = np.asarray(grid.occupied_mask, dtype=bool)
     rc = np.argwhere(occ)
     if rc.shape[0] < 10:
         return []
     pts = np.asarray(grid.cell_to_world(rc), dtype=np.float64)[:, :2]
-    dist = distance_transform_edt(~occ) * grid.resolution
+    dist = fields.obstacle_distance()
 
     def overlap(centre: FloatArray, k: int) -> float:
         a = 2.0 * math.pi / k

@@ -11,6 +11,7 @@ from symloc.mcl.clustering import ClusterStats, Hypothesis, cluster_particles
 from symloc.mcl.confidence import (
     Confidence,
     ConfidenceConfig,
+    ConfidenceJudge,
     ScanConsistency,
     assess,
     scan_consistency,
@@ -25,6 +26,7 @@ __all__ = [
     "ClusterStats",
     "Confidence",
     "ConfidenceConfig",
+    "ConfidenceJudge",
     "Hypothesis",
     "NotInitializedError",
     "RivalReport",

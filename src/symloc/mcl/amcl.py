@@ -14,10 +14,16 @@ augmented-MCL extensions of Section 4.4):
 5. clustered into hypotheses; the estimate is the heaviest cluster, reported with its own
    covariance, and ``n_hypotheses`` counts the clusters holding at least
    ``hypothesis_min_weight`` of the weight, which is what tells a caller that the robot may
-   stand in a symmetric place;
-6. assessed: :mod:`symloc.mcl.confidence` decides whether the estimate is *confident* (one
-   dominant, tight hypothesis whose scan agrees with the map, sustained over a few updates);
-   ``AmclResult.confidence`` and :meth:`Amcl.confidence` report it.
+   stand in a symmetric place.
+
+That is all :meth:`Amcl.update` does, so its cost is bounded by the particle count and the
+beams. Whether the estimate is *confident* (one dominant, tight hypothesis whose scan agrees
+with the map, sustained, and no rival place on the whole map) is judged after the update, as
+beluga's ``amcl_core`` estimates after the filter update: by
+:class:`symloc.mcl.confidence.ConfidenceJudge`, whose rival search may take a second.
+
+The map's fields (the likelihood field, ...) come from the map's one shared cache,
+:class:`symloc.grid.fields.MapFields`: pass the grid or its ``MapFields``.
 
 Differences from nav2_amcl, on purpose: ``update_min_d`` is tested on the Euclidean distance
 (nav2 tests |dx| and |dy| in the odom frame separately, so its threshold depends on the
@@ -33,20 +39,20 @@ odometry raises :class:`~symloc.errors.DataFormatError`. The pose estimate is ne
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, DataFormatError, SymlocError
-from symloc.geometry import relative, transform_points, wrap_angle
-from symloc.grid.distance_field import DistanceField, distance_field
+from symloc.geometry import wrap_angle
+from symloc.grid.distance_field import DistanceField
+from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.beam_model import beam_model_weights
 from symloc.mcl.beams import BeamSet, select_beams
 from symloc.mcl.clustering import ClusterStats, Hypothesis, bin_keys, cluster_particles
-from symloc.mcl.confidence import Confidence, ConfidenceConfig, assess, scan_consistency
 from symloc.mcl.kld_sampling import kld_stop_index, pf_z_quantile
 from symloc.mcl.likelihood_field import likelihood_field_weights
 from symloc.mcl.likelihood_field_prob import BeamSkipReport, likelihood_field_prob_log_weights
@@ -54,7 +60,6 @@ from symloc.mcl.motion_model import sample_motion_model_odometry
 from symloc.mcl.params import AmclParams
 from symloc.mcl.recovery import FreeSpaceSampler, RecoveryState
 from symloc.mcl.resampling import low_variance_resample
-from symloc.mcl.rival_search import RivalReport, find_rival, padded_field
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
@@ -100,9 +105,9 @@ class AmclResult:
         Random particles injected by recovery in this call.
     beam_skip : BeamSkipReport or None
         Beam-skipping report (likelihood_field_prob with ``do_beamskip``).
-    confidence : Confidence or None
-        Whether the estimate is confident (:mod:`symloc.mcl.confidence`); set by
-        :meth:`Amcl.update`.
+
+    Whether the estimate is confident is judged afterwards, by
+    :class:`symloc.mcl.confidence.ConfidenceJudge`.
     """
 
     estimate: FloatArray
@@ -117,7 +122,6 @@ class AmclResult:
     n_beams: int = 0
     injected: int = 0
     beam_skip: BeamSkipReport | None = None
-    confidence: Confidence | None = None
 
     @property
     def weight(self) -> float:
@@ -131,7 +135,8 @@ class _Counters:
     n_scans_skipped: int = 0
     n_resamples: int = 0
     n_injected: int = 0
-    n_rival_searches: int = 0
+    #: calls of initialize_global / initialize_pose (a judge of the estimate resets on a new one)
+    n_initializations: int = 0
     skip_reasons: list[str] = field(default_factory=list)
 
 
@@ -140,33 +145,34 @@ class Amcl:
 
     Parameters
     ----------
-    grid : OccupancyGrid
-        The map. Must contain at least one free cell.
+    grid : OccupancyGrid or MapFields
+        The map, or its shared fields (:meth:`MapFields.of(grid) <MapFields.of>`, what a grid
+        stands for). Must contain at least one free cell.
     params : AmclParams, optional
         nav2-named parameters (defaults as nav2).
     rng : numpy.random.Generator or int or None
         Source of all randomness.
-    confidence_config : ConfidenceConfig, optional
-        Thresholds of the confidence verdict (default :class:`ConfidenceConfig()`).
     """
 
     def __init__(
         self,
-        grid: OccupancyGrid,
+        grid: OccupancyGrid | MapFields,
         params: AmclParams | None = None,
         rng: np.random.Generator | int | None = None,
-        *,
-        confidence_config: ConfidenceConfig | None = None,
     ) -> None:
-        if not isinstance(grid, OccupancyGrid):
-            raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
+        if not isinstance(grid, (OccupancyGrid, MapFields)):
+            raise ConfigurationError(
+                f"grid: expected an OccupancyGrid or MapFields, got {type(grid).__name__}"
+            )
         self.params = AmclParams() if params is None else params
         if not isinstance(self.params, AmclParams):
             raise ConfigurationError("params: expected an AmclParams")
-        self.grid = grid
+        #: the map's shared fields (one cache per map, :class:`symloc.grid.fields.MapFields`)
+        self.fields = MapFields.of(grid)
+        self.grid = self.fields.grid
         self.rng = as_rng(rng)
-        self.free_space = FreeSpaceSampler(grid)
-        self.field: DistanceField = distance_field(grid, self.params.laser_likelihood_max_dist)
+        self.free_space = FreeSpaceSampler(self.grid)
+        self.field: DistanceField = self.fields.distance(self.params.laser_likelihood_max_dist)
         p = self.params
         self._z = pf_z_quantile(p.pf_z)
         self._alphas = (p.alpha1, p.alpha2, p.alpha3, p.alpha4, p.alpha5)
@@ -178,19 +184,6 @@ class Amcl:
         self._force_update = False
         self._resample_count = 0
         self._stats: ClusterStats | None = None
-        self.confidence_config = (
-            ConfidenceConfig() if confidence_config is None else confidence_config
-        )
-        if not isinstance(self.confidence_config, ConfidenceConfig):
-            raise ConfigurationError("confidence_config: expected a ConfidenceConfig")
-        self._confidence: Confidence | None = None
-        self._evidence: list[tuple[FloatArray, FloatArray]] = []
-        self._rival_field: DistanceField | None = None
-        tol = self.confidence_config.consistency_sigmas * p.sigma_hit
-        # The scan check needs distances beyond its tolerance: a wider field if the map's is not.
-        self._consistency_field = (
-            self.field if tol < self.field.max_dist else distance_field(grid, 2.0 * tol)
-        )
 
     # ------------------------------------------------------------------ state
     @property
@@ -231,8 +224,7 @@ class Amcl:
         self._force_update = True
         self._resample_count = 0
         self.recovery.reset()
-        self._confidence = None
-        self._evidence = []
+        self.counters.n_initializations += 1
 
     # ----------------------------------------------------------- initialise
     def initialize_global(self) -> None:
@@ -303,61 +295,10 @@ class Amcl:
         Returns
         -------
         AmclResult
-            With ``confidence`` set (see :meth:`confidence`).
+            The belief after motion, sensor update, resampling and clustering; judge its
+            confidence afterwards with :class:`symloc.mcl.confidence.ConfidenceJudge`.
         """
-        res = self._update(odom, scan, laser_pose)
-        pose = np.asarray(odom.pose, dtype=np.float64)
-        cons = None
-        if res.updated and not res.sensor_skipped:
-            cons = scan_consistency(
-                self._consistency_field,
-                res.estimate,
-                scan,
-                sigma_hit=self.params.sigma_hit,
-                sigmas=self.confidence_config.consistency_sigmas,
-                laser_pose=laser_pose,
-                laser_max_range=self.params.laser_max_range,
-                laser_min_range=self.params.laser_min_range,
-            )
-        cfg = self.confidence_config
-        conf = assess(res, cons, cfg, previous=self._confidence, odom=pose)
-        if cons is not None:
-            if not conf.checks_pass:
-                self._evidence.clear()
-            elif cons.points is not None:
-                self._evidence.append((conf.estimate, cons.points))
-                del self._evidence[: -cfg.evidence_updates]
-        if conf.rival_due:
-            rival = self._rival_search(conf.estimate)
-            conf = assess(res, cons, cfg, previous=self._confidence, odom=pose, rival=rival)
-            self.counters.n_rival_searches += 1
-        self._confidence = conf
-        return replace(res, confidence=conf)
-
-    def _rival_search(self, estimate: FloatArray) -> RivalReport:
-        """Check 5 of :mod:`symloc.mcl.confidence` on the scans of the current streak."""
-        cfg = self.confidence_config
-        pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
-        points = np.concatenate(pts) if pts else np.zeros((0, 2))
-        if self._rival_field is None:
-            self._rival_field = padded_field(self.grid, self._consistency_field.max_dist)
-        return find_rival(
-            self._rival_field,
-            points,
-            estimate,
-            tol=cfg.rival_tolerance_sigmas * self.params.sigma_hit,
-            min_distance=cfg.rival_min_distance,
-            min_angle=cfg.rival_min_angle,
-            margin=cfg.rival_margin,
-            max_points=cfg.rival_max_points,
-        )
-
-    def confidence(self) -> Confidence | None:
-        """The confidence verdict after the last :meth:`update` (None before the first one).
-
-        See :mod:`symloc.mcl.confidence` for the definition.
-        """
-        return self._confidence
+        return self._update(odom, scan, laser_pose)
 
     def _update(self, odom: OdometryReading, scan: LaserScan, laser_pose: ArrayLike) -> AmclResult:
         if self._particles is None:

@@ -17,13 +17,10 @@ one per cell. The loop is over steps, not particles or beams.
 
 from __future__ import annotations
 
-import threading
-import weakref
-
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import distance_transform_edt
 
+from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.beams import BeamSet
 
@@ -31,33 +28,17 @@ __all__ = ["beam_model_weights", "raycast_grid"]
 
 FloatArray = NDArray[np.float64]
 
-_BLOCKED: weakref.WeakKeyDictionary[OccupancyGrid, NDArray[np.float32]] = (
-    weakref.WeakKeyDictionary()
-)
-_LOCK = threading.Lock()
-
-
-def _blocked_distance(grid: OccupancyGrid) -> NDArray[np.float32]:
-    """Padded (H+2, W+2) distance [m] to the nearest non-free cell; 0 on the border."""
-    with _LOCK:
-        tab = _BLOCKED.get(grid)
-        if tab is None:
-            free = np.zeros((grid.height + 2, grid.width + 2), dtype=bool)
-            free[1:-1, 1:-1] = grid.free_mask
-            tab = distance_transform_edt(free, sampling=grid.resolution).astype(np.float32)
-            tab.setflags(write=False)
-            _BLOCKED[grid] = tab
-    return tab
-
 
 def raycast_grid(
-    grid: OccupancyGrid, origins: FloatArray, angles: FloatArray, range_max: float
+    grid: OccupancyGrid | MapFields, origins: FloatArray, angles: FloatArray, range_max: float
 ) -> FloatArray:
     """Range [m] from each origin along each angle to the first non-free cell.
 
     Parameters
     ----------
-    grid : OccupancyGrid
+    grid : OccupancyGrid or MapFields
+        The map (or its shared fields: the distance to the nearest non-free cell is read
+        from :meth:`~symloc.grid.fields.MapFields.blocked_distance`).
     origins : ndarray of shape (M, 2)
         Ray origins in the map frame [m].
     angles : ndarray of shape (M,)
@@ -70,6 +51,9 @@ def raycast_grid(
     ndarray of shape (M,)
         Ranges; 0 for a ray that starts in a non-free cell or off the map.
     """
+    fields = MapFields.of(grid)
+    tab = fields.blocked_distance()
+    grid = fields.grid
     o = np.asarray(origins, dtype=np.float64).reshape(-1, 2)
     a = np.asarray(angles, dtype=np.float64).reshape(-1) - grid.origin[2]
     if grid.origin[2] != 0.0:
@@ -78,7 +62,6 @@ def raycast_grid(
         o = np.column_stack([c0 * d[:, 0] - s0 * d[:, 1], s0 * d[:, 0] + c0 * d[:, 1]])
     else:
         o = o - grid.origin[:2]
-    tab = _blocked_distance(grid)
     h2, w2 = tab.shape
     flat = tab.ravel()
     res = grid.resolution
@@ -107,7 +90,7 @@ def raycast_grid(
 
 
 def beam_model_weights(
-    grid: OccupancyGrid,
+    grid: OccupancyGrid | MapFields,
     particles: FloatArray,
     beams: BeamSet,
     *,

@@ -53,16 +53,21 @@ symmetric rooms; telling the copies apart is the localizer's job (vision). A cal
 resolved the ambiguity itself (the localizer after vision picked the copy) should track with
 ``locally_confident``; a caller that claims a pose from AMCL alone should use ``confident``.
 
-Use :meth:`symloc.mcl.Amcl.confidence` (the filter tracks it along its updates; also
-``AmclResult.confidence``), or :func:`assess` with :func:`scan_consistency` (and
-:func:`~symloc.mcl.rival_search.find_rival`) for hand-fed results.
+The verdict is judged *after* the filter update, not inside it (beluga's ``amcl_core``
+estimates after the update): :meth:`symloc.mcl.Amcl.update` only moves, weighs, resamples and
+clusters the particles (bounded cost); a :class:`ConfidenceJudge` bound to the filter then
+judges each of its results, keeps the hysteresis and the streak's evidence, and runs the rival
+search when it is due (up to about a second). Call the judge on *every* result of
+:meth:`~symloc.mcl.Amcl.update` (also those that integrated no scan: they keep the verdict),
+or the hysteresis counts differently. For hand-fed results use :func:`assess` with
+:func:`scan_consistency` (and :func:`~symloc.mcl.rival_search.find_rival`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -71,12 +76,17 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose, relative, transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
-from symloc.mcl.rival_search import RivalReport
+from symloc.mcl.rival_search import RivalReport, find_rival
+from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
+
+if TYPE_CHECKING:
+    from symloc.mcl.amcl import Amcl, AmclResult
 
 __all__ = [
     "Confidence",
     "ConfidenceConfig",
+    "ConfidenceJudge",
     "ScanConsistency",
     "assess",
     "hypothesis_std",
@@ -536,3 +546,158 @@ def assess(
         else f"ambiguous place (searched {streak - rival_streak} updates ago)"
     )
     return ok(False, reason, rival_due=due)
+
+
+class ConfidenceJudge:
+    """The confidence verdict of one :class:`~symloc.mcl.Amcl` filter, judged after each update.
+
+    Owns what the verdict carries from one update to the next: the previous verdict (the
+    hysteresis), the scans of the current streak (the rival search's evidence), the map's
+    consistency and rival-search fields, and the count of rival searches. A new
+    initialisation of the filter (``initialize_global`` / ``initialize_pose``) starts a new
+    judgement: the judge notices it (``amcl.counters.n_initializations``) and forgets the
+    verdict and the evidence, as if :meth:`reset` had been called at that moment.
+
+    Parameters
+    ----------
+    amcl : Amcl
+        The filter whose results are judged (its ``sigma_hit``, laser range limits and
+        map fields are used).
+    config : ConfidenceConfig, optional
+        Thresholds of the verdict (default :class:`ConfidenceConfig()`).
+
+    Attributes
+    ----------
+    amcl : Amcl
+    config : ConfidenceConfig
+    n_rival_searches : int
+        Rival searches run since the judge was made (over every streak and initialisation).
+    consistency_field : DistanceField
+        The map's distance field the scan check reads: the filter's likelihood field when its
+        ``laser_likelihood_max_dist`` exceeds the check's tolerance ``consistency_sigmas *
+        sigma_hit``, else the map's field clipped at twice the tolerance.
+    """
+
+    def __init__(self, amcl: Amcl, config: ConfidenceConfig | None = None) -> None:
+        self.amcl = amcl
+        self.config = ConfidenceConfig() if config is None else config
+        if not isinstance(self.config, ConfidenceConfig):
+            raise ConfigurationError(
+                f"config: expected a ConfidenceConfig, got {type(self.config).__name__}"
+            )
+        self.n_rival_searches = 0
+        tol = self.config.consistency_sigmas * amcl.params.sigma_hit
+        own = amcl.field
+        # The scan check needs distances beyond its tolerance: a wider field if the map's is not.
+        self.consistency_field: DistanceField = (
+            own if tol < own.max_dist else amcl.fields.distance(2.0 * tol)
+        )
+        self._verdict: Confidence | None = None
+        self._evidence: list[tuple[FloatArray, FloatArray]] = []
+        self._init_seen = amcl.counters.n_initializations
+
+    def reset(self) -> None:
+        """Forget the verdict and the streak's evidence (the filter was re-initialised)."""
+        self._verdict = None
+        self._evidence = []
+        self._init_seen = self.amcl.counters.n_initializations
+
+    def _sync(self) -> None:
+        if self._init_seen != self.amcl.counters.n_initializations:
+            self.reset()
+
+    @property
+    def verdict(self) -> Confidence | None:
+        """The verdict of the last judged result (None before the first one after an
+        initialisation)."""
+        self._sync()
+        return self._verdict
+
+    def __call__(
+        self,
+        result: AmclResult,
+        odom: OdometryReading,
+        scan: LaserScan,
+        *,
+        laser_pose: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> Confidence:
+        """Judge ``result``, what ``amcl.update(odom, scan, laser_pose=laser_pose)`` returned.
+
+        Parameters
+        ----------
+        result : AmclResult
+            The filter's last result (judge every one, in order).
+        odom : OdometryReading
+            The odometry given to that update.
+        scan : LaserScan
+            The scan given to that update.
+        laser_pose : array of shape (3,)
+            The laser in the robot frame, as given to that update.
+
+        Returns
+        -------
+        Confidence
+            Also :attr:`verdict` until the next call. When checks 1-4 pass and a rival search
+            is due, it runs here (up to about a second on a building-sized map).
+        """
+        self._sync()
+        amcl, cfg = self.amcl, self.config
+        p = amcl.params
+        pose = np.asarray(odom.pose, dtype=np.float64)
+        cons = None
+        if result.updated and not result.sensor_skipped:
+            cons = scan_consistency(
+                self.consistency_field,
+                result.estimate,
+                scan,
+                sigma_hit=p.sigma_hit,
+                sigmas=cfg.consistency_sigmas,
+                laser_pose=laser_pose,
+                laser_max_range=p.laser_max_range,
+                laser_min_range=p.laser_min_range,
+            )
+        conf = assess(result, cons, cfg, previous=self._verdict, odom=pose)
+        if cons is not None:
+            if not conf.checks_pass:
+                self._evidence.clear()
+            elif cons.points is not None:
+                self._evidence.append((conf.estimate, cons.points))
+                del self._evidence[: -cfg.evidence_updates]
+        if conf.rival_due:
+            rival = self._rival_search(conf.estimate)
+            conf = assess(result, cons, cfg, previous=self._verdict, odom=pose, rival=rival)
+            self.n_rival_searches += 1
+        self._verdict = conf
+        return conf
+
+    def update(
+        self,
+        odom: OdometryReading,
+        scan: LaserScan,
+        *,
+        laser_pose: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> tuple[AmclResult, Confidence]:
+        """Run the filter update, then judge it: ``amcl.update(...)`` followed by this judge.
+
+        The convenience of a caller that uses AMCL alone. Returns the filter's result and the
+        verdict on it.
+        """
+        result = self.amcl.update(odom, scan, laser_pose=laser_pose)
+        return result, self(result, odom, scan, laser_pose=laser_pose)
+
+    def _rival_search(self, estimate: FloatArray) -> RivalReport:
+        """Check 5 on the scans of the current streak, chained into the estimate's frame."""
+        cfg = self.config
+        pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
+        points = np.concatenate(pts) if pts else np.zeros((0, 2))
+        field = self.amcl.fields.grown(self.consistency_field.max_dist)
+        return find_rival(
+            field,
+            points,
+            estimate,
+            tol=cfg.rival_tolerance_sigmas * self.amcl.params.sigma_hit,
+            min_distance=cfg.rival_min_distance,
+            min_angle=cfg.rival_min_angle,
+            margin=cfg.rival_margin,
+            max_points=cfg.rival_max_points,
+        )

@@ -6,7 +6,7 @@ matches the map: nothing inside the filter says that another place would match a
 because the particles there died. This module answers that question directly, from the map:
 
 1. The evidence is a set of end points ``(M, 2)`` in the robot's current frame (the scans of
-   the last few filter updates, chained by odometry, see :class:`symloc.mcl.amcl.Amcl`). A
+   the last few filter updates, chained by odometry, see :class:`symloc.mcl.confidence.ConfidenceJudge`). A
    pose *explains* it to the degree ``score`` = fraction of points that land within ``tol``
    of an obstacle of the map's distance field (the scan-consistency measure of
    :mod:`symloc.mcl.confidence`).
@@ -43,8 +43,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, wrap_angle
-from symloc.grid.distance_field import DistanceField, distance_field
+from symloc.geometry import wrap_angle
+from symloc.grid.distance_field import DistanceField
+from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import endpoint_flat_indices
@@ -86,17 +87,11 @@ class RivalReport:
     n_points: int
 
 
-def padded_field(grid: OccupancyGrid, max_dist: float) -> DistanceField:
+def padded_field(grid: OccupancyGrid | MapFields, max_dist: float) -> DistanceField:
     """Distance field (clipped at ``max_dist`` [m]) of ``grid`` grown by ``max_dist`` of unknown
-    cells on every side (same frame, same free cells).
-
-    Keep the returned field (its grid is a new object; the distance-field cache is weak).
-    """
-    pad = math.ceil(max_dist / grid.resolution) + 1
-    data = np.pad(grid.data, pad, constant_values=-1)
-    origin = compose(np.asarray(grid.origin, dtype=np.float64), [-pad * grid.resolution] * 2 + [0])
-    big = OccupancyGrid(data, grid.resolution, origin, grid.occupied_thresh, grid.free_thresh)
-    return distance_field(big, max_dist)
+    cells on every side (same frame, same free cells): the map's shared
+    :meth:`~symloc.grid.fields.MapFields.grown` field, computed once per map."""
+    return MapFields.of(grid).grown(max_dist)
 
 
 def match_scores(

@@ -1,0 +1,227 @@
+"""``MapFields``: every field of one map, computed lazily once and shared by every consumer.
+
+The parts that localize on a map each need a field derived from it: AMCL's likelihood field
+(the distance to the nearest occupied cell clipped at ``laser_likelihood_max_dist``), the
+confidence check's wider distance field, the rival search's field on the map grown by a border
+of unknown cells, the beam model's distance to the nearest non-free cell, the pose scorer's and
+the map-symmetry search's unclipped distance, and the claim gate's distance to the walls'
+centre lines. ``MapFields.of(grid)`` is the one cache of them for a grid: each field is
+computed the first time a consumer asks and then handed to every other consumer of the same
+grid object. The cache lives on the grid (its lifetime is the grid's; nothing global keeps a
+map alive) and is left out when the grid is pickled or copied.
+
+Every consumer (``Amcl``, ``GridScorer``, ``map_symmetries``, the beam model, the rival
+search) accepts either an :class:`~symloc.grid.OccupancyGrid` or its ``MapFields``.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import Counter
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import distance_transform_edt
+
+from symloc._checks import check_positive
+from symloc.errors import ConfigurationError
+from symloc.geometry import compose
+from symloc.grid.distance_field import (
+    DistanceField,
+    compute_distance_field,
+    compute_surface_distance_field,
+)
+from symloc.grid.occupancy_grid import OccupancyGrid
+
+__all__ = [
+    "MapFields",
+    "clear_distance_field_cache",
+    "distance_field",
+    "surface_distance_field",
+]
+
+#: The attribute of an OccupancyGrid that holds its MapFields (see OccupancyGrid.__getstate__).
+_ATTR = "_map_fields"
+_OF_LOCK = threading.Lock()
+
+
+class MapFields:
+    """The fields of one map, each computed on first use and then shared.
+
+    Get the one instance of a grid with :meth:`of`; constructing one directly gives a private
+    cache (what a test that counts computations wants).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (immutable, so no field can go stale).
+
+    Attributes
+    ----------
+    grid : OccupancyGrid
+    n_computed : collections.Counter of str
+        How many times each kind of field was computed (``"distance"``, ``"surface"``,
+        ``"grown"``, ``"obstacle_distance"``, ``"blocked_distance"``): with one shared cache
+        each distinct field is computed once.
+    """
+
+    def __init__(self, grid: OccupancyGrid) -> None:
+        if not isinstance(grid, OccupancyGrid):
+            raise ConfigurationError(f"grid: expected an OccupancyGrid, got {type(grid).__name__}")
+        self.grid = grid
+        self.n_computed: Counter[str] = Counter()
+        self._lock = threading.RLock()
+        self._distance: dict[float, DistanceField] = {}
+        self._surface: dict[float, DistanceField] = {}
+        self._grown: dict[float, DistanceField] = {}
+        self._obstacle: NDArray[np.float64] | None = None
+        self._blocked: NDArray[np.float32] | None = None
+
+    @classmethod
+    def of(cls, source: OccupancyGrid | MapFields) -> MapFields:
+        """The shared fields of ``source`` (a grid, or its fields returned as they are).
+
+        The cache is stored on the grid object itself, so every consumer built on the same
+        grid object shares it and it dies with the grid.
+        """
+        if isinstance(source, MapFields):
+            return source
+        if not isinstance(source, OccupancyGrid):
+            raise ConfigurationError(
+                f"grid: expected an OccupancyGrid or MapFields, got {type(source).__name__}"
+            )
+        fields = source.__dict__.get(_ATTR)
+        if fields is None:
+            with _OF_LOCK:
+                fields = source.__dict__.get(_ATTR)
+                if fields is None:
+                    fields = cls(source)
+                    object.__setattr__(source, _ATTR, fields)  # frozen dataclass: a cache only
+        assert isinstance(fields, MapFields)
+        return fields
+
+    # ------------------------------------------------------------------ fields
+    def distance(self, max_dist: float = 2.0) -> DistanceField:
+        """Distance [m] to the nearest occupied cell clipped at ``max_dist`` [m] > 0.
+
+        AMCL's likelihood field (``max_dist`` is nav2's ``laser_likelihood_max_dist``) and the
+        confidence check's scan-consistency field. Cells with occupancy above
+        ``occupied_thresh`` are obstacles; unknown and free cells are not (as ROS amcl's
+        ``map_update_cspace``); off the map reads ``max_dist``; a grid with no occupied cell
+        gives ``max_dist`` everywhere. Its per-cell likelihood tables
+        (:meth:`DistanceField.table`) are cached on it, so they are shared too.
+        """
+        md = check_positive(max_dist, "laser_likelihood_max_dist")
+        with self._lock:
+            df = self._distance.get(md)
+            if df is None:
+                df = compute_distance_field(self.grid, md)
+                self.n_computed["distance"] += 1
+                self._distance[md] = df
+        return df
+
+    def surface(self, max_dist: float = 1.0) -> DistanceField:
+        """Distance [m] to the map's obstacle surfaces, as lines one cell thin.
+
+        A laser map draws a wall as a band of occupied cells two or three cells thick (the hits
+        of many scans straddle the surface), so the distance to the nearest occupied cell is
+        zero across the whole band and says nothing about where in it the surface is. Here the
+        band's cells that face free space are thinned to their centre line
+        (:func:`skimage.morphology.skeletonize`) and the distance is measured to that line:
+        zero on the surface's best estimate, with a gradient on both sides of it. Clipped at
+        ``max_dist`` [m] > 0; off the map reads ``max_dist``. Used by scan-to-map alignment
+        (:mod:`symloc.mcl.scan_to_map`) and the localizer's claim gate.
+        """
+        md = check_positive(max_dist, "max_dist")
+        with self._lock:
+            df = self._surface.get(md)
+            if df is None:
+                df = compute_surface_distance_field(self.grid, md)
+                self.n_computed["surface"] += 1
+                self._surface[md] = df
+        return df
+
+    def grown(self, max_dist: float) -> DistanceField:
+        """:meth:`distance` of the map grown by ``max_dist`` [m] of unknown cells on every side.
+
+        Same frame and free cells as the map; its grid is a new, larger object (kept alive by
+        the field). The rival search (:mod:`symloc.mcl.rival_search`) reads it so that a
+        candidate pose near the map's edge scores its points off the map as far away.
+        """
+        md = check_positive(max_dist, "max_dist")
+        with self._lock:
+            df = self._grown.get(md)
+            if df is None:
+                g = self.grid
+                pad = math.ceil(md / g.resolution) + 1
+                data = np.pad(g.data, pad, constant_values=-1)
+                origin = compose(
+                    np.asarray(g.origin, dtype=np.float64), [-pad * g.resolution] * 2 + [0]
+                )
+                big = OccupancyGrid(data, g.resolution, origin, g.occupied_thresh, g.free_thresh)
+                df = compute_distance_field(big, md)
+                self.n_computed["grown"] += 1
+                self._grown[md] = df
+        return df
+
+    def obstacle_distance(self) -> NDArray[np.float64]:
+        """Unclipped distance [m] of each cell ``(H, W)`` to the nearest occupied cell, float64.
+
+        :func:`scipy.ndimage.distance_transform_edt` of the free-of-obstacle mask times the
+        resolution (read-only). Read by the localizer's pose
+        scorer (:class:`symloc.localizer.adapters.GridScorer`) and by
+        :func:`symloc.localizer.map_symmetry.map_symmetries`.
+        """
+        with self._lock:
+            if self._obstacle is None:
+                occ = np.asarray(self.grid.occupied_mask, dtype=bool)
+                dist = np.asarray(distance_transform_edt(~occ), dtype=np.float64)
+                dist = dist * self.grid.resolution
+                dist.setflags(write=False)
+                self._obstacle = dist
+                self.n_computed["obstacle_distance"] += 1
+            return self._obstacle
+
+    def blocked_distance(self) -> NDArray[np.float32]:
+        """Distance [m] to the nearest non-free cell, padded ``(H + 2, W + 2)`` float32.
+
+        The one-cell border counts as non-free (0), so a ray leaving the map stops there. The
+        beam model's sphere tracing (:func:`symloc.mcl.beam_model.raycast_grid`) reads it.
+        """
+        with self._lock:
+            if self._blocked is None:
+                g = self.grid
+                free = np.zeros((g.height + 2, g.width + 2), dtype=bool)
+                free[1:-1, 1:-1] = g.free_mask
+                tab = distance_transform_edt(free, sampling=g.resolution).astype(np.float32)
+                tab.setflags(write=False)
+                self._blocked = tab
+                self.n_computed["blocked_distance"] += 1
+            return self._blocked
+
+    def clear(self) -> None:
+        """Forget every computed field (the counts stay)."""
+        with self._lock:
+            self._distance.clear()
+            self._surface.clear()
+            self._grown.clear()
+            self._obstacle = None
+            self._blocked = None
+
+
+def distance_field(grid: OccupancyGrid | MapFields, max_dist: float = 2.0) -> DistanceField:
+    """The shared distance field of ``grid`` clipped at ``max_dist`` [m]:
+    ``MapFields.of(grid).distance(max_dist)``."""
+    return MapFields.of(grid).distance(max_dist)
+
+
+def surface_distance_field(grid: OccupancyGrid | MapFields, max_dist: float = 1.0) -> DistanceField:
+    """The shared distance [m] to the map's obstacle surfaces:
+    ``MapFields.of(grid).surface(max_dist)``."""
+    return MapFields.of(grid).surface(max_dist)
+
+
+def clear_distance_field_cache(grid: OccupancyGrid | MapFields) -> None:
+    """Forget the fields computed for ``grid`` (:meth:`MapFields.clear`)."""
+    MapFields.of(grid).clear()
