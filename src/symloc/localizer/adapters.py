@@ -25,7 +25,7 @@ from symloc.geometry import compose, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.scan import LaserScan
 
-from .types import Hypothesis, SymmetryVerdict, TrackerResult
+from .types import SymmetryVerdict, TrackerResult
 
 __all__ = ["AmclTracker", "GridScorer", "ReportJudge", "corner_middle_bearing", "verdict_from"]
 
@@ -57,10 +57,7 @@ class AmclTracker:
     def update(self, odom: Any, scan: Any) -> TrackerResult:
         r = self.amcl.update(odom, scan, laser_pose=self.laser_pose)
         self.last = r
-        hyps = tuple(
-            Hypothesis(pose=np.asarray(h.mean, dtype=np.float64), weight=float(h.weight))
-            for h in r.hypotheses
-        )
+        hyps = tuple(r.hypotheses)  # the clusters are the localizer's hypotheses
         covs = tuple(np.asarray(h.covariance, dtype=np.float64) for h in r.hypotheses)
         return TrackerResult(
             estimate=np.asarray(r.estimate, dtype=np.float64),
