@@ -202,7 +202,7 @@ def _trials(
     examples: list[NDArray[np.uint8]] | None = None,
 ) -> list[TrialOutcome]:
     K = camera_matrix(camera)
-    c = place.pose[:2]
+    c = place.center
     out = []
     stored = [im.bow for im in place.images]
     for j, im in enumerate(place.images):
