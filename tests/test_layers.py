@@ -25,6 +25,7 @@ ROBOT_SIDE = (
     "camera_model.py",
     "image_header.py",
     "errors.py",
+    "hypothesis.py",
     "_checks.py",
     "grid",
     "features",

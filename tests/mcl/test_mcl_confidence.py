@@ -15,6 +15,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import distance_field
+from symloc.hypothesis import Hypothesis
 from symloc.mcl import (
     Amcl,
     AmclParams,
@@ -26,7 +27,6 @@ from symloc.mcl import (
     find_rival,
     scan_consistency,
 )
-from symloc.mcl.clustering import Hypothesis
 from symloc.mcl.rival_search import match_scores, padded_field
 from symloc.odometry import OdometryReading
 
@@ -38,7 +38,7 @@ NO_RIVAL = ConfidenceConfig(rival_check=False)
 
 def _result(shares=(1.0,), cov=TIGHT, estimate=(2.0, 3.0, 0.5), updated=True, skipped=False):
     est = np.asarray(estimate, dtype=float)
-    hyps = [Hypothesis(w, est, cov, 100) for w in shares]
+    hyps = [Hypothesis(est, w, covariance=cov, n_particles=100) for w in shares]
     return SimpleNamespace(
         estimate=est, covariance=cov, hypotheses=hyps, updated=updated, sensor_skipped=skipped
     )

@@ -19,7 +19,7 @@ def _places(path: Path) -> list[tuple[str, int, int]]:
         out = []
         for pid in vm.place_ids():
             p = vm.place(pid, with_images=False)
-            out.append((p.kind, int(p.order), int(p.n_directions)))
+            out.append((p.kind, int(p.order), int(p.m)))
         return out
     finally:
         vm.close()

@@ -21,7 +21,7 @@ from symloc.vision.orientation import (
     intrinsics_matrix,
     yaw_from_homography,
 )
-from symloc.vision.visual_map import Place, PlaceImage
+from symloc.vision.place import Place, PlaceImage
 from symloc.vision.vocabulary import Vocabulary
 
 
@@ -30,7 +30,16 @@ def _place(photos: list[np.ndarray], voc: Vocabulary, ext: OrbExtractor) -> Plac
     for j, photo in enumerate(photos):
         f = ext.extract(rotated_view(photo, 0.0))
         images.append(PlaceImage(j, 0.5 - j * math.pi / 2, f, voc.bow(f.descriptors)))
-    return Place(1, "square", 4, 1.0, np.array([0.0, 0.0, 0.5]), tuple(images))
+    return Place(
+        place_id=1,
+        center=np.array([0.0, 0.0]),
+        heading0=0.5,
+        m=4,
+        order=4,
+        gv_distance=1.0,
+        kind="square",
+        images=tuple(images),
+    )
 
 
 def test_decides_each_direction_with_heading_offset() -> None:
@@ -143,6 +152,6 @@ def test_config_and_intrinsics_validation() -> None:
 
 def test_place_without_images_is_an_error() -> None:
     trained_vocabulary = helpers.trained_vocabulary()
-    empty = Place(3, "square", 4, 1.0, np.zeros(3), ())
+    empty = Place(3, np.zeros(2), heading0=0.0, m=4, order=4, gv_distance=1.0, kind="square")
     with pytest.raises(ConfigurationError, match="place 3: has no stored images"):
         decide_orientation(np.zeros((48, 64), np.uint8), empty, trained_vocabulary, K)

@@ -12,7 +12,7 @@ from vision_helpers import H, K, W, rotated_view
 
 from symloc.camera_model import CameraModel
 from symloc.vision.orientation import decide_orientation, dist_coeffs_of
-from symloc.vision.visual_map import Place, PlaceImage
+from symloc.vision.place import Place, PlaceImage
 
 # Raspberry Pi camera v2 (UbiquityRobotics/raspicam_node camerav2_1280x960.yaml) and a wide
 # barrel lens
@@ -37,7 +37,16 @@ def test_undistorted_keypoints_give_the_heading_offset(dist: tuple[float, ...]) 
     for j, photo in enumerate(photos):
         f = ext.extract(distort(rotated_view(photo, 0.0)))
         images.append(PlaceImage(j, 0.5 - j * math.pi / 2, f, voc.bow(f.descriptors)))
-    place = Place(1, "square", 4, 1.0, np.array([0.0, 0.0, 0.5]), tuple(images))
+    place = Place(
+        place_id=1,
+        center=np.array([0.0, 0.0]),
+        heading0=0.5,
+        m=4,
+        order=4,
+        gv_distance=1.0,
+        kind="square",
+        images=tuple(images),
+    )
     yaw = 0.25
     query = distort(rotated_view(photos[1], yaw))
     raw = decide_orientation(query, place, voc, K)

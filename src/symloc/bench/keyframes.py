@@ -71,7 +71,7 @@ class KeyframePolicyResult:
 
 def map_bytes(place: Any, *, keep_images: bool, folder: Path) -> int:
     """Bytes on disk of a visual map holding only ``place`` (WAL folded in)."""
-    path = folder / f"map_{place.n_directions}_{int(keep_images)}.db"
+    path = folder / f"map_{place.m}_{int(keep_images)}.db"
     path.unlink(missing_ok=True)
     with VisualMap(path, journal="delete") as vm:
         imgs = (

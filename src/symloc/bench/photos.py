@@ -39,7 +39,8 @@ from symloc._checks import as_rng
 from symloc.errors import ConfigurationError
 from symloc.vision.orb import OrbExtractor
 from symloc.vision.orientation import OrientationConfig, decide_orientation, decide_with_retries
-from symloc.vision.visual_map import Place, PlaceImage, direction_headings
+from symloc.vision.place import Place, PlaceImage
+from symloc.vision.visual_map import direction_headings
 from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
@@ -172,7 +173,16 @@ def make_place(
     for j, img in enumerate(views):
         f = extractor.extract(img)
         pimgs.append(PlaceImage(j, float(heads[j]), f, vocabulary.bow(f.descriptors)))
-    return Place(0, kind, len(views), 0.0, np.array([0.0, 0.0, 0.0]), tuple(pimgs))
+    return Place(
+        place_id=0,
+        center=np.array([0.0, 0.0]),
+        heading0=0.0,
+        m=len(pimgs),
+        order=len(views),
+        gv_distance=0.0,
+        kind=kind,
+        images=tuple(pimgs),
+    )
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from symloc.vision.orientation import (
     decide_orientation,
     decide_with_retries,
 )
-from symloc.vision.visual_map import Place, PlaceImage
+from symloc.vision.place import Place, PlaceImage
 from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
@@ -84,8 +84,16 @@ def store_place(
         images.append(
             PlaceImage(j, float(h), f, vocabulary.bow(f.descriptors), img if keep_images else None)
         )
-    pose = np.array([center[0], center[1], headings[0]], float)
-    return Place(0, kind, len(headings), float(gv_distance), pose, tuple(images))
+    return Place(
+        place_id=0,
+        center=np.array([center[0], center[1]], float),
+        heading0=float(headings[0]),
+        m=len(images),
+        order=len(headings),
+        gv_distance=float(gv_distance),
+        kind=kind,
+        images=tuple(images),
+    )
 
 
 @dataclass(frozen=True)
@@ -194,7 +202,7 @@ def _trials(
     examples: list[NDArray[np.uint8]] | None = None,
 ) -> list[TrialOutcome]:
     K = camera_matrix(camera)
-    c = place.pose[:2]
+    c = place.center
     out = []
     stored = [im.bow for im in place.images]
     for j, im in enumerate(place.images):

@@ -28,7 +28,7 @@ from symloc.mcl.amcl import Amcl, AmclResult
 from symloc.mcl.confidence import Confidence, ConfidenceConfig, ConfidenceJudge
 from symloc.scan import LaserScan
 
-from .types import Hypothesis, SymmetryVerdict, TrackerResult
+from .types import SymmetryVerdict, TrackerResult
 
 __all__ = ["AmclTracker", "GridScorer", "ReportJudge", "corner_middle_bearing", "verdict_from"]
 
@@ -89,10 +89,7 @@ class AmclTracker:
         r = self.amcl.update(odom, scan, laser_pose=self.laser_pose)
         conf = self.judge(r, odom, scan, laser_pose=self.laser_pose)
         self.last, self.last_confidence = r, conf
-        hyps = tuple(
-            Hypothesis(pose=np.asarray(h.mean, dtype=np.float64), weight=float(h.weight))
-            for h in r.hypotheses
-        )
+        hyps = tuple(r.hypotheses)  # the clusters are the localizer's hypotheses
         covs = tuple(np.asarray(h.covariance, dtype=np.float64) for h in r.hypotheses)
         return TrackerResult(
             estimate=np.asarray(r.estimate, dtype=np.float64),

@@ -20,6 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
+from symloc.hypothesis import Hypothesis
+from symloc.vision.place import Place
 
 __all__ = [
     "Decision",
@@ -102,14 +104,6 @@ class Request:
                     f"Request.angle: {self.kind.value} needs a finite angle, got {self.angle!r}"
                 )
             object.__setattr__(self, "angle", float(self.angle))
-
-
-@dataclass(frozen=True, slots=True)
-class Hypothesis:
-    """One candidate pose ``(3,)`` [m, m, rad] with its weight (sums to <= 1 over a set)."""
-
-    pose: FloatArray
-    weight: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -215,27 +209,6 @@ class SymmetryJudge(Protocol):
     """Algorithm 1: judge one scan."""
 
     def __call__(self, scan: object) -> SymmetryVerdict: ...
-
-
-@dataclass(frozen=True, slots=True)
-class Place:
-    """A symmetric place known to the visual map.
-
-    ``center`` (2,) map frame [m]; ``heading0`` [rad] map-frame heading of stored image 0; the
-    ``m`` images were taken clockwise, image ``j`` at ``heading0 - j * 2 pi / m``.
-    ``heading_reliable`` is False when the mapping pose could not observe heading there (laser
-    SLAM in a round room carries only odometry's heading): a decision at such a place gives a
-    direction but not a pose the localizer may claim.
-    """
-
-    place_id: int
-    center: FloatArray
-    heading0: float
-    m: int
-    order: int
-    gv_distance: float
-    kind: str = "polygon"
-    heading_reliable: bool = True
 
 
 class DecisionStatus(enum.Enum):

@@ -10,6 +10,7 @@ G-V distance, or a new one).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -18,13 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
+from symloc.vision.place import UNANCHORED_LABEL
 
 from .types import Decision, DecisionStatus, Place
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
-
-#: Label of a place whose stored headings came from odometry alone (see ``Place``).
-UNANCHORED_LABEL = "heading-from-odometry"
 
 FloatArray = NDArray[np.float64]
 
@@ -78,27 +77,19 @@ class VisionPlaceStore:
         self.orientation_config = orientation_config
         self.extractor = extractor if extractor is not None else OrbExtractor()
         self.keep_images = keep_images
-        self._places: dict[int, Any] = {}
+        self._places: dict[int, Place] = {}
         self.last_decision: Any = None
 
-    def _vplace(self, place_id: int) -> Any:
+    def _vplace(self, place_id: int) -> Place:
         if place_id not in self._places:
             self._places[place_id] = self.visual_map.place(place_id)
         return self._places[place_id]
 
     @staticmethod
-    def _to_place(vp: Any) -> Place:
-        order = 0 if vp.kind == "circle" else int(vp.order)
-        return Place(
-            place_id=int(vp.id),
-            center=np.asarray(vp.pose[:2], dtype=np.float64),
-            heading0=float(vp.pose[2]),
-            m=int(vp.n_directions),
-            order=order,
-            gv_distance=float(vp.gv_distance),
-            kind=str(vp.kind),
-            heading_reliable=vp.label != UNANCHORED_LABEL,
-        )
+    def _to_place(vp: Place) -> Place:
+        """The map's place as the localizer takes it: a circle's order is 0 (infinite), where
+        the map stores ``m``; everything else (``heading_reliable`` included) passes through."""
+        return dataclasses.replace(vp, order=0) if vp.kind == "circle" else vp
 
     def all_places(self) -> list[Place]:
         """Every stored place (the localizer's ``known_places``)."""

@@ -27,6 +27,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from symloc.errors import ConfigurationError
+from symloc.hypothesis import Hypothesis
 from symloc.mcl import kernels
 
 __all__ = [
@@ -48,28 +49,6 @@ N_ANGLE_BINS = 36
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class Hypothesis:
-    """One cluster of particles: a pose hypothesis.
-
-    Attributes
-    ----------
-    weight : float
-        Sum of its particles' normalised weights (0..1).
-    mean : ndarray of shape (3,)
-        Weighted mean x [m], y [m] and circular-mean theta [rad].
-    covariance : ndarray of shape (3, 3)
-        Its own weighted covariance (x, y, theta) [m^2, m rad, rad^2].
-    n_particles : int
-        Number of particles in it.
-    """
-
-    weight: float
-    mean: FloatArray
-    covariance: FloatArray
-    n_particles: int
-
-
-@dataclass(frozen=True, slots=True, eq=False)
 class ClusterStats:
     """All clusters at once, heaviest first.
 
@@ -87,9 +66,12 @@ class ClusterStats:
         return int(self.weights.size)
 
     def hypotheses(self) -> list[Hypothesis]:
-        """The clusters as :class:`Hypothesis` records, heaviest first."""
+        """The clusters as :class:`~symloc.hypothesis.Hypothesis` records, heaviest first.
+
+        Each carries its mean as ``pose``, its own ``covariance`` and ``n_particles``.
+        """
         return [
-            Hypothesis(float(w), m, c, int(k))
+            Hypothesis(pose=m, weight=float(w), covariance=c, n_particles=int(k))
             for w, m, c, k in zip(
                 self.weights, self.means, self.covariances, self.counts, strict=True
             )

@@ -12,7 +12,8 @@ from symloc.vision.orientation import (
     decide_orientation,
     decide_with_retries,
 )
-from symloc.vision.visual_map import Place, PlaceImage, QueryResult, VisualMap
+from symloc.vision.place import Place, PlaceImage
+from symloc.vision.visual_map import QueryResult, VisualMap
 from symloc.vision.vocabulary import Vocabulary, load_dbow2_text, load_vocabulary, save_vocabulary
 
 __all__ = [

@@ -58,7 +58,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.vision.bow import BowVector
 from symloc.vision.orb import OrbExtractor, OrbFeatures
-from symloc.vision.visual_map import Place
+from symloc.vision.place import Place
 from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
@@ -449,9 +449,9 @@ def decide_orientation(
         query if isinstance(query, OrbFeatures) else (extractor or OrbExtractor()).extract(query)
     )
     n_kp = len(feats)
-    m = place.n_directions
-    if m < 1:
-        raise ConfigurationError(f"place {place.id}: has no stored images")
+    if not place.images:
+        raise ConfigurationError(f"place {place.place_id}: has no stored images")
+    m = place.m
     if n_kp < cfg.min_keypoints:
         return _undecided(
             "refused",
@@ -568,7 +568,7 @@ def decide_with_retries(
         (stored images are in clockwise order); ``heading`` is the current heading after the
         t turns; ``attempts`` counts the images tried.
     """
-    m = place.n_directions
+    m = place.m
     last: OrientationDecision | None = None
     for t in range(m):
         d = decide_orientation(

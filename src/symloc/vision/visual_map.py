@@ -36,6 +36,7 @@ from symloc.geometry import wrap_angle
 from symloc.image_header import check_image_size, image_header
 from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
 from symloc.vision.orb import OrbFeatures
+from symloc.vision.place import UNANCHORED_LABEL, Place, PlaceImage
 
 __all__ = [
     "APPLICATION_ID",
@@ -115,62 +116,6 @@ MAX_FEATURES = 1_000_000
 def direction_headings(heading0: float, m: int) -> NDArray[np.float64]:
     """Headings [rad] of the M clockwise directions: ``heading0 - j * 2 pi / M``, wrapped."""
     return np.asarray(wrap_angle(heading0 - np.arange(m) * (2.0 * math.pi / m)), np.float64)
-
-
-@dataclass(frozen=True)
-class PlaceImage:
-    """One stored view of a place.
-
-    Attributes
-    ----------
-    direction : int
-        Clockwise index j in 0..M-1.
-    heading : float
-        Map heading [rad] the camera looked along.
-    features : OrbFeatures
-    bow : BowVector
-    image : (H, W) or (H, W, 3) uint8 array or None
-        Kept only when asked (it dominates the storage).
-    """
-
-    direction: int
-    heading: float
-    features: OrbFeatures
-    bow: BowVector
-    image: NDArray[np.uint8] | None = None
-
-
-@dataclass(frozen=True)
-class Place:
-    """A symmetric place with its M images in clockwise order.
-
-    Attributes
-    ----------
-    id : int
-    kind : str
-        e.g. ``"square"``, ``"polygon"``, ``"circle"``, ``"rectangle"``.
-    order : int
-        Symmetry order.
-    gv_distance : float
-        G-V distance [m] (the G-V index key).
-    pose : (3,) float64
-        Map pose of the centre, heading of direction 0.
-    images : tuple of PlaceImage
-    label : str or None
-    """
-
-    id: int
-    kind: str
-    order: int
-    gv_distance: float
-    pose: NDArray[np.float64]
-    images: tuple[PlaceImage, ...]
-    label: str | None = None
-
-    @property
-    def n_directions(self) -> int:
-        """M, the number of stored directions."""
-        return len(self.images)
 
 
 @dataclass(frozen=True)
@@ -527,21 +472,25 @@ class VisualMap:
                 (int(place_id),),
             ).fetchall()
             imgs = [self._image_record(r, where, with_images) for r in rows]
+            # read in column order, so a damaged row reports its first bad column
+            kind = str(_text(row[0], f"{where}: places.kind"))
+            order = _int(row[1], f"{where}: places.symmetry_order", 0, 1_000_000)
+            gv_distance = _real(row[2], f"{where}: places.gv_distance")
+            x = _real(row[3], f"{where}: places.x")
+            y = _real(row[4], f"{where}: places.y")
+            heading = _real(row[5], f"{where}: places.heading")
+            label = _text(row[6], f"{where}: places.label", null=True)
             return Place(
-                id=int(place_id),
-                kind=str(_text(row[0], f"{where}: places.kind")),
-                order=_int(row[1], f"{where}: places.symmetry_order", 0, 1_000_000),
-                gv_distance=_real(row[2], f"{where}: places.gv_distance"),
-                pose=np.array(
-                    [
-                        _real(row[3], f"{where}: places.x"),
-                        _real(row[4], f"{where}: places.y"),
-                        _real(row[5], f"{where}: places.heading"),
-                    ],
-                    np.float64,
-                ),
+                place_id=int(place_id),
+                center=np.array([x, y], np.float64),
+                heading0=heading,
+                m=len(imgs),
+                order=order,
+                gv_distance=gv_distance,
+                kind=kind,
+                heading_reliable=label != UNANCHORED_LABEL,
                 images=tuple(imgs),
-                label=_text(row[6], f"{where}: places.label", null=True),
+                label=label,
             )
 
     def _image_record(self, r: Sequence[Any], where: str, with_images: bool) -> PlaceImage:

@@ -189,8 +189,8 @@ def _list(args: argparse.Namespace) -> int:
         for pid in ids:
             p = vmap.place(pid, with_images=False)
             print(
-                f"{p.id:>4}  {p.kind:<10}{p.order:>6}{p.gv_distance:>9.3f}{p.n_directions:>3}  "
-                f"({p.pose[0]:.2f}, {p.pose[1]:.2f}, {math.degrees(p.pose[2]):.1f})"
+                f"{p.place_id:>4}  {p.kind:<10}{p.order:>6}{p.gv_distance:>9.3f}{p.m:>3}  "
+                f"({p.center[0]:.2f}, {p.center[1]:.2f}, {math.degrees(p.heading0):.1f})"
                 + (f"  {p.label}" if p.label else "")
             )
     return 0
@@ -212,10 +212,10 @@ def _decide(args: argparse.Namespace) -> int:
     )
     d = decide_orientation(query, place, voc, K)
     scores = ", ".join(f"{s:.3f}" for s in d.scores)
-    print(f"place {place.id} ({place.kind}, M={place.n_directions}), query {args.query}")
+    print(f"place {place.place_id} ({place.kind}, M={place.m}), query {args.query}")
     print(f"status:         {d.status}")
     if d.decided:
-        print(f"direction:      {options.direction_text(d.direction or 0, place.n_directions)}")
+        print(f"direction:      {options.direction_text(d.direction or 0, place.m)}")
         print(f"heading offset: {math.degrees(d.heading_offset):+.2f} deg (CCW positive)")
         print(f"heading:        {math.degrees(d.heading):.2f} deg (map)")
     print(f"scores:         [{scores}]")
@@ -223,7 +223,7 @@ def _decide(args: argparse.Namespace) -> int:
     print(f"keypoints:      {d.n_keypoints}")
     print(f"reason:         {d.reason}")
     if not d.decided:
-        print(f"advice:         turn clockwise by {360.0 / place.n_directions:g} deg and try again")
+        print(f"advice:         turn clockwise by {360.0 / place.m:g} deg and try again")
     return 0 if d.decided else 3
 
 
