@@ -46,6 +46,9 @@ class _Tracker:
     def initialize_pose(self, pose, covariance) -> None:
         pass
 
+    def force_update(self) -> None:
+        pass
+
     def update(self, odom, scan) -> TrackerResult:
         return self.result
 

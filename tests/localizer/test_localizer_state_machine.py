@@ -62,6 +62,9 @@ class FakeTracker:
         self.seeded.append(np.asarray(pose, float))
         self.default = _result([pose], [1.0])
 
+    def force_update(self) -> None:
+        pass
+
     def update(self, odom, scan) -> TrackerResult:
         if self.script:
             return self.script.pop(0)

@@ -34,6 +34,11 @@ class ScriptedLocalizer:
         self.script = list(script)
         self.calls: list[tuple[OdometryReading, LaserScan, object]] = []
         self.poses_set: list[np.ndarray] = []
+        self.last_result = None
+        self.forced = 0
+
+    def force_update(self) -> None:
+        self.forced += 1
 
     def update(self, odom, scan, image=None):  # type: ignore[no-untyped-def]
         self.calls.append((odom, scan, image))

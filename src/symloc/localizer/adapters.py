@@ -90,12 +90,10 @@ class AmclTracker:
         conf = self.judge(r, odom, scan, laser_pose=self.laser_pose)
         self.last, self.last_confidence = r, conf
         hyps = tuple(r.hypotheses)  # the clusters are the localizer's hypotheses
-        covs = tuple(np.asarray(h.covariance, dtype=np.float64) for h in r.hypotheses)
         return TrackerResult(
             estimate=np.asarray(r.estimate, dtype=np.float64),
             covariance=np.asarray(r.covariance, dtype=np.float64),
             hypotheses=hyps,
-            covariances=covs,
             particles=np.asarray(r.particles),
             weights=np.asarray(r.weights),
             updated=bool(r.updated),

@@ -227,13 +227,6 @@ class Ruling:
     reason: str
 
 
-def _force_update(tracker: Tracker) -> None:
-    """A filter update at the next scan, moved or not (trackers without one skip it)."""
-    force: Callable[[], object] | None = getattr(tracker, "force_update", None)
-    if force is not None:
-        force()
-
-
 def _std(cov: FloatArray) -> tuple[float, float]:
     ev = np.linalg.eigvalsh(0.5 * (cov[:2, :2] + cov[:2, :2].T))
     return math.sqrt(max(float(ev.max()), 0.0)), math.sqrt(max(float(cov[2, 2]), 0.0))
@@ -400,7 +393,7 @@ class ClaimGate:
         self._patience.reset()
         self._resume.reset()
         note(f"claims suspended: {why}")
-        _force_update(tracker)
+        tracker.force_update()
 
     def _while_suspended(
         self,
@@ -436,7 +429,7 @@ class ClaimGate:
                 "(kidnapped?): global relocalization, the pose must be earned again"
             )
             return Ruling(Standing.RELOCALIZE, claim, why)
-        _force_update(tracker)
+        tracker.force_update()
         return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}")
 
     def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:

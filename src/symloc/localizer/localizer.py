@@ -39,7 +39,7 @@ from .context import Context, Inputs, Record
 from .copies import PoseScorer, rotated_copies, symmetry_consistent
 from .notes import NOTE_HISTORY, Notes
 from .phases import Lost, Phase, Tracking, restart
-from .types import Decision, Estimate, Place, PlaceStore, SymmetryJudge, Tracker
+from .types import Decision, Estimate, Place, PlaceStore, SymmetryJudge, Tracker, TrackerResult
 
 __all__ = ["Localizer", "LocalizerConfig", "rotated_copies", "symmetry_consistent"]
 
@@ -123,6 +123,7 @@ class Localizer:
             record=Record(),
         )
         self._last_odom: OdometryReading | None = None
+        self._last_result: TrackerResult | None = None
         self._phase: Phase = Lost.fresh(self.config)
 
     # ------------------------------------------------------------------ collaborators
@@ -177,6 +178,12 @@ class Localizer:
         return self._ctx.record.last_decision
 
     @property
+    def last_result(self) -> TrackerResult | None:
+        """The tracker's result at the last scan (its estimate, clusters, particles (N, 3) and
+        weights (N,), for display: a pose there is not earned); None before the first scan."""
+        return self._last_result
+
+    @property
     def particles_at_ambiguity(self) -> FloatArray | None:
         """AMCL's particles (N, 3) when the ambiguity was declared (for figures)."""
         return self._ctx.record.particles_at_ambiguity
@@ -204,6 +211,11 @@ class Localizer:
         self._enter(Tracking(fresh))
         self.log("pose set by the operator")
 
+    def force_update(self) -> None:
+        """Integrate the next scan even if the robot has not moved (nav2's
+        ``request_nomotion_update``)."""
+        self.tracker.force_update()
+
     def update(
         self, odom: OdometryReading, scan: object, image: NDArray[np.uint8] | None = None
     ) -> Estimate:
@@ -222,6 +234,7 @@ class Localizer:
                 scan = deskew(scan, vx, w, vy=vy)
             self._last_odom = odom
         result = self.tracker.update(odom, scan)
+        self._last_result = result
         if self.claim_gate is not None:
             self.claim_gate.observe(result, odom_pose)
         verdict = self.judge(scan)

@@ -154,7 +154,8 @@ class TrackerResult:
     """What the localizer needs from one AMCL update.
 
     ``estimate`` (3,), ``covariance`` (3, 3) of the heaviest cluster, ``hypotheses`` (every
-    cluster, heaviest first), ``particles`` (N, 3) and ``weights`` (N,) for display.
+    cluster, heaviest first, each with its own covariance), ``particles`` (N, 3) and ``weights``
+    (N,) for display.
     ``confident`` the tracker's own verdict (:mod:`symloc.mcl.confidence`, the project's one
     definition); None (a tracker that gives none) counts as not converged.
     """
@@ -162,7 +163,6 @@ class TrackerResult:
     estimate: FloatArray
     covariance: FloatArray
     hypotheses: tuple[Hypothesis, ...]
-    covariances: tuple[FloatArray, ...] = ()
     particles: FloatArray | None = None
     weights: FloatArray | None = None
     updated: bool = True
@@ -181,6 +181,10 @@ class Tracker(Protocol):
 
     def update(self, odom: object, scan: object) -> TrackerResult:
         """One filter step with an odometry reading and a scan."""
+
+    def force_update(self) -> None:
+        """Integrate the next scan even if the robot has not moved (nav2's
+        ``request_nomotion_update``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 from symloc.errors import SymlocError
 from symloc.geometry import angle_diff, compose, relative, wrap_angle
 from symloc.grid import OccupancyGrid
-from symloc.localizer import Estimate, RequestKind, Status
+from symloc.localizer import Estimate, Localizer, RequestKind, Status
 from symloc.msgs.fields import field as msg_field
 from symloc.msgs.grid import grid_from_msg
 from symloc.msgs.header import header_fields, header_frame, header_stamp
@@ -65,6 +65,7 @@ from symloc.msgs.pose import (
 )
 from symloc.msgs.scan import scan_from_msg
 from symloc.odometry import OdometryReading
+from symloc.ros.assemble import make_localizer
 from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
 from symloc.ros.params import NodeParams
 from symloc.ros.status_msg import candidates_to_fields, status_to_fields
@@ -82,7 +83,7 @@ __all__ = ["LocalizerFactory", "NodeCore", "Outputs"]
 
 FloatArray = NDArray[np.float64]
 #: ``factory(grid, params) -> Localizer`` (default :func:`symloc.ros.assemble.make_localizer`).
-LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Any]
+LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Localizer]
 
 _WARN_FIRST = 5
 _WARN_EVERY = 100
@@ -185,8 +186,6 @@ class NodeCore:
         use_tf: bool = False,
     ) -> None:
         if factory is None:
-            from symloc.ros.assemble import make_localizer
-
             factory = make_localizer
         self.params = params
         self.factory = factory
@@ -195,7 +194,7 @@ class NodeCore:
         self.recovered: Counter[str] = Counter()
         self.received: Counter[str] = Counter()
         self.grid: OccupancyGrid | None = None
-        self.localizer: Any = None
+        self.localizer: Localizer | None = None
         self.scans_used = 0
         self.last: Outputs | None = None
         self._odom = _OdomBuffer()
@@ -369,10 +368,9 @@ class NodeCore:
     def request_nomotion_update(self) -> bool:
         """Update the filter with the next scan even if the robot did not move (nav2's
         ``request_nomotion_update``); False without a localizer that can."""
-        force = getattr(getattr(self.localizer, "tracker", None), "force_update", None)
-        if force is None:
+        if self.localizer is None:
             return False
-        force()
+        self.localizer.force_update()
         return True
 
     # ------------------------------------------------------------------ TF
@@ -804,17 +802,15 @@ class NodeCore:
         return out
 
     def _best_estimate(self) -> FloatArray | None:
-        last = getattr(getattr(self.localizer, "tracker", None), "last", None)
-        est = getattr(last, "estimate", None)
-        if est is None:
+        last = None if self.localizer is None else self.localizer.last_result
+        if last is None:
             return None
-        arr = np.asarray(est, dtype=np.float64).reshape(-1)
+        arr = np.asarray(last.estimate, dtype=np.float64).reshape(-1)
         return arr.copy() if arr.shape == (3,) and np.all(np.isfinite(arr)) else None
 
     def _particles(self) -> FloatArray | None:
-        last = getattr(getattr(self.localizer, "tracker", None), "last", None)
-        parts = getattr(last, "particles", None)
-        if parts is None:
+        last = None if self.localizer is None else self.localizer.last_result
+        if last is None or last.particles is None:
             return None
-        arr = np.asarray(parts, dtype=np.float64).reshape(-1, 3)
+        arr = np.asarray(last.particles, dtype=np.float64).reshape(-1, 3)
         return arr if arr.size else None

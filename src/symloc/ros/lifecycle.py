@@ -540,12 +540,11 @@ class LocalizationNode(LifecycleNode):
         """nav2_msgs/ParticleCloud fields: AMCL's particles and their weights."""
         assert self.core is not None
         assert self.params is not None
-        last = getattr(getattr(self.core.localizer, "tracker", None), "last", None)
-        parts = getattr(last, "particles", None)
-        weights = getattr(last, "weights", None)
-        if parts is None:
+        last = None if self.core.localizer is None else self.core.localizer.last_result
+        if last is None or last.particles is None:
             return None
-        poses = np.asarray(parts, dtype=np.float64).reshape(-1, 3)
+        weights = last.weights
+        poses = np.asarray(last.particles, dtype=np.float64).reshape(-1, 3)
         w = np.asarray(weights if weights is not None else [], dtype=np.float64).reshape(-1)
         if w.shape[0] != poses.shape[0]:
             w = np.full(poses.shape[0], 1.0 / max(1, poses.shape[0]))
