@@ -23,6 +23,7 @@ from symloc.localizer.claim import ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import DecisionStatus
 from symloc.ros.params import NodeParams
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
 
@@ -33,7 +34,7 @@ class MemoryPlaces:
     def __init__(self) -> None:
         self.places: list[Place] = []
 
-    def candidates(self, gv_distance: float, order: int) -> Sequence[Place]:
+    def candidates(self, gv_distance: float, order: SymmetryOrder) -> Sequence[Place]:
         """No stored place can decide anything (their images are not kept)."""
         return []
 
@@ -45,7 +46,7 @@ class MemoryPlaces:
         self,
         center: Any,
         heading0: float,
-        order: int,
+        order: SymmetryOrder,
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
@@ -58,7 +59,7 @@ class MemoryPlaces:
             center=np.asarray(center, dtype=np.float64),
             heading0=float(heading0),
             m=len(images),
-            order=int(order),
+            order=0 if order.k is None else order.k,  # Place.order: 0 for a circle
             gv_distance=float(gv_distance),
             kind=kind,
         )
