@@ -52,7 +52,7 @@ class GVIndex:
     Examples
     --------
     >>> idx = GVIndex()
-    >>> idx.add("lab-square", 2.83, kind="polygon", order=SymmetryOrder.finite(4))
+    >>> _ = idx.add("lab-square", 2.83, kind="polygon", order=SymmetryOrder.finite(4))
     >>> [e.place_id for e in idx.lookup(2.80, tolerance=0.05)]
     ['lab-square']
     """
