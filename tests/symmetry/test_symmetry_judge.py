@@ -51,7 +51,7 @@ def test_circle_order_is_infinite_and_centre_is_accurate() -> None:
     assert rep.kind == "circle"
     assert rep.continuous
     assert rep.order == SymmetryOrder.CIRCLE
-    assert rep.order.is_circle and rep.continuous
+    assert rep.order.is_circle
     assert rep.regular
     assert rep.symmetric
     assert rep.gv_distance == pytest.approx(5.0, abs=0.01)
