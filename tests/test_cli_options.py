@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from symloc.cli import options
+from symloc.symmetry.order import SymmetryOrder
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -64,9 +65,9 @@ def test_bad_values_are_usage_errors(argv: list[str], capsys: pytest.CaptureFixt
 def test_people_numbering() -> None:
     assert options.direction_text(0, 4) == "1 of 4"
     assert options.direction_text(3) == "4"
-    assert options.order_text(0) == "inf"
-    assert options.order_text(4) == "4"
-    assert options.order_text(1, continuous=True) == "inf"
+    assert options.order_text(SymmetryOrder.CIRCLE) == "inf"
+    assert options.order_text(SymmetryOrder.finite(4)) == "4"
+    assert options.order_text(None) == "-"
 
 
 def test_json_is_standard(tmp_path: Path) -> None:

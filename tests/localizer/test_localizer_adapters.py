@@ -13,13 +13,14 @@ from symloc.grid import OccupancyGrid
 from symloc.localizer.adapters import GridScorer, ReportJudge, corner_middle_bearing, verdict_from
 from symloc.localizer.directions import directions_for
 from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
 
 
 def _report(**kw):
     base = {
         "kind": "polygon",
         "symmetric": True,
-        "order": 4,
+        "order": SymmetryOrder.finite(4),
         "center": np.array([1.0, 0.0]),
         "corners": np.array([[2.0, -1.0], [2.0, 1.0], [0.0, 1.0], [0.0, -1.0]]),
         "gv_distance": math.sqrt(2.0),
@@ -38,16 +39,16 @@ def test_corner_middle_bearing_picks_the_smallest_turn():
 def test_verdict_from_polygon_has_facing_and_axis():
     v = verdict_from(_report())
     assert v.symmetric
-    assert v.order == 4
+    assert v.order == SymmetryOrder.finite(4)
     np.testing.assert_allclose(v.center, [1.0, 0.0])
     assert v.facing == pytest.approx(0.0)
     # axis: from the centre (1, 0) to the middle of corners 0 and 1, (2, 0): along +x
     assert v.axis == pytest.approx(0.0)
 
 
-def test_verdict_from_circle_has_order_zero_and_no_facing():
-    v = verdict_from(_report(kind="circle", order=math.inf, corners=np.zeros((0, 2))))
-    assert v.order == 0
+def test_verdict_from_circle_is_a_circle_and_has_no_facing():
+    v = verdict_from(_report(kind="circle", order=SymmetryOrder.CIRCLE, corners=np.zeros((0, 2))))
+    assert v.order == SymmetryOrder.CIRCLE
     assert v.facing is None
     assert v.axis is None
 
@@ -115,12 +116,12 @@ def test_grid_scorer_validates_sigma():
 
 
 def test_directions_for():
-    assert directions_for("polygon", 3) == 3
-    assert directions_for("polygon", 6) == 6
-    assert directions_for("rectangle", 2) == 4
-    assert directions_for("circle", 0) == 8
+    assert directions_for("polygon", SymmetryOrder.finite(3)) == 3
+    assert directions_for("polygon", SymmetryOrder.finite(6)) == 6
+    assert directions_for("rectangle", SymmetryOrder.finite(2)) == 4
+    assert directions_for("circle", SymmetryOrder.CIRCLE) == 8
     with pytest.raises(ConfigurationError, match="order"):
-        directions_for("polygon", 1)
+        directions_for("polygon", SymmetryOrder.finite(1))
 
 
 def test_verdict_in_the_robot_frame_with_a_laser_pose():

@@ -13,6 +13,7 @@ from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
 from symloc.odometry import OdometryReading
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.rooms import build_room, hallway, l_shaped_room
+from symloc.symmetry.order import SymmetryOrder
 
 
 def test_map_symmetries_of_a_hallway_and_an_l_shape():
@@ -59,7 +60,9 @@ class _Store:
 
 
 def _asym(scan) -> SymmetryVerdict:
-    return SymmetryVerdict(False, 1, "asymmetric", None, math.nan, reason="one end seen")
+    return SymmetryVerdict(
+        False, SymmetryOrder.finite(1), "asymmetric", None, math.nan, reason="one end seen"
+    )
 
 
 @pytest.mark.parametrize("copy_fits", [True, False])
@@ -82,7 +85,7 @@ def test_converged_pose_is_earned_only_when_no_map_copy_fits(copy_fits):
     ests = [loc.update(OdometryReading(np.zeros(3)), None) for _ in range(6)]
     if copy_fits:
         assert all(e.status is Status.AMBIGUOUS and e.pose is None for e in ests)
-        assert ests[-1].order == 2
+        assert ests[-1].order == SymmetryOrder.finite(2)
         mirrored = ests[-1].hypotheses[1].pose
         assert np.allclose(mirrored[:2], [-15.0, -0.3])
     else:

@@ -27,7 +27,9 @@ from symloc.localizer import (
     rotated_copies,
     symmetry_consistent,
 )
+from symloc.localizer.copies import CIRCLE_SAMPLES
 from symloc.odometry import OdometryReading
+from symloc.symmetry.order import SymmetryOrder
 
 CENTRE = np.array([2.0, 1.0])
 HALF = 1.5  # square room of side 3 m
@@ -82,7 +84,9 @@ class SquareJudge:
     def __call__(self, scan) -> SymmetryVerdict:
         sym = self.flip.pop(0) if self.flip else self.symmetric
         if not sym:
-            return SymmetryVerdict(False, 1, "asymmetric", None, float("nan"), reason="test")
+            return SymmetryVerdict(
+                False, SymmetryOrder.finite(1), "asymmetric", None, float("nan"), reason="test"
+            )
         pose = scan
         c = compose(inverse(pose), np.array([*CENTRE, 0.0]))[:2]
         # wall middles of the square, as bearings in the base frame
@@ -90,7 +94,9 @@ class SquareJudge:
         rel = compose(inverse(pose), np.column_stack([mids, np.zeros(4)]))
         bearings = np.arctan2(rel[:, 1] - c[1], rel[:, 0] - c[0])
         facing = float(bearings[np.argmin(np.abs(bearings))])
-        return SymmetryVerdict(True, 4, "polygon", c, HALF * math.sqrt(2), facing=facing)
+        return SymmetryVerdict(
+            True, SymmetryOrder.finite(4), "polygon", c, HALF * math.sqrt(2), facing=facing
+        )
 
 
 @dataclass
@@ -109,7 +115,8 @@ class FakeStore:
     def add_place(self, center, heading0, order, gv_distance, kind, images, headings=None) -> Place:
         self.added.append((center, heading0, order, gv_distance, kind, len(images)))
         self.headings.append(None if headings is None else list(headings))
-        p = Place(len(self.places), np.asarray(center), heading0, len(images), order, gv_distance)
+        k = 0 if order.is_circle else order.k  # Place.order: 0 for a circle
+        p = Place(len(self.places), np.asarray(center), heading0, len(images), k, gv_distance)
         self.places.append(p)
         return p
 
@@ -157,7 +164,7 @@ class Driver:
 
 
 def _ambiguous_tracker(true_pose) -> FakeTracker:
-    copies = rotated_copies(np.asarray(true_pose, float), CENTRE, 4)
+    copies = rotated_copies(np.asarray(true_pose, float), CENTRE, SymmetryOrder.finite(4))
     return FakeTracker(default=_result(copies, [0.25] * 4))
 
 
@@ -187,7 +194,7 @@ def test_full_resolution_path_goes_to_centre_faces_decides_and_reseeds():
     drv = Driver(loc, true)
     first = drv.step()
     assert first.status is Status.AMBIGUOUS
-    assert first.order == 4
+    assert first.order == SymmetryOrder.finite(4)
     assert len(first.hypotheses) == 4
     assert first.pose is None
     assert first.request is not None
@@ -248,7 +255,7 @@ def test_no_match_with_mapping_allowed_builds_a_new_place_and_says_so():
     final = drv.run(600)
     assert len(store.added) == 1
     _centre, _h0, order, _gv, _kind, n_images = store.added[0]
-    assert order == 4
+    assert order == SymmetryOrder.finite(4)
     assert n_images == 4
     assert final.status is Status.AMBIGUOUS
     assert "new visual map" in final.reason
@@ -308,13 +315,13 @@ def test_tracking_with_one_cluster_in_symmetric_room_keeps_tracking():
 
 def test_tracking_that_splits_into_rotated_clusters_becomes_ambiguous():
     pose = np.array([2.5, 1.5, 0.4])
-    copies = rotated_copies(pose, CENTRE, 4)
+    copies = rotated_copies(pose, CENTRE, SymmetryOrder.finite(4))
     tracker = FakeTracker(script=[_result(copies[:2], [0.6, 0.4])], default=_result([pose], [1]))
     loc = Localizer(tracker, SquareJudge(), FakeStore())
     loc.set_pose(pose, np.eye(3) * 0.01)
     est = loc.update(OdometryReading(np.zeros(3)), pose)
     assert est.status is Status.AMBIGUOUS
-    assert est.order == 4
+    assert est.order == SymmetryOrder.finite(4)
     assert est.request is not None
     assert est.request.kind is RequestKind.GO_TO_CENTRE
 
@@ -413,9 +420,11 @@ def test_config_validation(field_, value, match):
         LocalizerConfig(**{field_: value})
 
 
-def test_rotated_copies_rejects_negative_order():
-    with pytest.raises(ConfigurationError, match="order"):
-        rotated_copies(np.zeros(3), np.zeros(2), -1)
+def test_rotated_copies_takes_a_symmetry_order():
+    with pytest.raises(ConfigurationError, match="SymmetryOrder"):
+        rotated_copies(np.zeros(3), np.zeros(2), 4)  # type: ignore[arg-type]
+    circle = rotated_copies(np.array([1.0, 0.0, 0.0]), np.zeros(2), SymmetryOrder.CIRCLE)
+    assert circle.shape == (CIRCLE_SAMPLES, 3)
 
 
 @settings(max_examples=40, deadline=None)
@@ -428,14 +437,14 @@ def test_rotated_copies_rejects_negative_order():
 def test_rotated_copies_are_recognised_as_symmetric(x, y, th, k):
     pose = np.array([x, y, th])
     centre = np.array([0.3, -0.2])
-    copies = rotated_copies(pose, centre, k)
+    copies = rotated_copies(pose, centre, SymmetryOrder.finite(k))
     hyps = [Hypothesis(p, 1.0 / k) for p in copies]
     kw = {"min_weight": 0.05, "position_tol": 0.05, "angle_tol": 0.05}
-    assert symmetry_consistent(hyps, centre, k, **kw) == k
+    assert symmetry_consistent(hyps, centre, SymmetryOrder.finite(k), **kw) == k
     # a cluster displaced far from the rotated copies is not counted
     moved = [hyps[0], Hypothesis(copies[1] + np.array([1.0, 1.0, 0.0]), 0.5)]
     if np.hypot(x - 0.3, y + 0.2) > 0.1:
-        assert symmetry_consistent(moved, centre, k, **kw) == 1
+        assert symmetry_consistent(moved, centre, SymmetryOrder.finite(k), **kw) == 1
 
 
 class AxisSquareJudge(SquareJudge):
@@ -449,7 +458,7 @@ class AxisSquareJudge(SquareJudge):
         d = mid - v.center
         return SymmetryVerdict(
             True,
-            4,
+            SymmetryOrder.finite(4),
             "polygon",
             v.center,
             v.gv_distance,
@@ -472,7 +481,7 @@ def test_candidates_from_scan_and_known_place_contain_the_true_pose():
     dth = np.abs(angle_diff(poses[:, 2], true[2]))
     assert np.min(d + dth) < 1e-9
     # the other three are the true pose rotated about the centre by multiples of 90 degrees
-    expected = rotated_copies(true, CENTRE, 4)
+    expected = rotated_copies(true, CENTRE, SymmetryOrder.finite(4))
     for p in expected:
         assert np.min(np.hypot(poses[:, 0] - p[0], poses[:, 1] - p[1])) < 1e-9
 

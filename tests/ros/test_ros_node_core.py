@@ -23,6 +23,7 @@ from symloc.odometry import OdometryReading
 from symloc.ros.core import NodeCore
 from symloc.ros.params import NodeParams
 from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
 
 TS = get_typestore(Stores.ROS2_HUMBLE)
 
@@ -61,7 +62,13 @@ TRACK = Estimate(
 
 def _ambiguous(req: Request) -> Estimate:
     hyps = tuple(Hypothesis(np.array([0.0, 0.0, a]), 0.25) for a in (0, 1.57, 3.14, -1.57))
-    return Estimate(Status.AMBIGUOUS, hypotheses=hyps, order=4, request=req, reason="symmetric")
+    return Estimate(
+        Status.AMBIGUOUS,
+        hypotheses=hyps,
+        order=SymmetryOrder.finite(4),
+        request=req,
+        reason="symmetric",
+    )
 
 
 def _core(

@@ -16,6 +16,7 @@ from symloc.errors import ConfigurationError
 from symloc.experiments.symmetry_carmen import reason_tag, run_symmetry_carmen
 from symloc.scan import LaserScan
 from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
+from symloc.symmetry.order import SymmetryOrder
 
 
 def _front_scan(ranges: np.ndarray) -> LaserScan:
@@ -50,7 +51,7 @@ def test_partial_view_hallway_only_when_asked() -> None:
     rep = judge_symmetry(scan, config=SymmetryConfig(partial_view=True))
     assert rep.kind == "hallway"
     assert rep.symmetric
-    assert rep.order == 2
+    assert rep.order == SymmetryOrder.finite(2)
     assert "assumed to continue" in rep.reason
     # the centre lies on the mid-line, 0.1 m to the right of the sensor across the hallway
     # (walls 1.0 m left and 1.2 m right), whatever the heading

@@ -14,6 +14,7 @@ from symloc.sim.lidar import LDS01, PAPER_15M, RPLIDAR_A2, simulate_scan
 from symloc.sim.rooms import add_furniture, build_room, hallway, rectangle_room
 from symloc.sim.world import World, polygon_walls
 from symloc.symmetry import SymmetryConfig, judge_symmetry
+from symloc.symmetry.order import SymmetryOrder
 
 CFG = SymmetryConfig.from_lidar(PAPER_15M)
 
@@ -36,7 +37,7 @@ def test_regular_polygons_off_centre(name: str, n: int) -> None:
     assert rep.kind == "polygon"
     assert rep.symmetric
     assert rep.regular
-    assert rep.order == n
+    assert rep.order == SymmetryOrder.finite(n)
     assert rep.n_corners == n
     assert rep.gv_distance == pytest.approx(4.0, abs=0.02)
     assert np.hypot(*(world_center(rep, pose) - room.center)) < 0.01
@@ -49,7 +50,8 @@ def test_circle_order_is_infinite_and_centre_is_accurate() -> None:
     rep = judge_symmetry(scan_in(room.world, pose), config=CFG)
     assert rep.kind == "circle"
     assert rep.continuous
-    assert math.isinf(rep.order)
+    assert rep.order == SymmetryOrder.CIRCLE
+    assert rep.order.is_circle
     assert rep.regular
     assert rep.symmetric
     assert rep.gv_distance == pytest.approx(5.0, abs=0.01)
@@ -62,7 +64,7 @@ def test_rectangle_is_order_two_not_a_square() -> None:
     pose = [1.0, 0.7, 1.0]
     rep = judge_symmetry(scan_in(room.world, pose), config=CFG)
     assert rep.kind == "rectangle"
-    assert rep.order == 2
+    assert rep.order == SymmetryOrder.finite(2)
     assert rep.symmetric
     assert not rep.regular
     assert rep.gv_distance == pytest.approx(math.hypot(3.0, 2.5), abs=0.02)
@@ -77,7 +79,7 @@ def test_rhombus_is_order_two_polygon() -> None:
     v = v - v.mean(axis=0)
     rep = judge_symmetry(scan_in(World(polygon_walls(v)), [0.5, 0.3, 0.0]), config=CFG)
     assert rep.kind == "polygon"
-    assert rep.order == 2
+    assert rep.order == SymmetryOrder.finite(2)
     assert not rep.regular
 
 
@@ -86,7 +88,7 @@ def test_kite_is_asymmetric_with_reason() -> None:
     rep = judge_symmetry(scan_in(World(polygon_walls(v)), [0.2, -0.5, 0.3]), config=CFG)
     assert rep.kind == "asymmetric"
     assert not rep.symmetric
-    assert rep.order == 1
+    assert rep.order == SymmetryOrder.finite(1)
     assert "no rotation" in rep.reason
     assert np.all(np.isnan(rep.center))
 
@@ -98,7 +100,7 @@ def test_hallway_with_unseen_ends() -> None:
         scan_in(room.world, pose, preset=LDS01), config=SymmetryConfig.from_lidar(LDS01)
     )
     assert rep.kind == "hallway"
-    assert rep.order == 2
+    assert rep.order == SymmetryOrder.finite(2)
     assert rep.symmetric
     assert "ends unseen" in rep.reason
     assert "undetermined" in rep.reason
@@ -114,7 +116,7 @@ def test_closed_hallway_seen_whole_is_a_rectangle() -> None:
     room = hallway(12.0, 2.0)
     rep = judge_symmetry(scan_in(room.world, [1.0, 0.3, 0.2]), config=CFG)
     assert rep.kind == "rectangle"
-    assert rep.order == 2
+    assert rep.order == SymmetryOrder.finite(2)
 
 
 def test_open_door_breaks_symmetry() -> None:
@@ -153,7 +155,8 @@ def test_beyond_range_is_unknown() -> None:
         scan_in(room.world, [0.0, 0.0, 0.0], preset=LDS01), config=SymmetryConfig.from_lidar(LDS01)
     )
     assert rep.kind == "unknown"
-    assert rep.order == 0
+    assert rep.order is None  # unknown: no order, not a circle
+    assert rep.to_dict()["order"] == 0  # the JSON form kept
     assert "no return" in rep.reason
 
 
@@ -165,7 +168,7 @@ def test_dropouts_are_bridged() -> None:
     assert np.isnan(scan.ranges).any()
     rep = judge_symmetry(scan, config=SymmetryConfig.from_lidar(RPLIDAR_A2))
     assert rep.kind == "polygon"
-    assert rep.order == 6
+    assert rep.order == SymmetryOrder.finite(6)
 
 
 def _scan(ranges, inc=2 * math.pi / 360) -> LaserScan:
@@ -185,7 +188,8 @@ def test_bad_scans_are_unknown_with_reason(ranges, match: str) -> None:
     rep = judge_symmetry(_scan(ranges))
     assert rep.kind == "unknown"
     assert not rep.symmetric
-    assert rep.order == 0
+    assert rep.order is None  # unknown: no order, not a circle
+    assert rep.to_dict()["order"] == 0  # the JSON form kept
     assert match in rep.reason
 
 
@@ -267,7 +271,7 @@ def test_judge_never_raises_on_arbitrary_ranges(ranges: list[float], full: bool)
     inc = 2 * math.pi / n if full else math.radians(0.5)
     rep = judge_symmetry(LaserScan(0.0, inc, 0.1, 15.0, np.asarray(ranges)))
     assert rep.kind in ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")
-    assert rep.symmetric == (rep.order != 1 and rep.order != 0)
+    assert rep.symmetric == (rep.order is not None and rep.order.symmetric)
     assert isinstance(rep.reason, str)
     assert rep.reason
 

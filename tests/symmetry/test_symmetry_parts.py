@@ -20,6 +20,7 @@ from symloc.symmetry import (
     rotational_order,
 )
 from symloc.symmetry.algorithm1 import count_groups
+from symloc.symmetry.order import SymmetryOrder
 
 
 # --- config ---------------------------------------------------------------------------------
@@ -77,9 +78,11 @@ def test_config_rejects_invalid_values(field: str, value: object, match: str) ->
 
 # --- report ---------------------------------------------------------------------------------
 def test_report_is_frozen_and_validates_kind() -> None:
-    rep = SymmetryReport("polygon", True, 4, True, [0.0, 0.0], [[1, 1], [-1, 1]], 1.4, 0.0, "x")
-    assert rep.order == 4
-    assert isinstance(rep.order, int)
+    rep = SymmetryReport(
+        "polygon", True, SymmetryOrder.finite(4), True, [0.0, 0.0], [[1, 1], [-1, 1]], 1.4, 0.0, "x"
+    )
+    assert rep.order == SymmetryOrder.finite(4)
+    assert rep.to_dict()["order"] == 4
     assert not rep.continuous
     with pytest.raises(AttributeError):
         rep.kind = "circle"  # type: ignore[misc]
@@ -88,7 +91,7 @@ def test_report_is_frozen_and_validates_kind() -> None:
     d = rep.to_dict()
     assert json.loads(json.dumps(d))["corners"] == [[1.0, 1.0], [-1.0, 1.0]]
     with pytest.raises(ConfigurationError, match="kind: expected one of"):
-        SymmetryReport("blob", False, 1, False, [0, 0], [], 0.0, 0.0, "")
+        SymmetryReport("blob", False, SymmetryOrder.finite(1), False, [0, 0], [], 0.0, 0.0, "")
 
 
 # --- helpers --------------------------------------------------------------------------------
@@ -159,9 +162,9 @@ def test_algorithm1_circle_and_bad_input() -> None:
 # --- G-V index ------------------------------------------------------------------------------
 def test_gv_index_lookup_sorted_by_nearness() -> None:
     idx = GVIndex()
-    idx.add("a", 3.0, kind="polygon", order=4, center=(1.0, 2.0))
+    idx.add("a", 3.0, kind="polygon", order=SymmetryOrder.finite(4), center=(1.0, 2.0))
     idx.add("b", 5.0)
-    idx.add("c", 3.05, kind="circle", order=math.inf)
+    idx.add("c", 3.05, kind="circle", order=SymmetryOrder.CIRCLE)
     assert len(idx) == 3
     assert "a" in idx
     assert "z" not in idx
@@ -180,7 +183,7 @@ def test_gv_index_from_report_and_errors() -> None:
     rep = judge_symmetry(simulate_scan(room.world, np.array([0.4, 0.1, 0.0]), PAPER_15M, 2))
     idx = GVIndex()
     e = idx.add_report("pentagon-4", rep)
-    assert e.order == 5
+    assert e.order == SymmetryOrder.finite(5)
     assert e.gv_distance == pytest.approx(4.0, abs=0.02)
     assert idx.lookup(4.0, tolerance=0.05)[0].place_id == "pentagon-4"
     with pytest.raises(ConfigurationError, match="already in the G-V index"):

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from symloc._checks import as_rng
 from symloc.localizer.types import Status
 from symloc.sim.rooms import Room
+from symloc.sim.symmetry_truth import truth_order
 
 from .scenario import AmclRun, Scenario, SymlocRun, build_scenario, run_plain_amcl, run_symloc
 
@@ -64,8 +65,8 @@ class DemoResult:
     def rows(self) -> list[tuple[str, str]]:
         a, s = self.amcl, self.symloc
         copy = a.outcome.near_copy
-        order = self.scenario.room.order
-        k = "inf" if order == 0 else str(order)
+        order = truth_order(self.scenario.room.order)
+        k = str(order)
         if copy is None and a.outcome.copy_index is None:
             chose = "no symmetric copy (room not symmetric)"
         elif copy is None:
@@ -76,7 +77,7 @@ class DemoResult:
         elif copy == 0:
             chose = "the true pose (copy 0)"
         else:
-            chose = f"symmetric copy {copy} of {k} (rotated {copy * 360 / max(order, 1):.0f} deg)"
+            chose = f"symmetric copy {copy} of {k} (rotated {copy * 360 / (order.k or 1):.0f} deg)"
         rows = [
             (
                 "plain AMCL: what it did",

@@ -104,7 +104,7 @@ def map_place(
     if run.phase != "done":
         return None
     verdict = judge(scan_at(body.pose))
-    if not verdict.symmetric or verdict.center is None:
+    if not verdict.symmetric or verdict.center is None or verdict.order is None:
         return None
     kind, order, gv = verdict.kind, verdict.order, verdict.gv_distance
     if not math.isfinite(gv):

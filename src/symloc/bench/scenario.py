@@ -47,9 +47,10 @@ from symloc.sim.lidar import RPLIDAR_A2
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room, build_room, hallway, with_lab
+from symloc.sim.symmetry_truth import truth_order
 from symloc.sim.world import World
 from symloc.slam import run_slam
-from symloc.symmetry import SymmetryConfig, judge_symmetry
+from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 
@@ -489,7 +490,7 @@ def _map_with_slam(
 
     t_c = to_map(0)
     centre = _compose(t_c, np.array([centre_o[0], centre_o[1], 0.0]))[:2]
-    round_room = kind == "circle" or order == 0
+    round_room = kind == "circle" or order.is_circle
     if round_room and gyro is not None:
         # laser SLAM cannot observe heading in a round room; the gyro-odometry frame is the map
         # frame at the start (both start at the robot's start pose), so its headings are used
@@ -537,7 +538,7 @@ def classify(
     confident: bool,
     true_pose: FloatArray,
     center: FloatArray,
-    order: int,
+    order: SymmetryOrder,
     confidence: float = math.nan,
 ) -> Outcome:
     """Grade ``pose`` against ``true_pose``; ``confident`` says whether it was claimed as known.
@@ -553,7 +554,7 @@ def classify(
     dpos = float(np.hypot(*(p[:2] - true_pose[:2])))
     dth = abs(float(angle_diff(p[2], true_pose[2])))
     copy = None
-    if order != 1:
+    if order.symmetric:
         copies = rotated_copies(true_pose, np.asarray(center), order)
         d = np.hypot(copies[:, 0] - p[0], copies[:, 1] - p[1]) + np.abs(
             np.asarray(angle_diff(copies[:, 2], p[2]))
@@ -688,9 +689,8 @@ def amcl_confident(conf: Confidence | None) -> tuple[bool, str]:
     return local, str(conf.reason)
 
 
-def _order(scen: Scenario) -> int:
-    order = int(scen.room.order)
-    return 0 if order == 0 else order
+def _order(scen: Scenario) -> SymmetryOrder:
+    return truth_order(scen.room.order)
 
 
 @dataclass

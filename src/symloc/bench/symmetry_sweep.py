@@ -27,7 +27,7 @@ import numpy as np
 from symloc.camera_model import DEFAULT_HFOV
 from symloc.lidar_spec import PRESETS
 from symloc.sim.camera import Camera
-from symloc.symmetry import SymmetryConfig, judge_symmetry
+from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 
 from .sensors import robot_hardware
 from .stats import wilson_interval
@@ -49,10 +49,9 @@ class SymmetryTask:
     regime: str = "ideal"
 
 
-def _order(value: Any) -> int:
-    """A report's order as the truth writes it (a circle's ``inf`` is 0)."""
-    v = float(value)
-    return 0 if math.isinf(v) else round(v)
+def _order(order: SymmetryOrder) -> int:
+    """An order as the truth writes it in the JSON (a circle is 0)."""
+    return 0 if order.k is None else order.k
 
 
 def run_symmetry_world(task: SymmetryTask) -> dict[str, Any]:
@@ -69,10 +68,10 @@ def run_symmetry_world(task: SymmetryTask) -> dict[str, Any]:
         pose = room.sample_pose(rng)
         scan = session.scan(room.world, pose, (0.0, 0.0), 0.0)
         rep = judge_symmetry(scan, config=config)
-        judged = _order(rep.order) if rep.symmetric else 1
+        judged = rep.order if rep.symmetric and rep.order is not None else SymmetryOrder.finite(1)
         if rep.kind == "unknown" and not rep.symmetric:
             outcome = "unknown"
-        elif rep.symmetric and judged == truth.order:
+        elif rep.symmetric and judged == truth.symmetry_order:
             outcome = "correct"
         elif rep.symmetric:
             outcome = "false_symmetric"
@@ -89,7 +88,7 @@ def run_symmetry_world(task: SymmetryTask) -> dict[str, Any]:
         rows.append(
             {
                 "kind": rep.kind,
-                "judged_order": judged,
+                "judged_order": _order(judged),
                 "outcome": outcome,
                 "centre_error_m": centre_error,
             }

@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from symloc.lidar_spec import PRESETS
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = [
     "DEFAULT_LIDAR",
@@ -365,14 +366,9 @@ def direction_text(index: int, count: int | None = None) -> str:
     return f"{int(index) + 1}" + ("" if count is None else f" of {int(count)}")
 
 
-def order_text(order: float | None, continuous: bool = False) -> str:
-    """A symmetry order for people: ``inf`` for a circle (the library's order 0, inf or
-    ``continuous``)."""
-    if order is None:
-        return "-"
-    if continuous or order == 0 or math.isinf(order):
-        return "inf"
-    return str(int(order))
+def order_text(order: SymmetryOrder | None) -> str:
+    """A symmetry order for people: ``inf`` for a circle, ``-`` for none (an unknown verdict)."""
+    return "-" if order is None else str(order)
 
 
 # ----------------------------------------------------------------------- JSON

@@ -38,6 +38,7 @@ from symloc.cli import options
 from symloc.errors import ConfigurationError, WorldError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import transform_points
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["FP_ROOMS", "SENSORS", "SHAPES", "register", "run_false_positives", "run_table1"]
 
@@ -153,10 +154,10 @@ def _build_fp_room(spec: FPRoom, gv: float, rng: np.random.Generator) -> Any:
     )
 
 
-def _expected(shape: str) -> tuple[str, float]:
+def _expected(shape: str) -> tuple[str, SymmetryOrder]:
     if shape == "circle":
-        return "circle", math.inf
-    return "polygon", float(_SIDES[shape])
+        return "circle", SymmetryOrder.CIRCLE
+    return "polygon", SymmetryOrder.finite(_SIDES[shape])
 
 
 def _center_error(report: Any, pose: np.ndarray, true_center: np.ndarray) -> float:
@@ -211,7 +212,7 @@ def run_table1(
                         t0 = time.perf_counter()
                         rep = judge_symmetry(scan, config=cfg, centroid=cen)
                         timings.append(time.perf_counter() - t0)
-                        ok = rep.symmetric and rep.kind == kind and float(rep.order) == order
+                        ok = rep.symmetric and rep.kind == kind and rep.order == order
                         key = f"judge/{cen}"
                         outcome.setdefault(key, []).append(bool(ok))
                         unknown[key] = unknown.get(key, 0) + (rep.kind == "unknown")
@@ -301,13 +302,15 @@ def run_false_positives(
                 row["trials"] += 1
                 for cen in CENTROIDS:
                     rep = judge_symmetry(scan, config=cfg, centroid=cen)
-                    claimed = math.inf if rep.continuous else float(rep.order)
-                    fp = rep.symmetric and (spec.true_order == 1 or claimed > spec.true_order)
+                    claimed = rep.order if rep.symmetric else None  # k None: a circle
+                    fp = claimed is not None and (
+                        spec.true_order == 1 or claimed.k is None or claimed.k > spec.true_order
+                    )
                     by_cen[cen]["count"] += int(fp)
                     by_cen[cen]["trials"] += 1
                     row[f"fp_{cen}"] += int(fp)
                     row[f"order_found_{cen}"] += int(
-                        rep.symmetric and claimed == spec.true_order and spec.true_order > 1
+                        claimed == SymmetryOrder.finite(spec.true_order) and spec.true_order > 1
                     )
                     if cen == "area":
                         kinds[rep.kind] = kinds.get(rep.kind, 0) + 1

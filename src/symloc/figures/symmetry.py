@@ -124,6 +124,11 @@ def _draw_judgement(ax: Any, scan: Any, report: Any, lines: Any, title: str) -> 
     ax.tick_params(labelsize=6)
 
 
+def _order_text(report: Any) -> str:
+    """A report's order for a title: ``inf`` for a circle, 0 for an unknown verdict."""
+    return "0" if report.order is None else str(report.order)
+
+
 def plot_judgement(scan: Any, report: Any, path: str | Path, *, lines: Any = None) -> Path:
     """One scan in the sensor frame with the judgement: points, lines, corners, centre.
 
@@ -138,7 +143,7 @@ def plot_judgement(scan: Any, report: Any, path: str | Path, *, lines: Any = Non
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 5.5))
-    order = "inf" if report.continuous else report.order
+    order = _order_text(report)
     _draw_judgement(
         ax, scan, report, lines, f"{report.kind}, order {order}, symmetric={report.symmetric}"
     )
@@ -171,7 +176,7 @@ def plot_judgement_grid(
     if not items:
         axes[0, 0].text(0.5, 0.5, "no scans", ha="center", va="center")
     for ax, (scan, report, lines, label) in zip(axes.ravel(), items, strict=False):
-        order = "inf" if report.continuous else report.order
+        order = _order_text(report)
         _draw_judgement(ax, scan, report, lines, f"{label}\n{report.kind}, order {order}")
     if items:
         axes[0, 0].legend(fontsize=6, loc="lower left")

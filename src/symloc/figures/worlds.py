@@ -11,14 +11,16 @@ import numpy as np
 
 from symloc.figures._save import save_figure
 from symloc.figures.world import plot_world
+from symloc.sim.symmetry_truth import truth_order
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["gallery_figure"]
 
 
-def _order_text(order: int) -> str:
-    if order == 0:
+def _order_text(order: SymmetryOrder) -> str:
+    if order.is_circle:
         return "order 0 (continuous)"
-    if order == 1:
+    if not order.symmetric:
         return "order 1 (none)"
     return f"order {order}"
 
@@ -71,7 +73,7 @@ def gallery_figure(
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(f"{title}\n{_order_text(int(room.order))}", fontsize=9)
+        ax.set_title(f"{title}\n{_order_text(truth_order(room.order))}", fontsize=9)
     fig.suptitle(
         "generated worlds (navy: textured wall, tan: board, brown: furniture, light blue: glass,"
         " black: dark, orange: people, dashed: below the lidar plane, +: symmetry centre)",

@@ -27,6 +27,7 @@ from symloc.grid.fields import MapFields
 from symloc.mcl.amcl import Amcl, AmclResult
 from symloc.mcl.confidence import Confidence, ConfidenceConfig, ConfidenceJudge
 from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
 
 from .types import SymmetryVerdict, TrackerResult
 
@@ -118,13 +119,12 @@ def corner_middle_bearing(corners: NDArray[np.float64]) -> float | None:
 def verdict_from(report: Any, laser_pose: ArrayLike | None = None) -> SymmetryVerdict:
     """Translate a :class:`symloc.symmetry.SymmetryReport` into a :class:`SymmetryVerdict`.
 
-    A circle's infinite order becomes 0. A hallway is reported symmetric (order 2) but its
+    The report's order passes through (None for an unknown verdict). A hallway is reported symmetric (order 2) but its
     centre along the axis is not observable, so it carries ``kind="hallway"``. The report is in
     the laser's frame; with ``laser_pose`` (3,) (``base_from_laser``) the centre, corners,
     facing bearing and axis of the verdict are in the robot's frame, where the robot drives.
     """
-    order_raw = report.order
-    order = 0 if isinstance(order_raw, float) and math.isinf(order_raw) else int(order_raw)
+    order: SymmetryOrder | None = report.order
     center = np.asarray(report.center, dtype=np.float64).reshape(2)
     symmetric = bool(report.symmetric) and bool(np.all(np.isfinite(center)))
     corners = np.asarray(report.corners, dtype=np.float64).reshape(-1, 2)
@@ -135,12 +135,13 @@ def verdict_from(report: Any, laser_pose: ArrayLike | None = None) -> SymmetryVe
         center = rot @ center + lp[:2]
         corners = corners @ rot.T + lp[:2]
     facing = None
-    if (symmetric and order != 0 and report.kind == "polygon") or (
+    finite = order is not None and not order.is_circle
+    if (symmetric and finite and report.kind == "polygon") or (
         symmetric and report.kind == "rectangle" and corners.shape[0] == 4
     ):
         facing = corner_middle_bearing(corners)
     axis = None
-    if symmetric and order != 0 and report.kind == "polygon" and corners.shape[0] >= 2:
+    if symmetric and finite and report.kind == "polygon" and corners.shape[0] >= 2:
         mid = 0.5 * (corners[0] + corners[1]) - center
         axis = float(np.arctan2(mid[1], mid[0]))
     return SymmetryVerdict(
@@ -188,7 +189,7 @@ class ReportJudge:
             self.errors += 1
             self.last_error = f"{type(err).__name__}: {err}"
             return SymmetryVerdict(
-                False, 0, "unknown", None, math.nan, reason=f"judge raised {self.last_error}"
+                False, None, "unknown", None, math.nan, reason=f"judge raised {self.last_error}"
             )
         self.last_report = report
         return verdict_from(report, self.laser_pose)

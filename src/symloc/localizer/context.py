@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.geometry import compose, wrap_angle
+from symloc.symmetry.order import SymmetryOrder
 
 from .centering import CentreFilter
 from .claim import ClaimGate
@@ -125,7 +126,7 @@ class Outcome(enum.Enum):
 class Visit:
     """The symmetric place being resolved.
 
-    ``order`` k (0: a circle), ``gv`` its G-V distance [m] (re-estimated from every
+    ``order`` k (or a circle), ``gv`` its G-V distance [m] (re-estimated from every
     symmetric scan on the way), ``kind``, ``centre_map`` (2,) its centre in the map frame [m],
     ``centre`` the filter of its centre in the base frame, ``place`` the one known place it
     matches (for candidate poses from the scan), ``flips`` the non-symmetric verdicts on the
@@ -133,7 +134,7 @@ class Visit:
     the images tried, ``mapping`` when the place is being mapped.
     """
 
-    order: int
+    order: SymmetryOrder
     gv: float
     kind: str
     centre_map: FloatArray
@@ -152,11 +153,6 @@ class Visit:
 def cov_from_std(xy_std: float, theta_std: float) -> FloatArray:
     """A diagonal pose covariance (3, 3) from a position std [m] and a heading std [rad]."""
     return np.diag([xy_std**2, xy_std**2, theta_std**2])
-
-
-def order_people(order: int) -> str:
-    """A symmetry order as people read it: ``inf`` for a circle (order 0 in the library)."""
-    return "inf" if int(order) == 0 else str(int(order))
 
 
 def people(direction: int | None) -> str:
@@ -210,7 +206,7 @@ def candidates(inp: Inputs, visit: Visit) -> tuple[Hypothesis, ...]:
         and v.symmetric
         and v.axis is not None
         and v.center is not None
-        and place.m == visit.order
+        and place.m == visit.order.k
     ):
         j = np.arange(place.m)
         theta = wrap_angle(place.heading0 - j * 2.0 * np.pi / place.m - v.axis)

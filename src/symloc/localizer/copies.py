@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff, wrap_angle
 from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
 
 from .claim import ClaimGate
 from .types import Hypothesis, Place
@@ -32,6 +33,7 @@ __all__ = [
     "copies_fit",
     "copies_verdict",
     "known_place_at",
+    "place_order",
     "rotated_copies",
     "symmetry_consistent",
 ]
@@ -44,14 +46,14 @@ PoseScorer = Callable[[FloatArray, Any], FloatArray]
 CIRCLE_SAMPLES = 8
 
 
-def rotated_copies(pose: FloatArray, center: FloatArray, order: int) -> FloatArray:
+def rotated_copies(pose: FloatArray, center: FloatArray, order: SymmetryOrder) -> FloatArray:
     """The ``k`` poses ``(k, 3)`` obtained by rotating ``pose`` (3,) about ``center`` (2,).
 
-    ``order`` 0 (a circle) gives :data:`CIRCLE_SAMPLES` evenly spaced copies. Copy 0 is ``pose``.
+    A circle gives :data:`CIRCLE_SAMPLES` evenly spaced copies. Copy 0 is ``pose``.
     """
-    k = CIRCLE_SAMPLES if order == 0 else int(order)
-    if k < 1:
-        raise ConfigurationError(f"rotated_copies: order must be >= 0, got {order}")
+    if not isinstance(order, SymmetryOrder):
+        raise ConfigurationError(f"rotated_copies: expected a SymmetryOrder, got {order!r}")
+    k = order.copies(CIRCLE_SAMPLES)
     phi = 2.0 * np.pi * np.arange(k) / k
     c, s = np.cos(phi), np.sin(phi)
     d = np.asarray(pose[:2], dtype=np.float64) - center
@@ -65,7 +67,7 @@ def rotated_copies(pose: FloatArray, center: FloatArray, order: int) -> FloatArr
 def symmetry_consistent(
     hypotheses: Sequence[Hypothesis],
     center: FloatArray,
-    order: int,
+    order: SymmetryOrder,
     *,
     min_weight: float,
     position_tol: float,
@@ -74,7 +76,7 @@ def symmetry_consistent(
     """How many well-weighted clusters are symmetric images of the heaviest one.
 
     Counts the heaviest cluster itself, so a value >= 2 means AMCL's hypotheses are related by
-    the place's rotation of order ``order`` (0: a circle, any angle) about ``center`` (2,) [m].
+    the place's rotation of order ``order`` (a circle: any angle) about ``center`` (2,) [m].
     """
     strong = [h for h in hypotheses if h.weight >= min_weight]
     if not strong:
@@ -85,16 +87,16 @@ def symmetry_consistent(
         if h is ref:
             continue
         phi = float(angle_diff(h.pose[2], ref.pose[2]))
-        if order > 0:
-            step = 2.0 * np.pi / order
+        step = order.step
+        if step is not None:
             phi = round(phi / step) * step
             if abs(float(angle_diff(h.pose[2], ref.pose[2] + phi))) > angle_tol:
                 continue
         if abs(phi) < angle_tol:
             continue  # the same heading: a split of one cluster, not a symmetric copy
-        expect = rotated_copies(ref.pose, center, 0 if order == 0 else order)
-        if order == 0:
-            expect = rotated_copies(ref.pose, center, 1).copy()
+        expect = rotated_copies(ref.pose, center, order)
+        if step is None:
+            expect = rotated_copies(ref.pose, center, SymmetryOrder.finite(1)).copy()
             c, s = math.cos(phi), math.sin(phi)
             d = ref.pose[:2] - center
             expect[0, :2] = center + np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
@@ -138,7 +140,7 @@ def copy_scores(
 def copies_verdict(
     pose: FloatArray,
     center: FloatArray,
-    order: int,
+    order: SymmetryOrder,
     scan: object,
     *,
     gate: ClaimGate | None,
@@ -164,7 +166,7 @@ def copies_verdict(
 def copies_fit(
     pose: FloatArray,
     center: FloatArray,
-    order: int,
+    order: SymmetryOrder,
     scan: object,
     *,
     gate: ClaimGate | None,
@@ -190,3 +192,15 @@ def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: flo
         if d <= radius_factor * place.gv_distance and d < best_d:
             best, best_d = place, d
     return best
+
+
+def place_order(place: Place) -> SymmetryOrder:
+    """A known place's symmetry order.
+
+    The one reading of ``Place.order`` (an int): a circle is ``kind == "circle"`` (its
+    ``order`` holds 0 in the localizer's places, the number of directions in the visual map's
+    rows, whichever reaches here) or an ``order`` of 0; otherwise the finite ``order``.
+    """
+    if place.kind == "circle" or place.order == 0:
+        return SymmetryOrder.CIRCLE
+    return SymmetryOrder.finite(place.order)

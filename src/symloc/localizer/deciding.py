@@ -170,7 +170,8 @@ def conclusion(ctx: Context, visit: Visit) -> str | None:
     mapping is allowed), else why the pose stays undetermined."""
     outcomes = set(visit.outcomes)
     nothing_matched = outcomes <= {Outcome.NO_PLACE, Outcome.NO_MATCH}
-    if nothing_matched and ctx.config.allow_mapping and visit.order >= 2:
+    # a circle is not mapped here (any heading fits its images equally)
+    if nothing_matched and ctx.config.allow_mapping and (visit.order.k or 0) >= 2:
         return None
     if Outcome.REFUSED in outcomes and len(outcomes) == 1:
         return "undetermined: the images have too few features to decide"

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from symloc.geometry import angle_diff, compose, inverse
 from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
 
 from . import deciding
 from .centering import CentreFilter
@@ -38,7 +39,6 @@ from .context import (
     ambiguous,
     cov_from_std,
     lost,
-    order_people,
     tracking,
 )
 from .copies import (
@@ -46,6 +46,7 @@ from .copies import (
     copies_fit,
     copies_verdict,
     known_place_at,
+    place_order,
     rotated_copies,
     symmetry_consistent,
 )
@@ -160,7 +161,7 @@ class Tracking:
     def step(self, ctx: Context, inp: Inputs) -> Step:
         cfg = ctx.config
         result, verdict = inp.result, inp.verdict
-        if verdict.symmetric and verdict.center is not None:
+        if verdict.symmetric and verdict.center is not None and verdict.order is not None:
             n = symmetry_consistent(
                 result.hypotheses,
                 inp.centre_in_map(),
@@ -229,18 +230,19 @@ def copies_ambiguity(
     gate, scorer, ratio = ctx.gate, ctx.scorer, cfg.copy_score_ratio
     place = known_place_at(pose, ctx.known_places, cfg.place_radius_factor)
     if place is not None and copies_fit(
-        pose, place.center, place.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+        pose, place.center, place_order(place), inp.scan, gate=gate, scorer=scorer, ratio=ratio
     ):
         back.converged.reset()
         return start_ambiguity_at_place(ctx, inp, place)
     for sym in ctx.map_symmetries:
+        sym_order = SymmetryOrder.finite(sym.order)
         verdict = copies_verdict(
-            pose, sym.centre, sym.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+            pose, sym.centre, sym_order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
         )
         if verdict.kind is CopiesKind.UNIQUE:
             continue
         back.converged.reset()
-        copies = rotated_copies(pose, sym.centre, sym.order)
+        copies = rotated_copies(pose, sym.centre, sym_order)
         if verdict.kind is CopiesKind.BETTER:
             assert verdict.index is not None
             # a rotated copy explains the scan clearly better: AMCL chose wrong
@@ -261,7 +263,7 @@ def copies_ambiguity(
         estimate = Estimate(
             status=Status.AMBIGUOUS,
             hypotheses=tuple(Hypothesis(pose=p, weight=1.0 / len(copies)) for p in copies),
-            order=sym.order,
+            order=sym_order,
             reason=why,
         )
         return estimate, back
@@ -275,12 +277,13 @@ def start_ambiguity(ctx: Context, inp: Inputs, why: str) -> Step:
     """The scan is symmetric and the pose not earned: go to the centre it shows."""
     result, verdict = inp.result, inp.verdict
     ctx.record.particles_at_ambiguity = result.particles
-    order = int(verdict.order)
+    order = verdict.order
+    assert order is not None  # a symmetric verdict has an order
     gv = float(verdict.gv_distance)
     centre = CentreFilter(alpha=ctx.config.centre_smoothing)
     target = np.asarray(verdict.center, dtype=np.float64)
     centre.update(inp.odom_pose, target[:2])
-    found = [p for p in ctx.places.candidates(gv, order) if p.order == order]
+    found = [p for p in ctx.places.candidates(gv, order) if place_order(p) == order]
     visit = Visit(
         order=order,
         gv=gv,
@@ -290,13 +293,13 @@ def start_ambiguity(ctx: Context, inp: Inputs, why: str) -> Step:
         place=found[0] if len(found) == 1 else None,
         flips=Streak(ctx.config.flip_patience),
     )
-    ctx.note(f"ambiguous (order {order_people(order)}): {why}; going to the centre")
+    ctx.note(f"ambiguous (order {order}): {why}; going to the centre")
     estimate = ambiguous(
         inp,
         visit,
         Status.AMBIGUOUS,
         Request(RequestKind.GO_TO_CENTRE, target=np.asarray(verdict.center, dtype=float)),
-        f"{why}; order {order_people(order)}",
+        f"{why}; order {order}",
     )
     return estimate, Centering(visit)
 
@@ -310,7 +313,7 @@ def start_ambiguity_at_place(ctx: Context, inp: Inputs, place: Place) -> Step:
     centre_base = compose_inverse(result.estimate, place.center)
     centre.update(inp.odom_pose, centre_base)
     visit = Visit(
-        order=place.order,
+        order=place_order(place),
         gv=place.gv_distance,
         kind=place.kind,
         centre_map=np.asarray(place.center, dtype=np.float64),
@@ -319,7 +322,7 @@ def start_ambiguity_at_place(ctx: Context, inp: Inputs, place: Place) -> Step:
         flips=Streak(ctx.config.flip_patience),
     )
     why = f"inside known symmetric place {place.place_id}: rotated copies fit the map"
-    ctx.note(f"ambiguous (order {order_people(visit.order)}): {why}")
+    ctx.note(f"ambiguous (order {visit.order}): {why}")
     estimate = ambiguous(
         inp, visit, Status.AMBIGUOUS, Request(RequestKind.GO_TO_CENTRE, target=centre_base), why
     )
@@ -458,7 +461,7 @@ def next_attempt(ctx: Context, inp: Inputs, visit: Visit, why: str) -> Step:
         return conclude(ctx, inp, visit)
     # a polygon squares up on the next corner middle after the turn; a circle has none, and
     # a query half-way between two stored views scores both alike, so it turns half a step
-    step = 2.0 * np.pi / visit.m if visit.order != 0 else np.pi / visit.m
+    step = 2.0 * np.pi / visit.m if not visit.order.is_circle else np.pi / visit.m
     rotating = Rotating(visit, float(inp.odom_pose[2]), -step)
     estimate = ambiguous(
         inp,

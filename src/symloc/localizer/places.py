@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.localizer.types import Decision, DecisionStatus, Place
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["MemoryPlaces"]
 
@@ -19,7 +20,7 @@ class MemoryPlaces:
     def __init__(self) -> None:
         self.places: list[Place] = []
 
-    def candidates(self, gv_distance: float, order: int) -> Sequence[Place]:
+    def candidates(self, gv_distance: float, order: SymmetryOrder) -> Sequence[Place]:
         """No stored place can decide anything (their images are not kept)."""
         return []
 
@@ -31,7 +32,7 @@ class MemoryPlaces:
         self,
         center: Any,
         heading0: float,
-        order: int,
+        order: SymmetryOrder,
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
@@ -47,7 +48,7 @@ class MemoryPlaces:
             center=np.asarray(center, dtype=np.float64),
             heading0=float(heading0),
             m=len(images),
-            order=int(order),
+            order=0 if order.k is None else order.k,  # Place.order: 0 for a circle
             gv_distance=float(gv_distance),
             kind=kind,
         )

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
 from symloc.hypothesis import Hypothesis
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import Place
 
 __all__ = [
@@ -120,8 +121,9 @@ class Estimate:
     hypotheses : tuple of Hypothesis
         When ambiguous: the ``order`` candidate poses related by the place's rotation.
         When tracking: the AMCL clusters (for display).
-    order : int or None
-        The symmetry order ``k`` when ambiguous (``None`` otherwise; 0 means infinite, a circle).
+    order : SymmetryOrder or None
+        The symmetry order ``k`` when ambiguous (:data:`SymmetryOrder.CIRCLE` for a circle);
+        ``None`` otherwise.
     request : Request or None
         What the driver should do next; ``None`` means carry on.
     reason : str
@@ -132,11 +134,15 @@ class Estimate:
     pose: FloatArray | None = None
     covariance: FloatArray | None = None
     hypotheses: tuple[Hypothesis, ...] = ()
-    order: int | None = None
+    order: SymmetryOrder | None = None
     request: Request | None = None
     reason: str = ""
 
     def __post_init__(self) -> None:
+        if self.order is not None and not isinstance(self.order, SymmetryOrder):
+            raise ConfigurationError(
+                f"Estimate.order: expected a SymmetryOrder or None, got {self.order!r}"
+            )
         if self.status is Status.TRACKING:
             if self.pose is None or self.covariance is None:
                 raise ConfigurationError("Estimate: status tracking needs a pose and a covariance")
@@ -191,7 +197,8 @@ class Tracker(Protocol):
 class SymmetryVerdict:
     """The part of a symmetry report the localizer uses.
 
-    ``order`` k: 0 means a circle (infinite order); ``center`` (2,) and ``corners`` (K, 2) are in
+    ``order`` k (:data:`SymmetryOrder.CIRCLE` for a circle; None when the scan allows no
+    verdict, too little range or field of view); ``center`` (2,) and ``corners`` (K, 2) are in
     the sensor (base) frame [m]; ``facing`` is the bearing [rad] in the base frame of the middle
     between two adjacent corners (None when there are no corners); ``axis`` [rad] is the
     direction in the base frame from the centre to one such corner middle (regular polygons
@@ -199,7 +206,7 @@ class SymmetryVerdict:
     """
 
     symmetric: bool
-    order: int
+    order: SymmetryOrder | None
     kind: str
     center: FloatArray | None
     gv_distance: float
@@ -207,6 +214,14 @@ class SymmetryVerdict:
     corners: FloatArray | None = None
     reason: str = ""
     axis: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.order is not None and not isinstance(self.order, SymmetryOrder):
+            raise ConfigurationError(
+                f"SymmetryVerdict.order: expected a SymmetryOrder or None, got {self.order!r}"
+            )
+        if self.symmetric and self.order is None:
+            raise ConfigurationError("SymmetryVerdict: a symmetric verdict needs an order")
 
 
 class SymmetryJudge(Protocol):
@@ -256,7 +271,7 @@ class Decision:
 class PlaceStore(Protocol):
     """The visual map with its G-V index, as the localizer uses it."""
 
-    def candidates(self, gv_distance: float, order: int) -> Sequence[Place]:
+    def candidates(self, gv_distance: float, order: SymmetryOrder) -> Sequence[Place]:
         """Places whose G-V distance matches within the index's tolerance."""
 
     def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
@@ -266,7 +281,7 @@ class PlaceStore(Protocol):
         self,
         center: FloatArray,
         heading0: float,
-        order: int,
+        order: SymmetryOrder,
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
 
 from .types import Decision, DecisionStatus, Place
@@ -95,7 +96,7 @@ class VisionPlaceStore:
         """Every stored place (the localizer's ``known_places``)."""
         return [self._to_place(self._vplace(i)) for i in self.visual_map.place_ids()]
 
-    def candidates(self, gv_distance: float, order: int) -> list[Place]:
+    def candidates(self, gv_distance: float, order: SymmetryOrder) -> list[Place]:
         if not math.isfinite(gv_distance):
             return []
         tol = self.gv_tolerance + self.gv_relative_tolerance * abs(gv_distance)
@@ -142,7 +143,7 @@ class VisionPlaceStore:
         self,
         center: FloatArray,
         heading0: float,
-        order: int,
+        order: SymmetryOrder,
         gv_distance: float,
         kind: str,
         images: Sequence[NDArray[np.uint8]],
@@ -171,7 +172,8 @@ class VisionPlaceStore:
                     image=np.asarray(image) if self.keep_images else None,
                 )
             )
-        stored_order = m if (kind == "circle" or order == 0) else int(order)
+        # the visual map stores a circle as its number of directions (its column needs >= 1)
+        stored_order = m if (kind == "circle" or order.k is None) else order.k
         pid = self.visual_map.add_place(
             kind=kind,
             order=stored_order,

@@ -46,6 +46,7 @@ import numpy as np
 from symloc.localizer import Estimate, Request, RequestKind, Status
 from symloc.msgs.header import header_fields
 from symloc.msgs.pose import pose_fields
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["LEVELS", "candidates_to_fields", "status_to_fields"]
 
@@ -60,11 +61,17 @@ LEVELS = {
 _ARROW, _TEXT, _DELETEALL = 0, 9, 3
 
 
-def _order_text(order: int | None) -> str:
-    """`` (order k)`` for people; a circle (order 0 in the library) reads ``inf``."""
+def _order_text(order: SymmetryOrder | None) -> str:
+    """`` (order k)`` for people; a circle reads ``inf``."""
+    return "" if order is None else f" (order {order})"
+
+
+def _order_value(order: SymmetryOrder | None) -> str:
+    """The ``order`` diagnostic value: k, ``0`` for a circle (the field's documented form),
+    ``""`` when not ambiguous."""
     if order is None:
         return ""
-    return f" (order {'inf' if int(order) == 0 else int(order)})"
+    return "0" if order.k is None else str(order.k)
 
 
 def _fmt(values: Any) -> str:
@@ -96,7 +103,7 @@ def status_to_fields(
     values: list[tuple[str, str]] = [
         ("status", est.status.value),
         ("reason", est.reason),
-        ("order", "" if est.order is None else str(int(est.order))),
+        ("order", _order_value(est.order)),
         ("pose", "" if est.pose is None else _fmt(est.pose)),
         ("candidates", str(len(est.hypotheses))),
     ]

@@ -46,6 +46,7 @@ from symloc._checks import check_positive
 from symloc.errors import ConfigurationError, WorldError
 from symloc.sim.lidar import LIDAR_MOUNT_HEIGHT
 from symloc.sim.world import MATERIAL_GLASS, MATERIAL_PERSON, World, points_in_polygon
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = [
     "DEFAULT_TOLERANCE",
@@ -56,6 +57,7 @@ __all__ = [
     "outline_centroid",
     "outline_samples",
     "rotational_order",
+    "truth_order",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -112,6 +114,18 @@ class SymmetryTruth:
     def continuous(self) -> bool:
         """True for continuous rotational symmetry (order 0)."""
         return self.order == 0
+
+    @property
+    def symmetry_order(self) -> SymmetryOrder:
+        """:attr:`order` as the library's :class:`~symloc.symmetry.order.SymmetryOrder`."""
+        return truth_order(self.order)
+
+
+def truth_order(order: int) -> SymmetryOrder:
+    """A true order as the simulator writes it (``k >= 1``, 0 for continuous symmetry; e.g.
+    ``Room.order``) as a :class:`~symloc.symmetry.order.SymmetryOrder`: the one place that
+    reads the simulator's 0."""
+    return SymmetryOrder.CIRCLE if int(order) == 0 else SymmetryOrder.finite(int(order))
 
 
 def lidar_visible(

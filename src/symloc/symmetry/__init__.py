@@ -6,6 +6,7 @@ from symloc.symmetry.algorithm1 import Algorithm1Result, algorithm1
 from symloc.symmetry.config import SymmetryConfig
 from symloc.symmetry.gv_index import GVEntry, GVIndex
 from symloc.symmetry.judge import fit_circle, judge_symmetry, rotational_order
+from symloc.symmetry.order import SymmetryOrder
 from symloc.symmetry.report import KINDS, SymmetryReport
 from symloc.symmetry.scan_lines import ScanLines, scan_lines
 
@@ -16,6 +17,7 @@ __all__ = [
     "GVIndex",
     "ScanLines",
     "SymmetryConfig",
+    "SymmetryOrder",
     "SymmetryReport",
     "algorithm1",
     "fit_circle",

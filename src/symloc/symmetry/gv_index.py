@@ -15,6 +15,7 @@ import numpy as np
 
 from symloc._checks import check_finite_scalar, check_positive
 from symloc.errors import ConfigurationError
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["GVEntry", "GVIndex"]
 
@@ -31,8 +32,8 @@ class GVEntry:
         G-V distance [m] (> 0; ``math.inf`` is not allowed, a hallway has none).
     kind : str
         The report kind (``"polygon"``, ``"circle"``, ...).
-    order : int or float
-        Symmetry order (``math.inf`` for a circle).
+    order : SymmetryOrder or None
+        Symmetry order (:data:`SymmetryOrder.CIRCLE` for a circle); None when not given.
     center : tuple of float
         Centre of the place in the map frame [m], (x, y).
     """
@@ -40,7 +41,7 @@ class GVEntry:
     place_id: str
     gv_distance: float
     kind: str = "polygon"
-    order: int | float = 0
+    order: SymmetryOrder | None = None
     center: tuple[float, float] = (math.nan, math.nan)
 
 
@@ -51,7 +52,7 @@ class GVIndex:
     Examples
     --------
     >>> idx = GVIndex()
-    >>> idx.add("lab-square", 2.83, kind="polygon", order=4)
+    >>> _ = idx.add("lab-square", 2.83, kind="polygon", order=SymmetryOrder.finite(4))
     >>> [e.place_id for e in idx.lookup(2.80, tolerance=0.05)]
     ['lab-square']
     """
@@ -74,7 +75,7 @@ class GVIndex:
         gv_distance: float,
         *,
         kind: str = "polygon",
-        order: int | float = 0,
+        order: SymmetryOrder | None = None,
         center: Any = (math.nan, math.nan),
     ) -> GVEntry:
         """Add a place; raises if ``place_id`` is already there or the distance is not > 0.

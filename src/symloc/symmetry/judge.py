@@ -48,6 +48,7 @@ from symloc.features.split_and_merge import (
 )
 from symloc.scan import LaserScan
 from symloc.symmetry.config import SymmetryConfig
+from symloc.symmetry.order import SymmetryOrder
 from symloc.symmetry.report import SymmetryReport
 
 __all__ = ["fit_circle", "judge_symmetry", "rotational_order"]
@@ -156,7 +157,7 @@ def rotational_order(
 def _report(kind: str, reason: str, **kw: object) -> SymmetryReport:
     base: dict[str, object] = {
         "symmetric": False,
-        "order": 0 if kind == "unknown" else 1,
+        "order": None if kind == "unknown" else SymmetryOrder.finite(1),
         "regular": False,
         "center": _NAN2,
         "corners": _NO_CORNERS,
@@ -308,7 +309,7 @@ def _judge_closed(
             return SymmetryReport(
                 kind="circle",
                 symmetric=True,
-                order=math.inf,
+                order=SymmetryOrder.CIRCLE,
                 regular=True,
                 center=c_fit,
                 corners=_NO_CORNERS,
@@ -428,7 +429,7 @@ def _judge_closed(
     return SymmetryReport(
         kind=kind,
         symmetric=True,
-        order=order,
+        order=SymmetryOrder.finite(order),
         regular=regular,
         center=center,
         gv_distance=float(np.mean(dist)) if regular or kind == "rectangle" else float(dist.max()),
@@ -511,7 +512,7 @@ def _judge_open(
             return SymmetryReport(
                 kind="hallway",
                 symmetric=True,
-                order=2,
+                order=SymmetryOrder.finite(2),
                 regular=False,
                 center=center,
                 corners=_NO_CORNERS,

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
+from symloc.symmetry.order import SymmetryOrder
 
 __all__ = ["KINDS", "SymmetryReport"]
 
@@ -35,22 +36,23 @@ class SymmetryReport:
         One of :data:`KINDS`:
 
         - ``"polygon"``: a polygonal room; ``regular`` tells whether it is a regular n-gon
-          (then ``order == n``); a non-regular polygon may still have a rotational symmetry
+          (then ``order.k == n``); a non-regular polygon may still have a rotational symmetry
           (e.g. a rhombus, order 2);
-        - ``"circle"``: a round room (the paper's "n = infinity"), ``order == math.inf``;
+        - ``"circle"``: a round room (the paper's "n = infinity"),
+          ``order is SymmetryOrder.CIRCLE``;
         - ``"rectangle"``: four right angles, unequal sides, order 2;
         - ``"hallway"``: two parallel walls whose ends the laser does not reach, order 2 about
           a centre whose position along the hallway is undetermined;
         - ``"asymmetric"``: the room was measured but no rotation other than the identity
           maps it onto itself (order 1), or the symmetry test failed (see ``reason``);
         - ``"unknown"``: the scan does not allow a verdict (too few points, walls beyond
-          range, field of view under 360 degrees); order 0.
+          range, field of view under 360 degrees); no order (``order is None``).
     symmetric : bool
         True when more than one pose explains the scan (order > 1).
-    order : int or float
+    order : SymmetryOrder or None
         Symmetry order k, how many poses explain the scan: n for a regular n-gon, 2 for a
-        rectangle / hallway / rhombus, ``math.inf`` for a circle, 1 for asymmetric, 0 for
-        unknown. Compare with ``math.isinf`` or use :attr:`continuous`.
+        rectangle / hallway / rhombus, :data:`SymmetryOrder.CIRCLE` for a circle, 1 for
+        asymmetric; None for unknown (no verdict is not an order).
     regular : bool
         Regular polygon (all sides and angles equal) or circle.
     center : ndarray of shape (2,)
@@ -84,7 +86,7 @@ class SymmetryReport:
 
     kind: str
     symmetric: bool
-    order: int | float
+    order: SymmetryOrder | None
     regular: bool
     center: FloatArray
     corners: FloatArray
@@ -105,14 +107,18 @@ class SymmetryReport:
         set_(self, "center", _frozen(self.center, ()).reshape(2))
         set_(self, "corners", _frozen(self.corners, (2,)))
         set_(self, "centroid", _frozen(self.centroid, ()).reshape(2))
-        order = self.order
-        if not (isinstance(order, float) and math.isinf(order)):
-            set_(self, "order", int(order))
+        if self.order is not None and not isinstance(self.order, SymmetryOrder):
+            raise ConfigurationError(f"order: expected a SymmetryOrder or None, got {self.order!r}")
+        if (self.order is None) != (self.kind == "unknown"):
+            raise ConfigurationError(
+                f"order: only an unknown verdict has no order (kind {self.kind!r}, "
+                f"order {self.order!r})"
+            )
 
     @property
     def continuous(self) -> bool:
-        """True for a continuous symmetry (a circle: ``order == math.inf``)."""
-        return isinstance(self.order, float) and math.isinf(self.order)
+        """True for a continuous symmetry (a circle: ``order is SymmetryOrder.CIRCLE``)."""
+        return self.order is not None and self.order.is_circle
 
     @property
     def n_corners(self) -> int:
@@ -120,11 +126,12 @@ class SymmetryReport:
         return int(self.corners.shape[0])
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python form (JSON-friendly; ``order`` inf becomes the string ``"inf"``)."""
+        """Plain-Python form (JSON-friendly): ``order`` is an integer, the string ``"inf"`` for
+        a circle, or 0 for an unknown verdict (the form every JSON output has kept)."""
         return {
             "kind": self.kind,
             "symmetric": self.symmetric,
-            "order": "inf" if self.continuous else int(self.order),
+            "order": 0 if self.order is None else self.order.to_json(),
             "regular": self.regular,
             "center": [float(v) for v in self.center],
             "corners": self.corners.tolist(),

@@ -122,6 +122,7 @@ def _fmt(v: Any) -> str:
 
 def _judge(args: argparse.Namespace) -> int:
     from symloc.bench.scan_sources import bag_scan, carmen_scan, room_scan
+    from symloc.sim.symmetry_truth import truth_order
     from symloc.symmetry import SymmetryConfig, judge_symmetry, scan_lines
 
     if args.carmen is None and args.bag is None:
@@ -173,7 +174,7 @@ def _judge(args: argparse.Namespace) -> int:
         f" m; noise sigma {sigma:g} m + {rel:g} r; centroid {args.centroid};"
         f" partial_view {cfg.partial_view}"
     )
-    order = options.order_text(report.order, report.continuous)
+    order = options.order_text(report.order)
     print(f"kind        {report.kind}")
     print(f"symmetric   {report.symmetric}")
     print(f"order       {order}")
@@ -187,7 +188,7 @@ def _judge(args: argparse.Namespace) -> int:
     print(f"reason      {report.reason}")
     if src.truth:
         t = src.truth
-        t_order = options.order_text(t["order"], t["kind"] == "circle" and t["order"] == 0)
+        t_order = options.order_text(truth_order(t["order"]))
         err = float(np.hypot(*(report.center - t["center"])))
         where = f", centre error {err:.3f} m" if np.isfinite(err) else ""
         print(
