@@ -13,6 +13,7 @@ import symloc.localizer.types
 import symloc.vision
 from symloc.errors import ConfigurationError
 from symloc.localizer.vision_store import VisionPlaceStore
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.bow import BowVector
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.place import UNANCHORED_LABEL, Place, PlaceImage
@@ -44,6 +45,7 @@ def test_geometry_only_place_keeps_m_without_images() -> None:
     assert p.heading_reliable
     assert p.label is None
     assert p.pose.tolist() == [1.0, 2.0, 0.3]
+    assert p.order == SymmetryOrder.finite(4)  # an int is a finite order
 
 
 @pytest.mark.parametrize(
@@ -51,6 +53,7 @@ def test_geometry_only_place_keeps_m_without_images() -> None:
     [
         ({"center": np.zeros(3)}, r"Place\.center: expected shape \(2,\)"),
         ({"m": -1}, r"Place\.m: expected >= 0"),
+        ({"order": 0}, r"Place\.order: expected a SymmetryOrder or an integer k >= 1, got 0"),
         ({"images": (_image(0),)}, r"Place\.images: 1 views for m = 4 directions \(place 5\)"),
     ],
 )
@@ -80,17 +83,18 @@ def test_the_map_and_the_store_give_one_place(tmp_path: Path) -> None:
             label=UNANCHORED_LABEL,
         )
         place = vm.place(sq)
-        assert (place.place_id, place.kind, place.m, place.order) == (sq, "square", 4, 4)
+        assert (place.place_id, place.kind, place.m) == (sq, "square", 4)
+        assert place.order == SymmetryOrder.finite(4)
         assert place.center.tolist() == [1.0, 2.0]
         assert place.heading0 == 0.3
         assert place.heading_reliable
         assert [im.direction for im in place.images] == [0, 1, 2, 3]
         circle = vm.place(ci, with_images=False)
         assert not circle.heading_reliable
-        assert circle.order == 4  # the map stores m for a circle
+        assert circle.order == SymmetryOrder.CIRCLE  # the column holds m; kind says circle
         store = VisionPlaceStore(vm, vocabulary=None, intrinsics=np.eye(3))
         by_id = {p.place_id: p for p in store.all_places()}
-        assert by_id[sq].order == 4
-        assert by_id[ci].order == 0  # the localizer's convention: 0 is a circle
+        assert by_id[sq].order == SymmetryOrder.finite(4)
+        assert by_id[ci].order == SymmetryOrder.CIRCLE  # one reading in every layer
         assert by_id[ci].m == 4
         assert not by_id[ci].heading_reliable

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError, DatabaseError
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.bow import BowVector, Scoring
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.visual_map import PlaceImage, VisualMap, direction_headings
@@ -54,7 +55,7 @@ def test_round_trip(tmp_path, journal: str) -> None:  # type: ignore[no-untyped-
         assert vm.get_meta("vocabulary") == "default k=10 L=4"
         p = vm.place(pid)
         assert p.kind == "square"
-        assert p.order == 4
+        assert p.order == SymmetryOrder.finite(4)
         assert p.pose.tolist() == [1.0, 2.0, 0.3]
         assert [im.direction for im in p.images] == [0, 1, 2, 3]
         for j, im in enumerate(p.images):

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.orb import OrbExtractor
 from symloc.vision.orientation import OrientationConfig, decide_orientation, decide_with_retries
 from symloc.vision.place import Place, PlaceImage
@@ -178,7 +179,7 @@ def make_place(
         center=np.array([0.0, 0.0]),
         heading0=0.0,
         m=len(pimgs),
-        order=len(views),
+        order=SymmetryOrder.CIRCLE if kind == "circle" else SymmetryOrder.finite(len(views)),
         gv_distance=0.0,
         kind=kind,
         images=tuple(pimgs),

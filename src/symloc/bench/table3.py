@@ -22,6 +22,7 @@ from symloc._checks import as_rng
 from symloc.geometry import angle_diff, wrap_angle
 from symloc.sim.camera import Camera
 from symloc.sim.rooms import build_room
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.orb import OrbExtractor, OrbSettings
 from symloc.vision.orientation import (
@@ -89,7 +90,7 @@ def store_place(
         center=np.array([center[0], center[1]], float),
         heading0=float(headings[0]),
         m=len(images),
-        order=len(headings),
+        order=SymmetryOrder.CIRCLE if kind == "circle" else SymmetryOrder.finite(len(headings)),
         gv_distance=float(gv_distance),
         kind=kind,
         images=tuple(images),

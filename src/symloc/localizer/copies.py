@@ -33,7 +33,6 @@ __all__ = [
     "copies_fit",
     "copies_verdict",
     "known_place_at",
-    "place_order",
     "rotated_copies",
     "symmetry_consistent",
 ]
@@ -192,15 +191,3 @@ def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: flo
         if d <= radius_factor * place.gv_distance and d < best_d:
             best, best_d = place, d
     return best
-
-
-def place_order(place: Place) -> SymmetryOrder:
-    """A known place's symmetry order.
-
-    The one reading of ``Place.order`` (an int): a circle is ``kind == "circle"`` (its
-    ``order`` holds 0 in the localizer's places, the number of directions in the visual map's
-    rows, whichever reaches here) or an ``order`` of 0; otherwise the finite ``order``.
-    """
-    if place.kind == "circle" or place.order == 0:
-        return SymmetryOrder.CIRCLE
-    return SymmetryOrder.finite(place.order)

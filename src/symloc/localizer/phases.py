@@ -46,7 +46,6 @@ from .copies import (
     copies_fit,
     copies_verdict,
     known_place_at,
-    place_order,
     rotated_copies,
     symmetry_consistent,
 )
@@ -230,7 +229,7 @@ def copies_ambiguity(
     gate, scorer, ratio = ctx.gate, ctx.scorer, cfg.copy_score_ratio
     place = known_place_at(pose, ctx.known_places, cfg.place_radius_factor)
     if place is not None and copies_fit(
-        pose, place.center, place_order(place), inp.scan, gate=gate, scorer=scorer, ratio=ratio
+        pose, place.center, place.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
     ):
         back.converged.reset()
         return start_ambiguity_at_place(ctx, inp, place)
@@ -283,7 +282,7 @@ def start_ambiguity(ctx: Context, inp: Inputs, why: str) -> Step:
     centre = CentreFilter(alpha=ctx.config.centre_smoothing)
     target = np.asarray(verdict.center, dtype=np.float64)
     centre.update(inp.odom_pose, target[:2])
-    found = [p for p in ctx.places.candidates(gv, order) if place_order(p) == order]
+    found = [p for p in ctx.places.candidates(gv, order) if p.order == order]
     visit = Visit(
         order=order,
         gv=gv,
@@ -313,7 +312,7 @@ def start_ambiguity_at_place(ctx: Context, inp: Inputs, place: Place) -> Step:
     centre_base = compose_inverse(result.estimate, place.center)
     centre.update(inp.odom_pose, centre_base)
     visit = Visit(
-        order=place_order(place),
+        order=place.order,
         gv=place.gv_distance,
         kind=place.kind,
         centre_map=np.asarray(place.center, dtype=np.float64),

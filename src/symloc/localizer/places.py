@@ -48,7 +48,7 @@ class MemoryPlaces:
             center=np.asarray(center, dtype=np.float64),
             heading0=float(heading0),
             m=len(images),
-            order=0 if order.k is None else order.k,  # Place.order: 0 for a circle
+            order=order,
             gv_distance=float(gv_distance),
             kind=kind,
         )

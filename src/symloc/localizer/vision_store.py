@@ -10,7 +10,6 @@ G-V distance, or a new one).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -86,22 +85,16 @@ class VisionPlaceStore:
             self._places[place_id] = self.visual_map.place(place_id)
         return self._places[place_id]
 
-    @staticmethod
-    def _to_place(vp: Place) -> Place:
-        """The map's place as the localizer takes it: a circle's order is 0 (infinite), where
-        the map stores ``m``; everything else (``heading_reliable`` included) passes through."""
-        return dataclasses.replace(vp, order=0) if vp.kind == "circle" else vp
-
     def all_places(self) -> list[Place]:
         """Every stored place (the localizer's ``known_places``)."""
-        return [self._to_place(self._vplace(i)) for i in self.visual_map.place_ids()]
+        return [self._vplace(i) for i in self.visual_map.place_ids()]
 
     def candidates(self, gv_distance: float, order: SymmetryOrder) -> list[Place]:
         if not math.isfinite(gv_distance):
             return []
         tol = self.gv_tolerance + self.gv_relative_tolerance * abs(gv_distance)
         rows = self.visual_map.find_places(gv_distance, tol)
-        return [self._to_place(self._vplace(pid)) for pid, _gv in rows]
+        return [self._vplace(pid) for pid, _gv in rows]
 
     def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
         from symloc.vision.orientation import OrientationConfig, decide_orientation
@@ -172,15 +165,13 @@ class VisionPlaceStore:
                     image=np.asarray(image) if self.keep_images else None,
                 )
             )
-        # the visual map stores a circle as its number of directions (its column needs >= 1)
-        stored_order = m if (kind == "circle" or order.k is None) else order.k
         pid = self.visual_map.add_place(
             kind=kind,
-            order=stored_order,
+            order=order,
             gv_distance=float(gv_distance),
             pose=np.array([center[0], center[1], heading0], dtype=np.float64),
             images=stored,
             label=label,
         )
         self._places.pop(pid, None)
-        return self._to_place(self._vplace(pid))
+        return self._vplace(pid)

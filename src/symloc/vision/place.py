@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
+from symloc.symmetry.order import SymmetryOrder
 
 if TYPE_CHECKING:
     from symloc.vision.bow import BowVector
@@ -71,10 +72,10 @@ class Place:
         Map-frame heading [rad] of direction 0 (stored view 0).
     m : int
         M, the number of stored directions, also when ``images`` were not loaded.
-    order : int
-        Symmetry order k. The localizer's convention is 0 for a circle (infinite order); the
-        visual map stores ``m`` for a circle (its column needs >= 1) and
-        :class:`~symloc.localizer.vision_store.VisionPlaceStore` hands the localizer 0.
+    order : SymmetryOrder
+        Symmetry order k, or :data:`SymmetryOrder.CIRCLE` for a round room (an int is taken
+        as a finite order ``k >= 1``). The visual map's column stores ``m`` for a circle (it
+        needs an integer >= 1); :meth:`~symloc.vision.visual_map.VisualMap.place` turns it back.
     gv_distance : float
         G-V distance [m], the key of the G-V index.
     kind : str
@@ -93,7 +94,7 @@ class Place:
     center: FloatArray
     heading0: float
     m: int
-    order: int
+    order: SymmetryOrder
     gv_distance: float
     kind: str = "polygon"
     heading_reliable: bool = True
@@ -109,6 +110,14 @@ class Place:
                 f"(place {self.place_id})"
             )
         object.__setattr__(self, "center", center)
+        if not isinstance(self.order, SymmetryOrder):
+            try:
+                object.__setattr__(self, "order", SymmetryOrder.finite(self.order))
+            except ConfigurationError as err:
+                raise ConfigurationError(
+                    f"Place.order: expected a SymmetryOrder or an integer k >= 1, got "
+                    f"{self.order!r} (place {self.place_id})"
+                ) from err
         if self.m < 0:
             raise ConfigurationError(f"Place.m: expected >= 0, got {self.m}")
         if self.images and len(self.images) != self.m:

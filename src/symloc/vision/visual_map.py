@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import ConfigurationError, DatabaseError, DataFormatError
 from symloc.geometry import wrap_angle
 from symloc.image_header import check_image_size, image_header
+from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.place import UNANCHORED_LABEL, Place, PlaceImage
@@ -372,7 +373,7 @@ class VisualMap:
         self,
         *,
         kind: str,
-        order: int,
+        order: SymmetryOrder | int,
         gv_distance: float,
         pose: ArrayLike,
         images: Sequence[PlaceImage],
@@ -383,8 +384,10 @@ class VisualMap:
         Parameters
         ----------
         kind : str
-        order : int
-            Symmetry order (>= 1).
+        order : SymmetryOrder or int
+            Symmetry order (an int is a finite order >= 1). The column stores a circle's
+            number of directions M (it needs an integer >= 1; :meth:`place` reads the circle
+            back from ``kind == "circle"``).
         gv_distance : float
             G-V distance [m].
         pose : (3,) array
@@ -395,6 +398,8 @@ class VisualMap:
         """
         if not kind:
             raise ConfigurationError("kind: expected a non-empty string")
+        if isinstance(order, SymmetryOrder):
+            order = len(images) if order.k is None else order.k
         if int(order) != order or order < 1:
             raise ConfigurationError(f"order: expected an integer >= 1, got {order}")
         gv = float(gv_distance)
@@ -474,7 +479,7 @@ class VisualMap:
             imgs = [self._image_record(r, where, with_images) for r in rows]
             # read in column order, so a damaged row reports its first bad column
             kind = str(_text(row[0], f"{where}: places.kind"))
-            order = _int(row[1], f"{where}: places.symmetry_order", 0, 1_000_000)
+            stored_order = _int(row[1], f"{where}: places.symmetry_order", 1, 1_000_000)
             gv_distance = _real(row[2], f"{where}: places.gv_distance")
             x = _real(row[3], f"{where}: places.x")
             y = _real(row[4], f"{where}: places.y")
@@ -485,7 +490,10 @@ class VisualMap:
                 center=np.array([x, y], np.float64),
                 heading0=heading,
                 m=len(imgs),
-                order=order,
+                # the column holds a circle's number of directions (it needs an integer >= 1)
+                order=SymmetryOrder.CIRCLE
+                if kind == "circle"
+                else SymmetryOrder.finite(stored_order),
                 gv_distance=gv_distance,
                 kind=kind,
                 heading_reliable=label != UNANCHORED_LABEL,

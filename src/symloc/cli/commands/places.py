@@ -189,7 +189,7 @@ def _list(args: argparse.Namespace) -> int:
         for pid in ids:
             p = vmap.place(pid, with_images=False)
             print(
-                f"{p.place_id:>4}  {p.kind:<10}{p.order:>6}{p.gv_distance:>9.3f}{p.m:>3}  "
+                f"{p.place_id:>4}  {p.kind:<10}{p.order!s:>6}{p.gv_distance:>9.3f}{p.m:>3}  "
                 f"({p.center[0]:.2f}, {p.center[1]:.2f}, {math.degrees(p.heading0):.1f})"
                 + (f"  {p.label}" if p.label else "")
             )
