@@ -11,7 +11,8 @@ from symloc.errors import ConfigurationError
 from symloc.grid.fields import surface_distance_field
 from symloc.localizer import Localizer, Status
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
-from symloc.localizer.claim import ClaimConfig, ClaimGate, Verdict
+from symloc.localizer.claim import ClaimConfig, ClaimGate, Standing, Verdict
+from symloc.localizer.types import TrackerResult
 from symloc.mcl import Amcl, AmclParams
 from symloc.odometry import OdometryReading
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
@@ -65,6 +66,46 @@ def test_a_corridor_pose_is_withheld_not_claimed() -> None:
     claim = gate.check(np.zeros(3), scan)
     assert claim.verdict is Verdict.WITHHELD
     assert "std" in claim.reason
+
+
+class _Tracker:
+    """Counts what the gate asks of the filter."""
+
+    def __init__(self) -> None:
+        self.forced = 0
+
+    def force_update(self) -> None:
+        self.forced += 1
+
+    def initialize_global(self) -> None:
+        raise AssertionError("not expected here")
+
+    def initialize_pose(self, pose, covariance) -> None:  # type: ignore[no-untyped-def]
+        raise AssertionError("not expected here")
+
+    def update(self, odom, scan):  # type: ignore[no-untyped-def]
+        raise AssertionError("not expected here")
+
+
+def test_a_suspension_ends_with_the_chain_it_waits_for(l_room) -> None:
+    room, grid = l_room
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    tracker, notes = _Tracker(), []
+    truth = np.array([-0.6, -0.8, 0.4])
+    result = TrackerResult(estimate=truth, covariance=COV, hypotheses=())
+    gate.observe(result, np.zeros(3))
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 1)
+    first = gate.step(result, np.zeros(3), scan, tracker, notes.append)
+    assert first.standing is Standing.FIRST
+    gate.confirmed(first.claim, np.zeros(3))  # the localizer publishes it: a chain starts
+    away = simulate_scan(room.world, np.array([0.9, -1.0, 2.5]), RPLIDAR_A2, 2)
+    assert gate.step(result, np.zeros(3), away, tracker, notes.append).standing is Standing.HOLD
+    assert notes[-1].startswith("claims suspended")
+    assert tracker.forced == 1
+    # tracking ended: the chain is forgotten, and with it the suspension that waited for it
+    gate.forget_chain()
+    again = gate.step(result, np.zeros(3), scan, tracker, notes.append)
+    assert again.standing is Standing.FIRST, again.reason
 
 
 def test_anchor_reports_a_jump_of_the_filter(l_room) -> None:

@@ -335,6 +335,15 @@ def test_tracking_that_loses_every_cluster_reports_lost():
     assert est.pose is None
 
 
+def test_a_pose_lost_while_tracking_is_earned_again_only_after_n_converged_updates():
+    good, weak = _result([[0.5, 0.5, 0.1]], [1.0]), _result([[0.5, 0.5, 0.1]], [0.01])
+    tracker = FakeTracker(script=[good, good, good, weak], default=good)
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    statuses = [loc.update(OdometryReading(np.zeros(3)), None).status for _ in range(7)]
+    # earned at the 3rd, lost at the 4th, earned again only at the 3rd converged update after
+    assert statuses == [Status.LOST] * 2 + [Status.TRACKING] + [Status.LOST] * 3 + [Status.TRACKING]
+
+
 def test_collapsed_amcl_inside_known_symmetric_place_is_not_trusted():
     # The judge fails (near a wall) and AMCL collapsed to one copy: the map scorer says the
     # rotated copies explain the scan as well, so the pose is not earned.

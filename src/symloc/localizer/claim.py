@@ -22,7 +22,8 @@ scan goes through :meth:`ClaimGate.check`:
    obstacle) or when the laser had to pull the pose further from the carried one than their
    uncertainty allows (squared Mahalanobis distance above ``max_pull``): a kidnapping, an
    odometry error, a wrong filter estimate. The localizer then forces a filter update, and
-   after ``patience`` such scans in a row it relocalizes from scratch.
+   after ``patience`` such scans since the first (not necessarily in a row: a scan that fits
+   once does not restart the count) it relocalizes from scratch.
 4. **Gate**: the pose is published only while its published covariance puts it inside the
    tolerance with a margin of ``gate_sigmas`` standard deviations in position and heading
    (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans, and
@@ -32,7 +33,8 @@ scan goes through :meth:`ClaimGate.check`:
 The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
 when the last confirmed pose, carried by odometry, is confirmed ``resume_after`` scans in a row
-(a person walked past), and after ``patience`` failing scans the pose is given up and the
+(a person walked past), and after ``patience`` failing scans since the suspension (counted, not
+necessarily in a row) the pose is given up and the
 filter relocalizes globally (the robot was carried away). An operator's initial pose chose among
 symmetric copies, so while the filter stays on it no copy check is needed.
 
@@ -106,9 +108,9 @@ class ClaimConfig:
         Smallest std [m], [rad] of the carried prior (a particle cloud can be narrower than
         its error).
     patience : int
-        Scans the localizer waits, after a withdrawn claim or a jump of the filter, for the
-        last confirmed pose carried by odometry to fit the scan again before it gives the pose
-        up and relocalizes.
+        Failing scans the localizer allows, after a withdrawn claim or a jump of the filter,
+        for the last confirmed pose carried by odometry to fit the scan again before it gives
+        the pose up and relocalizes (counted since the suspension, not necessarily in a row).
     resume_after : int
         Consecutive scans at which that carried pose must be confirmed again to resume.
     odometry_alphas : (4,) floats
@@ -311,8 +313,12 @@ class ClaimGate:
         )
 
     def forget_chain(self) -> None:
-        """Forget the last confirmed pose (tracking ended); the filter's anchor stays."""
+        """Forget the last confirmed pose (tracking ended), and a suspension waiting for it to
+        fit again; the filter's anchor stays."""
         self._chain = None
+        self._suspended = False
+        self._patience.reset()
+        self._resume.reset()
 
     # ------------------------------------------------------------------ lifecycle
 

@@ -122,7 +122,6 @@ class Lost:
                 return found
             if self.converged.hit():
                 ctx.note("AMCL converged where the scan is not symmetric: pose earned")
-                # the counters are kept: a pose lost while tracking comes back to them
                 return Tracking(self).claim(ctx, inp, "AMCL converged; scan not symmetric")
             return lost("AMCL converging", result), self
         self.converged.miss()
@@ -150,8 +149,9 @@ class Lost:
 class Tracking:
     """The pose is earned; each scan's pose is published only if the claim gate confirms it.
 
-    ``lost`` holds :class:`Lost`'s counters as they were when the pose was earned: a pose
-    lost while tracking goes back to them.
+    ``lost`` holds :class:`Lost`'s counters as they were when the pose was earned (the copy
+    check of the first claim goes on with them); a pose lost while tracking starts them afresh,
+    so it is earned again only after ``converged_updates`` converged updates.
     """
 
     name: ClassVar[str] = "tracking"
@@ -174,7 +174,7 @@ class Tracking:
                 return start_ambiguity(ctx, inp, why)
         if not result.hypotheses or result.hypotheses[0].weight < cfg.min_cluster_weight:
             ctx.note("AMCL lost its pose")
-            return lost("AMCL has no well-weighted cluster", result), self.lost
+            return lost("AMCL has no well-weighted cluster", result), Lost.fresh(cfg)
         return self.claim(ctx, inp, "AMCL tracking")
 
     def claim(self, ctx: Context, inp: Inputs, reason: str) -> Step:
