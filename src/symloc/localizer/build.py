@@ -13,7 +13,6 @@ what ``symloc ros node`` runs when both are given the same settings.
 from __future__ import annotations
 
 import weakref
-from typing import Any
 
 import numpy as np
 
@@ -25,6 +24,7 @@ from symloc.localizer.localizer import Localizer
 from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
 from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.settings import LocalizerSettings
+from symloc.localizer.types import PlaceStore
 from symloc.mcl.amcl import Amcl
 from symloc.symmetry import judge_symmetry
 
@@ -49,7 +49,7 @@ def build_localizer(
     grid: OccupancyGrid,
     settings: LocalizerSettings,
     *,
-    places: Any = None,
+    places: PlaceStore | None = None,
     rng: np.random.Generator | None = None,
 ) -> Localizer:
     """The localizer on ``grid`` configured by ``settings``; not initialised yet.
@@ -64,7 +64,7 @@ def build_localizer(
         Where places are looked up and mapped (a
         :class:`~symloc.localizer.vision_store.VisionPlaceStore` over a visual map); None: a
         :class:`~symloc.localizer.places.MemoryPlaces` (no visual map). Its stored places
-        (``all_places()``, when it has them) are the localizer's known places.
+        (``all_places()``) are the localizer's known places.
     rng : numpy.random.Generator, optional
         AMCL's random numbers; None: ``numpy.random.default_rng(settings.seed)``. The bench
         passes the generator its trial draws everything from.
@@ -79,8 +79,7 @@ def build_localizer(
     amcl = Amcl(fields, settings.amcl, gen)
     laser = np.asarray(settings.laser_pose, dtype=np.float64)
     store = places if places is not None else MemoryPlaces()
-    all_places = getattr(store, "all_places", None)
-    known = list(all_places()) if all_places is not None else []
+    known = list(store.all_places())
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     return Localizer(

@@ -13,7 +13,6 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,6 +24,7 @@ from .centering import CentreFilter
 from .claim import ClaimGate
 from .config import LocalizerConfig
 from .copies import PoseScorer, rotated_copies
+from .map_symmetry import MapSymmetry
 from .notes import Notes
 from .rules import Streak
 from .types import (
@@ -70,7 +70,7 @@ class Context:
     gate: ClaimGate | None
     scorer: PoseScorer | None
     known_places: list[Place]
-    map_symmetries: Sequence[Any]
+    map_symmetries: Sequence[MapSymmetry]
     notes: Notes
     record: Record
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,6 +36,7 @@ from .claim import ClaimGate
 from .config import LocalizerConfig
 from .context import Context, Inputs, Record
 from .copies import PoseScorer, rotated_copies, symmetry_consistent
+from .map_symmetry import MapSymmetry
 from .notes import NOTE_HISTORY, Notes
 from .phases import Lost, Phase, Tracking, restart
 from .types import Decision, Estimate, Place, PlaceStore, SymmetryJudge, Tracker, TrackerResult
@@ -96,7 +96,7 @@ class Localizer:
         *,
         scorer: PoseScorer | None = None,
         known_places: Sequence[Place] = (),
-        map_symmetries: Sequence[Any] = (),
+        map_symmetries: Sequence[MapSymmetry] = (),
         claim_gate: ClaimGate | None = None,
         laser_pose: FloatArray | Sequence[float] = (0.0, 0.0, 0.0),
         note_history: int = NOTE_HISTORY,
@@ -160,7 +160,7 @@ class Localizer:
         return self._ctx.known_places
 
     @property
-    def map_symmetries(self) -> Sequence[Any]:
+    def map_symmetries(self) -> Sequence[MapSymmetry]:
         """Rotational symmetries of the map itself: a converged pose whose rotated copy fits
         the scan as well is not earned."""
         return self._ctx.map_symmetries

@@ -24,6 +24,10 @@ class MemoryPlaces:
         """No stored place can decide anything (their images are not kept)."""
         return []
 
+    def all_places(self) -> list[Place]:
+        """The places mapped so far (none at start-up: nothing is stored between runs)."""
+        return list(self.places)
+
     def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
         """Never called (no candidates); answers ``no_match``."""
         return Decision(status=DecisionStatus.NO_MATCH, reason="no visual map loaded")

@@ -277,6 +277,9 @@ class PlaceStore(Protocol):
     def decide(self, place: Place, image: NDArray[np.uint8]) -> Decision:
         """Decide the direction of ``image`` against ``place``'s stored images."""
 
+    def all_places(self) -> Sequence[Place]:
+        """Every stored place (the localizer's known places at start-up)."""
+
     def add_place(
         self,
         center: FloatArray,

@@ -9,8 +9,6 @@ global initialisation (nothing earned).
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -20,6 +18,7 @@ from symloc.grid import OccupancyGrid
 from symloc.localizer import Localizer
 from symloc.localizer.build import build_localizer
 from symloc.localizer.places import MemoryPlaces
+from symloc.localizer.types import PlaceStore
 from symloc.ros.params import NodeParams
 
 __all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
@@ -33,7 +32,7 @@ def camera_matrix(params: NodeParams) -> NDArray[np.float64]:
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
 
-def open_places(params: NodeParams) -> Any:
+def open_places(params: NodeParams) -> PlaceStore:
     """The place store for ``params.visual_map`` (``""``: :class:`MemoryPlaces`).
 
     In ``localize`` mode the visual map is opened read-only.
@@ -72,7 +71,9 @@ def open_places(params: NodeParams) -> Any:
     )
 
 
-def make_localizer(grid: OccupancyGrid, params: NodeParams, *, places: Any = None) -> Localizer:
+def make_localizer(
+    grid: OccupancyGrid, params: NodeParams, *, places: PlaceStore | None = None
+) -> Localizer:
     """A globally initialised localizer on ``grid`` configured by ``params``.
 
     :func:`~symloc.localizer.build.build_localizer` with ``params.settings()`` and the place
