@@ -222,6 +222,9 @@ class Recorder:
         self.scans: list[LaserScan] = []
         self.reset = 0
         self.poses_set: list[np.ndarray] = []
+        self.last_result = None
+        #: Localizer.holds_pose: True while the script's estimates are tracking or withheld
+        self.holds_pose = False
 
     def update(self, odom, scan, image=None):  # type: ignore[no-untyped-def]
         self.scans.append(scan)
@@ -232,6 +235,9 @@ class Recorder:
 
     def reset_global(self) -> None:
         self.reset += 1
+
+    def force_update(self) -> None:
+        self.forced = getattr(self, "forced", 0) + 1
 
 
 def _core(
@@ -383,7 +389,8 @@ def test_first_map_only_and_the_services() -> None:
     assert core.grid.width == 40
     assert core.reinitialize_global()
     assert locs[-1].reset == 1
-    assert not core.request_nomotion_update()  # this localizer cannot
+    assert core.request_nomotion_update()
+    assert locs[-1].forced == 1
 
 
 def test_odometry_reading_from_tf_is_used_for_scans() -> None:

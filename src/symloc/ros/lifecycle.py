@@ -5,7 +5,8 @@
 
 - **Lifecycle** (``amcl/get_state``, ``amcl/change_state``, driven by nav2's
   ``lifecycle_manager_localization`` or ``nav2_simple_commander``): *configure* reads the
-  parameters (an invalid or unknown one fails the transition, naming it) and creates the
+  parameters (an invalid one fails the transition, naming it; an unknown name is warned about
+  and ignored, as nav2_amcl does) and creates the
   subscriptions, publishers and services; *activate* starts localizing (scans before it are
   ignored, as nav2_amcl does; maps, TF and odometry are kept), applies ``set_initial_pose`` /
   ``initialize_at_saved_pose`` or an initial pose received while inactive, starts the pose
@@ -56,7 +57,13 @@ from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
 from symloc.ros.core import NodeCore, Outputs
-from symloc.ros.nav2_params import node_params_from_ros, parameter_defaults, ros_values
+from symloc.ros.nav2_params import (
+    WITHOUT_EFFECT,
+    node_params_from_ros,
+    parameter_defaults,
+    ros_values,
+    seeded_from_time,
+)
 from symloc.ros.params import NodeParams
 from symloc.ros.tf import transforms_from_msg
 
@@ -191,20 +198,31 @@ class LocalizationNode(LifecycleNode):
         return values
 
     def unknown_parameters(self) -> list[str]:
-        """Names the params file gave this node that it does not know (configure refuses)."""
+        """Names the params file gave this node that it does not know (warned about at
+        configure and ignored, as nav2_amcl ignores names it does not declare)."""
         overrides = getattr(self, "_parameter_overrides", {}) or {}
         known = set(self._declared) | {"use_sim_time", "start_type_description_service"}
         return sorted(n for n in overrides if n not in known and not n.startswith("qos_overrides."))
 
     def read_params(self) -> NodeParams:
-        """The node's settings from its ROS parameters (raises ConfigurationError)."""
-        unknown = self.unknown_parameters()
-        if unknown:
-            raise ConfigurationError(
-                f"parameter {unknown[0]!r}: unknown to symloc"
-                + (f" (and {len(unknown) - 1} more: {unknown[1:]})" if len(unknown) > 1 else "")
+        """The node's settings from its ROS parameters (raises ConfigurationError on an invalid
+        value); unknown names are warned about and ignored, as nav2_amcl does."""
+        log = self.get_logger()
+        for name in self.unknown_parameters():
+            log.warning(
+                f"parameter {name!r}: unknown to symloc, ignored (as nav2_amcl ignores names it"
+                " does not declare; symloc's names: symloc.ros.nav2_params)"
             )
-        return node_params_from_ros(self._values())
+        values = self._values()
+        for name in ("accept_map_updates",):
+            if values.get(name) is not None and values.get(name) != WITHOUT_EFFECT[name][0]:
+                log.warning(f"parameter {name!r}: {WITHOUT_EFFECT[name][1]}")
+        params = node_params_from_ros(values, on_unknown=lambda why: log.warning(why))
+        if seeded_from_time(values):
+            log.info(
+                f"random_seed {values['random_seed']}: filter seeded from the time ({params.seed})"
+            )
+        return params
 
     def _validate_parameters(self, changes: list[Parameter[Any]]) -> Any:
         from rcl_interfaces.msg import SetParametersResult
@@ -324,6 +342,10 @@ class LocalizationNode(LifecycleNode):
             self._pending_pose = (pose, INITIAL_COVARIANCE)
         self._apply_pending_pose()
         self.active = True
+        # held scans whose odometry never comes are dropped (and answered) after the tolerance
+        self._timer_handles.append(
+            self.create_timer(max(0.05, p.transform_tolerance / 4.0), self._answer_held)
+        )
         if p.save_pose_rate > 0.0:
             self._timer_handles.append(self.create_timer(1.0 / p.save_pose_rate, self._save_pose))
         if p.bond_heartbeat_period > 0.0 and self.bond_status is not None:
@@ -403,7 +425,9 @@ class LocalizationNode(LifecycleNode):
             sub(PoseWithCovarianceStamped, p.initialpose_topic, self._on_initialpose, 10),
         ]
         if p.odom_source == "topic":
-            self._sub_handles.append(sub(Odometry, p.odom_topic, self._guard(core.on_odom), sensor))
+            self._sub_handles.append(
+                sub(Odometry, p.odom_topic, self._guard(self._on_odom_msg), sensor)
+            )
         if self.tf_message is not None:
             tf_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             static_qos = QoSProfile(
@@ -411,7 +435,7 @@ class LocalizationNode(LifecycleNode):
                 reliability=ReliabilityPolicy.RELIABLE,
                 durability=DurabilityPolicy.TRANSIENT_LOCAL,
             )
-            on_tf = core.on_tf if p.odom_source == "tf" else self._static_only
+            on_tf = self._on_odom_tf if p.odom_source == "tf" else self._static_only
             self._sub_handles.append(sub(self.tf_message, "/tf", self._guard(on_tf), tf_qos))
             self._sub_handles.append(
                 sub(self.tf_message, "/tf_static", self._guard(core.on_tf_static), static_qos)
@@ -444,9 +468,10 @@ class LocalizationNode(LifecycleNode):
             "particle_cloud": pub(cloud_type, p.particle_cloud_topic, best_effort),
             "status": pub(DiagnosticArray, p.status_topic, 50),
             "candidates": pub(MarkerArray, p.candidates_topic, 10),
-            "goal": pub(PoseStamped, p.goal_topic, 10),
             "capture": pub(Header, p.capture_topic, 10),
         }
+        if p.publish_goals:  # off by default: nothing commands the robot unless asked
+            self._pub_handles["goal"] = pub(PoseStamped, p.goal_topic, 10)
         if self.tf_message is not None:
             self._pub_handles["tf"] = pub(
                 self.tf_message,
@@ -501,17 +526,40 @@ class LocalizationNode(LifecycleNode):
 
     # ------------------------------------------------------------------ callbacks
 
+    def _now(self) -> float:
+        return float(self.get_clock().now().nanoseconds) * 1e-9
+
     def _on_scan(self, msg: Any) -> None:
         core = self.core
         if core is None or not self.active:
             return  # nav2_amcl ignores scans until it is active
         try:
             self._apply_pending_pose()
-            out = core.on_scan(msg)
+            outs = core.receive_scan(msg, self._now())
         except Exception as err:  # the node must stay up; the status still goes out
             core.drop("internal error", f"{type(err).__name__}: {err}")
-            out = core.unused_scan(None)
-        self.publish(out)
+            outs = [core.unused_scan(None)]
+        for out in outs:
+            self.publish(out)
+
+    def _on_odom_tf(self, msg: Any) -> None:
+        """``/tf``: odometry (and frames); held scans it now covers are answered."""
+        assert self.core is not None
+        self.core.on_tf(msg)
+        self._answer_held()
+
+    def _on_odom_msg(self, msg: Any) -> None:
+        """nav_msgs/Odometry (``odom_source: topic``); held scans it covers are answered."""
+        assert self.core is not None
+        self.core.on_odom(msg)
+        self._answer_held()
+
+    def _answer_held(self) -> None:
+        core = self.core
+        if core is None or not self.active or not core.held_scans:
+            return
+        for out in core.ready_scans(self._now()):
+            self.publish(out)
 
     def publish(self, out: Outputs) -> None:
         """Publish one step's outputs (and remember the pose for the pose file)."""
@@ -526,7 +574,7 @@ class LocalizationNode(LifecycleNode):
         fields = {
             "particle_cloud": cloud,
             "amcl_pose": out.amcl_pose,
-            "goal": out.goal,
+            "goal": out.goal if p.publish_goals else None,
             "capture": out.capture,
             "candidates": out.candidates,
             "status": out.status,
@@ -591,6 +639,8 @@ class LocalizationNode(LifecycleNode):
         return self._apply_pending_pose()
 
     def _apply_pending_pose(self) -> bool:
+        """Hand the pending initial pose to the core once it has a map (the core keeps it
+        across every rebuild of the localizer until tracking confirms it)."""
         core = self.core
         if self._pending_pose is None or core is None or core.localizer is None:
             return False
@@ -598,9 +648,7 @@ class LocalizationNode(LifecycleNode):
         self._pending_pose = None
         pose = np.asarray(pose, dtype=np.float64).copy()
         pose[2] = wrap_angle(pose[2])
-        core.localizer.set_pose(pose, np.asarray(cov, dtype=np.float64))
-        self.get_logger().info(f"initial pose set to {pose.round(3).tolist()}")
-        return True
+        return core.set_initial_pose(pose, np.asarray(cov, dtype=np.float64))
 
     def _save_pose(self) -> None:
         if not self.active or self._last_pose is None or self.params is None:
