@@ -11,9 +11,9 @@ from symloc.ros.nav2_params import (
     WITHOUT_EFFECT,
     node_params_from_ros,
     parameter_defaults,
-    seeded_from_time,
     read_params_block,
     ros_values,
+    seeded_from_time,
 )
 from symloc.ros.params import NodeParams
 
