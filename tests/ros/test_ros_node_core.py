@@ -302,6 +302,9 @@ def test_every_new_map_rebuilds_and_keeps_the_pose() -> None:
     core.on_scan(_scan_msg(1.0))
     core.on_map(_map_msg((60, 40)))  # 2 m x 3 m: the tracked pose (1, 2) is inside
     assert len(built) == 2
+    assert loc.poses_set == []  # seeded at the next scan, carried to its odometry
+    core.on_odom(_odom_msg(1.2))
+    core.on_scan(_scan_msg(1.2))
     np.testing.assert_allclose(loc.poses_set[-1], [1.0, 2.0, 0.5])
     only = NodeCore(NodeParams(first_map_only=True), factory=factory)
     only.on_map(_map_msg())

@@ -84,6 +84,9 @@ __all__ = ["LocalizerFactory", "NodeCore", "Outputs"]
 FloatArray = NDArray[np.float64]
 #: ``factory(grid, params) -> Localizer`` (default :func:`symloc.ros.assemble.make_localizer`).
 LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Localizer]
+#: A pose kept across a rebuild: (pose (3,), covariance (3, 3), the odometry pose (3,) it
+#: refers to or None, whether it is an operator's pose not yet confirmed).
+_Seed = tuple[FloatArray, FloatArray, FloatArray | None, bool]
 
 _WARN_FIRST = 5
 _WARN_EVERY = 100
@@ -226,6 +229,8 @@ class NodeCore:
         self._seed: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
         #: the last confirmed pose (pose, covariance, odometry pose at its scan)
         self._confirmed: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        #: the pose kept across a rebuild, applied at the next step (:meth:`_reseed`)
+        self._pending_seed: _Seed | None = None
 
     # ------------------------------------------------------------------ bookkeeping
 
@@ -358,17 +363,16 @@ class NodeCore:
         kept = self._reseed(seed)
         self.warn(f"localizer rebuilt: {why}" + (f"; pose kept at {kept}" if kept else ""))
 
-    def _pose_to_keep(self) -> tuple[FloatArray, FloatArray, bool] | None:
-        """The pose a rebuilt localizer starts from: ``(pose, covariance, operator)``, carried
-        by odometry to the newest reading; None when no pose is held."""
-        now = self._odom.poses[-1] if self._odom.stamps else None
-        held = self.localizer is not None and getattr(self.localizer, "holds_pose", False)
+    def _pose_to_keep(self) -> _Seed | None:
+        """The pose a rebuilt localizer starts from: ``(pose, covariance, odometry pose then,
+        operator)``; None when no pose is held."""
+        held = self.localizer is not None and self._holds_pose()
         if self._confirmed is not None and (held or self._tracking_now()):
             pose, cov, then = self._confirmed
-            return self._carry(pose, then, now), cov, False
+            return pose, cov, then, False
         if self._seed is not None:
             pose, cov, then_seed = self._seed
-            return self._carry(pose, then_seed, now), cov, True
+            return pose, cov, then_seed, True
         return None
 
     def _tracking_now(self) -> bool:
@@ -382,19 +386,34 @@ class NodeCore:
         out[2] = wrap_angle(out[2])
         return out
 
-    def _reseed(self, seed: tuple[FloatArray, FloatArray, bool] | None) -> list[float] | None:
-        """Seed the (new) localizer at ``seed`` (:meth:`_pose_to_keep`); the pose it gives."""
+    def _reseed(self, seed: _Seed | None) -> list[float] | None:
+        """Seed the (new) localizer at ``seed`` (:meth:`_pose_to_keep`) at the next scan, carried
+        by odometry to that scan's stamp (a fresh filter applies no motion before its first
+        update, so a pose carried only to now would lag the robot); the pose as of now."""
+        self._pending_seed = None
         if seed is None or self.localizer is None or self.grid is None:
             return None
-        pose, cov, operator = seed
-        if self._pose_problem(pose, cov) is not None:
+        pose, cov, then, _ = seed
+        now = self._odom.poses[-1] if self._odom.stamps else None
+        carried = self._carry(pose, then, now)
+        if self._pose_problem(carried, cov) is not None:
             return None
-        self.localizer.set_pose(pose, cov)
-        if operator:
-            now = self._odom.poses[-1].copy() if self._odom.stamps else None
-            self._seed = (pose, cov, now)
-        rounded: list[float] = np.round(pose, 3).tolist()
+        self._pending_seed = seed
+        rounded: list[float] = np.round(carried, 3).tolist()
         return rounded
+
+    def _apply_pending_seed(self, odom: OdometryReading) -> None:
+        """Before a step: seed a rebuilt localizer at the pose kept, carried to ``odom``."""
+        seed, self._pending_seed = self._pending_seed, None
+        if seed is None or self.localizer is None:
+            return
+        pose, cov, then, operator = seed
+        carried = self._carry(pose, then, np.asarray(odom.pose, dtype=np.float64))
+        if self._pose_problem(carried, cov) is not None:
+            return
+        self.localizer.set_pose(carried, cov)
+        if operator:
+            self._seed = (carried, cov, np.asarray(odom.pose, dtype=np.float64).copy())
 
     def reconfigure(self, params: NodeParams) -> None:
         """Use new (validated) parameters from now on; the localizer is rebuilt on them."""
@@ -419,6 +438,7 @@ class NodeCore:
         self.localizer.reset_global()
         self._seed = None
         self._confirmed = None
+        self._pending_seed = None
         self.map_odom.forget()
         self.warn("global localization requested: pose forgotten, AMCL spread over the map")
         return True
@@ -630,6 +650,7 @@ class NodeCore:
         # on /tf_static at the first scan, new parameters, a new map) seeds it again
         self._seed = (pose, cov, self._odom.poses[-1].copy() if self._odom.stamps else None)
         self._confirmed = None
+        self._pending_seed = None
         self.map_odom.forget()
         self.warn(f"initial pose set to {np.asarray(pose).round(3).tolist()}")
         return True
@@ -825,6 +846,7 @@ class NodeCore:
         if want is not None and got is not None and got[0] >= want - 1e-9:
             image = got[1]
         try:
+            self._apply_pending_seed(odom)
             est = self.localizer.update(odom, scan, image)
         except Exception as err:  # the node must keep localizing: count, rebuild if it persists
             self.drop("scan: rejected by the localizer", f"{type(err).__name__}: {err}")

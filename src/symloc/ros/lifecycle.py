@@ -166,6 +166,8 @@ class LocalizationNode(LifecycleNode):
         self._srv_handles: list[Any] = []
         self._timer_handles: list[Any] = []
         self._bond: _Bond | None = None
+        self._odom_sub: Any = None
+        self._odom_feed: Callable[[Any], None] | None = None
         self._pending_pose: tuple[Any, Any] | None = None
         self._last_pose: tuple[Any, Any, float] | None = None
         self.tf_message = _optional("tf2_msgs.msg", "TFMessage")
@@ -424,10 +426,11 @@ class LocalizationNode(LifecycleNode):
             sub(OccupancyGrid, p.map_topic, self._guard(core.on_map), latched),
             sub(PoseWithCovarianceStamped, p.initialpose_topic, self._on_initialpose, 10),
         ]
+        self._odom_sub, self._odom_feed = None, None
         if p.odom_source == "topic":
-            self._sub_handles.append(
-                sub(Odometry, p.odom_topic, self._guard(self._on_odom_msg), sensor)
-            )
+            self._odom_sub = sub(Odometry, p.odom_topic, self._guard(self._on_odom_msg), sensor)
+            self._odom_feed = self._guard(core.on_odom)
+            self._sub_handles.append(self._odom_sub)
         if self.tf_message is not None:
             tf_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             static_qos = QoSProfile(
@@ -436,7 +439,10 @@ class LocalizationNode(LifecycleNode):
                 durability=DurabilityPolicy.TRANSIENT_LOCAL,
             )
             on_tf = self._on_odom_tf if p.odom_source == "tf" else self._static_only
-            self._sub_handles.append(sub(self.tf_message, "/tf", self._guard(on_tf), tf_qos))
+            tf_sub = sub(self.tf_message, "/tf", self._guard(on_tf), tf_qos)
+            self._sub_handles.append(tf_sub)
+            if p.odom_source == "tf":
+                self._odom_sub, self._odom_feed = tf_sub, self._guard(core.on_tf)
             self._sub_handles.append(
                 sub(self.tf_message, "/tf_static", self._guard(core.on_tf_static), static_qos)
             )
@@ -535,6 +541,7 @@ class LocalizationNode(LifecycleNode):
             return  # nav2_amcl ignores scans until it is active
         try:
             self._apply_pending_pose()
+            self._drain_odometry()
             outs = core.receive_scan(msg, self._now())
         except Exception as err:  # the node must stay up; the status still goes out
             core.drop("internal error", f"{type(err).__name__}: {err}")
@@ -558,8 +565,30 @@ class LocalizationNode(LifecycleNode):
         core = self.core
         if core is None or not self.active or not core.held_scans:
             return
+        self._drain_odometry()
         for out in core.ready_scans(self._now()):
             self.publish(out)
+
+    def _drain_odometry(self) -> None:
+        """Take the odometry messages already delivered but not yet handed to a callback.
+
+        nav2_amcl's tf2 listener fills its buffer on a thread of its own, so its message
+        filter sees every transform that has arrived. Here one executor runs every callback:
+        after a long step (global localization on a loaded machine) the odometry that covers a
+        held scan may sit in the subscription's queue while the scan's deadline passes, so
+        the queue is emptied first (rclpy's own take, as its executor does)."""
+        sub, feed = self._odom_sub, self._odom_feed
+        if sub is None or feed is None:
+            return
+        for _ in range(1000):
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+            except Exception:  # an rclpy without this API, or a destroyed subscription
+                return
+            if taken is None:
+                return
+            feed(taken[0])
 
     def publish(self, out: Outputs) -> None:
         """Publish one step's outputs (and remember the pose for the pose file)."""
