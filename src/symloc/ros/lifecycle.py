@@ -75,6 +75,9 @@ INITIAL_COVARIANCE = np.diag([0.25, 0.25, (math.pi / 12.0) ** 2])
 #: bondcpp's heartbeat timeout that nav2's lifecycle nodes announce [s].
 BOND_HEARTBEAT_TIMEOUT = 4.0
 
+#: Outputs built and published only while someone listens (RViz displays).
+_ON_DEMAND = frozenset({"particle_cloud", "candidates"})
+
 Ok = TransitionCallbackReturn.SUCCESS
 Failed = TransitionCallbackReturn.FAILURE
 
@@ -597,21 +600,27 @@ class LocalizationNode(LifecycleNode):
         est = out.estimate
         if out.amcl_pose is not None and est.pose is not None and est.covariance is not None:
             self._last_pose = (np.asarray(est.pose), np.asarray(est.covariance), out.stamp)
-        cloud = out.particle_cloud
-        if cloud is not None and self.particle_cloud_type is not None:
-            cloud = self._weighted_cloud(out)
+        # map -> odom first: nav2's costmaps and controller wait for it
         fields = {
-            "particle_cloud": cloud,
+            "tf": out.tf,
             "amcl_pose": out.amcl_pose,
+            "status": out.status,
             "goal": out.goal if p.publish_goals else None,
             "capture": out.capture,
             "candidates": out.candidates,
-            "status": out.status,
-            "tf": out.tf,
+            "particle_cloud": out.particle_cloud,
         }
         for key, value in fields.items():
-            if value is not None and key in self._pub_handles:
-                self._pub_handles[key].publish(build_rclpy(self._types[key], value))
+            pub = self._pub_handles.get(key)
+            if value is None or pub is None:
+                continue
+            if key in _ON_DEMAND and pub.get_subscription_count() == 0:
+                continue  # built only for a listener (a cloud of 2000 particles: ~75 ms)
+            if key == "particle_cloud" and self.particle_cloud_type is not None:
+                value = self._weighted_cloud(out)
+                if value is None:
+                    continue
+            pub.publish(build_rclpy(self._types[key], value))
 
     def _weighted_cloud(self, out: Outputs) -> dict[str, Any] | None:
         """nav2_msgs/ParticleCloud fields: AMCL's particles and their weights."""
