@@ -96,7 +96,10 @@ class Driver:
         n.create_subscription(
             PoseWithCovarianceStamped, "amcl_pose", self.amcl_poses.append, latched
         )
-        n.create_subscription(PoseStamped, "goal_pose", self.goals.append, 50)
+        # requests to move the robot are opt-in (publish_goals), on symloc's own topic
+        n.create_subscription(PoseStamped, "symloc/goal", self.goals.append, 50)
+        self.nav2_goals: list[Any] = []
+        n.create_subscription(PoseStamped, "goal_pose", self.nav2_goals.append, 50)
         n.create_subscription(Header, "symloc/capture_request", self.captures.append, 50)
 
     def send(self, key: str, fields: dict[str, Any]) -> None:
@@ -164,6 +167,8 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
             "--ros-args",
             "-r",
             "scan:=front/scan",
+            "-p",
+            "publish_goals:=true",
         ],
         env=env,
         stdout=log,
@@ -242,6 +247,7 @@ def test_kidnapped_run_over_dds_then_bad_input(node_process: Any) -> None:
     assert st.status is Status.TRACKING, f"ended {st.status}: {st.reason}"
     assert Status.GOING_TO_CENTRE in seen or Status.DECIDING in seen
     assert driver.goals, "the node never published a goal pose"
+    assert not driver.nav2_goals, "a goal was sent on nav2's goal_pose"
     assert driver.captures, "the node never requested an image"
     assert 1 <= images_sent <= 4, f"{images_sent} images for one decision"
     assert driver.spin_until(lambda: bool(driver.amcl_poses), 5.0)
