@@ -2,7 +2,11 @@
 
 :class:`NodeCore` receives messages (rclpy, rosbags or look-alikes) or already converted symloc
 values, pairs each scan with the odometry at its stamp (interpolated), hands the localizer the
-image it asked for, and returns what to publish as :class:`Outputs`. It survives bad input: a
+image it asked for, and returns what to publish as :class:`Outputs`. The live node offers scans
+with :meth:`NodeCore.offer_scan`: a scan newer than the newest odometry waits for it (up to
+``transform_tolerance``, as nav2_amcl's tf2 message filter) and is answered by
+:meth:`NodeCore.ready_scans` after the odometry that covers it; :meth:`NodeCore.add_scan` answers
+at once (a simulator or a bag whose odometry comes first). It survives bad input: a
 malformed message, a scan of another length than the first, NaN poses, an unknown image
 encoding, a message in the wrong frame, a map that changes size, stamps that go backwards. Each
 is dropped, counted in :attr:`NodeCore.dropped` under a short reason, and reported through the

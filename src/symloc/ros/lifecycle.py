@@ -27,8 +27,11 @@
   (std_srvs/Empty), ``set_initial_pose`` (nav2_msgs/SetInitialPose).
 - **Topics**: ``amcl_pose``, ``particle_cloud`` (nav2_msgs/ParticleCloud with weights when
   ``nav2_msgs`` is built, geometry_msgs/PoseArray otherwise), ``initialpose`` as in nav2, and
-  symloc's own (``symloc/status``, ``symloc/candidates``, ``goal_pose``,
-  ``symloc/capture_request``, camera inputs; :mod:`symloc.ros.node`).
+  symloc's own (``symloc/status``, ``symloc/candidates``, ``symloc/goal`` with
+  ``publish_goals``, ``symloc/capture_request``, camera inputs; :mod:`symloc.ros.node`).
+- **Scans** wait for the odometry at their stamp (:meth:`NodeCore.offer_scan
+  <symloc.ros.core.NodeCore.offer_scan>`, nav2_amcl's tf2 message filter): they are answered
+  from the odometry callback, and a timer drops those that waited past ``transform_tolerance``.
 
 ``tf2_msgs``, ``nav2_msgs`` and ``bond`` are not on PyPI: ``symloc ros setup`` builds them
 (:mod:`symloc.ros.interfaces`). Without them the node still runs: odometry from the topic,

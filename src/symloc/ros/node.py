@@ -25,8 +25,9 @@ out ``particle_cloud``         nav2_msgs/ParticleCloud (PoseArray without  best 
 out ``/tf``                    tf2_msgs/TFMessage: map -> odom             reliable
 out ``symloc/status``          diagnostic_msgs/DiagnosticArray [2]_        reliable
 out ``symloc/candidates``      visualization_msgs/MarkerArray [2]_         reliable
-out ``goal_pose``              geometry_msgs/PoseStamped, odom frame:      reliable
-                               go to the centre / face / rotate
+out ``symloc/goal``            geometry_msgs/PoseStamped, odom frame:      reliable
+                               go to the centre / face / rotate (only
+                               with ``publish_goals``; off by default)
 out ``symloc/capture_request`` std_msgs/Header: take an image now          reliable
 =============================  ==========================================  ====================
 
@@ -35,7 +36,8 @@ out ``symloc/capture_request`` std_msgs/Header: take an image now          relia
 .. [2] see :mod:`symloc.ros.status_msg` for the key / value layout.
 
 The map frame's ``goal_pose`` of nav2 would need a pose the localizer has not earned, so the
-requests of Algorithm 2 are published in the odometry frame, which the robot knows.
+requests of Algorithm 2 are published in the odometry frame, which the robot knows; and only
+when the user enables ``publish_goals`` (a localization node does not command the robot).
 """
 
 from __future__ import annotations

@@ -15,20 +15,20 @@ plain arrays, so that it runs (and is tested) without rclpy:
 - :class:`MapToOdom` decides what to broadcast as ``map -> odom`` after each scan.
 
 **What is broadcast.** ``map -> odom`` is ``map_from_base * inverse(odom_from_base)``: the pose
-the claim gate confirmed at this scan and the odometry at the scan's stamp, stamped with the
-scan time plus ``transform_tolerance`` (so that tf2 lookups up to that time succeed while
-odometry carries the robot), and sent again with every confirmed scan, as nav2_amcl does.
+the claim gate confirmed at a scan and the odometry at the scan's stamp, stamped with the scan
+time plus ``transform_tolerance`` (so that tf2 lookups up to that time succeed while odometry
+carries the robot).
 
-**While symloc is not tracking** (ambiguous, deciding, lost, a claim withheld or withdrawn,
-after a kidnapping) nothing is sent: the last transform is not re-stamped. nav2_amcl re-sends
-its last transform with every scan whatever happened; symloc's promise is that what it
-publishes is right, and a re-stamped transform would tell nav2's costmaps and controllers that
-an unconfirmed pose is current. So the last earned transform ages: tf2 lookups for times past
-its stamp (the last confirmed scan plus ``transform_tolerance``) fail, nav2 stops planning and
-following paths instead of driving on a pose nobody vouches for, and ``symloc/status`` says
-why (its ``map_to_odom`` value names the stamp the transform is valid until). Before the first
-pose is earned nothing is ever sent. A momentary withheld claim costs nothing: the last
-transform stays valid for ``transform_tolerance`` after its scan.
+**While the pose is held** it is sent again at every scan, as nav2_amcl re-sends its transform
+between filter updates: with a newly confirmed pose, or re-stamped for this scan from the last
+confirmed pose carried by odometry (the same ``map -> odom``) when the claim gate only withheld
+the claim, or the scan was late or unusable (``Localizer.holds_pose``). **It is withdrawn** (not
+re-stamped: it ages, tf2 lookups past its stamp fail, and nav2 stops planning and following
+paths instead of driving on a pose nobody vouches for) only when the localizer concludes that
+the pose is wrong or lost: a withdrawn claim, ambiguity, deciding, lost, a kidnapping, a global
+re-initialisation or a new operator pose; it resumes with the next confirmed pose.
+``symloc/status`` says which (its ``map_to_odom`` value). Before the first pose is earned
+nothing is ever sent.
 """
 
 from __future__ import annotations
