@@ -23,7 +23,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-pytest.importorskip("rclpy", reason="rclpy absent: pip install 'symloc[ros]' to run the ROS tests")
+pytest.importorskip(
+    "rclpy", reason="rclpy absent: pip install '.[ros]' in symloc's checkout to run the ROS tests"
+)
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: symloc[ros]")
 
 from symloc.bench.sim_record import drive_command, prepare_session

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import yaml
 
-pytest.importorskip("rclpy", reason="rclpy absent: pip install 'symloc[ros]'")
+pytest.importorskip("rclpy", reason="rclpy absent: pip install '.[ros]' in symloc's checkout")
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: symloc[ros]")
 
 from rclpy.lifecycle import TransitionCallbackReturn

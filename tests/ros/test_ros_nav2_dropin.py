@@ -38,9 +38,13 @@ import numpy as np
 import pytest
 import yaml
 
-pytest.importorskip("rclpy", reason="rclpy absent: pip install 'symloc[ros]' to run the ROS tests")
+pytest.importorskip(
+    "rclpy", reason="rclpy absent: pip install '.[ros]' in symloc's checkout to run the ROS tests"
+)
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: symloc[ros]")
-pytest.importorskip("std_srvs.srv", reason="std_srvs absent: pip install 'symloc[ros]'")
+pytest.importorskip(
+    "std_srvs.srv", reason="std_srvs absent: pip install '.[ros]' in symloc's checkout"
+)
 
 from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.geometry import compose, wrap_angle

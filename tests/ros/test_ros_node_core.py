@@ -387,7 +387,7 @@ def test_ros_node_command_without_rclpy_says_what_to_install(
     params = tmp_path / "p.yaml"
     params.write_text("symloc:\n  ros__parameters: {}\n")
     assert main(["ros", "node", "--params", str(params)]) == 2
-    assert "pip install 'symloc[ros]'" in capsys.readouterr().err
+    assert "pip install '.[ros]' in symloc's checkout" in capsys.readouterr().err
     assert main(["ros", "check-params", str(params)]) == 0
 
 

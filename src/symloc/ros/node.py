@@ -53,7 +53,7 @@ __all__ = ["rclpy_available", "run_node"]
 
 
 def rclpy_available() -> bool:
-    """True when rclpy and the message packages import (``pip install symloc[ros]``)."""
+    """True when rclpy and the message packages import (``pip install '.[ros]'`` in symloc's checkout)."""
     try:
         import diagnostic_msgs.msg  # noqa: F401
         import geometry_msgs.msg  # noqa: F401
@@ -70,7 +70,7 @@ def rclpy_available() -> bool:
 def _require_rclpy() -> None:
     if not rclpy_available():
         raise ConfigurationError(
-            "symloc ros node needs rclpy and the ROS message packages: pip install 'symloc[ros]'"
+            "symloc ros node needs rclpy and the ROS message packages: pip install '.[ros]' in symloc's checkout"
         )
 
 
@@ -117,12 +117,16 @@ def run_node(
 
 
 def _read_params(path: str | Path, node_name: str) -> NodeParams:
-    """A params file's block for ``node_name`` (nav2's flat names) or symloc's ``symloc:``
-    block (nested ``amcl:``, ``localizer:``, ``symmetry:``)."""
+    """A params file's block for ``node_name`` (nav2's flat names; an unknown name is warned
+    about on stderr and ignored, as at configure) or symloc's ``symloc:`` block (nested
+    ``amcl:``, ``localizer:``, ``symmetry:``)."""
     from symloc.ros.nav2_params import node_params_from_ros, read_params_block
 
+    def warn(line: str) -> None:  # as the node's configure: unknown names are ignored
+        print(f"warning: {path}: {line}", file=sys.stderr)
+
     try:
-        return node_params_from_ros(read_params_block(path, node_name))
+        return node_params_from_ros(read_params_block(path, node_name), on_unknown=warn)
     except ConfigurationError as err:
         if node_name == "symloc" or "no block for node" not in str(err):
             raise

@@ -1,4 +1,4 @@
-"""``symloc ros node --params params.yaml``: the ROS 2 node (needs ``pip install symloc[ros]``)."""
+"""``symloc ros node --params params.yaml``: the ROS 2 node (needs ``pip install '.[ros]'`` in symloc's checkout)."""
 
 from __future__ import annotations
 
