@@ -561,8 +561,11 @@ def test_no_transform_before_the_pose_is_earned(run: Run) -> None:
     for t, _ in run.transforms:
         scan = round(t - 1.0, 6)
         assert scan >= round(first_tracking, 6), f"transform for the scan at {scan} before tracking"
-        assert by_stamp[scan].status is Status.TRACKING, (
-            f"transform sent at {scan} while not tracking"
+        st = by_stamp[scan]
+        # a confirmed pose, or the last one re-sent while the localizer holds it (a claim only
+        # withheld at this scan: nav2_amcl re-sends its transform between filter updates)
+        assert st.status is Status.TRACKING or st.values["map_to_odom"].startswith("re-sent"), (
+            f"transform sent at {scan} while not tracking: {st.reason}"
         )
     assert run.transforms_after_reinit == 0, "map -> odom sent after the pose was forgotten"
 
