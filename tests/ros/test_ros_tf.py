@@ -472,9 +472,10 @@ def test_a_pending_initial_pose_survives_every_rebuild() -> None:
     core.on_scan(_scan(1.2))
     np.testing.assert_allclose(locs[-1].poses_set[-1], compose(start, [0.2, 0, 0]), atol=1e-9)
     core.set_map(OccupancyGrid(np.zeros((45, 45), np.int8), 0.1))  # a new map
+    core.reconfigure(core.params)  # and a rebuild before the next scan: still kept
     _odom(core, 1.3, (0.3, 0.0, 0.0))
     core.on_scan(_scan(1.3))
-    assert len(built) == 4
+    assert len(built) == 5
     np.testing.assert_allclose(locs[-1].poses_set[-1], compose(start, [0.3, 0, 0]), atol=1e-9)
     assert core.reinitialize_global()  # forgotten: no rebuild brings it back
     core.set_map(OccupancyGrid(np.zeros((40, 40), np.int8), 0.1))

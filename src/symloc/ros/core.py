@@ -308,7 +308,7 @@ class NodeCore:
         """Use ``grid`` as nav2_amcl does: the first usable map builds the localizer, and every
         new map after it rebuilds the localizer on it unless ``first_map_only``. A pose held
         at the update (a tracked pose, or an operator's pose not yet confirmed) is seeded on
-        the new map, carried by odometry to now; the claim gate confirms it at the next scans
+        the new map at the next scan, carried by odometry to its stamp; the claim gate confirms it at the next scans
         when the new map still fits the scan (else the pose is given up and earned again). A
         map the localizer cannot be built on (no free cell, ...) is dropped and not stored.
         Returns whether the map is now in use."""
@@ -358,8 +358,8 @@ class NodeCore:
 
     def rebuild(self, why: str) -> None:
         """Build the localizer again on the current map (new settings or a new laser mount),
-        seeded at the pose held (tracked, or an operator's pose not yet confirmed), carried by
-        odometry to now."""
+        seeded at the pose held (tracked, or an operator's pose not yet confirmed) at the next
+        scan, carried by odometry to its stamp."""
         if self.grid is None:
             return
         seed = self._pose_to_keep()
@@ -370,6 +370,8 @@ class NodeCore:
     def _pose_to_keep(self) -> _Seed | None:
         """The pose a rebuilt localizer starts from: ``(pose, covariance, odometry pose then,
         operator)``; None when no pose is held."""
+        if self._pending_seed is not None:  # rebuilt again before the next scan
+            return self._pending_seed
         held = self.localizer is not None and self._holds_pose()
         if self._confirmed is not None and (held or self._tracking_now()):
             pose, cov, then = self._confirmed
