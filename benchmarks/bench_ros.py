@@ -72,7 +72,9 @@ def bench_conversions(repeats: int) -> None:
 
         from symloc.msgs import build_rclpy
     except ImportError:
-        print("rclpy absent: rclpy message building skipped (pip install 'symloc[ros]')")
+        print(
+            "rclpy absent: rclpy message building skipped (pip install '.[ros]' in symloc's checkout)"
+        )
         return
     fields = image_to_fields(img, stamp=1.0)
     w, c = median_ms(lambda i: build_rclpy(Image, fields), repeats)
@@ -108,7 +110,7 @@ def bench_dds(repeats: int) -> None:
 
         from symloc.msgs import build_rclpy
     except ImportError:
-        print("rclpy absent: DDS round trips skipped (pip install 'symloc[ros]')")
+        print("rclpy absent: DDS round trips skipped (pip install '.[ros]' in symloc's checkout)")
         return
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     ctx = Context()

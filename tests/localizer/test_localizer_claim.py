@@ -186,6 +186,7 @@ def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
     odom = OdometryReading(np.zeros(3), 0.0)
     rng = np.random.default_rng(7)
     out = []
+    held = []
     for k in range(12):
         scan = simulate_scan(room.world, pose, RPLIDAR_A2, rng)
         if k in (4, 5):  # a person right in front of the lidar hides part of the room
@@ -193,9 +194,16 @@ def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
             r[: int(hidden * r.size)] = 0.4
             scan = scan.with_ranges(r)
         out.append(loc.update(odom, scan).status)
+        held.append(loc.holds_pose)
     assert out[4] is not Status.TRACKING
     assert out[5] is not Status.TRACKING
     assert out[-1] is Status.TRACKING
+    # the ROS node keeps map -> odom while the pose is held: a withheld claim holds it, a
+    # withdrawn one (claims suspended) does not
+    assert held[4] is not suspended
+    assert held[-1]
+    loc.reset_global()
+    assert not loc.holds_pose
     # most of the scan contradicting the pose suspends claims; half of it only withholds
     assert any("claims resumed" in line for line in loc.log) is suspended
     assert not any("global relocalization" in line for line in loc.log)

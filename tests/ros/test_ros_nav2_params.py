@@ -13,6 +13,7 @@ from symloc.ros.nav2_params import (
     parameter_defaults,
     read_params_block,
     ros_values,
+    seeded_from_time,
 )
 from symloc.ros.params import NodeParams
 
@@ -93,7 +94,11 @@ def test_nav2_params_file_of_each_branch(branch: str) -> None:
     assert params.amcl.robot_model_type == "nav2_amcl::DifferentialMotionModel"
     assert params.transform_tolerance == 1.0
     assert params.tf_broadcast
-    assert params.seed == 0  # nav2's random_seed -1 (a time seed) keeps symloc's seed
+    if values.get("random_seed", 0) < 0:  # nav2's -1: a time seed, unless symloc's seed
+        assert seeded_from_time(values)
+        assert node_params_from_ros({**values, "seed": 5}).seed == 5
+    else:  # humble's file has no random_seed (nav2_amcl seeds from the time as well)
+        assert params.seed == 0
 
 
 def test_every_nav2_name_is_declared_and_accepted() -> None:
@@ -137,6 +142,24 @@ def test_nav2_names_map_to_their_settings() -> None:
     assert p.localizer.converged_updates == 4
     assert p.symmetry == {"min_points": 40}
     assert p.laser_pose == (0.2, 0.0, 3.0)
+
+
+def test_random_seed_below_zero_seeds_from_the_time() -> None:
+    seeds = {node_params_from_ros({"random_seed": -1}).seed for _ in range(3)}
+    assert all(0 <= s < 2**31 for s in seeds)
+    assert seeded_from_time({"random_seed": -1, "seed": None})
+    assert not seeded_from_time({"random_seed": -1, "seed": 3})
+    assert node_params_from_ros({"random_seed": -1, "seed": 3}).seed == 3
+    assert node_params_from_ros({}).seed == 0  # nothing said: symloc's reproducible default
+
+
+def test_unknown_names_are_reported_and_ignored_when_asked() -> None:
+    heard: list[str] = []
+    p = node_params_from_ros({"use_map_topic": True, "alpha1": 0.3}, on_unknown=heard.append)
+    assert p.amcl.alpha1 == 0.3
+    assert len(heard) == 1
+    assert "'use_map_topic': unknown to symloc" in heard[0]
+    assert "ignored" in heard[0]
 
 
 def test_symloc_settings_round_trip_through_ros_values() -> None:

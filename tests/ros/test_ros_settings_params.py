@@ -52,6 +52,8 @@ def _candidates(name: str, default: Any) -> list[Any]:
     short = name.rpartition(".")[2]
     if short in STRINGS:
         return [v for v in STRINGS[short] if v != default]
+    if default is None and name == "seed":  # declared not set: nav2's random_seed decides
+        return [7]
     if default is None and name.startswith("symmetry."):
         default = getattr(SymmetryConfig(), short)
         if default is None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -222,6 +223,9 @@ class Recorder:
         self.scans: list[LaserScan] = []
         self.reset = 0
         self.poses_set: list[np.ndarray] = []
+        self.last_result = None
+        #: Localizer.holds_pose: True while the script's estimates are tracking or withheld
+        self.holds_pose = False
 
     def update(self, odom, scan, image=None):  # type: ignore[no-untyped-def]
         self.scans.append(scan)
@@ -232,6 +236,9 @@ class Recorder:
 
     def reset_global(self) -> None:
         self.reset += 1
+
+    def force_update(self) -> None:
+        self.forced = getattr(self, "forced", 0) + 1
 
 
 def _core(
@@ -383,7 +390,8 @@ def test_first_map_only_and_the_services() -> None:
     assert core.grid.width == 40
     assert core.reinitialize_global()
     assert locs[-1].reset == 1
-    assert not core.request_nomotion_update()  # this localizer cannot
+    assert core.request_nomotion_update()
+    assert locs[-1].forced == 1
 
 
 def test_odometry_reading_from_tf_is_used_for_scans() -> None:
@@ -395,3 +403,93 @@ def test_odometry_reading_from_tf_is_used_for_scans() -> None:
     assert core.received["tf"] == 1
     assert core.received["tf_static"] == 1
     assert isinstance(core._odom.at(5.0, 1.0), OdometryReading)
+
+
+# ---------------------------------------------------------------- issue 27: nav2's pairing
+
+
+WITHHELD = Estimate(Status.LOST, reason="claim withheld: std exceeds")
+
+
+def test_map_to_odom_is_re_sent_while_the_pose_is_held() -> None:
+    policy = MapToOdom(global_frame="map", odom_frame="odom", tolerance=1.0)
+    assert policy.step(WITHHELD, 10.0, [0, 0, 0], holds=True) is None  # nothing earned yet
+    first = policy.step(TRACK, 11.0, [0.5, 0.0, 0.1])
+    assert first is not None
+    again = policy.step(WITHHELD, 11.2, [0.7, 0.0, 0.1], holds=True)  # one claim withheld
+    assert again is not None
+    assert again["transforms"][0]["header"]["stamp"] == {"sec": 12, "nanosec": 200_000_000}
+    # the same map -> odom: the last confirmed pose carried by odometry
+    assert again["transforms"][0]["transform"] == first["transforms"][0]["transform"]
+    assert policy.describe(11.2).startswith("re-sent, stamped 12.200")
+    assert policy.step(LOST, 11.4, [0.9, 0.0, 0.1]) is None  # the localizer gave the pose up
+    assert policy.step(WITHHELD, 11.6, [0.9, 0.0, 0.1], holds=True) is None  # until earned again
+    assert policy.resend(11.8) is None
+
+
+def test_a_scan_waits_for_the_odometry_at_its_stamp() -> None:
+    core, _, locs = _core([TRACK])
+    _static_laser(core)
+    _odom(core, 1.0, (0.0, 0.0, 0.0))
+    assert core.offer_scan(_scan_obj(1.1), now=100.0) == []  # held: odometry only up to 1.0
+    assert core.held_scans == 1
+    _odom(core, 1.2, (0.2, 0.0, 0.0))
+    (out,) = core.ready_scans(now=100.05)
+    assert out.used
+    assert out.tf is not None
+    # paired with the odometry at 1.1, interpolated (not the older reading at 1.0)
+    tf_pose = out.tf["transforms"][0]["transform"]["translation"]
+    assert tf_pose["x"] == pytest.approx(1.0 - 0.1 * math.cos(0.5), abs=1e-9)
+    assert len(locs[-1].scans) == 1
+
+
+def test_a_scan_whose_odometry_never_comes_is_dropped_after_the_tolerance() -> None:
+    core, _, _ = _core([TRACK])
+    _static_laser(core)
+    _odom(core, 1.0, (0.0, 0.0, 0.0))
+    assert core.offer_scan(_scan_obj(1.1), now=100.0) == []
+    assert core.ready_scans(now=100.9) == []  # still within transform_tolerance (1 s)
+    (out,) = core.ready_scans(now=101.2)
+    assert not out.used
+    assert core.dropped["scan: no odometry at its stamp within transform_tolerance"] == 1
+    assert "no odometry at its stamp" in out.estimate.reason
+
+
+def test_a_pending_initial_pose_survives_every_rebuild() -> None:
+    """Issue 27 item 2: the pose set before the first scan on a robot whose laser is not at the
+    base origin was lost when the localizer was rebuilt for the laser's mount."""
+    core, built, locs = _core([WITHHELD])
+    _odom(core, 1.0, (0.0, 0.0, 0.0))
+    start = np.array([1.0, 1.5, 0.3])
+    assert core.set_initial_pose(start, np.eye(3) * 0.01)
+    _static_laser(core)
+    _odom(core, 1.1, (0.1, 0.0, 0.0))
+    core.on_scan(_scan(1.1))  # the mount is found: rebuilt, the pose seeded at this scan
+    assert len(built) == 2
+    np.testing.assert_allclose(locs[-1].poses_set[-1], compose(start, [0.1, 0, 0]), atol=1e-9)
+    core.reconfigure(dataclasses.replace(core.params, transform_tolerance=0.5))  # parameters
+    _odom(core, 1.2, (0.2, 0.0, 0.0))
+    core.on_scan(_scan(1.2))
+    np.testing.assert_allclose(locs[-1].poses_set[-1], compose(start, [0.2, 0, 0]), atol=1e-9)
+    core.set_map(OccupancyGrid(np.zeros((45, 45), np.int8), 0.1))  # a new map
+    core.reconfigure(core.params)  # and a rebuild before the next scan: still kept
+    _odom(core, 1.3, (0.3, 0.0, 0.0))
+    core.on_scan(_scan(1.3))
+    assert len(built) == 5
+    np.testing.assert_allclose(locs[-1].poses_set[-1], compose(start, [0.3, 0, 0]), atol=1e-9)
+    assert core.reinitialize_global()  # forgotten: no rebuild brings it back
+    core.set_map(OccupancyGrid(np.zeros((40, 40), np.int8), 0.1))
+    core.on_scan(_scan(1.3))
+    assert locs[-1].poses_set == []
+
+
+def _scan_obj(stamp: float) -> LaserScan:
+    return LaserScan(
+        -math.pi / 2,
+        math.pi / 180,
+        0.1,
+        10.0,
+        np.linspace(1.0, 2.0, 181),
+        stamp=stamp,
+        frame_id="laser",
+    )

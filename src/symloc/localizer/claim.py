@@ -302,6 +302,12 @@ class ClaimGate:
         """True when a confirmed pose exists to carry (see :meth:`check_chain`)."""
         return self._chain is not None
 
+    @property
+    def suspended(self) -> bool:
+        """True while claims are suspended (a withdrawn claim or a jump of the filter, until
+        the tracked pose fits the scan again or is given up; see :meth:`step`)."""
+        return self._suspended
+
     def confirmed(self, claim: Claim, odom_pose: FloatArray) -> None:
         """Remember ``claim`` (published at ``odom_pose``) as the last confirmed pose."""
         if claim.pose is None or claim.covariance is None:

@@ -178,6 +178,17 @@ class Localizer:
         return self._ctx.record.last_decision
 
     @property
+    def holds_pose(self) -> bool:
+        """True while the localizer still vouches for its last confirmed pose: it is tracking
+        and its claims are not suspended (a scan whose claim was only withheld keeps the pose;
+        a withdrawn claim, a jump of the filter, ambiguity or a lost pose do not). Read only:
+        the ROS node keeps ``map -> odom`` on the last confirmed pose while this holds."""
+        if not isinstance(self._phase, Tracking):
+            return False
+        gate = self.claim_gate
+        return gate is None or not gate.suspended
+
+    @property
     def last_result(self) -> TrackerResult | None:
         """The tracker's result at the last scan (its estimate, clusters, particles (N, 3) and
         weights (N,), for display: a pose there is not earned); None before the first scan."""

@@ -2,7 +2,11 @@
 
 :class:`NodeCore` receives messages (rclpy, rosbags or look-alikes) or already converted symloc
 values, pairs each scan with the odometry at its stamp (interpolated), hands the localizer the
-image it asked for, and returns what to publish as :class:`Outputs`. It survives bad input: a
+image it asked for, and returns what to publish as :class:`Outputs`. The live node offers scans
+with :meth:`NodeCore.offer_scan`: a scan newer than the newest odometry waits for it (up to
+``transform_tolerance``, as nav2_amcl's tf2 message filter) and is answered by
+:meth:`NodeCore.ready_scans` after the odometry that covers it; :meth:`NodeCore.add_scan` answers
+at once (a simulator or a bag whose odometry comes first). It survives bad input: a
 malformed message, a scan of another length than the first, NaN poses, an unknown image
 encoding, a message in the wrong frame, a map that changes size, stamps that go backwards. Each
 is dropped, counted in :attr:`NodeCore.dropped` under a short reason, and reported through the
@@ -40,7 +44,7 @@ from __future__ import annotations
 import bisect
 import dataclasses
 import math
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -84,6 +88,9 @@ __all__ = ["LocalizerFactory", "NodeCore", "Outputs"]
 FloatArray = NDArray[np.float64]
 #: ``factory(grid, params) -> Localizer`` (default :func:`symloc.ros.assemble.make_localizer`).
 LocalizerFactory = Callable[[OccupancyGrid, NodeParams], Localizer]
+#: A pose kept across a rebuild: (pose (3,), covariance (3, 3), the odometry pose (3,) it
+#: refers to or None, whether it is an operator's pose not yet confirmed).
+_Seed = tuple[FloatArray, FloatArray, FloatArray | None, bool]
 
 _WARN_FIRST = 5
 _WARN_EVERY = 100
@@ -91,6 +98,11 @@ _WARN_EVERY = 100
 STALE_SCANS = 5
 #: Latest stamp a ROS time can carry [s] (``builtin_interfaces/Time.sec`` is an int32).
 MAX_STAMP = float(2**31 - 1)
+#: Scans held at most while they wait for the odometry at their stamp (nav2_amcl's tf2
+#: message filter queue).
+MAX_HELD_SCANS = 10
+#: Why a held scan was dropped (``dropped/<reason>`` in the status).
+NO_ODOM_AT_STAMP = "scan: no odometry at its stamp within transform_tolerance"
 
 
 @dataclass
@@ -214,6 +226,15 @@ class NodeCore:
         #: the laser's mount the localizer was built for (None until the first scan)
         self.mount: LaserMount | None = None
         self.map_odom = self._map_odom(params)
+        #: scans waiting for the odometry at their stamp: (scan, arrival time or None)
+        self._held: deque[tuple[LaserScan, float | None]] = deque()
+        #: the last operator pose (pose, covariance, odometry pose then or None) not yet
+        #: confirmed by tracking: a rebuild of the localizer seeds it again
+        self._seed: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
+        #: the last confirmed pose (pose, covariance, odometry pose at its scan)
+        self._confirmed: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        #: the pose kept across a rebuild, applied at the next step (:meth:`_reseed`)
+        self._pending_seed: _Seed | None = None
 
     # ------------------------------------------------------------------ bookkeeping
 
@@ -284,9 +305,13 @@ class NodeCore:
         self.set_map(grid)
 
     def set_map(self, grid: OccupancyGrid) -> bool:
-        """Use ``grid``: the first usable map builds the localizer; a changed one is handled per
-        ``accept_map_updates``. A map the localizer cannot be built on (no free cell, ...) is
-        dropped and not stored. Returns whether the map is now in use."""
+        """Use ``grid`` as nav2_amcl does: the first usable map builds the localizer, and every
+        new map after it rebuilds the localizer on it unless ``first_map_only``. A pose held
+        at the update (a tracked pose, or an operator's pose not yet confirmed) is seeded on
+        the new map at the next scan, carried by odometry to its stamp; the claim gate confirms it at the next scans
+        when the new map still fits the scan (else the pose is given up and earned again). A
+        map the localizer cannot be built on (no free cell, ...) is dropped and not stored.
+        Returns whether the map is now in use."""
         old = self.grid
         if old is not None:
             same_geometry = (
@@ -298,27 +323,22 @@ class NodeCore:
                 return True  # re-published (transient local): nothing new
             if self.params.first_map_only:
                 return False  # nav2's first_map_only: later maps are ignored
-            if not self.params.accept_map_updates:
-                self.drop(
-                    "map: changed",
-                    f"{old.width}x{old.height} -> {grid.width}x{grid.height} cells; keeping the"
-                    " first map (set accept_map_updates to switch)",
-                )
-                return False
         try:
             localizer = self.factory(grid, self._build_params())
         except SymlocError as err:
             self.drop("map: unusable", f"{grid.width}x{grid.height} cells: {err}")
             return False
-        pose, cov = self._tracked_pose()
+        seed = self._pose_to_keep()
         self.grid = grid
         self.localizer = localizer
         self._failures = 0
         if old is None:
             return True
-        if pose is not None and cov is not None and self._pose_problem(pose, cov) is None:
-            self.localizer.set_pose(pose, cov)
-        self.warn(f"map changed to {grid.width}x{grid.height} cells: localizer rebuilt")
+        kept = self._reseed(seed)
+        self.warn(
+            f"new map {grid.width}x{grid.height} cells: localizer rebuilt on it"
+            + (f"; pose kept at {kept}" if kept else "; no pose to keep")
+        )
         return True
 
     def _build_params(self) -> NodeParams:
@@ -338,19 +358,79 @@ class NodeCore:
 
     def rebuild(self, why: str) -> None:
         """Build the localizer again on the current map (new settings or a new laser mount),
-        reseeded at the tracked pose when there is one."""
+        seeded at the pose held (tracked, or an operator's pose not yet confirmed) at the next
+        scan, carried by odometry to its stamp."""
         if self.grid is None:
             return
-        pose, cov = self._tracked_pose()
+        seed = self._pose_to_keep()
         self.localizer = self.factory(self.grid, self._build_params())
-        if pose is not None and cov is not None:
-            self.localizer.set_pose(pose, cov)
-        self.warn(f"localizer rebuilt: {why}")
+        kept = self._reseed(seed)
+        self.warn(f"localizer rebuilt: {why}" + (f"; pose kept at {kept}" if kept else ""))
+
+    def _pose_to_keep(self) -> _Seed | None:
+        """The pose a rebuilt localizer starts from: ``(pose, covariance, odometry pose then,
+        operator)``; None when no pose is held."""
+        if self._pending_seed is not None:  # rebuilt again before the next scan
+            return self._pending_seed
+        held = self.localizer is not None and self._holds_pose()
+        if self._confirmed is not None and (held or self._tracking_now()):
+            pose, cov, then = self._confirmed
+            return pose, cov, then, False
+        if self._seed is not None:
+            pose, cov, then_seed = self._seed
+            return pose, cov, then_seed, True
+        return None
+
+    def _tracking_now(self) -> bool:
+        return self.last is not None and self.last.estimate.status is Status.TRACKING
+
+    @staticmethod
+    def _carry(pose: FloatArray, then: FloatArray | None, now: FloatArray | None) -> FloatArray:
+        if then is None or now is None:
+            return np.asarray(pose, dtype=np.float64).copy()
+        out = compose(np.asarray(pose, dtype=np.float64), relative(then, now))
+        out[2] = wrap_angle(out[2])
+        return out
+
+    def _reseed(self, seed: _Seed | None) -> list[float] | None:
+        """Seed the (new) localizer at ``seed`` (:meth:`_pose_to_keep`) at the next scan, carried
+        by odometry to that scan's stamp (a fresh filter applies no motion before its first
+        update, so a pose carried only to now would lag the robot); the pose as of now."""
+        self._pending_seed = None
+        if seed is None or self.localizer is None or self.grid is None:
+            return None
+        pose, cov, then, _ = seed
+        now = self._odom.poses[-1] if self._odom.stamps else None
+        carried = self._carry(pose, then, now)
+        if self._pose_problem(carried, cov) is not None:
+            return None
+        self._pending_seed = seed
+        rounded: list[float] = np.round(carried, 3).tolist()
+        return rounded
+
+    def _apply_pending_seed(self, odom: OdometryReading) -> None:
+        """Before a step: seed a rebuilt localizer at the pose kept, carried to ``odom``."""
+        seed, self._pending_seed = self._pending_seed, None
+        if seed is None or self.localizer is None:
+            return
+        pose, cov, then, operator = seed
+        carried = self._carry(pose, then, np.asarray(odom.pose, dtype=np.float64))
+        if self._pose_problem(carried, cov) is not None:
+            return
+        self.localizer.set_pose(carried, cov)
+        if operator:
+            self._seed = (carried, cov, np.asarray(odom.pose, dtype=np.float64).copy())
 
     def reconfigure(self, params: NodeParams) -> None:
         """Use new (validated) parameters from now on; the localizer is rebuilt on them."""
         self.params = params
-        self.map_odom = self._map_odom(params)
+        old, self.map_odom = self.map_odom, self._map_odom(params)
+        if (old.global_frame, old.odom_frame) == (
+            self.map_odom.global_frame,
+            self.map_odom.odom_frame,
+        ):
+            self.map_odom.last, self.map_odom.confirmed_at = old.last, old.confirmed_at
+            self.map_odom.holding = old.holding
         if not (self.use_tf and params.laser_pose_source == "tf"):
             # the mount from the (maybe changed) laser_pose; a TF mount stays as it is
             self.mount = LaserMount(np.array(params.laser_pose), params.laser_upside_down)
@@ -362,6 +442,10 @@ class NodeCore:
         if self.localizer is None:
             return False
         self.localizer.reset_global()
+        self._seed = None
+        self._confirmed = None
+        self._pending_seed = None
+        self.map_odom.forget()
         self.warn("global localization requested: pose forgotten, AMCL spread over the map")
         return True
 
@@ -432,11 +516,6 @@ class NodeCore:
                     f"{' upside down' if mount.upside_down else ''}"
                 )
         return self.mount if self.mount is not None else mount
-
-    def _tracked_pose(self) -> tuple[FloatArray | None, FloatArray | None]:
-        if self.last is not None and self.last.estimate.status is Status.TRACKING:
-            return self.last.estimate.pose, self.last.estimate.covariance
-        return None, None
 
     # ------------------------------------------------------------------ odometry, pose, images
 
@@ -566,11 +645,19 @@ class NodeCore:
         if problem is not None:
             self.drop("initialpose: rejected", problem)
             return False
+        pose = np.asarray(pose, dtype=np.float64).copy()
+        cov = np.asarray(covariance, dtype=np.float64).copy()
         try:
-            self.localizer.set_pose(np.asarray(pose, float), np.asarray(covariance, float))
+            self.localizer.set_pose(pose, cov)
         except SymlocError as err:
             self.drop("initialpose: rejected", str(err))
             return False
+        # kept until tracking confirms it: a rebuild of the localizer (the laser's mount found
+        # on /tf_static at the first scan, new parameters, a new map) seeds it again
+        self._seed = (pose, cov, self._odom.poses[-1].copy() if self._odom.stamps else None)
+        self._confirmed = None
+        self._pending_seed = None
+        self.map_odom.forget()
         self.warn(f"initial pose set to {np.asarray(pose).round(3).tolist()}")
         return True
 
@@ -635,8 +722,93 @@ class NodeCore:
             return self.unused_scan(None)
         return self.add_scan(scan)
 
+    def receive_scan(self, msg: Any, now: float | None = None) -> list[Outputs]:
+        """A sensor_msgs/LaserScan message as the live node takes it (:meth:`offer_scan`: it
+        waits for the odometry at its stamp); the outputs of the scans answered now."""
+        self.received["scan"] += 1
+        try:
+            scan = scan_from_msg(msg)
+        except SymlocError as err:
+            self.drop("scan: malformed", str(err))
+            return [*self.ready_scans(now), self.unused_scan(None)]
+        return self.offer_scan(scan, now)
+
     def add_scan(self, scan: LaserScan) -> Outputs:
-        """One localizer step with ``scan`` and the odometry at its stamp (see :meth:`on_scan`)."""
+        """One localizer step with ``scan`` now (see :meth:`on_scan`), for callers that cannot
+        wait (a simulator that publishes odometry before its scan): the odometry at the scan's
+        stamp, interpolated, or the newest reading when the scan is newer than it by at most
+        ``transform_tolerance``. The live node waits instead (:meth:`offer_scan`)."""
+        admitted = self._admit(scan)
+        if isinstance(admitted, Outputs):
+            return admitted
+        odom = self._odom.at(admitted.stamp, self.params.transform_tolerance)
+        if isinstance(odom, str):
+            self.drop(f"scan: {odom}", f"scan at {admitted.stamp:.3f} s")
+            return self.unused_scan(admitted.stamp)
+        return self._step(admitted, odom)
+
+    def offer_scan(self, scan: LaserScan, now: float | None = None) -> list[Outputs]:
+        """A scan as nav2_amcl's tf2 message filter takes it: paired with the odometry at its
+        own stamp (interpolated between the readings around it). A scan newer than the newest
+        odometry is held until the odometry reaches its stamp (:meth:`ready_scans`, called
+        after each odometry reading) and dropped, counted under :data:`NO_ODOM_AT_STAMP`,
+        when it has waited more than ``transform_tolerance`` (``now`` - its arrival, on the
+        node's clock; or a newer scan stamped that much later), or more than
+        :data:`MAX_HELD_SCANS` wait. Returns the outputs of the scans answered now, in order
+        (none while this one waits)."""
+        admitted = self._admit(scan)
+        if isinstance(admitted, Outputs):
+            return [*self.ready_scans(now), admitted]
+        if self._held and admitted.stamp < self._held[-1][0].stamp:
+            self.drop("scan: stamp went backwards", f"{admitted.stamp:.3f} s (held scans)")
+            return [*self.ready_scans(now), self.unused_scan(admitted.stamp)]
+        self._held.append((admitted, now))
+        return self.ready_scans(now)
+
+    @property
+    def held_scans(self) -> int:
+        """Scans waiting for the odometry at their stamp."""
+        return len(self._held)
+
+    def ready_scans(self, now: float | None = None) -> list[Outputs]:
+        """Answer the held scans the odometry now covers, and drop those that waited too long
+        (:meth:`offer_scan`); their outputs in order."""
+        outs: list[Outputs] = []
+        tol = self.params.transform_tolerance
+        while self._held:
+            scan, arrived = self._held[0]
+            if self._odom.stamps and scan.stamp <= self._odom.stamps[-1]:
+                self._held.popleft()
+                odom = self._odom.at(scan.stamp, tol)
+                if isinstance(odom, str):
+                    self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
+                    outs.append(self.unused_scan(scan.stamp))
+                else:
+                    outs.append(self._step(scan, odom))
+                continue
+            waited = None if now is None or arrived is None else now - arrived
+            newer = self._held[-1][0].stamp - scan.stamp
+            if (
+                (waited is not None and waited > tol)
+                or newer > tol
+                or len(self._held) > MAX_HELD_SCANS
+            ):
+                self._held.popleft()
+                newest = f"{self._odom.stamps[-1]:.3f} s" if self._odom.stamps else "none"
+                self.drop(
+                    NO_ODOM_AT_STAMP,
+                    f"scan at {scan.stamp:.3f} s waited"
+                    + (f" {waited:.2f} s" if waited is not None else f" for {newer:.2f} s of scans")
+                    + f"; newest odometry {newest}",
+                )
+                outs.append(self.unused_scan(scan.stamp))
+                continue
+            break
+        return outs
+
+    def _admit(self, scan: LaserScan) -> LaserScan | Outputs:
+        """The checks a scan passes before it is paired with odometry: the scan to use (mirrored
+        for an upside-down laser), or the outputs of a scan not used."""
         if not self._frame_ok(scan.frame_id, self.params.laser_frame_id, "scan: wrong frame"):
             return self.unused_scan(scan.stamp)
         if self._beams is not None and len(scan) != self._beams:
@@ -668,17 +840,19 @@ class NodeCore:
         if isinstance(mount, str):
             self.drop("scan: no laser pose", mount)
             return self.unused_scan(scan.stamp)
-        if mount.upside_down:
-            scan = mirror(scan)
-        odom = self._odom.at(scan.stamp, self.params.transform_tolerance)
-        if isinstance(odom, str):
-            self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
+        return mirror(scan) if mount.upside_down else scan
+
+    def _step(self, scan: LaserScan, odom: OdometryReading) -> Outputs:
+        """One localizer step with an admitted scan and the odometry at its stamp."""
+        if self.localizer is None:  # cleaned up meanwhile
+            self.drop("scan: no map yet")
             return self.unused_scan(scan.stamp)
         image = None
         want, got = self._want_image_after, self._image
         if want is not None and got is not None and got[0] >= want - 1e-9:
             image = got[1]
         try:
+            self._apply_pending_seed(odom)
             est = self.localizer.update(odom, scan, image)
         except Exception as err:  # the node must keep localizing: count, rebuild if it persists
             self.drop("scan: rejected by the localizer", f"{type(err).__name__}: {err}")
@@ -693,9 +867,23 @@ class NodeCore:
         if image is not None:
             self._want_image_after = None
             self._image = None
+        if est.status is Status.TRACKING and est.pose is not None and est.covariance is not None:
+            self._seed = None  # the operator's pose (if any) is confirmed: tracking carries it
+            self._confirmed = (
+                np.asarray(est.pose, dtype=np.float64).copy(),
+                np.asarray(est.covariance, dtype=np.float64).copy(),
+                np.asarray(odom.pose, dtype=np.float64).copy(),
+            )
+        elif not self._holds_pose():
+            self._confirmed = None
         out = self._outputs(est, scan.stamp, odom)
         self.last = out
         return out
+
+    def _holds_pose(self) -> bool:
+        """The localizer still vouches for its last confirmed pose (``Localizer.holds_pose``;
+        a localizer without that property never does)."""
+        return bool(getattr(self.localizer, "holds_pose", False))
 
     def _localizer_failed(self) -> None:
         """After :data:`~symloc.ros.guards.CONFIRM` failures in a row, rebuild the localizer."""
@@ -742,6 +930,9 @@ class NodeCore:
             ),
             used=False,
         )
+        if self._unused < STALE_SCANS and self._holds_pose():
+            # one scan late or unusable: the pose is still held, map -> odom carries on
+            out.tf = self.map_odom.resend(stamp)
         self._add_map_to_odom(out, stamp)
         return out
 
@@ -768,7 +959,7 @@ class NodeCore:
             candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
             best_estimate=self._best_estimate(),
         )
-        out.tf = self.map_odom.step(est, stamp, odom.pose)
+        out.tf = self.map_odom.step(est, stamp, odom.pose, holds=self._holds_pose())
         self._add_map_to_odom(out, stamp)
         particles = self._particles()
         if particles is not None:

@@ -193,7 +193,7 @@ def missing_requirements(prefix: str | Path | None = None) -> list[str]:
         missing.append(
             "the ROS build wheels "
             + ", ".join(sorted(set(wheels)))
-            + " (pip install 'symloc[ros]')"
+            + " (pip install '.[ros]' in symloc's checkout)"
         )
     return missing
 

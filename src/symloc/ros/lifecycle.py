@@ -5,7 +5,8 @@
 
 - **Lifecycle** (``amcl/get_state``, ``amcl/change_state``, driven by nav2's
   ``lifecycle_manager_localization`` or ``nav2_simple_commander``): *configure* reads the
-  parameters (an invalid or unknown one fails the transition, naming it) and creates the
+  parameters (an invalid one fails the transition, naming it; an unknown name is warned about
+  and ignored, as nav2_amcl does) and creates the
   subscriptions, publishers and services; *activate* starts localizing (scans before it are
   ignored, as nav2_amcl does; maps, TF and odometry are kept), applies ``set_initial_pose`` /
   ``initialize_at_saved_pose`` or an initial pose received while inactive, starts the pose
@@ -26,8 +27,11 @@
   (std_srvs/Empty), ``set_initial_pose`` (nav2_msgs/SetInitialPose).
 - **Topics**: ``amcl_pose``, ``particle_cloud`` (nav2_msgs/ParticleCloud with weights when
   ``nav2_msgs`` is built, geometry_msgs/PoseArray otherwise), ``initialpose`` as in nav2, and
-  symloc's own (``symloc/status``, ``symloc/candidates``, ``goal_pose``,
-  ``symloc/capture_request``, camera inputs; :mod:`symloc.ros.node`).
+  symloc's own (``symloc/status``, ``symloc/candidates``, ``symloc/goal`` with
+  ``publish_goals``, ``symloc/capture_request``, camera inputs; :mod:`symloc.ros.node`).
+- **Scans** wait for the odometry at their stamp (:meth:`NodeCore.offer_scan
+  <symloc.ros.core.NodeCore.offer_scan>`, nav2_amcl's tf2 message filter): they are answered
+  from the odometry callback, and a timer drops those that waited past ``transform_tolerance``.
 
 ``tf2_msgs``, ``nav2_msgs`` and ``bond`` are not on PyPI: ``symloc ros setup`` builds them
 (:mod:`symloc.ros.interfaces`). Without them the node still runs: odometry from the topic,
@@ -56,7 +60,13 @@ from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
 from symloc.ros.core import NodeCore, Outputs
-from symloc.ros.nav2_params import node_params_from_ros, parameter_defaults, ros_values
+from symloc.ros.nav2_params import (
+    WITHOUT_EFFECT,
+    node_params_from_ros,
+    parameter_defaults,
+    ros_values,
+    seeded_from_time,
+)
 from symloc.ros.params import NodeParams
 from symloc.ros.tf import transforms_from_msg
 
@@ -67,6 +77,9 @@ DEFAULT_NODE_NAME = "amcl"
 INITIAL_COVARIANCE = np.diag([0.25, 0.25, (math.pi / 12.0) ** 2])
 #: bondcpp's heartbeat timeout that nav2's lifecycle nodes announce [s].
 BOND_HEARTBEAT_TIMEOUT = 4.0
+
+#: Outputs built and published only while someone listens (RViz displays).
+_ON_DEMAND = frozenset({"particle_cloud", "candidates"})
 
 Ok = TransitionCallbackReturn.SUCCESS
 Failed = TransitionCallbackReturn.FAILURE
@@ -159,6 +172,8 @@ class LocalizationNode(LifecycleNode):
         self._srv_handles: list[Any] = []
         self._timer_handles: list[Any] = []
         self._bond: _Bond | None = None
+        self._odom_sub: Any = None
+        self._odom_feed: Callable[[Any], None] | None = None
         self._pending_pose: tuple[Any, Any] | None = None
         self._last_pose: tuple[Any, Any, float] | None = None
         self.tf_message = _optional("tf2_msgs.msg", "TFMessage")
@@ -191,20 +206,31 @@ class LocalizationNode(LifecycleNode):
         return values
 
     def unknown_parameters(self) -> list[str]:
-        """Names the params file gave this node that it does not know (configure refuses)."""
+        """Names the params file gave this node that it does not know (warned about at
+        configure and ignored, as nav2_amcl ignores names it does not declare)."""
         overrides = getattr(self, "_parameter_overrides", {}) or {}
         known = set(self._declared) | {"use_sim_time", "start_type_description_service"}
         return sorted(n for n in overrides if n not in known and not n.startswith("qos_overrides."))
 
     def read_params(self) -> NodeParams:
-        """The node's settings from its ROS parameters (raises ConfigurationError)."""
-        unknown = self.unknown_parameters()
-        if unknown:
-            raise ConfigurationError(
-                f"parameter {unknown[0]!r}: unknown to symloc"
-                + (f" (and {len(unknown) - 1} more: {unknown[1:]})" if len(unknown) > 1 else "")
+        """The node's settings from its ROS parameters (raises ConfigurationError on an invalid
+        value); unknown names are warned about and ignored, as nav2_amcl does."""
+        log = self.get_logger()
+        for name in self.unknown_parameters():
+            log.warning(
+                f"parameter {name!r}: unknown to symloc, ignored (as nav2_amcl ignores names it"
+                " does not declare; symloc's names: symloc.ros.nav2_params)"
             )
-        return node_params_from_ros(self._values())
+        values = self._values()
+        for name in ("accept_map_updates",):
+            if values.get(name) is not None and values.get(name) != WITHOUT_EFFECT[name][0]:
+                log.warning(f"parameter {name!r}: {WITHOUT_EFFECT[name][1]}")
+        params = node_params_from_ros(values, on_unknown=lambda why: log.warning(why))
+        if seeded_from_time(values):
+            log.info(
+                f"random_seed {values['random_seed']}: filter seeded from the time ({params.seed})"
+            )
+        return params
 
     def _validate_parameters(self, changes: list[Parameter[Any]]) -> Any:
         from rcl_interfaces.msg import SetParametersResult
@@ -324,6 +350,10 @@ class LocalizationNode(LifecycleNode):
             self._pending_pose = (pose, INITIAL_COVARIANCE)
         self._apply_pending_pose()
         self.active = True
+        # held scans whose odometry never comes are dropped (and answered) after the tolerance
+        self._timer_handles.append(
+            self.create_timer(max(0.05, p.transform_tolerance / 4.0), self._answer_held)
+        )
         if p.save_pose_rate > 0.0:
             self._timer_handles.append(self.create_timer(1.0 / p.save_pose_rate, self._save_pose))
         if p.bond_heartbeat_period > 0.0 and self.bond_status is not None:
@@ -402,8 +432,11 @@ class LocalizationNode(LifecycleNode):
             sub(OccupancyGrid, p.map_topic, self._guard(core.on_map), latched),
             sub(PoseWithCovarianceStamped, p.initialpose_topic, self._on_initialpose, 10),
         ]
+        self._odom_sub, self._odom_feed = None, None
         if p.odom_source == "topic":
-            self._sub_handles.append(sub(Odometry, p.odom_topic, self._guard(core.on_odom), sensor))
+            self._odom_sub = sub(Odometry, p.odom_topic, self._guard(self._on_odom_msg), sensor)
+            self._odom_feed = self._guard(core.on_odom)
+            self._sub_handles.append(self._odom_sub)
         if self.tf_message is not None:
             tf_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             static_qos = QoSProfile(
@@ -411,8 +444,11 @@ class LocalizationNode(LifecycleNode):
                 reliability=ReliabilityPolicy.RELIABLE,
                 durability=DurabilityPolicy.TRANSIENT_LOCAL,
             )
-            on_tf = core.on_tf if p.odom_source == "tf" else self._static_only
-            self._sub_handles.append(sub(self.tf_message, "/tf", self._guard(on_tf), tf_qos))
+            on_tf = self._on_odom_tf if p.odom_source == "tf" else self._static_only
+            tf_sub = sub(self.tf_message, "/tf", self._guard(on_tf), tf_qos)
+            self._sub_handles.append(tf_sub)
+            if p.odom_source == "tf":
+                self._odom_sub, self._odom_feed = tf_sub, self._guard(core.on_tf)
             self._sub_handles.append(
                 sub(self.tf_message, "/tf_static", self._guard(core.on_tf_static), static_qos)
             )
@@ -444,9 +480,10 @@ class LocalizationNode(LifecycleNode):
             "particle_cloud": pub(cloud_type, p.particle_cloud_topic, best_effort),
             "status": pub(DiagnosticArray, p.status_topic, 50),
             "candidates": pub(MarkerArray, p.candidates_topic, 10),
-            "goal": pub(PoseStamped, p.goal_topic, 10),
             "capture": pub(Header, p.capture_topic, 10),
         }
+        if p.publish_goals:  # off by default: nothing commands the robot unless asked
+            self._pub_handles["goal"] = pub(PoseStamped, p.goal_topic, 10)
         if self.tf_message is not None:
             self._pub_handles["tf"] = pub(
                 self.tf_message,
@@ -501,17 +538,63 @@ class LocalizationNode(LifecycleNode):
 
     # ------------------------------------------------------------------ callbacks
 
+    def _now(self) -> float:
+        return float(self.get_clock().now().nanoseconds) * 1e-9
+
     def _on_scan(self, msg: Any) -> None:
         core = self.core
         if core is None or not self.active:
             return  # nav2_amcl ignores scans until it is active
         try:
             self._apply_pending_pose()
-            out = core.on_scan(msg)
+            self._drain_odometry()
+            outs = core.receive_scan(msg, self._now())
         except Exception as err:  # the node must stay up; the status still goes out
             core.drop("internal error", f"{type(err).__name__}: {err}")
-            out = core.unused_scan(None)
-        self.publish(out)
+            outs = [core.unused_scan(None)]
+        for out in outs:
+            self.publish(out)
+
+    def _on_odom_tf(self, msg: Any) -> None:
+        """``/tf``: odometry (and frames); held scans it now covers are answered."""
+        assert self.core is not None
+        self.core.on_tf(msg)
+        self._answer_held()
+
+    def _on_odom_msg(self, msg: Any) -> None:
+        """nav_msgs/Odometry (``odom_source: topic``); held scans it covers are answered."""
+        assert self.core is not None
+        self.core.on_odom(msg)
+        self._answer_held()
+
+    def _answer_held(self) -> None:
+        core = self.core
+        if core is None or not self.active or not core.held_scans:
+            return
+        self._drain_odometry()
+        for out in core.ready_scans(self._now()):
+            self.publish(out)
+
+    def _drain_odometry(self) -> None:
+        """Take the odometry messages already delivered but not yet handed to a callback.
+
+        nav2_amcl's tf2 listener fills its buffer on a thread of its own, so its message
+        filter sees every transform that has arrived. Here one executor runs every callback:
+        after a long step (global localization on a loaded machine) the odometry that covers a
+        held scan may sit in the subscription's queue while the scan's deadline passes, so
+        the queue is emptied first (rclpy's own take, as its executor does)."""
+        sub, feed = self._odom_sub, self._odom_feed
+        if sub is None or feed is None:
+            return
+        for _ in range(1000):
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+            except Exception:  # an rclpy without this API, or a destroyed subscription
+                return
+            if taken is None:
+                return
+            feed(taken[0])
 
     def publish(self, out: Outputs) -> None:
         """Publish one step's outputs (and remember the pose for the pose file)."""
@@ -520,21 +603,27 @@ class LocalizationNode(LifecycleNode):
         est = out.estimate
         if out.amcl_pose is not None and est.pose is not None and est.covariance is not None:
             self._last_pose = (np.asarray(est.pose), np.asarray(est.covariance), out.stamp)
-        cloud = out.particle_cloud
-        if cloud is not None and self.particle_cloud_type is not None:
-            cloud = self._weighted_cloud(out)
+        # map -> odom first: nav2's costmaps and controller wait for it
         fields = {
-            "particle_cloud": cloud,
+            "tf": out.tf,
             "amcl_pose": out.amcl_pose,
-            "goal": out.goal,
+            "status": out.status,
+            "goal": out.goal if p.publish_goals else None,
             "capture": out.capture,
             "candidates": out.candidates,
-            "status": out.status,
-            "tf": out.tf,
+            "particle_cloud": out.particle_cloud,
         }
         for key, value in fields.items():
-            if value is not None and key in self._pub_handles:
-                self._pub_handles[key].publish(build_rclpy(self._types[key], value))
+            pub = self._pub_handles.get(key)
+            if value is None or pub is None:
+                continue
+            if key in _ON_DEMAND and pub.get_subscription_count() == 0:
+                continue  # built only for a listener (a cloud of 2000 particles: ~75 ms)
+            if key == "particle_cloud" and self.particle_cloud_type is not None:
+                value = self._weighted_cloud(out)
+                if value is None:
+                    continue
+            pub.publish(build_rclpy(self._types[key], value))
 
     def _weighted_cloud(self, out: Outputs) -> dict[str, Any] | None:
         """nav2_msgs/ParticleCloud fields: AMCL's particles and their weights."""
@@ -591,6 +680,8 @@ class LocalizationNode(LifecycleNode):
         return self._apply_pending_pose()
 
     def _apply_pending_pose(self) -> bool:
+        """Hand the pending initial pose to the core once it has a map (the core keeps it
+        across every rebuild of the localizer until tracking confirms it)."""
         core = self.core
         if self._pending_pose is None or core is None or core.localizer is None:
             return False
@@ -598,9 +689,7 @@ class LocalizationNode(LifecycleNode):
         self._pending_pose = None
         pose = np.asarray(pose, dtype=np.float64).copy()
         pose[2] = wrap_angle(pose[2])
-        core.localizer.set_pose(pose, np.asarray(cov, dtype=np.float64))
-        self.get_logger().info(f"initial pose set to {pose.round(3).tolist()}")
-        return True
+        return core.set_initial_pose(pose, np.asarray(cov, dtype=np.float64))
 
     def _save_pose(self) -> None:
         if not self.active or self._last_pose is None or self.params is None:

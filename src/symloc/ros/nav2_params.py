@@ -12,8 +12,8 @@ The node takes nav2_amcl's place, so it reads nav2's own ``nav2_params.yaml`` un
   ``always_reset_initial_pose``, ``save_pose_rate``, ``initialize_at_saved_pose``,
   ``saved_pose_filepath``, ``random_seed``) and of nav2's lifecycle nodes
   (``bond_heartbeat_period``, ``autostart_node``) are :class:`NodeParams` fields of the same
-  name (``random_seed`` >= 0 sets ``seed``; nav2's -1, a time-based seed, keeps symloc's
-  reproducible ``seed``);
+  name (``random_seed`` >= 0 sets ``seed``; below 0, as nav2's -1, the filter is seeded from
+  the time, unless symloc's own ``seed`` is given: :func:`time_seed`);
 - symloc's own settings keep their names: the other :class:`NodeParams` fields
   (``laser_frame_id``, ``image_topic``, ``visual_map``, ``odom_source``, ``laser_pose``,
   ``mode``, ``lidar_preset``, ``seed``, ...) and one dotted block per part of the localizer's
@@ -29,14 +29,17 @@ The node takes nav2_amcl's place, so it reads nav2's own ``nav2_params.yaml`` un
   field added to a block is a parameter without a change here;
 - accepted and without effect, each for a reason (:data:`WITHOUT_EFFECT`).
 
-Any other name raises :class:`~symloc.errors.ConfigurationError` naming it, as does any invalid
-value: nothing is reset to a default with a log line.
+Any other name is unknown: :func:`node_params_from_ros` raises
+:class:`~symloc.errors.ConfigurationError` naming it, or, given ``on_unknown`` (the node, as
+nav2_amcl ignores names it does not declare), reports it there and ignores it. An invalid value
+always raises, naming it: nothing is reset to a default with a log line.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -54,8 +57,10 @@ __all__ = [
     "parameter_defaults",
     "read_params_block",
     "ros_values",
+    "seeded_from_time",
     "settings_from_ros",
     "settings_to_ros",
+    "time_seed",
 ]
 
 #: nav2_amcl's defaults where they differ from :class:`NodeParams`'s.
@@ -79,7 +84,29 @@ WITHOUT_EFFECT: dict[str, tuple[Any, str]] = {
     "map_subscribe_transient_local": (True, "the map is always subscribed transient local"),
     "bond_disable_heartbeat_timeout": (True, "the node never times out its manager's bond"),
     "initial_pose.z": (0.0, "the localizer is 2-D: the initial pose's height is ignored"),
+    "accept_map_updates": (
+        False,
+        "retired: every new map is taken, as nav2_amcl does, unless first_map_only is true",
+    ),
 }
+
+
+def time_seed() -> int:
+    """A seed from the clock (nav2_amcl's ``random_seed`` < 0), in 0 .. 2**31 - 1."""
+    return int(time.time_ns() % (2**31 - 1))
+
+
+def seeded_from_time(values: Mapping[str, Any]) -> bool:
+    """True when these ROS parameter values seed the filter from the time: ``random_seed``
+    below 0 (nav2's -1) and symloc's ``seed`` not given."""
+    seed = values.get("random_seed")
+    return (
+        isinstance(seed, int)
+        and not isinstance(seed, bool)
+        and seed < 0
+        and values.get("seed") is None
+    )
+
 
 _BLOCKS = (*SETTINGS_BLOCKS, "symmetry")
 _AMCL = tuple(f.name for f in dataclasses.fields(AmclParams) if f.name != "ros_extras")
@@ -129,6 +156,7 @@ def parameter_defaults() -> dict[str, Any]:
             continue
         out[name] = _ros_value(NAV2_DEFAULTS.get(name, getattr(params, name)))
     out["random_seed"] = -1
+    out["seed"] = None  # not set: nav2's random_seed decides (-1: from the time)
     for block, names in _DOTTED.items():
         for name in names:
             out[f"{block}.{name}"] = _ros_value(getattr(getattr(params, block), name))
@@ -141,14 +169,27 @@ def parameter_defaults() -> dict[str, Any]:
     return out
 
 
-def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
+def node_params_from_ros(
+    values: Mapping[str, Any], *, on_unknown: Callable[[str], object] | None = None
+) -> NodeParams:
     """:class:`NodeParams` from ROS parameter values (flat names as :func:`parameter_defaults`
     lists; a value of None is "not set").
+
+    ``random_seed`` >= 0 sets ``seed``; below 0 with no ``seed`` given the seed comes from the
+    time (:func:`time_seed`, :func:`seeded_from_time`), as in nav2_amcl.
+
+    Parameters
+    ----------
+    values : mapping
+    on_unknown : callable, optional
+        Receives a line about each unknown name, which is then ignored (nav2_amcl's way);
+        without it an unknown name raises.
 
     Raises
     ------
     ConfigurationError
-        An unknown name (named) or an invalid value (named, with what was expected).
+        An unknown name (named; without ``on_unknown``) or an invalid value (named, with what
+        was expected).
     """
     node: dict[str, Any] = {}
     amcl: dict[str, Any] = {}
@@ -192,16 +233,21 @@ def node_params_from_ros(values: Mapping[str, Any]) -> NodeParams:
         elif name in WITHOUT_EFFECT:
             continue
         else:
-            raise ConfigurationError(
+            why = (
                 f"parameter {name!r}: unknown to symloc (nav2_amcl's names, symloc's node"
                 " settings, confidence.*, claim.*, localizer.* and symmetry.* are known; see"
                 " symloc.ros.nav2_params)"
             )
+            if on_unknown is None:
+                raise ConfigurationError(why)
+            on_unknown(why + ": ignored")
     if seed is not None:
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise ConfigurationError(f"random_seed: expected an integer, got {seed!r}")
         if seed >= 0:
             node["seed"] = seed
+        elif "seed" not in node:
+            node["seed"] = time_seed()
     if initial:
         node["initial_pose"] = initial
     # every declared parameter has a value: an older name given beside its target's default

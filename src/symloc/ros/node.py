@@ -25,8 +25,9 @@ out ``particle_cloud``         nav2_msgs/ParticleCloud (PoseArray without  best 
 out ``/tf``                    tf2_msgs/TFMessage: map -> odom             reliable
 out ``symloc/status``          diagnostic_msgs/DiagnosticArray [2]_        reliable
 out ``symloc/candidates``      visualization_msgs/MarkerArray [2]_         reliable
-out ``goal_pose``              geometry_msgs/PoseStamped, odom frame:      reliable
-                               go to the centre / face / rotate
+out ``symloc/goal``            geometry_msgs/PoseStamped, odom frame:      reliable
+                               go to the centre / face / rotate (only
+                               with ``publish_goals``; off by default)
 out ``symloc/capture_request`` std_msgs/Header: take an image now          reliable
 =============================  ==========================================  ====================
 
@@ -35,7 +36,8 @@ out ``symloc/capture_request`` std_msgs/Header: take an image now          relia
 .. [2] see :mod:`symloc.ros.status_msg` for the key / value layout.
 
 The map frame's ``goal_pose`` of nav2 would need a pose the localizer has not earned, so the
-requests of Algorithm 2 are published in the odometry frame, which the robot knows.
+requests of Algorithm 2 are published in the odometry frame, which the robot knows; and only
+when the user enables ``publish_goals`` (a localization node does not command the robot).
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ __all__ = ["rclpy_available", "run_node"]
 
 
 def rclpy_available() -> bool:
-    """True when rclpy and the message packages import (``pip install symloc[ros]``)."""
+    """True when rclpy and the message packages import (``pip install '.[ros]'`` in symloc's checkout)."""
     try:
         import diagnostic_msgs.msg  # noqa: F401
         import geometry_msgs.msg  # noqa: F401
@@ -68,7 +70,7 @@ def rclpy_available() -> bool:
 def _require_rclpy() -> None:
     if not rclpy_available():
         raise ConfigurationError(
-            "symloc ros node needs rclpy and the ROS message packages: pip install 'symloc[ros]'"
+            "symloc ros node needs rclpy and the ROS message packages: pip install '.[ros]' in symloc's checkout"
         )
 
 
@@ -115,12 +117,16 @@ def run_node(
 
 
 def _read_params(path: str | Path, node_name: str) -> NodeParams:
-    """A params file's block for ``node_name`` (nav2's flat names) or symloc's ``symloc:``
-    block (nested ``amcl:``, ``localizer:``, ``symmetry:``)."""
+    """A params file's block for ``node_name`` (nav2's flat names; an unknown name is warned
+    about on stderr and ignored, as at configure) or symloc's ``symloc:`` block (nested
+    ``amcl:``, ``localizer:``, ``symmetry:``)."""
     from symloc.ros.nav2_params import node_params_from_ros, read_params_block
 
+    def warn(line: str) -> None:  # as the node's configure: unknown names are ignored
+        print(f"warning: {path}: {line}", file=sys.stderr)
+
     try:
-        return node_params_from_ros(read_params_block(path, node_name))
+        return node_params_from_ros(read_params_block(path, node_name), on_unknown=warn)
     except ConfigurationError as err:
         if node_name == "symloc" or "no block for node" not in str(err):
             raise

@@ -201,6 +201,12 @@ class NodeParams:
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
     capture_topic : str
         Outputs (see :mod:`symloc.ros.node`).
+    publish_goals : bool
+        Publish the localizer's requests to move the robot (go to a centre, face a direction,
+        rotate) as geometry_msgs/PoseStamped in the odometry frame on ``goal_topic``
+        (``symloc/goal``). Off by default: a localization node does not command the robot;
+        the requests are always in ``symloc/status``. To hand them to a navigator, enable it
+        and point ``goal_topic`` at what drives the robot (see the node's README).
     sensor_qos : {"best_effort", "reliable"}
         Reliability of the scan, odometry and image subscriptions (nav2 uses best effort).
     mode : {"localize", "build_visual_map"}
@@ -221,9 +227,6 @@ class NodeParams:
         scanner's data sheet; ``""``: Algorithm 1's defaults.
     map_yaml : str
         A map_server YAML to load at start-up instead of waiting for the map topic.
-    accept_map_updates : bool
-        A map whose size or origin differs from the first: rebuild the localizer on it (True),
-        or drop it with a warning (False, the default; the pose is kept).
     transform_tolerance : float
         Largest gap [s] between a scan and the newest odometry before it is used; the
         ``map -> odom`` transform is stamped this far after its scan (nav2's meaning).
@@ -231,7 +234,10 @@ class NodeParams:
         Broadcast ``map -> odom`` on ``/tf`` once a pose is earned (nav2's name; see
         :mod:`symloc.ros.tf` for what is sent while the pose is not earned).
     first_map_only : bool
-        Use the first map received and ignore every later one (nav2's name).
+        Use the first map received and ignore every later one (nav2's name). Otherwise every
+        new map rebuilds the localizer on it, the pose held kept (re-seeded, carried by
+        odometry, and confirmed by the claim gate on the new map). The older
+        ``accept_map_updates`` is retired: accepted with a warning, without effect.
     max_odom_age : float
         How much odometry history [s] is kept for interpolating at scan stamps.
     odom_source : {"tf", "topic"}
@@ -300,7 +306,8 @@ class NodeParams:
     particle_cloud_topic: str = "particle_cloud"
     status_topic: str = "symloc/status"
     candidates_topic: str = "symloc/candidates"
-    goal_topic: str = "goal_pose"
+    goal_topic: str = "symloc/goal"
+    publish_goals: bool = False
     capture_topic: str = "symloc/capture_request"
     sensor_qos: str = "best_effort"
     mode: str = "localize"
@@ -310,7 +317,6 @@ class NodeParams:
     camera_dist_coeffs: tuple[float, ...] = ()
     lidar_preset: str = ""
     map_yaml: str = ""
-    accept_map_updates: bool = False
     transform_tolerance: float = 1.0
     tf_broadcast: bool = True
     first_map_only: bool = False
@@ -428,9 +434,9 @@ class NodeParams:
                 raise ConfigurationError(
                     f"{name}: expected true/false, got {getattr(self, name)!r}"
                 )
-        if not isinstance(self.accept_map_updates, bool):
+        if not isinstance(self.publish_goals, bool):
             raise ConfigurationError(
-                f"accept_map_updates: expected true/false, got {self.accept_map_updates!r}"
+                f"publish_goals: expected true/false, got {self.publish_goals!r}"
             )
         for name in ("transform_tolerance", "max_odom_age", "max_stamp_jump", "max_odom_speed"):
             v = getattr(self, name)

@@ -15,20 +15,20 @@ plain arrays, so that it runs (and is tested) without rclpy:
 - :class:`MapToOdom` decides what to broadcast as ``map -> odom`` after each scan.
 
 **What is broadcast.** ``map -> odom`` is ``map_from_base * inverse(odom_from_base)``: the pose
-the claim gate confirmed at this scan and the odometry at the scan's stamp, stamped with the
-scan time plus ``transform_tolerance`` (so that tf2 lookups up to that time succeed while
-odometry carries the robot), and sent again with every confirmed scan, as nav2_amcl does.
+the claim gate confirmed at a scan and the odometry at the scan's stamp, stamped with the scan
+time plus ``transform_tolerance`` (so that tf2 lookups up to that time succeed while odometry
+carries the robot).
 
-**While symloc is not tracking** (ambiguous, deciding, lost, a claim withheld or withdrawn,
-after a kidnapping) nothing is sent: the last transform is not re-stamped. nav2_amcl re-sends
-its last transform with every scan whatever happened; symloc's promise is that what it
-publishes is right, and a re-stamped transform would tell nav2's costmaps and controllers that
-an unconfirmed pose is current. So the last earned transform ages: tf2 lookups for times past
-its stamp (the last confirmed scan plus ``transform_tolerance``) fail, nav2 stops planning and
-following paths instead of driving on a pose nobody vouches for, and ``symloc/status`` says
-why (its ``map_to_odom`` value names the stamp the transform is valid until). Before the first
-pose is earned nothing is ever sent. A momentary withheld claim costs nothing: the last
-transform stays valid for ``transform_tolerance`` after its scan.
+**While the pose is held** it is sent again at every scan, as nav2_amcl re-sends its transform
+between filter updates: with a newly confirmed pose, or re-stamped for this scan from the last
+confirmed pose carried by odometry (the same ``map -> odom``) when the claim gate only withheld
+the claim, or the scan was late or unusable (``Localizer.holds_pose``). **It is withdrawn** (not
+re-stamped: it ages, tf2 lookups past its stamp fail, and nav2 stops planning and following
+paths instead of driving on a pose nobody vouches for) only when the localizer concludes that
+the pose is wrong or lost: a withdrawn claim, ambiguity, deciding, lost, a kidnapping, a global
+re-initialisation or a new operator pose; it resumes with the next confirmed pose.
+``symloc/status`` says which (its ``map_to_odom`` value). Before the first pose is earned
+nothing is ever sent.
 """
 
 from __future__ import annotations
@@ -307,13 +307,12 @@ class MapToOdom:
         self.enabled = bool(enabled)
         #: the last transform sent: (pose (3,), the stamp it carries)
         self.last: tuple[FloatArray, float] | None = None
+        #: the stamp of the scan whose confirmed pose the last transform comes from
+        self.confirmed_at: float | None = None
+        #: True while the last transform may be re-sent (the pose is held, see :meth:`step`)
+        self.holding = False
 
-    def step(self, est: Estimate, stamp: float, odom_pose: ArrayLike) -> dict[str, Any] | None:
-        """The TFMessage field dict to send after the scan at ``stamp`` (None: send nothing)."""
-        if not self.enabled or est.status is not Status.TRACKING or est.pose is None:
-            return None
-        pose = map_from_odom(est.pose, odom_pose)
-        valid_until = float(stamp) + self.tolerance
+    def _message(self, pose: FloatArray, valid_until: float) -> dict[str, Any]:
         self.last = (pose, valid_until)
         return tf_message_fields(
             [
@@ -323,6 +322,42 @@ class MapToOdom:
             ]
         )
 
+    def step(
+        self, est: Estimate, stamp: float, odom_pose: ArrayLike, *, holds: bool = False
+    ) -> dict[str, Any] | None:
+        """The TFMessage field dict to send after the scan at ``stamp`` (None: send nothing).
+
+        A confirmed pose (status tracking) gives a new transform. ``holds`` (the localizer
+        still vouches for its last confirmed pose: a claim withheld at this scan, not withdrawn)
+        re-sends the last transform stamped for this scan, as nav2_amcl does between filter
+        updates: the last confirmed pose carried by odometry. Otherwise nothing is sent and
+        nothing will be re-sent until a pose is confirmed again.
+        """
+        if not self.enabled:
+            return None
+        if est.status is Status.TRACKING and est.pose is not None:
+            self.holding = True
+            self.confirmed_at = float(stamp)
+            return self._message(map_from_odom(est.pose, odom_pose), float(stamp) + self.tolerance)
+        if holds:
+            return self.resend(stamp)
+        self.holding = False
+        return None
+
+    def resend(self, stamp: float) -> dict[str, Any] | None:
+        """The last transform again, stamped ``stamp`` + ``transform_tolerance``, while a pose
+        is held (None otherwise, or when that would not be newer than what was sent)."""
+        if not self.enabled or not self.holding or self.last is None:
+            return None
+        valid_until = float(stamp) + self.tolerance
+        if valid_until <= self.last[1]:
+            return None
+        return self._message(self.last[0], valid_until)
+
+    def forget(self) -> None:
+        """Stop re-sending (the pose was replaced or forgotten); the last transform ages."""
+        self.holding = False
+
     def describe(self, stamp: float) -> str:
         """One line for the status: what the broadcast ``map -> odom`` is at ``stamp``."""
         if not self.enabled:
@@ -330,6 +365,12 @@ class MapToOdom:
         if self.last is None:
             return "never sent (no pose earned yet)"
         valid_until = self.last[1]
-        if valid_until - self.tolerance >= stamp - 1e-9:
+        fresh = valid_until - self.tolerance >= stamp - 1e-9
+        if fresh and self.confirmed_at is not None and self.confirmed_at >= stamp - 1e-9:
             return f"sent, stamped {valid_until:.3f}"
+        if fresh and self.holding:
+            return (
+                f"re-sent, stamped {valid_until:.3f}, from the pose confirmed at the scan at"
+                f" {self.confirmed_at:.3f} carried by odometry"
+            )
         return f"not updated since the scan at {valid_until - self.tolerance:.3f} (stamped {valid_until:.3f})"

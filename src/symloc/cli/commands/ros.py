@@ -1,4 +1,4 @@
-"""``symloc ros node --params params.yaml``: the ROS 2 node (needs ``pip install symloc[ros]``)."""
+"""``symloc ros node --params params.yaml``: the ROS 2 node (needs ``pip install '.[ros]'`` in symloc's checkout)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def register(subparsers: Any) -> None:
         description="Run the symloc node, a lifecycle node named amcl that takes nav2_amcl's"
         " place: subscribes scan, map, /tf, /tf_static (or odom), camera, initialpose;"
         " publishes amcl_pose, particle_cloud, map -> odom on /tf, symloc/status,"
-        " symloc/candidates, goal_pose, symloc/capture_request; services"
+        " symloc/candidates, symloc/capture_request (symloc/goal with publish_goals); services"
         " reinitialize_global_localization, request_nomotion_update, set_initial_pose."
         " nav2's lifecycle manager configures and activates it (or --autostart). Arguments"
         " after --ros-args (last) go to rclpy (e.g. --ros-args --params-file nav2_params.yaml"
