@@ -46,11 +46,15 @@ plain NumPy) finds exactly the same set, which the tests check.
 Distinct poses
 --------------
 The lattice poses at or above the threshold come in clumps (every cell and heading near a
-true pose explains the scan). They are ranked by score, ties broken by the mean distance
-[m] from the end points to the nearest obstacle (clipped at twice the tolerance: the pose
-closest to the walls' centre), and thinned by non-maximum suppression: a pose within
-``nms_radius`` *and* ``nms_angle`` of a better kept one is dropped. A square room gives four
-candidates, one per rotated copy.
+true pose explains the scan). They are ranked by score, ties broken by the *fit*, the mean
+distance [m] from the end points to the nearest occupied cell (each clipped at twice the
+tolerance), and thinned by non-maximum suppression: the best remaining pose and every pose
+within ``nms_radius`` *and* ``nms_angle`` of it form one candidate, represented by its
+member of smallest fit (the centre of the plateau of equal scores). A square room gives four
+candidates, one per rotated copy. A candidate is a lattice pose: off by up to half a cell in
+x and y, and by a heading step or two (the heading that best makes up for the position's
+rounding); the localizer's scan-to-map refinement (:mod:`symloc.mcl.scan_to_map`) takes it
+from there.
 
 Cost and cap
 ------------
@@ -352,7 +356,7 @@ def need_py(best: int, m: int, min_score: float, margin: float) -> int:
     A tiny slack absorbs the rounding of ``score * m`` (0.3 * 10 must give 3, not 4).
     """
     t = max(min_score * m, best - margin * m)
-    return max(1, int(math.ceil(t - 1e-9)))
+    return max(1, math.ceil(t - 1e-9))
 
 
 _need = _jit(need_py)
@@ -391,8 +395,11 @@ def free_in_py(
     b1 = min(c1, box[3])
     if a0 >= a1 or b0 >= b1:
         return 0
-    return int(integral[a1, b1]) - int(integral[a0, b1]) - int(integral[a1, b0]) + int(
-        integral[a0, b0]
+    return (
+        int(integral[a1, b1])
+        - int(integral[a0, b1])
+        - int(integral[a1, b0])
+        + int(integral[a0, b0])
     )
 
 
@@ -447,7 +454,7 @@ def branch_and_bound_py(
     best first); returns the next root to visit (``len(roots)`` when done).
 
     ``state = [best count, nodes evaluated, hits held, flag]`` carries over between calls; the
-    flag is set to 1 when ``max_nodes`` is reached and to 2 when the hit buffer ``hk, hr, hc,
+    flag is set to 1 when a node beyond ``max_nodes`` would be evaluated and to 2 when the hit buffer ``hk, hr, hc,
     hn, hd`` (heading, row, col, count, mean clipped distance) is full of poses within the
     margin. Returns after the root during which ``chunk_nodes`` more nodes were evaluated.
     """
@@ -535,6 +542,12 @@ def branch_and_bound_py(
                 cq = c + (q >> 1) * h
                 if _free_in(integral, box, cr, cr + h, cq, cq + h) == 0:
                     continue
+                if nodes >= max_nodes:
+                    state[0] = best
+                    state[1] = nodes
+                    state[2] = nh
+                    state[3] = 1
+                    return i
                 cb = _block_count(levels[d - 1], pad, drk, dck, cr, cq)
                 nodes += 1
                 if cb >= need:
@@ -555,12 +568,6 @@ def branch_and_bound_py(
                 sc[sp] = kc[p]
                 sb[sp] = kb[p]
                 sp += 1
-            if nodes >= max_nodes:
-                state[0] = best
-                state[1] = nodes
-                state[2] = nh
-                state[3] = 1
-                return i
         i += 1
         if nodes - nodes0 >= chunk_nodes:
             break
@@ -676,13 +683,13 @@ class GlobalSearch:
                     ],
                     dtype=np.int64,
                 )
-        headings = np.asarray(headings, dtype=np.float64)
-        cth, sth = np.cos(headings)[:, None], np.sin(headings)[:, None]
+        heads: FloatArray = np.asarray(headings, dtype=np.float64)
+        cth, sth = np.cos(heads)[:, None], np.sin(heads)[:, None]
         x = (cth * pts[None, :, 0] - sth * pts[None, :, 1]) / res
         y = (sth * pts[None, :, 0] + cth * pts[None, :, 1]) / res
         dc = np.floor(x + 0.5).astype(np.int32)
         dr = np.floor(y + 0.5).astype(np.int32)
-        return _Lattice(pts, headings, dr, dc, box, float(step))
+        return _Lattice(pts, heads, dr, dc, box, float(step))
 
     def _n_positions(self, box: IntArray) -> int:
         return self.pyramid.free_count(int(box[0]), int(box[1]), int(box[2]), int(box[3]))
@@ -838,23 +845,30 @@ class GlobalSearch:
         order = np.lexsort((hits.fit, -hits.count))
         poses, cnt, fit = poses[order], hits.count[order], hits.fit[order]
         alive = np.ones(cnt.size, dtype=bool)
-        out: list[PoseCandidate] = []
-        n_distinct = 0
+        picked: list[int] = []
         while True:
             idx = np.flatnonzero(alive)
             if idx.size == 0:
                 break
-            j = int(idx[0])
-            n_distinct += 1
-            if len(out) < cfg.max_candidates:
-                pose = poses[j].copy()
-                pose.setflags(write=False)
-                out.append(PoseCandidate(pose, float(cnt[j]) / hits.n_points, int(cnt[j]), float(fit[j])))
-            near = (np.hypot(poses[idx, 0] - poses[j, 0], poses[idx, 1] - poses[j, 1]) <= cfg.nms_radius) & (
-                np.abs(wrap_angle(poses[idx, 2] - poses[j, 2])) <= cfg.nms_angle
-            )
+            j = int(idx[0])  # the best remaining pose leads a new candidate ...
+            near = (
+                np.hypot(poses[idx, 0] - poses[j, 0], poses[idx, 1] - poses[j, 1]) <= cfg.nms_radius
+            ) & (np.abs(wrap_angle(poses[idx, 2] - poses[j, 2])) <= cfg.nms_angle)
             near[0] = True
-            alive[idx[near]] = False
+            members = idx[near]
+            # ... represented by its member closest to the walls (the plateau of equal
+            # counts around a true pose is a few cells wide; the fit singles out its centre)
+            picked.append(int(members[np.argmin(fit[members])]))
+            alive[members] = False
+        n_distinct = len(picked)
+        picked.sort(key=lambda q: (-int(cnt[q]), float(fit[q])))
+        out: list[PoseCandidate] = []
+        for q in picked[: cfg.max_candidates]:
+            pose = poses[q].copy()
+            pose.setflags(write=False)
+            out.append(
+                PoseCandidate(pose, float(cnt[q]) / hits.n_points, int(cnt[q]), float(fit[q]))
+            )
         return out, n_distinct
 
     def search_points(
