@@ -437,3 +437,24 @@ def test_too_many_poses_within_the_margin_is_incomplete() -> None:
     assert capped.complete
     assert len(capped.candidates) == 2
     assert capped.n_distinct == 4
+
+
+def test_headings_searched_on_several_threads_give_the_same_hits(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each thread prunes with its own threshold (never above the final one): the merged hits
+    are the exhaustive search's."""
+    from symloc.mcl import kernels
+
+    grid = asymmetric_room()
+    pose = np.array([2.2, 3.1, -0.7])
+    pts = _rays(grid, pose, 90, 6.0)
+    cfg = GlobalSearchConfig(angular_step=math.radians(4.0), min_score=0.3, score_margin=0.3)
+    search = GlobalSearch(grid, cfg)
+    ref = search.hits(pts, exhaustive=True)
+    monkeypatch.setattr(kernels, "PARALLEL_MIN_PAIRS", 0)
+    monkeypatch.setattr(kernels, "n_threads", lambda: 3)
+    par = search.hits(pts)
+    assert par.complete
+    assert par.best == ref.best
+    assert par.key_set() == ref.key_set()

@@ -85,6 +85,7 @@ from symloc.geometry import as_pose, compose, inverse, transform_points, wrap_an
 from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.grid.precomputation import MAX_DEPTH, PrecomputationGrids
+from symloc.mcl import kernels
 from symloc.mcl.kernels import _jit
 from symloc.scan import LaserScan
 
@@ -101,7 +102,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: Nodes evaluated per call of the compiled search between two checks of the wall clock.
-_CHUNK_NODES = 200_000
+_CHUNK_NODES = 20_000
 
 _NAME = "GlobalSearchConfig"
 
@@ -750,47 +751,69 @@ class GlobalSearch:
                 lat, 0, False, f"node budget: {n_roots} roots exceed max_nodes={cfg.max_nodes}"
             )
         bl = np.asarray(blocks, dtype=np.int64).reshape(-1, 2)
-        rk = np.repeat(np.arange(n_k, dtype=np.int64), bl.shape[0])
-        rr = np.tile(bl[:, 0], n_k)
-        rc = np.tile(bl[:, 1], n_k)
-        rb = np.empty(n_roots, dtype=np.int64)
-        root_bounds(pyr.levels[depth], s, lat.dr, lat.dc, rk, rr, rc, rb)
+        n_b = bl.shape[0]
         need0 = need_py(0, m, cfg.min_score, cfg.score_margin)
-        keep = rb >= need0
-        rk, rr, rc, rb = rk[keep], rr[keep], rc[keep], rb[keep]
-        order = np.argsort(-rb, kind="stable")
-        rk, rr, rc, rb = rk[order], rr[order], rc[order], rb[order]
-        cap = cfg.max_hits
-        hk = np.empty(cap, dtype=np.int64)
-        hr = np.empty(cap, dtype=np.int64)
-        hc = np.empty(cap, dtype=np.int64)
-        hn = np.empty(cap, dtype=np.int64)
-        hd = np.empty(cap, dtype=np.float64)
-        state = np.array([0, n_roots, 0, 0], dtype=np.int64)
         dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
-        reason = ""
-        i = 0
-        while i < rk.size:
-            i = branch_and_bound(
-                pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.distance, dist_cap,
-                cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, _CHUNK_NODES, cfg.max_nodes,
-                state, hk, hr, hc, hn, hd,
-            )  # fmt: skip
-            if state[3] == 1:
-                reason = f"node budget: max_nodes={cfg.max_nodes} evaluated"
-                break
-            if state[3] == 2:
-                reason = f"more than max_hits={cap} lattice poses within the margin"
-                break
-            if i < rk.size and time.perf_counter() - t0 > cfg.max_seconds:
-                reason = f"time budget: max_seconds={cfg.max_seconds:g} s passed"
-                break
-        best, nodes, nh = int(state[0]), int(state[1]), int(state[2])
+        parts: dict[int, tuple[IntArray, IntArray, IntArray, IntArray, IntArray, FloatArray, str]]
+        parts = {}
+
+        def work(k0: int, k1: int) -> None:
+            """Search the headings ``[k0, k1)`` with their own threshold, buffer and share of
+            the node budget (a thread's threshold is never above the final one: the bound
+            stays admissible)."""
+            budget = max(1, cfg.max_nodes * (k1 - k0) // n_k)
+            rk = np.repeat(np.arange(k0, k1, dtype=np.int64), n_b)
+            rr = np.tile(bl[:, 0], k1 - k0)
+            rc = np.tile(bl[:, 1], k1 - k0)
+            rb = np.empty(rk.size, dtype=np.int64)
+            state = np.array([0, rk.size, 0, 0], dtype=np.int64)
+            cap = cfg.max_hits
+            hk = np.empty(cap, dtype=np.int64)
+            hr = np.empty(cap, dtype=np.int64)
+            hc = np.empty(cap, dtype=np.int64)
+            hn = np.empty(cap, dtype=np.int64)
+            hd = np.empty(cap, dtype=np.float64)
+            reason = ""
+            chunk = max(1, _CHUNK_NODES)
+            for q in range(0, rk.size, chunk):
+                sl = slice(q, q + chunk)
+                root_bounds(pyr.levels[depth], s, lat.dr, lat.dc, rk[sl], rr[sl], rc[sl], rb[sl])
+                if q + chunk < rk.size and time.perf_counter() - t0 > cfg.max_seconds:
+                    reason = f"time budget: max_seconds={cfg.max_seconds:g} s passed"
+                    break
+            i = 0
+            if not reason:
+                keep = rb >= need0
+                rk, rr, rc, rb = rk[keep], rr[keep], rc[keep], rb[keep]
+                order = np.argsort(-rb, kind="stable")
+                rk, rr, rc, rb = rk[order], rr[order], rc[order], rb[order]
+            while not reason and i < rk.size:
+                i = branch_and_bound(
+                    pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.distance,
+                    dist_cap, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
+                    state, hk, hr, hc, hn, hd,
+                )  # fmt: skip
+                if state[3] == 1:
+                    reason = f"node budget: max_nodes={cfg.max_nodes} evaluated"
+                elif state[3] == 2:
+                    reason = f"more than max_hits={cap} lattice poses within the margin"
+                elif i < rk.size and time.perf_counter() - t0 > cfg.max_seconds:
+                    reason = f"time budget: max_seconds={cfg.max_seconds:g} s passed"
+            nh = int(state[2])
+            parts[k0] = (state, hk[:nh], hr[:nh], hc[:nh], hn[:nh], hd[:nh], reason)
+
+        kernels.split_over_threads(n_k, n_roots * m, work)
+        runs = [parts[k] for k in sorted(parts)]
+        best = max(int(p[0][0]) for p in runs)
+        nodes = sum(int(p[0][1]) for p in runs)
+        reasons = [p[6] for p in runs if p[6]]
         need = need_py(best, m, cfg.min_score, cfg.score_margin)
-        sel = hn[:nh] >= need
+        hk, hr, hc, hn = (np.concatenate([p[j] for p in runs]) for j in (1, 2, 3, 4))
+        hd = np.concatenate([p[5] for p in runs])
+        sel = hn >= need
         return LatticeHits(
-            hk[:nh][sel], hr[:nh][sel], hc[:nh][sel], hn[:nh][sel], hd[:nh][sel], need, best, m,
-            lat.headings, nodes, reason == "", reason, self._n_positions(box),
+            hk[sel], hr[sel], hc[sel], hn[sel], hd[sel], need, best, m, lat.headings, nodes,
+            not reasons, reasons[0] if reasons else "", self._n_positions(box),
         )  # fmt: skip
 
     def _exhaustive(self, lat: _Lattice) -> LatticeHits:
