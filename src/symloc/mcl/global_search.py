@@ -445,6 +445,7 @@ def branch_and_bound_py(
     chunk_nodes: int,
     max_nodes: int,
     state: IntArray,
+    shared: IntArray,
     hk: IntArray,
     hr: IntArray,
     hc: IntArray,
@@ -458,6 +459,9 @@ def branch_and_bound_py(
     flag is set to 1 when a node beyond ``max_nodes`` would be evaluated and to 2 when the hit buffer ``hk, hr, hc,
     hn, hd`` (heading, row, col, count, mean clipped distance) is full of poses within the
     margin. Returns after the root during which ``chunk_nodes`` more nodes were evaluated.
+    ``shared[0]`` is the best count found by any thread searching other headings: read before
+    every node and raised here, it only ever lifts the threshold to one that some pose of the
+    lattice reaches (a stale read prunes less, never wrongly).
     """
     depth = levels.shape[0] - 1
     m = dr.shape[1]
@@ -476,10 +480,15 @@ def branch_and_bound_py(
     best = state[0]
     nodes = state[1]
     nh = state[2]
-    need = _need(best, m, min_score, margin)
+    top = max(best, shared[0])
+    need = _need(top, m, min_score, margin)
     nodes0 = nodes
     i = start
     while i < n_roots:
+        sh = shared[0]
+        if sh > top:
+            top = sh
+            need = _need(top, m, min_score, margin)
         if roots_b[i] < need:  # sorted: no later root can reach the threshold
             i = n_roots
             break
@@ -493,6 +502,10 @@ def branch_and_bound_py(
         sb[0] = roots_b[i]
         sp = 1
         while sp > 0:
+            sh = shared[0]
+            if sh > top:
+                top = sh
+                need = _need(top, m, min_score, margin)
             sp -= 1
             d = sd[sp]
             r = sr[sp]
@@ -534,7 +547,11 @@ def branch_and_bound_py(
                 nh += 1
                 if b > best:
                     best = b
-                    need = _need(best, m, min_score, margin)
+                    if b > shared[0]:
+                        shared[0] = b
+                    if b > top:
+                        top = b
+                        need = _need(top, m, min_score, margin)
                 continue
             h = 1 << (d - 1)
             nk = 0
@@ -756,11 +773,12 @@ class GlobalSearch:
         dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
         parts: dict[int, tuple[IntArray, IntArray, IntArray, IntArray, IntArray, FloatArray, str]]
         parts = {}
+        shared = np.zeros(1, dtype=np.int64)  # the best count of any thread so far
 
         def work(k0: int, k1: int) -> None:
-            """Search the headings ``[k0, k1)`` with their own threshold, buffer and share of
-            the node budget (a thread's threshold is never above the final one: the bound
-            stays admissible)."""
+            """Search the headings ``[k0, k1)`` with their own hit buffer and share of the
+            node budget; the best count found so far is shared (a thread's threshold is never
+            above the final one: the bound stays admissible)."""
             budget = max(1, cfg.max_nodes * (k1 - k0) // n_k)
             rk = np.repeat(np.arange(k0, k1, dtype=np.int64), n_b)
             rr = np.tile(bl[:, 0], k1 - k0)
@@ -791,7 +809,7 @@ class GlobalSearch:
                 i = branch_and_bound(
                     pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.distance,
                     dist_cap, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
-                    state, hk, hr, hc, hn, hd,
+                    state, shared, hk, hr, hc, hn, hd,
                 )  # fmt: skip
                 if state[3] == 1:
                     reason = f"node budget: max_nodes={cfg.max_nodes} evaluated"
