@@ -436,7 +436,9 @@ def test_too_many_poses_within_the_margin_is_incomplete() -> None:
     capped = global_search(grid, scan, config=GlobalSearchConfig(max_candidates=2))
     assert capped.complete
     assert len(capped.candidates) == 2
-    assert capped.n_distinct == 4
+    assert capped.n_distinct == 3  # counted up to max_candidates + 1
+    assert capped.truncated
+    assert not global_search(grid, scan).truncated
 
 
 def test_headings_searched_on_several_threads_give_the_same_hits(

@@ -160,7 +160,9 @@ class GlobalSearchConfig:
     max_nodes : int
         Node budget (>= 1): bound evaluations, roots and leaves included.
     max_seconds : float
-        Wall-time budget [s] (> 0, inf: none).
+        Wall-time budget [s] of one search (> 0, inf: none), checked every ``_CHUNK_NODES``
+        nodes per thread; it bounds the latency on a huge or loaded machine, where the node
+        budget alone could take longer (the look-ups of a large map miss the caches).
     max_hits : int
         Most lattice poses within the margin held before thinning (>= 1).
     max_candidates : int
@@ -179,7 +181,7 @@ class GlobalSearchConfig:
     max_points: int = 200
     depth: int = 7
     max_nodes: int = 5_000_000
-    max_seconds: float = math.inf
+    max_seconds: float = 5.0
     max_hits: int = 200_000
     max_candidates: int = 32
 
@@ -278,7 +280,8 @@ class GlobalSearchResult:
     n_hits : int
         Lattice poses at or above the threshold before thinning.
     n_distinct : int
-        Distinct poses after thinning (``len(candidates)`` unless truncated).
+        Distinct poses after thinning, counted up to ``max_candidates + 1``: more than
+        ``len(candidates)`` means the list is truncated (:attr:`truncated`).
     seconds : float
         Wall time [s] of the search (the map's precomputation excluded).
     """
@@ -296,6 +299,12 @@ class GlobalSearchResult:
     n_hits: int
     n_distinct: int
     seconds: float
+
+    @property
+    def truncated(self) -> bool:
+        """More distinct poses than ``max_candidates`` explain the scan (only the best are
+        listed)."""
+        return self.n_distinct > len(self.candidates)
 
     @property
     def verdict(self) -> str:
@@ -874,7 +883,7 @@ class GlobalSearch:
 
     def candidates(self, hits: LatticeHits) -> tuple[list[PoseCandidate], int]:
         """Thin the hits to distinct poses, best first: ``(the first max_candidates, how many
-        distinct poses there are)``."""
+        distinct poses there are, counted up to max_candidates + 1)``."""
         cfg = self.config
         if hits.count.size == 0:
             return [], 0
@@ -887,7 +896,7 @@ class GlobalSearch:
         poses, cnt, fit = poses[order], hits.count[order], hits.fit[order]
         alive = np.ones(cnt.size, dtype=bool)
         picked: list[int] = []
-        while True:
+        while len(picked) <= cfg.max_candidates:  # one more tells that there are more
             idx = np.flatnonzero(alive)
             if idx.size == 0:
                 break
