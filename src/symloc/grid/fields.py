@@ -4,8 +4,9 @@ The parts that localize on a map each need a field derived from it: AMCL's likel
 (the distance to the nearest occupied cell clipped at ``laser_likelihood_max_dist``), the
 confidence check's wider distance field, the rival search's field on the map grown by a border
 of unknown cells, the beam model's distance to the nearest non-free cell, the pose scorer's and
-the map-symmetry search's unclipped distance, and the claim gate's distance to the walls'
-centre lines. ``MapFields.of(grid)`` is the one cache of them for a grid: each field is
+the map-symmetry search's unclipped distance, the claim gate's distance to the walls'
+centre lines, and the global search's branch-and-bound precomputation grids.
+``MapFields.of(grid)`` is the one cache of them for a grid: each field is
 computed the first time a consumer asks and then handed to every other consumer of the same
 grid object. The cache lives on the grid (its lifetime is the grid's; nothing global keeps a
 map alive) and is left out when the grid is pickled or copied.
@@ -33,6 +34,7 @@ from symloc.grid.distance_field import (
     compute_surface_distance_field,
 )
 from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.grid.precomputation import PrecomputationGrids, build_precomputation_grids
 
 __all__ = [
     "MapFields",
@@ -62,8 +64,8 @@ class MapFields:
     grid : OccupancyGrid
     n_computed : collections.Counter of str
         How many times each kind of field was computed (``"distance"``, ``"surface"``,
-        ``"grown"``, ``"obstacle_distance"``, ``"blocked_distance"``): with one shared cache
-        each distinct field is computed once.
+        ``"grown"``, ``"obstacle_distance"``, ``"blocked_distance"``, ``"precomputation"``):
+        with one shared cache each distinct field is computed once.
     """
 
     def __init__(self, grid: OccupancyGrid) -> None:
@@ -77,6 +79,7 @@ class MapFields:
         self._grown: dict[float, DistanceField] = {}
         self._obstacle: NDArray[np.float64] | None = None
         self._blocked: NDArray[np.float32] | None = None
+        self._pyramids: dict[tuple[float, int], PrecomputationGrids] = {}
 
     @classmethod
     def of(cls, source: OccupancyGrid | MapFields) -> MapFields:
@@ -200,9 +203,31 @@ class MapFields:
                 self.n_computed["blocked_distance"] += 1
             return self._blocked
 
+    def precomputation_grids(self, tolerance: float, depth: int) -> PrecomputationGrids:
+        """The branch-and-bound precomputation grids of the map (``"precomputation"``).
+
+        Level 0 marks the cells within ``tolerance`` [m] (>= 0) of an occupied cell (read from
+        :meth:`obstacle_distance`); level ``d <= depth`` is its max over ``2^d x 2^d`` blocks;
+        with the integral image of the free cells. Read by the global scan-to-map search
+        (:mod:`symloc.mcl.global_search`); see :mod:`symloc.grid.precomputation`.
+        """
+        tol = check_positive(tolerance, "hit_tolerance", allow_zero=True)
+        with self._lock:
+            key = (tol, int(depth))
+            pg = self._pyramids.get(key)
+            if pg is None:
+                g = self.grid
+                pg = build_precomputation_grids(
+                    self.obstacle_distance(), g.occupied_mask, g.free_mask, tol, depth
+                )
+                self.n_computed["precomputation"] += 1
+                self._pyramids[key] = pg
+        return pg
+
     def clear(self) -> None:
         """Forget every computed field (the counts stay)."""
         with self._lock:
+            self._pyramids.clear()
             self._distance.clear()
             self._surface.clear()
             self._grown.clear()

@@ -1,0 +1,118 @@
+"""Precomputation grids for branch-and-bound scan matching (Hess et al. 2016, Section V.C).
+
+A scan end point *hits* a cell when the cell's centre lies within ``tolerance`` [m] of the
+centre of an occupied cell. Level 0 is that hit mask; level ``d`` holds, at cell ``(r, c)``,
+the maximum of level 0 over the ``2^d x 2^d`` cells ``[r, r + 2^d) x [c, c + 2^d)`` (the
+window *starts* at the cell, as Cartographer's ``PrecomputationGrid2D``). Summing level ``d``
+at a scan's end points for the corner translation of a block of ``2^d x 2^d`` translations
+bounds the number of hits of every translation in the block: the bound that lets the search
+prune a block without missing any pose in it.
+
+All levels share one layout, ``(depth + 1, H + 2P, W + 2P)`` uint8 with ``P = 2^depth``, map
+cell ``(r, c)`` at index ``(r + P, c + P)``; the border is zero at level 0, so an end point off
+the map hits nothing and an index outside the array reads 0 at every level. Memory: ``depth +
+1`` bytes per padded cell (8 at Cartographer's default depth 7). Built once per map and
+tolerance through :meth:`symloc.grid.fields.MapFields.precomputation_grids`, with the integral
+image of the free cells (where a robot may stand) that tells a block with no free cell apart.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.errors import ConfigurationError
+
+__all__ = ["MAX_DEPTH", "PrecomputationGrids", "build_precomputation_grids"]
+
+#: Deepest pyramid built (blocks of 4,096 x 4,096 cells).
+MAX_DEPTH = 12
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class PrecomputationGrids:
+    """The max-pooled hit pyramid of one map and the integral image of its free cells.
+
+    Attributes
+    ----------
+    levels : ndarray of shape (depth + 1, H + 2 pad, W + 2 pad), uint8
+        Level ``d`` at index ``(r + pad, c + pad)``: 1 if any cell of ``[r, r + 2^d) x [c, c +
+        2^d)`` is a hit (read-only).
+    free_integral : ndarray of shape (H + 1, W + 1), int32
+        ``free_integral[r, c]`` = free cells in rows ``< r`` and columns ``< c`` (read-only).
+    depth : int
+    pad : int
+        ``2^depth``.
+    tolerance : float
+        Hit tolerance [m].
+    height, width : int
+        The map's shape.
+    """
+
+    levels: NDArray[np.uint8]
+    free_integral: NDArray[np.int32]
+    depth: int
+    pad: int
+    tolerance: float
+    height: int
+    width: int
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held [bytes]."""
+        return int(self.levels.nbytes + self.free_integral.nbytes)
+
+    def free_count(self, r0: int, r1: int, c0: int, c1: int) -> int:
+        """Free cells in rows ``[r0, r1)`` and columns ``[c0, c1)`` (clipped to the map)."""
+        r0, r1 = max(r0, 0), min(r1, self.height)
+        c0, c1 = max(c0, 0), min(c1, self.width)
+        if r0 >= r1 or c0 >= c1:
+            return 0
+        f = self.free_integral
+        return int(f[r1, c1]) - int(f[r0, c1]) - int(f[r1, c0]) + int(f[r0, c0])
+
+
+def build_precomputation_grids(
+    obstacle_distance: NDArray[np.float64],
+    occupied: NDArray[np.bool_],
+    free: NDArray[np.bool_],
+    tolerance: float,
+    depth: int,
+) -> PrecomputationGrids:
+    """The pyramid of a map from its unclipped obstacle distance [m] ``(H, W)``.
+
+    Parameters
+    ----------
+    obstacle_distance : array of shape (H, W)
+        Distance [m] of each cell centre to the nearest occupied cell centre
+        (:meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
+    occupied, free : array of shape (H, W), bool
+        The map's occupied and free cells (a map with no occupied cell hits nothing).
+    tolerance : float
+        Hit tolerance [m] (>= 0).
+    depth : int
+        Levels above level 0, in ``[0, MAX_DEPTH]``.
+    """
+    if not isinstance(depth, (int, np.integer)) or isinstance(depth, bool):
+        raise ConfigurationError(f"depth: expected an integer, got {depth!r}")
+    if not 0 <= depth <= MAX_DEPTH:
+        raise ConfigurationError(f"depth: expected an integer in [0, {MAX_DEPTH}], got {depth}")
+    dist = np.asarray(obstacle_distance)
+    h, w = dist.shape
+    pad = 1 << int(depth)
+    levels = np.zeros((depth + 1, h + 2 * pad, w + 2 * pad), dtype=np.uint8)
+    if np.any(occupied):
+        levels[0, pad : pad + h, pad : pad + w] = dist <= tolerance
+    for d in range(1, depth + 1):
+        s = 1 << (d - 1)
+        prev, cur = levels[d - 1], levels[d]
+        cur[...] = prev
+        np.maximum(cur[:-s, :], prev[s:, :], out=cur[:-s, :])
+        np.maximum(cur[:, :-s], cur[:, s:].copy(), out=cur[:, :-s])
+    levels.setflags(write=False)
+    integral = np.zeros((h + 1, w + 1), dtype=np.int32)
+    np.cumsum(np.cumsum(np.asarray(free, dtype=np.int32), axis=0), axis=1, out=integral[1:, 1:])
+    integral.setflags(write=False)
+    return PrecomputationGrids(levels, integral, int(depth), pad, float(tolerance), h, w)
