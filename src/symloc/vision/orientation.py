@@ -46,19 +46,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from symloc.camera_model import check_dist_coeffs, undistort_points
+from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.vision.bow import BowVector
 from symloc.vision.orb import OrbExtractor, OrbFeatures
 from symloc.vision.place import Place
+from symloc.vision.two_view import ratio_matches, undistorted, yaw_and_tilt
 from symloc.vision.vocabulary import Vocabulary
 
 __all__ = [
@@ -240,16 +241,6 @@ def dist_coeffs_of(
     return check_dist_coeffs(dist_coeffs)
 
 
-def _undistorted(
-    features: OrbFeatures, K: NDArray[np.float64], dist: tuple[float, ...]
-) -> OrbFeatures:
-    """``features`` with undistorted keypoint positions (itself when there is no distortion)."""
-    if not any(dist) or len(features) == 0:
-        return features
-    pts = undistort_points(features.points, K, dist).astype(np.float32)
-    return replace(features, points=np.ascontiguousarray(pts))
-
-
 def match_inliers(
     query: OrbFeatures, stored: OrbFeatures, config: OrientationConfig
 ) -> tuple[NDArray[np.float64] | None, NDArray[np.float64], NDArray[np.float64], int]:
@@ -264,20 +255,14 @@ def match_inliers(
         Matches that passed the ratio test.
     """
     none = np.zeros((0, 2))
-    if len(query) < 2 or len(stored) < 2:
-        return None, none, none, 0
-    matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
-    knn = matcher.knnMatch(stored.descriptors, query.descriptors, k=2)
-    good = [m[0] for m in knn if len(m) == 2 and m[0].distance < config.lowe_ratio * m[1].distance]
-    if len(good) < 4:
-        return None, none, none, len(good)
-    src = stored.points[[m.queryIdx for m in good]].astype(np.float64)
-    dst = query.points[[m.trainIdx for m in good]].astype(np.float64)
+    src, dst = ratio_matches(query, stored, config.lowe_ratio)
+    if src.shape[0] < 4:
+        return None, none, none, int(src.shape[0])
     H, mask = cv2.findHomography(src, dst, cv2.RANSAC, config.ransac_threshold)
     if H is None or mask is None:
-        return None, none, none, len(good)
+        return None, none, none, int(src.shape[0])
     keep = mask.ravel().astype(bool)
-    return np.asarray(H, np.float64), src[keep], dst[keep], len(good)
+    return np.asarray(H, np.float64), src[keep], dst[keep], int(src.shape[0])
 
 
 def match_homography(
@@ -348,10 +333,7 @@ def rotation_from_correspondences(
         z = float(np.sum(c * a[:, :2]) / den)
         if not (np.isfinite(z) and z > 0):
             return math.nan, math.nan, math.nan
-    yaw = math.atan2(R[0, 2], R[2, 2])
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    tilt = math.acos(max(-1.0, min(1.0, (np.trace(Ry.T @ R) - 1.0) / 2.0)))
+    yaw, tilt = yaw_and_tilt(R)
     return yaw, tilt, z
 
 
@@ -378,12 +360,7 @@ def yaw_from_homography(H: ArrayLike, K: ArrayLike) -> tuple[float, float]:
     R = U @ Vt
     if np.linalg.det(R) < 0:
         R = -R
-    yaw = math.atan2(R[0, 2], R[2, 2])
-    c, s = math.cos(yaw), math.sin(yaw)
-    Ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    resid = Ry.T @ R
-    tilt = math.acos(max(-1.0, min(1.0, (np.trace(resid) - 1.0) / 2.0)))
-    return yaw, tilt
+    return yaw_and_tilt(R)
 
 
 def _undecided(
@@ -477,8 +454,8 @@ def decide_orientation(
         return _undecided("undetermined", bow_problem, scores, n_kp)
     # geometric verification against every stored direction (M is small), so that a second
     # view of the same scene is caught even when the BoW ranking put it far down
-    qf = _undistorted(feats, K, dist)
-    fits = [match_inliers(qf, _undistorted(im.features, K, dist), cfg) for im in place.images]
+    qf = undistorted(feats, K, dist)
+    fits = [match_inliers(qf, undistorted(im.features, K, dist), cfg) for im in place.images]
     inliers = np.array([f[1].shape[0] for f in fits], np.int64)
     if bow_problem:
         best = int(np.argmax(inliers))
