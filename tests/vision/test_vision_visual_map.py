@@ -17,7 +17,7 @@ from symloc.errors import ConfigurationError, DatabaseError
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.bow import BowVector, Scoring
 from symloc.vision.orb import OrbFeatures
-from symloc.vision.visual_map import PlaceImage, VisualMap, direction_headings
+from symloc.vision.visual_map import SCHEMA_VERSION, PlaceImage, VisualMap, direction_headings
 
 
 def _image(direction: int, seed: int, n: int = 50, with_image: bool = False) -> PlaceImage:
@@ -66,7 +66,7 @@ def test_round_trip(tmp_path, journal: str) -> None:  # type: ignore[no-untyped-
             assert np.array_equal(im.bow.values, ref.bow.values)
             assert np.array_equal(im.image, ref.image)
         assert vm.integrity_check() == "ok"
-        assert sqlite3.connect(path).execute("PRAGMA user_version").fetchone()[0] == 1
+        assert sqlite3.connect(path).execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 2
 
 
 def test_gv_index_and_query(tmp_path) -> None:  # type: ignore[no-untyped-def]

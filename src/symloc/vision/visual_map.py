@@ -6,6 +6,13 @@ direction 0, and M images taken at the centre in clockwise order (direction j lo
 ``heading - j * 2 pi / M``), each with its BoW vector, ORB keypoints and descriptors, and
 optionally the image itself (PNG).
 
+Keyframes (schema version 2) are views recorded all along the mapping trip, each with the map
+pose it was taken from, its ORB keypoints and descriptors, its BoW vector and optionally the
+image (:class:`~symloc.vision.keyframes.Keyframe`); they let a pose hypothesis anywhere on the
+map be checked against what the camera sees (:mod:`symloc.vision.verification`). A version-1
+file (places only) is upgraded in place, in one transaction, when it is opened with
+``create=True``; opened for reading it stays version 1 and has no keyframes.
+
 Every write is one transaction; the journal is WAL with ``synchronous=FULL``, so a process that
 dies mid-write loses only the place it was writing. The file carries ``PRAGMA application_id``
 (``'SYML'``) and the schema version in ``PRAGMA user_version``.
@@ -36,12 +43,15 @@ from symloc.geometry import wrap_angle
 from symloc.image_header import check_image_size, image_header
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.bow import BowMatrix, BowVector, Scoring, parse_scoring, score_many
+from symloc.vision.keyframes import Keyframe
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.place import UNANCHORED_LABEL, Place, PlaceImage
 
 __all__ = [
     "APPLICATION_ID",
+    "OLDEST_SCHEMA_VERSION",
     "SCHEMA_VERSION",
+    "Keyframe",
     "Place",
     "PlaceImage",
     "QueryResult",
@@ -50,9 +60,25 @@ __all__ = [
 ]
 
 APPLICATION_ID = 0x53594D4C  # 'SYML'
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: Oldest schema version this symloc opens (version 1 has no ``keyframes`` table).
+OLDEST_SCHEMA_VERSION = 1
 
-_SCHEMA = """
+_KEYFRAMES_SCHEMA = """
+CREATE TABLE keyframes (
+    id INTEGER PRIMARY KEY,
+    x REAL NOT NULL, y REAL NOT NULL, heading REAL NOT NULL,
+    stamp REAL NOT NULL,
+    width INTEGER NOT NULL, height INTEGER NOT NULL,
+    n_features INTEGER NOT NULL,
+    bow_words BLOB NOT NULL, bow_values BLOB NOT NULL,
+    keypoints BLOB NOT NULL, descriptors BLOB NOT NULL,
+    image_png BLOB
+);
+CREATE INDEX keyframes_xy ON keyframes (x, y);
+"""
+
+_SCHEMA_V1 = """
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE places (
     id INTEGER PRIMARY KEY,
@@ -77,6 +103,7 @@ CREATE TABLE images (
     PRIMARY KEY (place_id, direction)
 );
 """
+_SCHEMA = _SCHEMA_V1 + _KEYFRAMES_SCHEMA
 
 
 #: The columns each table must have (name -> declared type).
@@ -107,6 +134,22 @@ _COLUMNS: dict[str, dict[str, str]] = {
         "descriptors": "BLOB",
         "image_png": "BLOB",
     },
+}
+#: Columns of the ``keyframes`` table (schema version 2).
+_KEYFRAME_COLUMNS: dict[str, str] = {
+    "id": "INTEGER",
+    "x": "REAL",
+    "y": "REAL",
+    "heading": "REAL",
+    "stamp": "REAL",
+    "width": "INTEGER",
+    "height": "INTEGER",
+    "n_features": "INTEGER",
+    "bow_words": "BLOB",
+    "bow_values": "BLOB",
+    "keypoints": "BLOB",
+    "descriptors": "BLOB",
+    "image_png": "BLOB",
 }
 #: Largest stored image (pixels) decoded from ``images.image_png``.
 MAX_STORED_IMAGE_PIXELS = 50_000_000
@@ -185,6 +228,48 @@ def _text(value: Any, where: str, *, null: bool = False) -> str | None:
     return value
 
 
+def _decode_features(
+    n: int, size: tuple[int, int], blobs: Sequence[Any], at: str
+) -> tuple[OrbFeatures, BowVector]:
+    """ORB features and BoW vector from the four BLOB columns ``bow_words, bow_values,
+    keypoints, descriptors`` of a stored view (``at`` names the row in errors)."""
+    words = _blob(blobs[0], f"{at}.bow_words")
+    values = _blob(blobs[1], f"{at}.bow_values")
+    kp_b = _blob(blobs[2], f"{at}.keypoints")
+    desc_b = _blob(blobs[3], f"{at}.descriptors")
+    for name, blob, need in (
+        ("keypoints", kp_b, 24 * n),
+        ("descriptors", desc_b, 32 * n),
+        ("bow_values", values, 2 * len(words)),
+    ):
+        if len(blob) != need:
+            raise DatabaseError(f"{at}.{name}: {len(blob)} bytes, expected {need} (damaged record)")
+    if len(words) % 4:
+        raise DatabaseError(f"{at}.bow_words: {len(words)} bytes, not whole int32 words")
+    try:
+        kp = np.frombuffer(kp_b, "<f4").reshape(n, 6)
+        desc = np.frombuffer(desc_b, np.uint8).reshape(n, 32)
+        bow = BowVector(np.frombuffer(words, "<i4"), np.frombuffer(values, "<f8"))
+        feats = OrbFeatures.from_arrays(kp, desc, size)
+    except (ValueError, DataFormatError) as err:
+        raise DatabaseError(f"{at}: damaged image record: {err}") from err
+    return feats, bow
+
+
+def _encode_view(features: OrbFeatures, bow: BowVector) -> tuple[Any, ...]:
+    """The columns ``width, height, n_features, bow_words, bow_values, keypoints,
+    descriptors`` of a stored view."""
+    return (
+        int(features.image_size[0]),
+        int(features.image_size[1]),
+        len(features),
+        bow.words.astype("<i4").tobytes(),
+        bow.values.astype("<f8").tobytes(),
+        features.keypoint_array().astype("<f4").tobytes(),
+        np.ascontiguousarray(features.descriptors, np.uint8).tobytes(),
+    )
+
+
 class VisualMap:
     """The visual map database (SQLite).
 
@@ -237,6 +322,8 @@ class VisualMap:
         except sqlite3.Error as err:
             raise DatabaseError(f"{self.path}: cannot open: {err}") from err
         self._cache: tuple[BowMatrix, NDArray[np.int64], NDArray[np.int64]] | None = None
+        self._kf_cache: tuple[BowMatrix, NDArray[np.int64]] | None = None
+        self.schema_version = SCHEMA_VERSION
         try:
             self._init_schema(journal, create)
         except sqlite3.DatabaseError as err:
@@ -290,16 +377,41 @@ class VisualMap:
                 f"{self.path}: schema version {version} is newer than this symloc reads "
                 f"({SCHEMA_VERSION}); upgrade symloc"
             )
-        elif version < 1:
+        elif version < OLDEST_SCHEMA_VERSION:
             raise DatabaseError(f"{self.path}: schema version {version} is not a valid version")
+        elif version < SCHEMA_VERSION and create:
+            self._migrate(version)
+        self.schema_version = int(con.execute("PRAGMA user_version").fetchone()[0])
         self._check_tables()
         if self.path != ":memory:" and not self.readonly:
             con.execute(f"PRAGMA journal_mode = {journal}")
         con.execute("PRAGMA synchronous = FULL")
         con.execute("PRAGMA foreign_keys = ON")
 
+    def _migrate(self, version: int) -> None:
+        """Upgrade a version-1 file in place, in one transaction (a crash leaves version 1)."""
+        con = self._con
+        con.execute("BEGIN IMMEDIATE")
+        try:
+            # re-read under the write lock: another process may have migrated it meanwhile
+            if int(con.execute("PRAGMA user_version").fetchone()[0]) == version == 1:
+                for stmt in _KEYFRAMES_SCHEMA.split(";"):
+                    if stmt.strip():
+                        con.execute(stmt)
+                con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+                con.execute(
+                    "INSERT OR REPLACE INTO meta VALUES ('migrated_from', ?)", (str(version),)
+                )
+            con.execute("COMMIT")
+        except BaseException:
+            con.execute("ROLLBACK")
+            raise
+
     def _check_tables(self) -> None:
-        for table, cols in _COLUMNS.items():
+        tables = dict(_COLUMNS)
+        if self.schema_version >= 2:
+            tables["keyframes"] = _KEYFRAME_COLUMNS
+        for table, cols in tables.items():
             have = {
                 str(r[1]): str(r[2]).upper()
                 for r in self._con.execute(f"PRAGMA table_info({table})")
@@ -367,6 +479,7 @@ class VisualMap:
 
     def _transaction(self) -> VisualMap._Tx:
         self._cache = None
+        self._kf_cache = None
         return VisualMap._Tx(self._con, self.path)
 
     def add_place(
@@ -424,13 +537,7 @@ class VisualMap:
                 (
                     int(im.direction),
                     float(im.heading),
-                    int(feat.image_size[0]),
-                    int(feat.image_size[1]),
-                    len(feat),
-                    im.bow.words.astype("<i4").tobytes(),
-                    im.bow.values.astype("<f8").tobytes(),
-                    feat.keypoint_array().astype("<f4").tobytes(),
-                    np.ascontiguousarray(feat.descriptors, np.uint8).tobytes(),
+                    *_encode_view(feat, im.bow),
                     None if im.image is None else _encode_png(im.image),
                 )
             )
@@ -509,28 +616,7 @@ class VisualMap:
             _int(r[2], f"{at}.width", 0, 1_000_000),
             _int(r[3], f"{at}.height", 0, 1_000_000),
         )
-        words = _blob(r[5], f"{at}.bow_words")
-        values = _blob(r[6], f"{at}.bow_values")
-        kp_b = _blob(r[7], f"{at}.keypoints")
-        desc_b = _blob(r[8], f"{at}.descriptors")
-        for name, blob, need in (
-            ("keypoints", kp_b, 24 * n),
-            ("descriptors", desc_b, 32 * n),
-            ("bow_values", values, 2 * len(words)),
-        ):
-            if len(blob) != need:
-                raise DatabaseError(
-                    f"{at}.{name}: {len(blob)} bytes, expected {need} (damaged record)"
-                )
-        if len(words) % 4:
-            raise DatabaseError(f"{at}.bow_words: {len(words)} bytes, not whole int32 words")
-        try:
-            kp = np.frombuffer(kp_b, "<f4").reshape(n, 6)
-            desc = np.frombuffer(desc_b, np.uint8).reshape(n, 32)
-            bow = BowVector(np.frombuffer(words, "<i4"), np.frombuffer(values, "<f8"))
-            feats = OrbFeatures.from_arrays(kp, desc, size)
-        except (ValueError, DataFormatError) as err:
-            raise DatabaseError(f"{at}: damaged image record: {err}") from err
+        feats, bow = _decode_features(n, size, r[5:9], at)
         image = None
         if with_images and r[9] is not None:
             image = _decode_png(_blob(r[9], f"{at}.image_png"), f"{at}.image_png")
@@ -617,6 +703,198 @@ class VisualMap:
         if max_results is not None:
             order = order[:max_results]
         return [QueryResult(int(pids[i]), int(dirs[i]), float(scores[i])) for i in order]
+
+    # ------------------------------------------------------------------ keyframes
+    def _keyframes_table(self, writing: bool) -> bool:
+        """True when the file has a keyframes table; a write to a version-1 file opened
+        without ``create`` (so not migrated) raises."""
+        if self.schema_version >= 2:
+            return True
+        if writing:
+            raise DatabaseError(
+                f"{self.path}: schema version {self.schema_version} has no keyframes table; "
+                "open the map with create=True (and not read-only) to upgrade it"
+            )
+        return False
+
+    def add_keyframes(self, keyframes: Sequence[Keyframe]) -> list[int]:
+        """Store keyframes in one transaction (all or none); return their ids in order."""
+        self._keyframes_table(writing=True)
+        rows = []
+        for i, kf in enumerate(keyframes):
+            if not isinstance(kf, Keyframe):
+                raise ConfigurationError(
+                    f"keyframes[{i}]: expected a Keyframe, got {type(kf).__name__}"
+                )
+            rows.append(
+                (
+                    *map(float, kf.pose),
+                    float(kf.stamp),
+                    *_encode_view(kf.features, kf.bow),
+                    None if kf.image is None else _encode_png(kf.image),
+                )
+            )
+        ids: list[int] = []
+        with self._transaction() as con:
+            for r in rows:
+                cur = con.execute(
+                    "INSERT INTO keyframes (x, y, heading, stamp, width, height, n_features, "
+                    "bow_words, bow_values, keypoints, descriptors, image_png) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                    r,
+                )
+                ids.append(int(cur.lastrowid or 0))
+        return ids
+
+    def add_keyframe(self, keyframe: Keyframe) -> int:
+        """Store one keyframe (one transaction); return its id."""
+        return self.add_keyframes([keyframe])[0]
+
+    def delete_keyframes(self, ids: Sequence[int] | None = None) -> None:
+        """Remove the keyframes ``ids`` (all of them when None), in one transaction."""
+        if not self._keyframes_table(writing=True):  # pragma: no cover - raised above
+            return
+        with self._transaction() as con:
+            if ids is None:
+                con.execute("DELETE FROM keyframes")
+            else:
+                con.executemany("DELETE FROM keyframes WHERE id = ?", [(int(i),) for i in ids])
+
+    def keyframe_count(self) -> int:
+        """Number of stored keyframes (0 in a version-1 file)."""
+        if not self._keyframes_table(writing=False):
+            return 0
+        with self._reading("keyframes"):
+            return int(self._con.execute("SELECT count(*) FROM keyframes").fetchone()[0])
+
+    def keyframe_poses(self) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Ids ``(N,)`` and map poses ``(N, 3)`` of all keyframes, by id (cheap: no features)."""
+        if not self._keyframes_table(writing=False):
+            return np.zeros(0, np.int64), np.zeros((0, 3))
+        with self._reading("keyframes (poses)"):
+            rows = self._con.execute(
+                "SELECT id, x, y, heading FROM keyframes ORDER BY id"
+            ).fetchall()
+        ids = np.array([_int(r[0], f"{self.path}: keyframes.id", 0, 2**62) for r in rows], np.int64)
+        poses = np.array(
+            [
+                [
+                    _real(v, f"{self.path}: keyframe {r[0]}: keyframes.{c}")
+                    for c, v in zip(("x", "y", "heading"), r[1:], strict=True)
+                ]
+                for r in rows
+            ],
+            np.float64,
+        ).reshape(-1, 3)
+        return ids, poses
+
+    def keyframes(
+        self, ids: Sequence[int] | None = None, *, with_images: bool = False
+    ) -> list[Keyframe]:
+        """Load keyframes (all, by id; or those of ``ids`` in that order)."""
+        if not self._keyframes_table(writing=False):
+            if ids:
+                raise DatabaseError(f"{self.path}: no keyframe with id {int(ids[0])}")
+            return []
+        cols = (
+            "id, x, y, heading, stamp, width, height, n_features, bow_words, bow_values, "
+            "keypoints, descriptors, " + ("image_png" if with_images else "NULL")
+        )
+        with self._reading("keyframes"):
+            if ids is None:
+                rows = self._con.execute(f"SELECT {cols} FROM keyframes ORDER BY id").fetchall()
+            else:
+                rows = []
+                for i in ids:
+                    row = self._con.execute(
+                        f"SELECT {cols} FROM keyframes WHERE id = ?", (int(i),)
+                    ).fetchone()
+                    if row is None:
+                        raise DatabaseError(f"{self.path}: no keyframe with id {int(i)}")
+                    rows.append(row)
+            return [self._keyframe_record(r) for r in rows]
+
+    def keyframe(self, keyframe_id: int, *, with_image: bool = False) -> Keyframe:
+        """Load one keyframe."""
+        return self.keyframes([keyframe_id], with_images=with_image)[0]
+
+    def _keyframe_record(self, r: Sequence[Any]) -> Keyframe:
+        kid = _int(r[0], f"{self.path}: keyframes.id", 0, 2**62)
+        at = f"{self.path}: keyframe {kid}: keyframes"
+        pose = np.array(
+            [_real(r[1], f"{at}.x"), _real(r[2], f"{at}.y"), _real(r[3], f"{at}.heading")]
+        )
+        stamp = _real(r[4], f"{at}.stamp")
+        size = (_int(r[5], f"{at}.width", 0, 1_000_000), _int(r[6], f"{at}.height", 0, 1_000_000))
+        n = _int(r[7], f"{at}.n_features", 0, MAX_FEATURES)
+        feats, bow = _decode_features(n, size, r[8:12], at)
+        image = None
+        if r[12] is not None:
+            image = _decode_png(_blob(r[12], f"{at}.image_png"), f"{at}.image_png")
+        return Keyframe(pose, feats, bow, stamp=stamp, keyframe_id=kid, image=image)
+
+    def _keyframe_bow_cache(self) -> tuple[BowMatrix, NDArray[np.int64]]:
+        if self._kf_cache is None:
+            vecs: list[BowVector] = []
+            kids: list[int] = []
+            if self._keyframes_table(writing=False):
+                with self._reading("keyframes (BoW vectors)"):
+                    rows = self._con.execute(
+                        "SELECT id, bow_words, bow_values FROM keyframes ORDER BY id"
+                    ).fetchall()
+                    for r in rows:
+                        kid = _int(r[0], f"{self.path}: keyframes.id", 0, 2**62)
+                        at = f"{self.path}: keyframe {kid}: keyframes"
+                        words = _blob(r[1], f"{at}.bow_words")
+                        values = _blob(r[2], f"{at}.bow_values")
+                        if len(words) % 4 or len(values) != 2 * len(words):
+                            raise DatabaseError(f"{at}.bow_words/bow_values: lengths disagree")
+                        vecs.append(
+                            BowVector(np.frombuffer(words, "<i4"), np.frombuffer(values, "<f8"))
+                        )
+                        kids.append(kid)
+            self._kf_cache = (BowMatrix.stack(vecs), np.array(kids, np.int64))
+        return self._kf_cache
+
+    def query_keyframes(
+        self,
+        bow: BowVector,
+        scoring: Scoring | int | str = Scoring.L1_NORM,
+        *,
+        ids: Sequence[int] | None = None,
+        max_results: int | None = None,
+    ) -> list[tuple[int, float]]:
+        """Score ``bow`` against stored keyframes (all, or those of ``ids``), best first.
+
+        Returns
+        -------
+        list of (keyframe_id, score)
+        """
+        sc = parse_scoring(scoring)
+        matrix, kids = self._keyframe_bow_cache()
+        if kids.size == 0:
+            return []
+        scores = score_many(bow, matrix, sc)
+        idx = np.arange(scores.size)
+        if ids is not None:
+            idx = idx[np.isin(kids, np.asarray(list(ids), np.int64))]
+        order = idx[np.argsort(-scores[idx], kind="stable")]
+        if max_results is not None:
+            order = order[:max_results]
+        return [(int(kids[i]), float(scores[i])) for i in order]
+
+    def keyframe_bytes(self) -> int:
+        """Bytes the keyframes' records hold (poses, features, BoW vectors, images if kept)."""
+        if not self._keyframes_table(writing=False):
+            return 0
+        with self._reading("keyframes (size)"):
+            row = self._con.execute(
+                "SELECT count(*), coalesce(sum(length(bow_words) + length(bow_values) + "
+                "length(keypoints) + length(descriptors) + coalesce(length(image_png), 0)), 0) "
+                "FROM keyframes"
+            ).fetchone()
+        # 4 REAL and 3 INTEGER columns and the id, 8 bytes each
+        return int(row[1]) + 64 * int(row[0])
 
     def integrity_check(self) -> str:
         """SQLite's ``PRAGMA integrity_check`` result (``"ok"`` when sound)."""
