@@ -66,7 +66,11 @@ def test_round_trip(tmp_path, journal: str) -> None:  # type: ignore[no-untyped-
             assert np.array_equal(im.bow.values, ref.bow.values)
             assert np.array_equal(im.image, ref.image)
         assert vm.integrity_check() == "ok"
-        assert sqlite3.connect(path).execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 2
+        assert (
+            sqlite3.connect(path).execute("PRAGMA user_version").fetchone()[0]
+            == SCHEMA_VERSION
+            == 2
+        )
 
 
 def test_gv_index_and_query(tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import cv2
@@ -174,6 +174,9 @@ class RelativeHeading:
     tilt : float
         Roll/pitch [rad] left in the measured rotation.
     method : {"homography", "essential", ""}
+    candidates : tuple of float
+        Every yaw [rad] the fit allows (the physically valid homography solutions and the
+        essential matrix's), for agreement across several keyframes.
     """
 
     inliers: int
@@ -181,6 +184,7 @@ class RelativeHeading:
     yaw: float = math.nan
     tilt: float = math.nan
     method: str = ""
+    candidates: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -293,7 +297,8 @@ def expected_keyframes(
     # nearest first: a metre of travel counts like the heading difference that is allowed
     cost = d / s.max_distance + dth / s.max_heading_difference
     order = np.argsort(cost[keep], kind="stable")
-    return ids[keep][order]
+    out: NDArray[np.int64] = ids[keep][order]
+    return out
 
 
 def measure_relative_heading(
@@ -330,11 +335,15 @@ def measure_relative_heading(
     )
     e_ok = E is not None and emask is not None and np.asarray(E).shape == (3, 3)
     e_in = int(emask.sum()) if e_ok else 0
-    if e_ok and e_in > 1.25 * h_in and e_in >= s.min_inliers:
+    e_yaw: tuple[float, float] | None = None
+    e_count = 0
+    if e_ok and e_in >= s.min_inliers:
         keep = emask.ravel().astype(bool)
         _, R, _, pose_mask = cv2.recoverPose(np.asarray(E), src[keep], dst[keep], Km)
-        yaw, tilt = yaw_and_tilt(R)
-        return RelativeHeading(int(np.count_nonzero(pose_mask)), n, yaw, tilt, "essential")
+        e_yaw = yaw_and_tilt(R)
+        e_count = int(np.count_nonzero(pose_mask))
+    if e_yaw is not None and (e_in > 1.25 * h_in or H is None):
+        return RelativeHeading(e_count, n, e_yaw[0], e_yaw[1], "essential", (e_yaw[0],))
     if H is None or h_in < 4:
         return RelativeHeading(0, n)
     keep = hmask.ravel().astype(bool)
@@ -365,7 +374,10 @@ def measure_relative_heading(
         best = min(fits, key=disagreement)
     else:
         best = min(fits, key=lambda f: f[2])
-    return RelativeHeading(h_in, n, best[1], best[2], "homography")
+    cand = tuple(f[1] for f in fits if f[2] <= s.max_tilt)
+    if e_yaw is not None and e_yaw[1] <= s.max_tilt:
+        cand += (e_yaw[0],)
+    return RelativeHeading(h_in, n, best[1], best[2], "homography", cand)
 
 
 class _Source:
@@ -385,7 +397,10 @@ class _Source:
             if np.unique(self.ids).size != self.ids.size:
                 raise ConfigurationError("keyframes: keyframe ids must be unique")
             self.poses = np.array([kf.pose for kf in kfs], np.float64).reshape(-1, 3)
-            self._loaded = {int(i): kf for i, kf in zip(self.ids, kfs, strict=True)}
+            self._loaded = {
+                int(i): kf if kf.keyframe_id == i else replace(kf, keyframe_id=int(i))
+                for i, kf in zip(self.ids, kfs, strict=True)
+            }
 
     def get(self, ids: Sequence[int]) -> list[Keyframe]:
         missing = [int(i) for i in ids if int(i) not in self._loaded]
@@ -393,6 +408,51 @@ class _Source:
             for kid, kf in zip(missing, self._map.keyframes(missing), strict=True):
                 self._loaded[kid] = kf
         return [self._loaded[int(i)] for i in ids]
+
+
+#: Candidate headings of several keyframes agree when within this angle [rad].
+_AGREEMENT = math.radians(2.0)
+
+
+def _agree(
+    fitted: list[tuple[RelativeHeading, Keyframe, FloatArray]], s: VerificationSettings
+) -> list[tuple[RelativeHeading, Keyframe, FloatArray]]:
+    """Settle each fit's ambiguous yaw by agreement across keyframes.
+
+    A planar wall seen from two places fits two rotations; the right one puts the query at the
+    same map heading (``keyframe heading + yaw``) for every keyframe, the wrong ones scatter.
+    The map heading supported by the most inliers (fits with ``min_inliers`` or more, at least
+    two of them) picks each fit's candidate; otherwise the fits are left as they are.
+    """
+    good = [f for f in fitted if f[0].inliers >= s.min_inliers and f[0].candidates]
+    if len(good) < 2:
+        return fitted
+    absolute = [
+        (float(kf.pose[2]) + np.asarray(fit.candidates, np.float64), fit.inliers)
+        for fit, kf, _ in good
+    ]
+    best_h, best_support = math.nan, 0
+    for heads, _ in absolute:
+        for h in heads:
+            support = sum(
+                w
+                for hs, w in absolute
+                if np.min(np.abs(np.asarray(wrap_angle(hs - h)))) <= _AGREEMENT
+            )
+            if support > best_support:
+                best_h, best_support = float(h), support
+    out = []
+    for fit, kf, rel in fitted:
+        if fit.candidates and fit.inliers >= s.min_inliers:
+            c = np.asarray(fit.candidates, np.float64)
+            gap = np.abs(np.asarray(wrap_angle(float(kf.pose[2]) + c - best_h)))
+            k = int(np.argmin(gap))
+            if gap[k] <= _AGREEMENT:
+                fit = RelativeHeading(
+                    fit.inliers, fit.matches, float(c[k]), fit.tilt, fit.method, fit.candidates
+                )
+        out.append((fit, kf, rel))
+    return out
 
 
 def _check(
@@ -444,12 +504,15 @@ def _check(
     best_score = float(np.max(scores))
     best_any: tuple[RelativeHeading, Keyframe, float] | None = None
     best_ok: tuple[RelativeHeading, Keyframe, float] | None = None
+    fitted: list[tuple[RelativeHeading, Keyframe, FloatArray]] = []
     for j in ranked:
         kf = kfs[int(j)]
         rel = np.asarray(compose(inverse(kf.pose), pose), np.float64)
         fit = measure_relative_heading(qf, undistorted(kf.features, K, dist), K, s, predicted=rel)
-        if fit.inliers == 0 or not math.isfinite(fit.yaw):
-            continue
+        if fit.inliers > 0 and math.isfinite(fit.yaw):
+            fitted.append((fit, kf, rel))
+    fitted = _agree(fitted, s)
+    for fit, kf, rel in fitted:
         off = float(wrap_angle(fit.yaw - rel[2]))
         if best_any is None or fit.inliers > best_any[0].inliers:
             best_any = (fit, kf, off)
@@ -547,7 +610,7 @@ def verify_hypothesis(
         Lens distortion (default: ``intrinsics.dist_coeffs`` if any).
     """
     return verify_hypotheses(
-        [pose],
+        _pose3(pose, "pose")[None, :],
         query,
         keyframes,
         vocabulary,
