@@ -53,11 +53,12 @@ from symloc.slam import run_slam
 from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
+from symloc.vision.keyframes import KeyframeSettings
 
 from .episode import Episode, RobotBody, drive_waypoints, run_episode
 from .exploration import exploration_path
 from .explore import ExploreDrive
-from .mapping_trip import MappedPlace, map_place
+from .mapping_trip import KeyframeRecorder, MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
 from .slam_metrics import umeyama_se2
 
@@ -182,6 +183,9 @@ class Scenario:
     #: SLAM map, fixed by the mapping trip's first pose; graders compare claims with
     #: ``compose(map_from_world, true_pose)``
     map_from_world: FloatArray = field(default_factory=lambda: np.zeros(3))
+    #: keyframes recorded along the mapping trip (``build_scenario(keyframes=...)``), stored in
+    #: the visual map's ``keyframes`` table
+    n_keyframes: int = 0
 
     def to_map(self, world_pose: FloatArray) -> FloatArray:
         """A true pose (3,) in the map frame (where the localizer's claims live)."""
@@ -268,6 +272,7 @@ def build_scenario(
     gyro: Any = "default",
     explore_laps: float = 0.0,
     regime: str = "ideal",
+    keyframes: KeyframeSettings | bool | None = None,
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -290,9 +295,19 @@ def build_scenario(
     laser SLAM cannot observe heading, the stored image headings then come from gyro-odometry
     and are trusted; without a gyro they are stored as heading-from-odometry and never yield a
     claimed pose.
+
+    ``keyframes`` (SLAM maps only; default off, so the bench's numbers do not change): record
+    keyframes along the whole mapping trip with this selection rule (True: the default
+    :class:`~symloc.vision.keyframes.KeyframeSettings`), each with the SLAM pose of its scan,
+    into the visual map's ``keyframes`` table (:attr:`Scenario.n_keyframes`; a note gives the
+    bytes per square metre).
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
+    if keyframes not in (None, False) and (map_source != "slam" or room_name == LONG_HALLWAY):
+        raise ConfigurationError(
+            "keyframes: recorded on SLAM mapping trips only (map_source='slam')"
+        )
 
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
@@ -359,7 +374,16 @@ def build_scenario(
         )
     else:
         spec = L3G4200D if isinstance(gyro, str) and gyro == "default" else gyro
-        scen.mapped = _map_with_slam(scen, start, gen, dt, spec, explore_laps=explore_laps)
+        kf_settings = (
+            KeyframeSettings()
+            if keyframes is True
+            else keyframes
+            if isinstance(keyframes, KeyframeSettings)
+            else None
+        )
+        scen.mapped = _map_with_slam(
+            scen, start, gen, dt, spec, explore_laps=explore_laps, keyframes=kf_settings
+        )
     if long_hallway:
         scen.notes.append(
             f"{room_name}: a {LONG_HALLWAY_SIZE[0]:g} m x {LONG_HALLWAY_SIZE[1]:g} m corridor; "
@@ -384,6 +408,7 @@ def _map_with_slam(
     gyro: Any = None,
     *,
     explore_laps: float = 0.0,
+    keyframes: KeyframeSettings | None = None,
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -408,6 +433,15 @@ def _map_with_slam(
     truths: list[FloatArray] = []
 
     last_odom: list[OdometryReading] = []
+    recorder = (
+        None
+        if keyframes is None
+        else KeyframeRecorder(
+            lambda pose: session.image(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0))),
+            OrbExtractor(),
+            keyframes,
+        )
+    )
 
     def scan_rec(pose: FloatArray) -> Any:
         odom = robot.odom
@@ -419,6 +453,8 @@ def _map_with_slam(
         scans.append(s)
         odoms.append(np.asarray(odom.pose))
         truths.append(np.asarray(pose, dtype=np.float64))
+        if recorder is not None:
+            recorder.frame(len(scans) - 1, np.asarray(odom.pose), truths[-1], float(odom.stamp))
         return s
 
     marks: list[int] = []
@@ -479,6 +515,21 @@ def _map_with_slam(
         f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "
         "visual map poses: SLAM poses"
     )
+    if recorder is not None:
+        vm = scen.store.visual_map
+        vocab = scen.store.vocabulary
+        kfs = recorder.keyframes(
+            lambda i: np.asarray(slam.poses[i], dtype=np.float64),
+            lambda f: vocab.bow(f.descriptors),
+        )
+        vm.add_keyframes(kfs)
+        scen.n_keyframes = len(kfs)
+        area = float(scen.room.area)
+        scen.notes.append(
+            f"mapping trip: {len(kfs)} keyframes of {recorder.captured} images looked at, "
+            f"{vm.keyframe_bytes() / 1024:.0f} KiB ({vm.keyframe_bytes() / area / 1024:.1f} "
+            f"KiB per m2 of the room's {area:.1f} m2)"
+        )
     if mapped is None or not deferred:
         return None
     centre_o, heading0_o, order, gv, kind, images = deferred[0]
