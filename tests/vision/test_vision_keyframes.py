@@ -468,3 +468,15 @@ def test_verification_settings_and_inputs_are_validated() -> None:
     voc = default_vocabulary()
     with pytest.raises(ConfigurationError, match=r"poses: expected an \(N, 3\) array"):
         verify_hypotheses(np.zeros((2, 2)), OrbFeatures.empty(), [], voc, Camera().calibration)
+
+
+def test_cli_lists_keyframes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from symloc.cli.main import main
+
+    path = tmp_path / "vm.sqlite"
+    with VisualMap(path) as vm:
+        vm.add_keyframes([_random_keyframe(i) for i in range(3)])
+    assert main(["places", "keyframes", "--db", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "schema version 2, 3 keyframe(s)" in out
+    assert len([ln for ln in out.splitlines() if ln.strip().startswith(("1 ", "2 ", "3 "))]) == 3

@@ -16,7 +16,8 @@ __all__ = ["register"]
 def register(subparsers: Any) -> None:
     """Add ``places`` with ``add``, ``list``, ``decide`` and ``remove``."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
-        "places", help="visual map of symmetric places (SQLite): add, list, decide, remove"
+        "places",
+        help="visual map of symmetric places (SQLite): add, list, keyframes, decide, remove",
     )
     sub = parser.add_subparsers(dest="places_command", metavar="ACTION")
     sub.required = True
@@ -88,6 +89,13 @@ def register(subparsers: Any) -> None:
         help="the vocabulary the map was made with (default: the shipped one; another is refused)",
     )
     d.set_defaults(func=_decide)
+
+    k = sub.add_parser(
+        "keyframes",
+        help="list the keyframes recorded along the mapping trip (map pose, features, size)",
+    )
+    k.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
+    k.set_defaults(func=_keyframes)
 
     r = sub.add_parser("remove", help="remove a place and its images")
     r.add_argument("--db", type=Path, required=True, help="visual map database")
@@ -192,6 +200,25 @@ def _list(args: argparse.Namespace) -> int:
                 f"{p.place_id:>4}  {p.kind:<10}{p.order!s:>6}{p.gv_distance:>9.3f}{p.m:>3}  "
                 f"({p.center[0]:.2f}, {p.center[1]:.2f}, {math.degrees(p.heading0):.1f})"
                 + (f"  {p.label}" if p.label else "")
+            )
+    return 0
+
+
+def _keyframes(args: argparse.Namespace) -> int:
+    with _open(args.db, readonly=True) as vmap:
+        kfs = vmap.keyframes()
+        size = vmap.keyframe_bytes()
+        print(
+            f"{args.db}: schema version {vmap.schema_version}, {len(kfs)} keyframe(s), "
+            f"{size / 1024:.0f} KiB"
+        )
+        if kfs:
+            print(f"{'id':>5}  {'time [s]':>9}  {'features':>8}  {'words':>6}  pose (x, y, deg)")
+        for kf in kfs:
+            x, y, th = kf.pose
+            print(
+                f"{kf.keyframe_id:>5}  {kf.stamp:>9.2f}  {len(kf.features):>8}  "
+                f"{len(kf.bow):>6}  ({x:.2f}, {y:.2f}, {math.degrees(th):.1f})"
             )
     return 0
 
