@@ -170,9 +170,8 @@ def _placed(parts: list[FurnitureSpec], at: FloatArray, yaw: float) -> tuple[Fur
     for f in parts:
         x, y = f.center
         p = at + np.array([c * x - s * y, s * x + c * y])
-        out.append(
-            replace(f, center=_pt(p), yaw_deg=round((f.yaw_deg + math.degrees(yaw)) % 360, 3))
-        )
+        turned = round((f.yaw_deg + math.degrees(yaw)) % 360, 3) if f.kind == "box" else 0.0
+        out.append(replace(f, center=_pt(p), yaw_deg=turned))
     return tuple(out)
 
 
@@ -278,8 +277,9 @@ def _apart(parts: tuple[FurnitureSpec, ...], at: FloatArray, spec: WorldSpec) ->
 
 def _pillar_layout(
     spec: WorldSpec, room: Room, rng: np.random.Generator
-) -> tuple[list[FloatArray], str]:
-    """Pillar positions centred on the room, and their name."""
+) -> tuple[list[tuple[FloatArray, float]], str]:
+    """Pillar positions centred on the room with the yaw [deg] of a square pillar there (one
+    side along the grid's axis, or facing the centre in a ring), and the layout's name."""
     shape = spec.room
     c = room.center
     n = shape.n if shape.shape == "regular" else 0
@@ -288,12 +288,12 @@ def _pillar_layout(
         corner = room.boundary[0] - c
         a0 = math.atan2(corner[1], corner[0]) + (math.pi / n if rng.random() < 0.5 else 0.0)
         rho = float(rng.uniform(0.35, 0.65)) * inner
-        pts = [c + rho * _unit(a0 + 2 * math.pi * j / n) for j in range(n)]
-        return pts, f"ring of {n}"
+        angles = [a0 + 2 * math.pi * j / n for j in range(n)]
+        return [(c + rho * _unit(a), math.degrees(a)) for a in angles], f"ring of {n}"
     axis = math.radians(shape.yaw_deg)
     if shape.shape == "regular":
-        corner = room.boundary[0] - c
-        axis = math.atan2(corner[1], corner[0])
+        edge = room.boundary[1] - room.boundary[0]  # the grid runs along the walls
+        axis = math.atan2(edge[1], edge[0])
     square_only = (shape.shape == "rectangle" and shape.width == shape.depth) or n in (4, 8)
     grid = str(rng.choice(["2x2", "3x3"] if square_only else ["2x2", "2x3", "3x3"]))
     s = float(rng.uniform(0.45, 0.8)) * inner
@@ -311,15 +311,14 @@ def _pillar_layout(
         local = [(sx * s / 2, sy * t / 2) for sx in (-1, 0, 1) for sy in (-1, 0, 1) if sx or sy]
         name = "3x3 grid without its centre"
     ca, sa = math.cos(axis), math.sin(axis)
-    pts = [c + np.array([ca * x - sa * y, sa * x + ca * y]) for x, y in local]
-    return pts, name
+    yaw = math.degrees(axis)
+    return [(c + np.array([ca * x - sa * y, sa * x + ca * y]), yaw) for x, y in local], name
 
 
 def _pillars(spec: WorldSpec, rng: np.random.Generator) -> tuple[WorldSpec, WorldSpec, str]:
     """The room with an intact pillar layout, the same with its symmetry broken, the name."""
     room = assemble(spec)
-    pts, name = _pillar_layout(spec, room, rng)
-    axis = math.degrees(math.atan2(*(pts[0] - room.center)[::-1]))
+    spots, name = _pillar_layout(spec, room, rng)
     if rng.random() < 0.5:
         p0 = FurnitureSpec(
             "cylinder",
@@ -334,11 +333,14 @@ def _pillars(spec: WorldSpec, rng: np.random.Generator) -> tuple[WorldSpec, Worl
             "box",
             (0.0, 0.0),
             size=(side, side),
-            yaw_deg=round(axis % 90.0, 3),
+            yaw_deg=0.0,
             height=PILLAR_HEIGHT,
             material="plain",
         )
-    pillars = [replace(p0, center=_pt(p)) for p in pts]
+    pillars = [
+        replace(p0, center=_pt(p), yaw_deg=round(yaw % 90.0, 3) if p0.kind == "box" else 0.0)
+        for p, yaw in spots
+    ]
     reach = _extent(p0)
     if any(math.dist(p.center, room.center) < _CENTRE_FREE + ROBOT_RADIUS + reach for p in pillars):
         raise WorldError("furnished: pillars too close to the centre")
