@@ -28,6 +28,11 @@ the room then gets one to three perturbations:
 ``dark``
     one wall of dark, poorly reflecting material.
 
+The ``furnished`` family (:mod:`symloc.sim.furnished`) is a symmetric base room that every
+world furnishes a little (furniture or a pillar grid that breaks the symmetry only slightly); it
+records the base order and the near-symmetry overlap in the world's ``metadata``, and its
+perturbed worlds only get the perturbations that leave the lidar's static geometry alone.
+
 The order is never assumed: it is computed from the geometry when the world is built
 (``WorldSpec.build().order``), so a perturbation that breaks the symmetry gives order 1. Every
 generated world is checked to be valid (furniture apart and inside, people's paths clear, a
@@ -320,7 +325,7 @@ def _family(
 _FURNISHED = Family(
     "furnished",
     "regular 3-8-gon, square, rectangle or circle (2.5-6 m) with 1-3 pieces of furniture (box,"
-    " table legs, shelf on a wall; 15 % below the lidar plane) or a pillar grid or ring with one"
+    " table legs, shelf on a wall; 12 % below the lidar plane) or a pillar grid or ring with one"
     " pillar missing or moved: nearly symmetric, the map overlaps itself by"
     f" {100 * furnished.MIN_OVERLAP:.0f}-100 % under the base rotation; order mostly 1",
     False,
