@@ -164,3 +164,28 @@ def test_world_files_run_and_bad_ones_name_the_key(
     bad.write_text("name: x\nroom:\n  circle: {radius: 2}\nfurnitures: []\n")
     assert main(["bench", "localization", "--world", str(bad), "--out", str(tmp_path)]) == 2
     assert "furnitures" in capsys.readouterr().err
+
+
+def test_a_furnished_world_runs_a_trial_and_records_its_near_symmetry() -> None:
+    from symloc.bench.localization import world_summary
+    from symloc.sim.generator import generate_world
+
+    task = WorldTask(
+        WorldRef("generated", "furnished", 0),
+        seed=0,
+        trials=1,
+        kinds=("global",),
+        map_source="raster",
+        config=TrialConfig(claim_timeout=2.0, track_time=1.0),
+    )
+    w = run_world(task)
+    assert w.family == "furnished"
+    assert len(w.trials) == 1
+    assert set(w.trials[0].results) == {"symloc", "amcl"}
+    for r in w.trials[0].results.values():
+        assert r.collisions == 0
+    meta = generate_world("furnished", 0).meta
+    assert w.metadata == meta
+    assert w.order in (1, meta["base_order"])
+    summary = json.loads(json.dumps(world_summary(w)))
+    assert summary["metadata"]["overlap"] == meta["overlap"]

@@ -169,3 +169,22 @@ def test_room_truth_with_opaque_glass() -> None:
     assert room.truth(glass_visible=True).order == 1
     plain = _world(room=SQUARE).build()
     assert plain.truth(glass_visible=True).order == 4
+
+
+def test_near_symmetry_overlap() -> None:
+    from symloc.sim.symmetry_truth import near_symmetry_overlap
+
+    bare = _world(room=SQUARE).build()
+    assert near_symmetry_overlap(bare.world, bare.boundary, 4) == pytest.approx(1.0)
+    box = {"box": {"center": [1.45, 0.0], "size": [0.5, 0.5], "height": 0.8}}
+    room = _world(room=SQUARE, furniture=[box]).build()
+    assert room.order == 1
+    # the box's outline (2 m) against the walls' (16 m): about 8/9 of the map lands on itself
+    for k in (2, 4):
+        share = near_symmetry_overlap(room.world, room.boundary, k, [0.0, 0.0])
+        assert share == pytest.approx(16 / 18, abs=0.01)
+    low = {"box": {"center": [1.0, 0.0], "size": [0.5, 0.5], "height": 0.2}}
+    room = _world(room=SQUARE, furniture=[low]).build()
+    assert near_symmetry_overlap(room.world, room.boundary, 4) == pytest.approx(1.0)
+    with pytest.raises(ConfigurationError, match="order"):
+        near_symmetry_overlap(room.world, room.boundary, 1)

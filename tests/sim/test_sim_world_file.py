@@ -547,3 +547,18 @@ def test_the_documented_example_loads(tmp_path: Path) -> None:
     assert room.order == 1
     assert len(room.people) == 2
     assert room.world_at(3.0).n_circles == room.world.n_circles + 2
+
+
+def test_metadata_round_trips_and_bad_values_name_the_key() -> None:
+    doc = {
+        "name": "m",
+        "metadata": {"base_order": 4, "overlap": 0.95, "layout": "furniture", "ok": True},
+        "room": {"circle": {"radius": 2.0}},
+    }
+    spec = WorldSpec.from_dict(doc)
+    assert spec.meta == doc["metadata"]
+    assert WorldSpec.from_dict(spec.to_dict()) == spec
+    with pytest.raises(WorldError, match=r"metadata\.overlap: expected a number"):
+        WorldSpec.from_dict({**doc, "metadata": {"overlap": [1, 2]}})
+    with pytest.raises(WorldError, match="metadata: expected a mapping"):
+        WorldSpec.from_dict({**doc, "metadata": [1]})

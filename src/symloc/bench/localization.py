@@ -30,7 +30,7 @@ from .grading import GRADES
 from .scenario import build_scenario
 from .stats import wilson_interval
 from .trial import METHODS, TrialConfig, TrialResult, TrialSpec, run_trial
-from .world_sources import WorldRef, build_world
+from .world_sources import WorldRef, build_world, world_spec
 
 __all__ = ["WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
 
@@ -55,7 +55,9 @@ class WorldTask:
 
 @dataclass(frozen=True)
 class WorldResult:
-    """A task's outcome: the world's truth, the mapping notes, the trials, costs [s]."""
+    """A task's outcome: the world's truth, the mapping notes, the trials, costs [s], and the
+    world's metadata (:attr:`symloc.sim.world_file.WorldSpec.metadata`: e.g. a furnished
+    room's base order and near-symmetry overlap)."""
 
     world_id: str
     family: str
@@ -67,12 +69,14 @@ class WorldResult:
     map_seconds: float
     trial_seconds: float
     error: str = ""
+    metadata: dict[str, Any] = field(default_factory=dict)
 
 
 def run_world(task: WorldTask) -> WorldResult:
     """Build, map and run one world (the function each worker runs)."""
     t0 = time.perf_counter()
-    room: Room = build_world(task.ref)
+    world = world_spec(task.ref)
+    room: Room = world.build() if world is not None else build_world(task.ref)
     order = int(room.order)
     with tempfile.TemporaryDirectory(prefix="symloc-bench-") as tmp:
         scen = build_scenario(
@@ -107,6 +111,7 @@ def run_world(task: WorldTask) -> WorldResult:
         trials=tuple(trials),
         map_seconds=t1 - t0,
         trial_seconds=time.perf_counter() - t1,
+        metadata={} if world is None else world.meta,
     )
 
 

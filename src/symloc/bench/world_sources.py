@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from symloc.errors import ConfigurationError
 from symloc.sim.generator import FAMILIES, generate_world
 from symloc.sim.rooms import Room, build_room, hallway, with_lab
-from symloc.sim.world_file import load_world_file
+from symloc.sim.world_file import WorldSpec, load_world_file
 
 __all__ = [
     "BUILTIN_ROOMS",
@@ -30,6 +30,7 @@ __all__ = [
     "family_refs",
     "file_refs",
     "split_seeds",
+    "world_spec",
 ]
 
 SPLIT_BASE = {"dev": 0, "test": 1_000_000}
@@ -113,12 +114,20 @@ def file_refs(paths: Sequence[str], seeds: Sequence[int]) -> list[WorldRef]:
     return [WorldRef("file", str(p), s) for p in paths for s in seeds]
 
 
+def world_spec(ref: WorldRef) -> WorldSpec | None:
+    """The world file a generated or file ref names (None for a built-in room)."""
+    if ref.source == "generated":
+        return generate_world(ref.name, ref.seed)
+    if ref.source == "file":
+        return load_world_file(ref.name)
+    return None
+
+
 def build_world(ref: WorldRef) -> Room:
     """The :class:`~symloc.sim.rooms.Room` a ref names."""
-    if ref.source == "generated":
-        return generate_world(ref.name, ref.seed).build()
-    if ref.source == "file":
-        return load_world_file(ref.name).build()
+    spec = world_spec(ref) if ref.source in ("generated", "file") else None
+    if spec is not None:
+        return spec.build()
     if ref.source == "builtin":
         if ref.name not in BUILTIN_ROOMS:
             raise ConfigurationError(f"room: unknown built-in room {ref.name!r}")

@@ -28,6 +28,11 @@ the room then gets one to three perturbations:
 ``dark``
     one wall of dark, poorly reflecting material.
 
+The ``furnished`` family (:mod:`symloc.sim.furnished`) is a symmetric base room that every
+world furnishes a little (furniture or a pillar grid that breaks the symmetry only slightly); it
+records the base order and the near-symmetry overlap in the world's ``metadata``, and its
+perturbed worlds only get the perturbations that leave the lidar's static geometry alone.
+
 The order is never assumed: it is computed from the geometry when the world is built
 (``WorldSpec.build().order``), so a perturbation that breaks the symmetry gives order 1. Every
 generated world is checked to be valid (furniture apart and inside, people's paths clear, a
@@ -49,6 +54,7 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
 
 from symloc.errors import ConfigurationError, WorldError
+from symloc.sim import furnished
 from symloc.sim.rooms import BOARD_HEIGHT, ROBOT_RADIUS, Room
 from symloc.sim.world_build import assemble, corner_points
 from symloc.sim.world_file import WorldSpec
@@ -108,6 +114,17 @@ class Family:
         ``draw(rng) -> RoomSpec`` (shape only; the generator picks the wall height).
     tall_only : bool
         Never put in a lab of low boards (corridors).
+    furnish : callable or None
+        ``furnish(spec, rng) -> WorldSpec``: a step every world of the family takes after its
+        shape is drawn and before any perturbation (the ``furnished`` family places its
+        furniture and records its metadata here); it raises
+        :class:`~symloc.errors.WorldError` to have the world drawn again.
+    perturbations : tuple of str
+        The perturbation kinds (of :data:`PERTURBATIONS`) the family's perturbed worlds draw
+        from.
+    nearly_symmetric : bool
+        Every room is symmetric but for a little furniture (the ``furnished`` family): validated
+        as a symmetric room (a robot stands at the centre and reaches most of the room).
     """
 
     name: str
@@ -116,6 +133,9 @@ class Family:
     params: Mapping[str, tuple[float, float]]
     draw: Callable[[np.random.Generator], RoomSpec]
     tall_only: bool = False
+    furnish: Callable[[WorldSpec, np.random.Generator], WorldSpec] | None = None
+    perturbations: tuple[str, ...] = PERTURBATIONS
+    nearly_symmetric: bool = False
 
 
 def _poly(v: FloatArray) -> RoomSpec:
@@ -302,6 +322,22 @@ def _family(
     return Family(name, description, symmetric, MappingProxyType(params), draw, tall_only)
 
 
+_FURNISHED = Family(
+    "furnished",
+    "regular 3-8-gon, square, rectangle or circle (2.5-6 m) with 1-3 pieces of furniture (box,"
+    " table legs, shelf on a wall; 12 % below the lidar plane) or a pillar grid or ring with one"
+    " pillar missing or moved: nearly symmetric, the map overlaps itself by"
+    f" {100 * furnished.MIN_OVERLAP:.0f}-100 % under the base rotation; order mostly 1",
+    False,
+    MappingProxyType(furnished.PARAMS),
+    furnished.draw_base,
+    furnish=furnished.furnish,
+    # only what leaves the lidar's static geometry, so the recorded overlap stays true
+    perturbations=("glass", "people", "aliasing", "dark"),
+    nearly_symmetric=True,
+)
+
+
 FAMILIES: Mapping[str, Family] = MappingProxyType(
     {
         f.name: f
@@ -399,6 +435,7 @@ FAMILIES: Mapping[str, Family] = MappingProxyType(
                 _corridor(40.0, 60.0),
                 tall_only=True,
             ),
+            _FURNISHED,
         )
     }
 )
@@ -743,14 +780,16 @@ def generate_world(family: str, seed: int, *, perturb: bool | None = None) -> Wo
                 generator=(family, int(seed)),
                 source=f"generate_world({family!r}, {seed})",
             )
+            if fam.furnish is not None:
+                spec = fam.furnish(spec, rng)
             if do_perturb:
-                spec = _perturb(spec, rng, tags)
+                spec = _perturb(spec, rng, tags, fam.perturbations)
             room = spec.build()
         except WorldError:
             if attempt == _ATTEMPTS - 1:
                 raise
             continue
-        if not _valid(room, room.symmetric):
+        if not _valid(room, room.symmetric or fam.nearly_symmetric):
             continue
         what = _describe(fam, spec)
         pert = "; perturbed: " + ", ".join(tags) if tags else ""
@@ -760,10 +799,15 @@ def generate_world(family: str, seed: int, *, perturb: bool | None = None) -> Wo
     )
 
 
-def _perturb(spec: WorldSpec, rng: np.random.Generator, tags: list[str]) -> WorldSpec:
-    """Apply one to three perturbations (at least one that takes, when any can)."""
-    count = int(rng.integers(1, 4))
-    kinds = [str(k) for k in rng.permutation(PERTURBATIONS)]
+def _perturb(
+    spec: WorldSpec,
+    rng: np.random.Generator,
+    tags: list[str],
+    allowed: tuple[str, ...] = PERTURBATIONS,
+) -> WorldSpec:
+    """Apply one to three perturbations of ``allowed`` (at least one that takes, when any can)."""
+    count = int(rng.integers(1, min(4, len(allowed) + 1)))
+    kinds = [str(k) for k in rng.permutation(allowed)]
     chosen = kinds[:count]
     # geometry of the room first (corner cuts, doors), then what stands in it
     rank = {k: i for i, k in enumerate(PERTURBATIONS)}
@@ -808,4 +852,11 @@ def _describe(fam: Family, spec: WorldSpec) -> str:
         geo = f"corridor {r.length} m x {r.width} m"
     else:
         geo = f"{fam.name} polygon, {len(r.polygon)} corners"
-    return f"{geo}, {where} {r.wall_height} m high"
+    text = f"{geo}, {where} {r.wall_height} m high"
+    meta = spec.meta
+    if "overlap" in meta:
+        text += (
+            f"; furnished: {meta['pieces']} (base order {meta['base_order']}, overlap"
+            f" {100 * float(meta['overlap']):.1f} % at {meta['overlap_turn_deg']} deg)"
+        )
+    return text

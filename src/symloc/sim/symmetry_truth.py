@@ -28,6 +28,11 @@ computed from the simulated primitives, never declared by whoever built the room
    gently curved outline along itself within the tolerance, so it would "match" anything
    round-ish; finer symmetry than that is continuous within the tolerance, or none.
 
+How *nearly* symmetric a room is (a square with one box: order 1, but a quarter turn leaves
+most of it in place) is :func:`near_symmetry_overlap`: the share of the room's lidar-visible
+outline that lands on itself when turned by ``2 pi / k``, measured as the localizer measures it
+on a map (:func:`symloc.localizer.map_symmetry.map_symmetries` on the ground-truth grid).
+
 The G-V distance is the paper's centre-to-vertex distance: the largest distance from the centre
 to a vertex of the room's outline (the radius of a round room), or to the visible geometry when
 no outline is given.
@@ -54,6 +59,7 @@ __all__ = [
     "SymmetryTruth",
     "lidar_symmetry",
     "lidar_visible",
+    "near_symmetry_overlap",
     "outline_centroid",
     "outline_samples",
     "rotational_order",
@@ -399,3 +405,82 @@ def lidar_symmetry(
         n_walls=visible.n_walls,
         n_circles=visible.n_circles,
     )
+
+
+def near_symmetry_overlap(
+    world: World,
+    boundary: ArrayLike,
+    order: int,
+    center: ArrayLike | None = None,
+    *,
+    plane_height: float = LIDAR_MOUNT_HEIGHT,
+    resolution: float = 0.05,
+    tolerance: float = 0.1,
+) -> float:
+    """Share of the room's lidar-visible outline that lies on itself turned by ``2 pi / order``.
+
+    The lidar-visible primitives of the room (as :func:`lidar_symmetry` counts them: those in
+    or on ``boundary``, everything visible if the outline is open) are rasterised into a
+    ground-truth occupancy grid (:func:`symloc.sim.rasterize.world_to_grid`, ``resolution``
+    [m]); the overlap is the share of occupied cells that land within ``tolerance`` [m] of an
+    occupied cell when turned by ``2 pi / order`` about the best centre near ``center``: the
+    measure of :func:`symloc.localizer.map_symmetry.map_symmetries`, the number the localizer
+    itself reads off a map ("order 4, overlap 95 %"), but searched from the true centre (the
+    localizer starts from the occupied cells' centroid, which furniture pulls aside).
+
+    Parameters
+    ----------
+    world : World
+        The whole static world.
+    boundary : array of shape (V, 2)
+        The room outline [m].
+    order : int
+        k >= 2: the rotation tested is ``2 pi / k``.
+    center : array of shape (2,), optional
+        Where to start the search for the rotation centre [m]: the symmetry centre of the bare
+        room when known; default the centroid of the occupied cells.
+    plane_height, resolution, tolerance : float
+        Lidar plane [m], grid cell [m], match distance [m].
+
+    Returns
+    -------
+    float
+        In [0, 1]; 1 for a room that the rotation maps onto itself (within ``tolerance``).
+    """
+    from symloc.sim.rasterize import world_to_grid
+
+    if int(order) != order or order < 2:
+        raise ConfigurationError(f"order: expected an integer >= 2, got {order}")
+    tol = check_positive(tolerance, "tolerance")
+    visible = lidar_visible(world, plane_height=plane_height)
+    if visible.n_walls + visible.n_circles == 0:
+        raise WorldError(
+            f"near_symmetry_overlap: nothing in the world is taller than the lidar plane"
+            f" ({plane_height} m)"
+        )
+    v = np.asarray(boundary, dtype=np.float64).reshape(-1, 2)
+    wk, ck, is_open = _room_part(visible, v, DEFAULT_TOLERANCE)
+    if not is_open:
+        visible = _subset(visible, wk, ck)
+    grid = world_to_grid(visible, resolution, min_height=plane_height)
+    cells = np.argwhere(np.asarray(grid.occupied_mask, dtype=bool))
+    pts = np.asarray(grid.cell_to_world(cells), dtype=np.float64)[:, :2]
+    tree = cKDTree(pts)
+    angle = 2.0 * math.pi / int(order)
+
+    def share(c: FloatArray) -> float:
+        d, _ = tree.query(_rotate(pts, c, angle), distance_upper_bound=tol + 1e-9)
+        return float(np.mean(np.isfinite(d)))
+
+    c = pts.mean(axis=0) if center is None else np.asarray(center, dtype=np.float64).reshape(2)
+    best = share(c)
+    for step in (2.0 * tol, tol, 0.5 * tol, 0.25 * tol):
+        improved = True
+        while improved:
+            improved = False
+            for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
+                cand = c + np.array([dx, dy])
+                value = share(cand)
+                if value > best + 1e-9:
+                    c, best, improved = cand, value, True
+    return best

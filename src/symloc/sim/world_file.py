@@ -62,6 +62,9 @@ Meaning of the less obvious keys:
   ``radius`` clear of every wall and obstacle.
 - ``generator: {family, seed}``: written by ``symloc sim world`` to record where a generated
   world came from; ignored when building.
+- ``metadata: {key: value}``: free notes about the world (numbers, strings, booleans), e.g. what
+  a generator family records of its worlds (the ``furnished`` family: the base order and how
+  much of the map overlaps itself under it); ignored when building.
 
 Every error is a :class:`~symloc.errors.WorldError` whose message names the file, the key path
 (``room.polygon[3]``, ``furniture[1].box.size``) and what was expected.
@@ -108,10 +111,12 @@ from symloc.sim.world_spec import (
     RoomSpec,
 )
 
-__all__ = ["WorldSpec", "load_world_file", "room_spec", "save_world_file"]
+__all__ = ["MetaValue", "WorldSpec", "load_world_file", "room_spec", "save_world_file"]
 
 FloatArray = NDArray[np.float64]
 Point = tuple[float, float]
+MetaValue = bool | int | float | str
+"""A value of :attr:`WorldSpec.metadata`."""
 
 _COORD_LIMIT = 1000.0  # |x|, |y| [m]
 _SIZE_LIMIT = 1000.0  # sizes [m]
@@ -247,10 +252,16 @@ class WorldSpec:
     seed: int | None = None
     description: str = ""
     generator: tuple[str, int] | None = None
+    metadata: tuple[tuple[str, MetaValue], ...] = ()
     source: str = field(default="<world>", compare=False)
 
     def __post_init__(self) -> None:
         assemble(self)
+
+    @property
+    def meta(self) -> dict[str, MetaValue]:
+        """``metadata`` as a dict (key -> number, string or boolean)."""
+        return dict(self.metadata)
 
     @staticmethod
     def from_dict(doc: Any, source: str = "<dict>") -> WorldSpec:
@@ -264,6 +275,8 @@ class WorldSpec:
             out["description"] = self.description
         if self.generator is not None:
             out["generator"] = {"family": self.generator[0], "seed": self.generator[1]}
+        if self.metadata:
+            out["metadata"] = dict(self.metadata)
         if self.seed is not None:
             out["seed"] = self.seed
         out["room"] = self.room.to_dict()
@@ -340,6 +353,7 @@ _TOP_KEYS = (
     "description",
     "seed",
     "generator",
+    "metadata",
     "room",
     "furniture",
     "pillars",
@@ -364,6 +378,7 @@ def _parse(doc: Any, ctx: ErrorContext) -> WorldSpec:
             _string(ctx, g["family"], "generator.family"),
             _integer(ctx, g["seed"], "generator.seed", 0, 2**63 - 1),
         )
+    metadata = _parse_metadata(ctx, top.get("metadata", {}))
     room = _parse_room(ctx, top["room"])
     furniture = tuple(
         _parse_furniture(ctx, f, f"furniture[{i}]")
@@ -398,8 +413,27 @@ def _parse(doc: Any, ctx: ErrorContext) -> WorldSpec:
         seed=seed,
         description=description,
         generator=generator,
+        metadata=metadata,
         source=ctx.source,
     )
+
+
+def _parse_metadata(ctx: ErrorContext, obj: Any) -> tuple[tuple[str, MetaValue], ...]:
+    if not isinstance(obj, Mapping):
+        raise ctx.error("metadata", f"expected a mapping of names to values, got {_show(obj)}")
+    out: list[tuple[str, MetaValue]] = []
+    for key, value in obj.items():
+        if not isinstance(key, str):
+            raise ctx.error(f"metadata.{key}", "expected a string key")
+        ok = isinstance(value, (bool, int, str)) or (
+            isinstance(value, float) and math.isfinite(value)
+        )
+        if not ok:
+            raise ctx.error(
+                f"metadata.{key}", f"expected a number, a string or true/false, got {_show(value)}"
+            )
+        out.append((key, value))
+    return tuple(out)
 
 
 def _parse_room(ctx: ErrorContext, obj: Any) -> RoomSpec:

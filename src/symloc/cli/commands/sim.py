@@ -217,7 +217,13 @@ def _world(args: argparse.Namespace) -> int:
 
     if args.list:
         for name, fam in FAMILIES.items():
-            nature = "symmetric" if fam.symmetric else "asymmetric"
+            nature = (
+                "symmetric"
+                if fam.symmetric
+                else "near-symm."
+                if fam.nearly_symmetric
+                else "asymmetric"
+            )
             print(f"{name:<15} {nature:<11} {fam.description}")
         return 0
     if args.family is not None:
