@@ -52,7 +52,7 @@ from symloc.lidar_spec import LDS01
 from symloc.localizer import Status
 from symloc.msgs import build_rclpy, grid_to_fields, scan_to_fields
 from symloc.msgs.pose import pose_with_covariance_to_fields
-from symloc.ros.core import NO_ODOM_AT_STAMP
+from symloc.ros.pairing import NO_ODOM_AT_STAMP
 from symloc.ros.requests import NodeStatus, status_from_msg
 from symloc.ros.tf import transform_fields
 from symloc.sim.lidar import simulate_scan

@@ -41,19 +41,18 @@ the ``laser_pose`` / ``laser_upside_down`` parameters.
 
 from __future__ import annotations
 
-import bisect
 import dataclasses
 import math
-from collections import Counter, deque
+from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import SymlocError
-from symloc.geometry import angle_diff, compose, relative, wrap_angle
+from symloc.geometry import compose, relative, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Estimate, Localizer, RequestKind, Status
 from symloc.msgs.fields import field as msg_field
@@ -71,6 +70,11 @@ from symloc.msgs.scan import scan_from_msg
 from symloc.odometry import OdometryReading
 from symloc.ros.assemble import make_localizer
 from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
+from symloc.ros.pairing import (
+    OdometryBuffer,
+    Paired,
+    ScanPairing,
+)
 from symloc.ros.params import NodeParams
 from symloc.ros.status_msg import candidates_to_fields, status_to_fields
 from symloc.ros.tf import (
@@ -98,11 +102,6 @@ _WARN_EVERY = 100
 STALE_SCANS = 5
 #: Latest stamp a ROS time can carry [s] (``builtin_interfaces/Time.sec`` is an int32).
 MAX_STAMP = float(2**31 - 1)
-#: Scans held at most while they wait for the odometry at their stamp (nav2_amcl's tf2
-#: message filter queue).
-MAX_HELD_SCANS = 10
-#: Why a held scan was dropped (``dropped/<reason>`` in the status).
-NO_ODOM_AT_STAMP = "scan: no odometry at its stamp within transform_tolerance"
 
 
 @dataclass
@@ -131,47 +130,6 @@ class Outputs:
     best_estimate: FloatArray | None = None
     #: tf2_msgs/TFMessage fields with ``map -> odom`` (None: nothing to broadcast)
     tf: dict[str, Any] | None = None
-
-
-@dataclass
-class _OdomBuffer:
-    stamps: list[float] = field(default_factory=list)
-    poses: list[FloatArray] = field(default_factory=list)
-
-    def add(self, reading: OdometryReading, max_age: float) -> bool:
-        if self.stamps and reading.stamp < self.stamps[-1]:
-            return False
-        self.stamps.append(reading.stamp)
-        self.poses.append(np.asarray(reading.pose, dtype=np.float64))
-        cut = bisect.bisect_left(self.stamps, reading.stamp - max_age)
-        if cut > 0:
-            del self.stamps[:cut], self.poses[:cut]
-        return True
-
-    def forget_after(self, t: float) -> None:
-        """Drop the readings stamped after ``t`` (they were outliers)."""
-        cut = bisect.bisect_right(self.stamps, t)
-        del self.stamps[cut:], self.poses[cut:]
-
-    def at(self, t: float, tolerance: float) -> OdometryReading | str:
-        """The reading at ``t`` (exact, interpolated, or the newest within tolerance)."""
-        if not self.stamps:
-            return "no odometry yet"
-        if t > self.stamps[-1]:
-            if t - self.stamps[-1] > tolerance:
-                return "no odometry within transform_tolerance"
-            return OdometryReading(self.poses[-1], self.stamps[-1])
-        i = bisect.bisect_left(self.stamps, t)
-        if self.stamps[i] == t:
-            return OdometryReading(self.poses[i], t)
-        if i == 0:
-            return "older than the odometry history"
-        t0, t1 = self.stamps[i - 1], self.stamps[i]
-        p0, p1 = self.poses[i - 1], self.poses[i]
-        f = (t - t0) / (t1 - t0)
-        xy = p0[:2] + f * (p1[:2] - p0[:2])
-        th = wrap_angle(p0[2] + f * float(angle_diff(p1[2], p0[2])))
-        return OdometryReading(np.array([xy[0], xy[1], th]), t)
 
 
 class NodeCore:
@@ -209,7 +167,7 @@ class NodeCore:
         self.localizer: Localizer | None = None
         self.scans_used = 0
         self.last: Outputs | None = None
-        self._odom = _OdomBuffer()
+        self._odom = OdometryBuffer()
         self._clock = StampGate(params.max_stamp_jump)
         self._odom_gate = OdometryGate(params.max_odom_speed)
         self._backwards: Counter[str] = Counter()
@@ -227,7 +185,7 @@ class NodeCore:
         self.mount: LaserMount | None = None
         self.map_odom = self._map_odom(params)
         #: scans waiting for the odometry at their stamp: (scan, arrival time or None)
-        self._held: deque[tuple[LaserScan, float | None]] = deque()
+        self._pairing = ScanPairing()
         #: the last operator pose (pose, covariance, odometry pose then or None) not yet
         #: confirmed by tracking: a rebuild of the localizer seeds it again
         self._seed: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
@@ -275,7 +233,7 @@ class NodeCore:
             )
             return False
         if verdict == "rebase":
-            self._odom = _OdomBuffer()
+            self._odom = OdometryBuffer()
             self._odom_gate.restart_clock()
             self._last_scan_stamp = -math.inf
             self._backwards.clear()
@@ -751,59 +709,36 @@ class NodeCore:
         """A scan as nav2_amcl's tf2 message filter takes it: paired with the odometry at its
         own stamp (interpolated between the readings around it). A scan newer than the newest
         odometry is held until the odometry reaches its stamp (:meth:`ready_scans`, called
-        after each odometry reading) and dropped, counted under :data:`NO_ODOM_AT_STAMP`,
+        after each odometry reading) and dropped, counted under :data:`~symloc.ros.pairing.NO_ODOM_AT_STAMP`,
         when it has waited more than ``transform_tolerance`` (``now`` - its arrival, on the
         node's clock; or a newer scan stamped that much later), or more than
-        :data:`MAX_HELD_SCANS` wait. Returns the outputs of the scans answered now, in order
+        :data:`~symloc.ros.pairing.MAX_HELD_SCANS` wait. Returns the outputs of the scans answered now, in order
         (none while this one waits)."""
         admitted = self._admit(scan)
         if isinstance(admitted, Outputs):
             return [*self.ready_scans(now), admitted]
-        if self._held and admitted.stamp < self._held[-1][0].stamp:
+        held = self._pairing.newest_stamp
+        if held is not None and admitted.stamp < held:
             self.drop("scan: stamp went backwards", f"{admitted.stamp:.3f} s (held scans)")
             return [*self.ready_scans(now), self.unused_scan(admitted.stamp)]
-        self._held.append((admitted, now))
+        self._pairing.hold(admitted, now)
         return self.ready_scans(now)
 
     @property
     def held_scans(self) -> int:
         """Scans waiting for the odometry at their stamp."""
-        return len(self._held)
+        return len(self._pairing)
 
     def ready_scans(self, now: float | None = None) -> list[Outputs]:
         """Answer the held scans the odometry now covers, and drop those that waited too long
         (:meth:`offer_scan`); their outputs in order."""
         outs: list[Outputs] = []
-        tol = self.params.transform_tolerance
-        while self._held:
-            scan, arrived = self._held[0]
-            if self._odom.stamps and scan.stamp <= self._odom.stamps[-1]:
-                self._held.popleft()
-                odom = self._odom.at(scan.stamp, tol)
-                if isinstance(odom, str):
-                    self.drop(f"scan: {odom}", f"scan at {scan.stamp:.3f} s")
-                    outs.append(self.unused_scan(scan.stamp))
-                else:
-                    outs.append(self._step(scan, odom))
-                continue
-            waited = None if now is None or arrived is None else now - arrived
-            newer = self._held[-1][0].stamp - scan.stamp
-            if (
-                (waited is not None and waited > tol)
-                or newer > tol
-                or len(self._held) > MAX_HELD_SCANS
-            ):
-                self._held.popleft()
-                newest = f"{self._odom.stamps[-1]:.3f} s" if self._odom.stamps else "none"
-                self.drop(
-                    NO_ODOM_AT_STAMP,
-                    f"scan at {scan.stamp:.3f} s waited"
-                    + (f" {waited:.2f} s" if waited is not None else f" for {newer:.2f} s of scans")
-                    + f"; newest odometry {newest}",
-                )
-                outs.append(self.unused_scan(scan.stamp))
-                continue
-            break
+        for item in self._pairing.release(self._odom, self.params.transform_tolerance, now):
+            if isinstance(item, Paired):
+                outs.append(self._step(item.scan, item.odom))
+            else:
+                self.drop(item.reason, item.detail)
+                outs.append(self.unused_scan(item.scan.stamp))
         return outs
 
     def _admit(self, scan: LaserScan) -> LaserScan | Outputs:

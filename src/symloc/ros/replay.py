@@ -23,7 +23,8 @@ from symloc.grid import OccupancyGrid
 from symloc.io.rosbag import BagTopics, bag_topics, read_bag
 from symloc.io.tum import TrajectoryPoint
 from symloc.localizer import Estimate
-from symloc.ros.core import LocalizerFactory, NodeCore, _OdomBuffer
+from symloc.ros.core import LocalizerFactory, NodeCore
+from symloc.ros.pairing import OdometryBuffer
 from symloc.ros.params import NodeParams
 
 __all__ = ["ReplayResult", "build_map_from_bag", "replay_bag", "scans_with_odometry"]
@@ -126,7 +127,7 @@ def scans_with_odometry(
     Scans without odometry close enough in time are left out and counted in the returned
     ``dropped`` dict (reason -> count), as the node does.
     """
-    buf = _OdomBuffer()
+    buf = OdometryBuffer()
     scans: list[Any] = []
     odom: list[FloatArray] = []
     dropped: Counter[str] = Counter()
