@@ -37,6 +37,7 @@ def _option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action | Non
 #: Commands without randomness: no --seed.
 NOT_STOCHASTIC = {
     ("places", "add"),
+    ("places", "keyframes"),
     ("places", "list"),
     ("places", "decide"),
     ("places", "remove"),

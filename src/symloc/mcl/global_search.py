@@ -837,7 +837,13 @@ class GlobalSearch:
         need = need_py(best, m, cfg.min_score, cfg.score_margin)
         hk, hr, hc, hn = (np.concatenate([p[j] for p in runs]) for j in (1, 2, 3, 4))
         hd = np.concatenate([p[5] for p in runs])
-        sel = hn >= need
+        sel = np.flatnonzero(hn >= need)
+        if sel.size > cfg.max_hits:
+            # each thread filled its own buffer: keep the best max_hits of them all
+            sel = sel[np.argsort(-hn[sel], kind="stable")[: cfg.max_hits]]
+            sel.sort()
+            if not reasons:
+                reasons = [f"more than max_hits={cfg.max_hits} lattice poses within the margin"]
         return LatticeHits(
             hk[sel], hr[sel], hc[sel], hn[sel], hd[sel], need, best, m, lat.headings, nodes,
             not reasons, reasons[0] if reasons else "", self._n_positions(box),
