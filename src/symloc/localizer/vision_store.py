@@ -1,11 +1,13 @@
-"""The visual map (:class:`symloc.vision.VisualMap`) as the localizer's :class:`PlaceStore`.
+"""The visual map (:class:`symloc.vision.VisualMap`) as the localizer's :class:`PlaceStore`
+and :class:`KeyframeStore`.
 
 G-V lookup (Algorithm 5 step 6) through :meth:`VisualMap.find_places`, the orientation decision
 (step 7) through :func:`symloc.vision.orientation.decide_orientation`, and new places
 (step 11) through :meth:`VisualMap.add_place` with ORB features and BoW vectors made here.
 A decision whose best BoW score is below the decision's ``min_score`` is reported as
 ``no_match`` (the image resembles none of the place's views: a different place with the same
-G-V distance, or a new one).
+G-V distance, or a new one). Pose hypotheses are verified against the map's keyframes
+(:meth:`VisionPlaceStore.verify`, :func:`symloc.vision.verification.verify_hypotheses`).
 """
 
 from __future__ import annotations
@@ -20,8 +22,13 @@ from numpy.typing import NDArray
 from symloc._checks import check_positive
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
+from symloc.vision.verification import (
+    VerificationDecision,
+    VerificationSettings,
+    verify_hypotheses,
+)
 
-from .types import Decision, DecisionStatus, Place
+from .types import Decision, DecisionStatus, Place, Verification
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
 
@@ -62,6 +69,7 @@ class VisionPlaceStore:
         extractor: Any = None,
         keep_images: bool = True,
         dist_coeffs: Any = None,
+        verification: VerificationSettings | None = None,
     ) -> None:
         from symloc.vision.orb import OrbExtractor
         from symloc.vision.orientation import dist_coeffs_of
@@ -79,6 +87,10 @@ class VisionPlaceStore:
         self.keep_images = keep_images
         self._places: dict[int, Place] = {}
         self.last_decision: Any = None
+        #: thresholds of :meth:`verify` (:class:`symloc.vision.verification.VerificationSettings`)
+        self.verification = verification if verification is not None else VerificationSettings()
+        #: the last :meth:`verify`'s full answer (every hypothesis' check), for notes and tests
+        self.last_verification: VerificationDecision | None = None
 
     def _vplace(self, place_id: int) -> Place:
         if place_id not in self._places:
@@ -125,6 +137,28 @@ class VisionPlaceStore:
             reason=d.reason,
             heading=float(d.heading) if status is DecisionStatus.DECIDED else None,
         )
+
+    # ------------------------------------------------------------------ keyframes
+
+    def keyframe_count(self) -> int:
+        """Keyframes in the visual map (:class:`~symloc.localizer.types.KeyframeStore`)."""
+        return int(self.visual_map.keyframe_count())
+
+    def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
+        """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
+        ``image`` with this store's vocabulary, camera and :attr:`verification` settings."""
+        dec = verify_hypotheses(
+            np.asarray(poses, dtype=np.float64).reshape(-1, 3),
+            image,
+            self.visual_map,
+            self.vocabulary,
+            self.intrinsics,
+            self.verification,
+            extractor=self.extractor,
+            dist_coeffs=self.dist_coeffs,
+        )
+        self.last_verification = dec
+        return Verification(dec.index, dec.pose, dec.reason, dict(dec.counts))
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""
