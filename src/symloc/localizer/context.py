@@ -54,7 +54,9 @@ class DecideCounts:
     ``entered`` times it started; ``proposals`` sets of hypotheses the laser proposed;
     ``laser_single`` times one hypothesis alone survived the laser (handed to AMCL);
     ``images`` images verified; ``verified`` images that verified one hypothesis with margin;
-    ``rejected`` of those, poses the laser then refused; ``claimed`` poses published;
+    ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
+    but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
+    ``claimed`` poses published at once;
     ``turns`` turns to look elsewhere; ``gave_up`` times nothing was decided here.
     """
 
@@ -64,6 +66,7 @@ class DecideCounts:
     images: int = 0
     verified: int = 0
     rejected: int = 0
+    withheld: int = 0
     claimed: int = 0
     turns: int = 0
     gave_up: int = 0

@@ -39,7 +39,7 @@ from symloc.geometry import angle_diff, compose, relative, wrap_angle
 from symloc.scan import LaserScan
 from symloc.symmetry.order import SymmetryOrder
 
-from .claim import Verdict
+from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
 from .copies import known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
@@ -270,6 +270,8 @@ class DecideHere:
         claim = None
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
+            if claim.verdict is Verdict.WITHHELD and claim.pose is not None:
+                return self._await_precision(ctx, inp, claim, answer.index, len(carried))
             if claim.verdict is not Verdict.CLAIM:
                 counts.rejected += 1
                 return self._look_elsewhere(
@@ -299,6 +301,35 @@ class DecideHere:
             covariance=cov,
             hypotheses=(Hypothesis(pose=pose, weight=1.0),),
             reason=reason,
+        )
+        return estimate, Tracking(restart(ctx))
+
+    def _await_precision(
+        self, ctx: Context, inp: Inputs, claim: Claim, index: int, count: int
+    ) -> Step:
+        """The camera chose a hypothesis and the laser fits it, but not yet precisely enough
+        to claim: AMCL is reseeded there and the pose becomes the claim chain's start (its
+        copy is chosen; :meth:`ClaimGate.step` publishes it once a scan confirms it with the
+        gate's precision). Nothing is published at this scan."""
+        cfg = ctx.config
+        gate = ctx.gate
+        assert gate is not None
+        assert claim.pose is not None
+        assert claim.covariance is not None
+        pose, cov = claim.pose, claim.covariance
+        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
+        ctx.tracker.initialize_pose(pose, reseed_cov)
+        gate.anchor(pose, cov, inp.odom_pose)
+        gate.confirmed(claim, inp.odom_pose)
+        ctx.record.decide.withheld += 1
+        why = (
+            f"decided here: hypothesis {index + 1} of {count} verified by the camera; the "
+            f"laser fits it but {claim.reason.removeprefix('claim withheld: ')}: AMCL reseeded, "
+            "pose published once a scan confirms it"
+        )
+        ctx.note(why)
+        estimate = Estimate(
+            status=Status.AMBIGUOUS, hypotheses=(Hypothesis(pose=pose, weight=1.0),), reason=why
         )
         return estimate, Tracking(restart(ctx))
 

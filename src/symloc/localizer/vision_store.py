@@ -20,9 +20,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
+from symloc.geometry import wrap_angle
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
 from symloc.vision.verification import (
+    HypothesisCheck,
     VerificationDecision,
     VerificationSettings,
     verify_hypotheses,
@@ -30,9 +32,49 @@ from symloc.vision.verification import (
 
 from .types import Decision, DecisionStatus, Place, Verification
 
-__all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
+__all__ = ["UNANCHORED_LABEL", "VisionPlaceStore", "single_verified"]
 
 FloatArray = NDArray[np.float64]
+
+
+def single_verified(
+    dec: VerificationDecision, margin: float, heading_tolerance: float
+) -> tuple[int | None, str]:
+    """The one hypothesis ``dec`` verifies with margin, or None, and why.
+
+    As :func:`~symloc.vision.verification.verify_hypotheses` decides (exactly one verified,
+    with ``margin`` times the inliers of every rival), except for what counts as a rival. A
+    hypothesis turned away from the verified one (by more than ``heading_tolerance`` [rad])
+    whose best fit measures the camera's map heading as the verified one's (within the
+    tolerance) is no rival: that fit is evidence for the verified heading (near a symmetric
+    room's centre every rotated copy sees the same keyframes, and the measurement tells them
+    apart). Every other hypothesis with a fit is a rival: one with the verified heading (the
+    camera does not measure position), and one whose fit measures another heading."""
+    checks = dec.checks
+    verified = [i for i, c in enumerate(checks) if c.verified]
+    if len(verified) != 1:
+        return None, dec.reason
+    i = verified[0]
+    heading = float(checks[i].corrected_pose[2])
+
+    def rival(c: HypothesisCheck) -> bool:
+        if abs(float(wrap_angle(c.pose[2] - heading))) <= heading_tolerance:
+            return True
+        if not math.isfinite(c.heading_offset):
+            return True
+        measured = float(c.pose[2]) + c.heading_offset
+        return abs(float(wrap_angle(measured - heading))) > heading_tolerance
+
+    best_rival = max((c.inliers for j, c in enumerate(checks) if j != i and rival(c)), default=0)
+    if checks[i].inliers < margin * best_rival:
+        return None, (
+            f"hypothesis {i + 1} verified with {checks[i].inliers} inliers, but a rival fits "
+            f"with {best_rival} (margin {margin:g}x not met)"
+        )
+    return i, (
+        f"hypothesis {i + 1} verified: {checks[i].inliers} inliers against at most "
+        f"{best_rival} for a rival"
+    )
 
 
 class VisionPlaceStore:
@@ -158,7 +200,10 @@ class VisionPlaceStore:
             dist_coeffs=self.dist_coeffs,
         )
         self.last_verification = dec
-        return Verification(dec.index, dec.pose, dec.reason, dict(dec.counts))
+        cfg = self.verification
+        index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
+        pose = None if index is None else dec.checks[index].corrected_pose
+        return Verification(index, pose, reason, dict(dec.counts))
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""
