@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
+from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _result
 
 from symloc.errors import ConfigurationError
 from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
@@ -15,8 +16,6 @@ from symloc.localizer.types import Proposal, Verification
 from symloc.localizer.vision_store import single_verified
 from symloc.odometry import OdometryReading
 from symloc.vision.verification import HypothesisCheck, VerificationDecision
-
-from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _result
 
 TRUE = np.array([1.0, 0.5, 0.3])
 COPY = np.array([3.0, 1.5, 0.3 - math.pi])
@@ -107,10 +106,11 @@ def test_one_pose_left_by_the_laser_goes_to_amcl() -> None:
 
 def test_an_incomplete_search_never_leaves_one_pose() -> None:
     fits = {(1.0, 0.5): 1.0}
-    loc, tracker = _localizer(FakeProposer([TRUE], complete=False), FakeKeyframes([0]), fits)
+    loc, _tracker = _localizer(FakeProposer([TRUE], complete=False), FakeKeyframes([0]), fits)
     est = _step(loc)
     assert est.status is Status.DECIDING
-    assert est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
     assert loc.decide_counts.laser_single == 0
 
 
@@ -120,7 +120,8 @@ def test_the_camera_picks_one_of_several() -> None:
     loc, tracker = _localizer(FakeProposer([COPY, TRUE]), kf, fits)
     est = _step(loc)
     assert est.status is Status.DECIDING
-    assert est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
     assert len(est.hypotheses) == 2
     assert est.pose is None
     est = _step(loc, image=IMAGE)
@@ -140,7 +141,7 @@ def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:
     _step(loc, pose=np.zeros(3))
     moved = np.array([0.2, 0.0, 0.0])
     _step(loc, pose=moved, image=IMAGE)
-    np.testing.assert_allclose(kf.shown[0][0], TRUE + [0.2 * math.cos(0.3), 0.2 * math.sin(0.3), 0])
+    np.testing.assert_allclose(kf.shown[0][0], [*TRUE, 0.2 * math.cos(0.3), 0.2 * math.sin(0.3), 0])
 
 
 def test_turns_then_gives_up_and_rests() -> None:
@@ -148,17 +149,21 @@ def test_turns_then_gives_up_and_rests() -> None:
     loc, _ = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(), fits, decide_views=2)
     heading = 0.0
     est = _step(loc, pose=[0, 0, heading])
-    assert est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
     est = _step(loc, pose=[0, 0, heading], image=IMAGE)
-    assert est.request is not None and est.request.kind is RequestKind.ROTATE
+    assert est.request is not None
+    assert est.request.kind is RequestKind.ROTATE
     assert est.request.angle == pytest.approx(-math.radians(75.0))
     heading -= math.radians(75.0)  # the driver turns
     est = _step(loc, pose=[0, 0, heading])
-    assert est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
     est = _step(loc, pose=[0, 0, heading], image=IMAGE)
     assert est.status is Status.LOST
     assert est.reason.startswith("not decided here: no hypothesis verified in 2 views")
-    assert loc.decide_counts.gave_up == 1 and loc.decide_counts.turns == 1
+    assert loc.decide_counts.gave_up == 1
+    assert loc.decide_counts.turns == 1
     # resting: the lost phase has the next scans
     _step(loc, pose=[0, 0, heading])
     assert loc.phase == "lost"
@@ -188,7 +193,8 @@ def test_a_rival_that_measures_the_verified_heading_is_no_rival() -> None:
     # a copy whose fit says the camera looks along 90 deg is a rival
     rival = _check([0, 0, math.pi / 2], "contradicted", 40, 0.0, 5)
     index, why = single_verified(VerificationDecision(None, (good, rival), ""), 2.0, tol)
-    assert index is None and "margin" in why
+    assert index is None
+    assert "margin" in why
     # a pose with the verified heading elsewhere is a rival whatever it measures
     beside = _check([1.5, 0, 0.0], "contradicted", 40, 0.0, 3)
     index, _ = single_verified(VerificationDecision(None, (good, beside), ""), 2.0, tol)
