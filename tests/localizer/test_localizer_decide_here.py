@@ -141,7 +141,8 @@ def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:
     _step(loc, pose=np.zeros(3))
     moved = np.array([0.2, 0.0, 0.0])
     _step(loc, pose=moved, image=IMAGE)
-    np.testing.assert_allclose(kf.shown[0][0], [*TRUE, 0.2 * math.cos(0.3), 0.2 * math.sin(0.3), 0])
+    step = np.array([0.2 * math.cos(0.3), 0.2 * math.sin(0.3), 0.0])
+    np.testing.assert_allclose(kf.shown[0][0], TRUE + step)
 
 
 def test_turns_then_gives_up_and_rests() -> None:
