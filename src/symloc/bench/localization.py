@@ -29,7 +29,7 @@ from symloc.sim.rooms import Room
 from .grading import GRADES
 from .scenario import build_scenario
 from .stats import wilson_interval
-from .trial import METHODS, TrialConfig, TrialResult, TrialSpec, run_trial
+from .trial import DEFAULT_METHODS, METHODS, TrialConfig, TrialResult, TrialSpec, run_trial
 from .world_sources import WorldRef, build_world, world_spec
 
 __all__ = ["WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
@@ -50,7 +50,7 @@ class WorldTask:
     regime: str = "ideal"
     map_source: str = "slam"
     config: TrialConfig = field(default_factory=TrialConfig)
-    methods: tuple[str, ...] = METHODS
+    methods: tuple[str, ...] = DEFAULT_METHODS
 
 
 @dataclass(frozen=True)
@@ -86,6 +86,10 @@ def run_world(task: WorldTask) -> WorldResult:
             map_source=task.map_source,
             explore_laps=1.0,
             regime=task.regime,
+            # the decide method verifies against keyframes of the mapping trip; recording
+            # them draws from their own stream, so the map and the other methods' trials are
+            # the same with and without them
+            keyframes=True if "decide" in task.methods else None,
         )
         t1 = time.perf_counter()
         trials = []
@@ -188,7 +192,7 @@ def summarize(rows: list[dict[str, Any]], by: str = "family") -> list[dict[str, 
 
 
 def method_order(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """``rows`` with symloc before plain AMCL inside each group (for printing)."""
+    """``rows`` in :data:`METHODS` order inside each group (for printing)."""
     rank = {m: i for i, m in enumerate(METHODS)}
     return sorted(
         rows, key=lambda r: (r.get("family", "") == "all", r.get("family", ""), rank[r["method"]])

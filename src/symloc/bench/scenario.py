@@ -15,6 +15,7 @@ ground truth: in a real run both come from SLAM. Callers print this.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import tempfile
@@ -225,7 +226,9 @@ class Scenario:
         settings = self.settings
         if config is not None:
             settings = dataclasses.replace(settings, localizer=config)
-        return build_localizer(self.grid, settings, places=self.store, rng=rng)
+        return build_localizer(
+            self.grid, settings, places=self.store, rng=rng, keyframes=self.store
+        )
 
     def map_symmetries(self) -> list[Any]:
         """Rotational symmetries of the occupancy grid (computed once per grid)."""
@@ -433,15 +436,25 @@ def _map_with_slam(
     truths: list[FloatArray] = []
 
     last_odom: list[OdometryReading] = []
-    recorder = (
-        None
-        if keyframes is None
-        else KeyframeRecorder(
-            lambda pose: session.image(scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0))),
+    recorder = None
+    if keyframes is not None:
+        # the keyframes' camera draws its noise from a stream of its own (a jump of the trip's
+        # generator, which stays untouched): the map, the places and every later draw are the
+        # same with and without keyframes, so methods that do not use them are unchanged
+        bits = gen.bit_generator
+        kf_gen = (
+            np.random.Generator(bits.jumped())
+            if isinstance(bits, np.random.PCG64)
+            else copy.deepcopy(gen)
+        )
+        kf_session = scen.hardware.session(kf_gen, "mapping")
+        recorder = KeyframeRecorder(
+            lambda pose: kf_session.image(
+                scen.room.world, pose, getattr(robot, "twist", (0.0, 0.0))
+            ),
             OrbExtractor(),
             keyframes,
         )
-    )
 
     def scan_rec(pose: FloatArray) -> Any:
         odom = robot.odom

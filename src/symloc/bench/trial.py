@@ -29,6 +29,7 @@ nav2's ``map -> odom`` transform gives a user) while its own filter is confident
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -51,6 +52,7 @@ from .grading import TOLERANCE, ScanLog, Tolerance, TrialGrade, grade_trial
 from .scenario import Scenario, amcl_confident
 
 __all__ = [
+    "DEFAULT_METHODS",
     "METHODS",
     "TRIAL_KINDS",
     "MethodResult",
@@ -68,8 +70,15 @@ FloatArray = NDArray[np.float64]
 Published = tuple[str, FloatArray | None, FloatArray | None, str, Request | None]
 
 TRIAL_KINDS = ("global", "kidnap")
-METHODS = ("symloc", "amcl")
-"""symloc, and plain AMCL (nav2's filter alone) on the same trial."""
+METHODS = ("symloc", "amcl", "decide")
+"""symloc (the paper's path: AMCL, then the drive to the centre), plain AMCL (nav2's filter
+alone) and symloc deciding from where the robot stands (``LocalizerConfig.decide_here``: the
+laser proposes, the camera verifies against the mapping trip's keyframes) on the same trial.
+Appended only: each method's random stream is ``SeedSequence(seed).spawn(...)[2 + index]``, and
+a spawned child depends on its index alone, so adding a method changes no other's numbers."""
+
+#: The methods run unless asked otherwise (``decide`` needs keyframes recorded while mapping).
+DEFAULT_METHODS = ("symloc", "amcl")
 
 #: Initial pose covariance an operator gives with a known start (kidnap trials): 5 cm, 3 deg.
 KNOWN_START_COV = np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2])
@@ -172,7 +181,7 @@ def run_trial(
     spec: TrialSpec,
     config: TrialConfig | None = None,
     *,
-    methods: tuple[str, ...] = METHODS,
+    methods: tuple[str, ...] = DEFAULT_METHODS,
 ) -> TrialResult:
     """Run ``methods`` on the trial ``spec`` in ``scen``; every random draw follows ``spec.seed``."""
     cfg = config if config is not None else TrialConfig()
@@ -209,7 +218,9 @@ def _run_method(
     dt = 1.0 / float(scen.preset.scan_rate)
     known_start = spec.kind == "kidnap"
     runner: _SymlocRunner | _AmclRunner = (
-        _SymlocRunner(scen, rng) if method == "symloc" else _AmclRunner(scen, rng)
+        _AmclRunner(scen, rng)
+        if method == "amcl"
+        else _SymlocRunner(scen, rng, decide_here=method == "decide")
     )
     runner.start(scen.to_map(start) if known_start else None)
     log = ScanLog()
@@ -267,10 +278,21 @@ def _run_method(
 
 
 class _SymlocRunner:
-    """symloc's localizer: publishes ``Estimate.pose`` while its status is tracking."""
+    """symloc's localizer: publishes ``Estimate.pose`` while its status is tracking
+    (``decide_here``: deciding from where the robot stands, on the scenario's keyframes)."""
 
-    def __init__(self, scen: Scenario, rng: np.random.Generator) -> None:
-        self.loc = scen.localizer(rng)
+    def __init__(
+        self, scen: Scenario, rng: np.random.Generator, *, decide_here: bool = False
+    ) -> None:
+        config = None
+        if decide_here:
+            if scen.n_keyframes == 0:
+                raise ConfigurationError(
+                    "method 'decide': the scenario has no keyframes "
+                    "(build_scenario(..., keyframes=True))"
+                )
+            config = dataclasses.replace(scen.settings.localizer, decide_here=True)
+        self.loc = scen.localizer(rng, config)
 
     def start(self, known: FloatArray | None) -> None:
         if known is None:

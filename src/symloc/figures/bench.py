@@ -12,7 +12,11 @@ from symloc.figures._save import save_figure
 
 __all__ = ["outcome_figure"]
 
-_LABELS = {"symloc": "symloc", "amcl": "plain AMCL (nav2's filter alone)"}
+_LABELS = {
+    "symloc": "symloc",
+    "amcl": "plain AMCL (nav2's filter alone)",
+    "decide": "symloc, deciding where it stands",
+}
 
 
 def outcome_figure(

@@ -8,6 +8,8 @@
   bearing of the middle between two adjacent corners that Algorithm 2 faces.
 - :class:`GridScorer` scores poses against an occupancy grid with a likelihood field (the
   test whether rotated copies of AMCL's estimate explain the scan as well).
+- :class:`GlobalSearchProposer` wraps :class:`symloc.mcl.global_search.GlobalSearch` as a
+  :class:`~symloc.localizer.types.PoseProposer` (the laser's proposals from one scan).
 """
 
 from __future__ import annotations
@@ -26,12 +28,20 @@ from symloc.grid import OccupancyGrid
 from symloc.grid.fields import MapFields
 from symloc.mcl.amcl import Amcl, AmclResult
 from symloc.mcl.confidence import Confidence, ConfidenceConfig, ConfidenceJudge
+from symloc.mcl.global_search import GlobalSearch
 from symloc.scan import LaserScan
 from symloc.symmetry.order import SymmetryOrder
 
-from .types import SymmetryVerdict, TrackerResult
+from .types import Proposal, SymmetryVerdict, TrackerResult
 
-__all__ = ["AmclTracker", "GridScorer", "ReportJudge", "corner_middle_bearing", "verdict_from"]
+__all__ = [
+    "AmclTracker",
+    "GlobalSearchProposer",
+    "GridScorer",
+    "ReportJudge",
+    "corner_middle_bearing",
+    "verdict_from",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -252,3 +262,29 @@ def _pose3(value: ArrayLike, name: str) -> FloatArray:
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ConfigurationError(f"{name}: expected finite (x [m], y [m], yaw [rad]), got {p}")
     return p
+
+
+class GlobalSearchProposer:
+    """:class:`~symloc.mcl.global_search.GlobalSearch` as a
+    :class:`~symloc.localizer.types.PoseProposer`: every distinct pose of the map that explains
+    one scan (the laser at ``laser_pose`` on the robot, ``base_from_laser``)."""
+
+    def __init__(self, search: GlobalSearch, *, laser_pose: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        self.search = search
+        self.laser_pose = _pose3(laser_pose, "GlobalSearchProposer.laser_pose")
+
+    def propose(self, scan: object) -> Proposal:
+        if not isinstance(scan, LaserScan):
+            raise ConfigurationError(
+                f"GlobalSearchProposer.propose: expected a LaserScan, got {type(scan).__name__}"
+            )
+        found = self.search.search(scan, laser_pose=self.laser_pose)
+        poses = np.array([c.pose for c in found.candidates], dtype=np.float64).reshape(-1, 3)
+        scores = np.array([c.score for c in found.candidates], dtype=np.float64)
+        complete = found.complete and not found.truncated
+        reason = found.reason or (
+            f"{found.n_distinct} poses explain the scan, only {len(found.candidates)} listed"
+            if found.truncated
+            else ""
+        )
+        return Proposal(poses, scores, complete, reason)

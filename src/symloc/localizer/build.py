@@ -18,14 +18,20 @@ import numpy as np
 
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import MapFields
-from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.adapters import (
+    AmclTracker,
+    GlobalSearchProposer,
+    GridScorer,
+    ReportJudge,
+)
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer
 from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
 from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.settings import LocalizerSettings
-from symloc.localizer.types import PlaceStore
+from symloc.localizer.types import KeyframeStore, PlaceStore
 from symloc.mcl.amcl import Amcl
+from symloc.mcl.global_search import GlobalSearch
 from symloc.symmetry import judge_symmetry
 
 __all__ = ["build_localizer", "grid_symmetries"]
@@ -51,6 +57,7 @@ def build_localizer(
     *,
     places: PlaceStore | None = None,
     rng: np.random.Generator | None = None,
+    keyframes: KeyframeStore | None = None,
 ) -> Localizer:
     """The localizer on ``grid`` configured by ``settings``; not initialised yet.
 
@@ -68,6 +75,10 @@ def build_localizer(
     rng : numpy.random.Generator, optional
         AMCL's random numbers; None: ``numpy.random.default_rng(settings.seed)``. The bench
         passes the generator its trial draws everything from.
+    keyframes : KeyframeStore, optional
+        The visual map's keyframes (a :class:`~symloc.localizer.vision_store.VisionPlaceStore`
+        is one), for deciding where the robot stands (``settings.localizer.decide_here``, which
+        also builds the global scan-to-map search on ``grid``). Unused when that is off.
 
     The caller starts it: :meth:`Localizer.reset_global` (lost, AMCL over the whole map) or
     :meth:`Localizer.set_pose`. ``settings.laser_pose`` goes to every part that reads scans:
@@ -82,6 +93,8 @@ def build_localizer(
     known = list(store.all_places())
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
+    decide = settings.localizer.decide_here
+    proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser) if decide else None
     return Localizer(
         AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
         ReportJudge(judge_symmetry, laser_pose=judge_laser, config=settings.symmetry),
@@ -92,4 +105,6 @@ def build_localizer(
         map_symmetries=grid_symmetries(grid),
         claim_gate=ClaimGate(fields.surface(), config=settings.claim, laser_pose=laser),
         laser_pose=laser,
+        proposer=proposer,
+        keyframes=keyframes if decide else None,
     )

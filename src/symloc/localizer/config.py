@@ -41,6 +41,21 @@ class LocalizerConfig:
     reseed_xy_std, reseed_theta_std : smallest spread of the AMCL reseed after a decision.
     decision_xy_std, decision_theta_std : how well a visual decision knows the pose before the
         laser sets it (the stored centre's and the decided heading's std) [m], [rad].
+    decide_here : decide from where the robot stands (:mod:`symloc.localizer.decide_here`):
+        while the pose is not earned, the laser proposes hypotheses (AMCL's clusters, the global
+        scan-to-map search, rotated copies about the map's and the known places' symmetries)
+        and the camera verifies them against the visual map's keyframes; the drive to the
+        centre is the last resort. Off by default.
+    decide_min_fit : least share of beams a hypothesis explains (after the laser aligned it).
+    decide_laser_margin : a hypothesis survives the laser when its share of beams is within
+        this of the best one's; exactly one survivor is handed to AMCL and the copy checks.
+    decide_views : images asked for from where the robot stands before giving up.
+    decide_turn : turn [rad] (clockwise) between two views.
+    decide_theta_std : how well a verified hypothesis' heading is known before the laser
+        sets it [rad] (its position: ``decision_xy_std``).
+    decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
+    decide_rest : scans left to the other phases (AMCL's convergence, the drive to the centre)
+        after deciding here handed over or gave up, before it is tried again.
     """
 
     min_cluster_weight: float = 0.05
@@ -61,6 +76,14 @@ class LocalizerConfig:
     decision_xy_std: float = 0.15
     decision_theta_std: float = math.radians(2.0)
     centre_smoothing: float = 0.5
+    decide_here: bool = False
+    decide_min_fit: float = 0.6
+    decide_laser_margin: float = 0.15
+    decide_views: int = 4
+    decide_turn: float = math.radians(75.0)
+    decide_theta_std: float = math.radians(5.0)
+    decide_max_hypotheses: int = 16
+    decide_rest: int = 100
 
     def __post_init__(self) -> None:
         for name in (
@@ -74,16 +97,27 @@ class LocalizerConfig:
             "reseed_theta_std",
             "decision_xy_std",
             "decision_theta_std",
+            "decide_turn",
+            "decide_theta_std",
         ):
             check_positive(getattr(self, name), f"LocalizerConfig.{name}")
         check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
         check_in_range(self.centre_smoothing, "LocalizerConfig.centre_smoothing", 1e-6, 1.0)
         check_in_range(self.copy_score_ratio, "LocalizerConfig.copy_score_ratio", 0.0, 1.0)
+        check_in_range(self.decide_min_fit, "LocalizerConfig.decide_min_fit", 0.0, 1.0)
+        check_in_range(self.decide_laser_margin, "LocalizerConfig.decide_laser_margin", 0.0, 1.0)
+        if not isinstance(self.decide_here, bool):
+            raise ConfigurationError(
+                f"LocalizerConfig.decide_here: expected a bool, got {self.decide_here!r}"
+            )
         for name in (
             "converged_updates",
             "flip_patience",
             "max_centering_updates",
             "relocalize_after",
+            "decide_views",
+            "decide_max_hypotheses",
+            "decide_rest",
         ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:

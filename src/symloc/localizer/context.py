@@ -31,8 +31,10 @@ from .types import (
     Decision,
     Estimate,
     Hypothesis,
+    KeyframeStore,
     Place,
     PlaceStore,
+    PoseProposer,
     Request,
     Status,
     SymmetryVerdict,
@@ -40,20 +42,46 @@ from .types import (
     TrackerResult,
 )
 
-__all__ = ["Context", "Inputs", "MappingRun", "Outcome", "Record", "Visit"]
+__all__ = ["Context", "DecideCounts", "Inputs", "MappingRun", "Outcome", "Record", "Visit"]
 
 FloatArray = NDArray[np.float64]
 
 
 @dataclass
+class DecideCounts:
+    """What deciding from where the robot stands did (:mod:`symloc.localizer.decide_here`).
+
+    ``entered`` times it started; ``proposals`` sets of hypotheses the laser proposed;
+    ``laser_single`` times one hypothesis alone survived the laser (handed to AMCL);
+    ``images`` images verified; ``verified`` images that verified one hypothesis with margin;
+    ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
+    but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
+    ``claimed`` poses published at once;
+    ``turns`` turns to look elsewhere; ``gave_up`` times nothing was decided here.
+    """
+
+    entered: int = 0
+    proposals: int = 0
+    laser_single: int = 0
+    images: int = 0
+    verified: int = 0
+    rejected: int = 0
+    withheld: int = 0
+    claimed: int = 0
+    turns: int = 0
+    gave_up: int = 0
+
+
+@dataclass
 class Record:
     """What the phases leave for callers (figures, the demo): the last visual decision that
-    reseeded AMCL, and AMCL's particles (N, 3) when the ambiguity was declared and just before
-    a decision reseeded it."""
+    reseeded AMCL, AMCL's particles (N, 3) when the ambiguity was declared and just before
+    a decision reseeded it, and the counters of deciding here."""
 
     last_decision: tuple[Place, Decision] | None = None
     particles_at_ambiguity: FloatArray | None = None
     particles_before_decision: FloatArray | None = None
+    decide: DecideCounts = field(default_factory=DecideCounts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +89,9 @@ class Context:
     """The localizer's collaborators, as every phase sees them.
 
     ``known_places`` is the localizer's own list (a mapped place is appended to it);
-    ``gate`` None publishes the tracker's estimate unchecked (scripted tests only).
+    ``gate`` None publishes the tracker's estimate unchecked (scripted tests only);
+    ``proposer`` (the global scan-to-map search) and ``keyframes`` (the visual map's
+    keyframes) serve deciding from where the robot stands (None: not available).
     """
 
     tracker: Tracker
@@ -73,6 +103,8 @@ class Context:
     map_symmetries: Sequence[MapSymmetry]
     notes: Notes
     record: Record
+    proposer: PoseProposer | None = None
+    keyframes: KeyframeStore | None = None
 
     def note(self, text: str) -> None:
         """Log what happened (kept in the localizer's history)."""

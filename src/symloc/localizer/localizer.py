@@ -17,7 +17,10 @@ visual decision. After :meth:`Localizer.reset_global` (start-up or kidnapping) n
 
 Each scan goes update -> deskew -> tracker -> claim gate's anchor -> judge -> the phase's step
 (:mod:`symloc.localizer.phases`); the phases share the collaborators through one
-:class:`~symloc.localizer.context.Context`.
+:class:`~symloc.localizer.context.Context`. With ``LocalizerConfig.decide_here`` set, a scan
+that would go to :class:`~symloc.localizer.phases.Lost` goes first to
+:class:`~symloc.localizer.decide_here.DecideHere` (the laser proposes, the camera decides where
+the robot stands; :class:`~symloc.localizer.decide_here.DecideRouter`).
 """
 
 from __future__ import annotations
@@ -34,12 +37,23 @@ from symloc.scan import LaserScan, deskew, sensor_twist
 
 from .claim import ClaimGate
 from .config import LocalizerConfig
-from .context import Context, Inputs, Record
+from .context import Context, DecideCounts, Inputs, Record
 from .copies import PoseScorer, rotated_copies, symmetry_consistent
+from .decide_here import DecideRouter
 from .map_symmetry import MapSymmetry
 from .notes import NOTE_HISTORY, Notes
 from .phases import Lost, Phase, Tracking, restart
-from .types import Decision, Estimate, Place, PlaceStore, SymmetryJudge, Tracker, TrackerResult
+from .types import (
+    Decision,
+    Estimate,
+    KeyframeStore,
+    Place,
+    PlaceStore,
+    PoseProposer,
+    SymmetryJudge,
+    Tracker,
+    TrackerResult,
+)
 
 __all__ = ["Localizer", "LocalizerConfig", "rotated_copies", "symmetry_consistent"]
 
@@ -85,6 +99,12 @@ class Localizer:
         along +x.
     note_history : int, optional
         How many notes :attr:`log` keeps (they also go to this module's logger).
+    proposer : PoseProposer, optional
+        The laser's proposals from one scan (the global scan-to-map search); used when
+        ``config.decide_here`` is set (:mod:`symloc.localizer.decide_here`).
+    keyframes : KeyframeStore, optional
+        The visual map's keyframes, against which the camera verifies hypotheses where the
+        robot stands (``config.decide_here``).
     """
 
     def __init__(
@@ -100,6 +120,8 @@ class Localizer:
         claim_gate: ClaimGate | None = None,
         laser_pose: FloatArray | Sequence[float] = (0.0, 0.0, 0.0),
         note_history: int = NOTE_HISTORY,
+        proposer: PoseProposer | None = None,
+        keyframes: KeyframeStore | None = None,
     ) -> None:
         lp = np.asarray(laser_pose, dtype=np.float64).reshape(-1)
         if lp.shape != (3,) or not np.all(np.isfinite(lp)):
@@ -121,7 +143,11 @@ class Localizer:
             map_symmetries=list(map_symmetries),
             notes=self.log,
             record=Record(),
+            proposer=proposer,
+            keyframes=keyframes,
         )
+        #: sends the localizer to decide where it stands (``config.decide_here``), else None
+        self._router = DecideRouter() if self._ctx.config.decide_here else None
         self._last_odom: OdometryReading | None = None
         self._last_result: TrackerResult | None = None
         self._phase: Phase = Lost.fresh(self.config)
@@ -204,17 +230,26 @@ class Localizer:
         """AMCL's particles (N, 3) just before the visual decision reseeded it (for figures)."""
         return self._ctx.record.particles_before_decision
 
+    @property
+    def decide_counts(self) -> DecideCounts:
+        """What deciding from where the robot stands did so far (``config.decide_here``)."""
+        return self._ctx.record.decide
+
     # ------------------------------------------------------------------ commands
 
     def reset_global(self) -> None:
         """Forget the pose (start-up or kidnapping): global AMCL, nothing earned."""
         self.tracker.initialize_global()
+        if self._router is not None:
+            self._router.reset()
         self._enter(restart(self._ctx))
         self.log("reset: global initialisation, pose not earned")
 
     def set_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         """A pose given by the operator (like RViz's 2D Pose Estimate): reseed and earn it."""
         self.tracker.initialize_pose(np.asarray(pose, float), np.asarray(covariance, float))
+        if self._router is not None:
+            self._router.reset()
         fresh = restart(self._ctx)
         if self.claim_gate is not None:
             # the operator chose among any symmetric copies (the laser still confirms the pose)
@@ -249,10 +284,14 @@ class Localizer:
         if self.claim_gate is not None:
             self.claim_gate.observe(result, odom_pose)
         verdict = self.judge(scan)
-        estimate, phase = self._phase.step(
-            self._ctx, Inputs(result, verdict, scan, image, odom_pose)
-        )
-        self._enter(phase)
+        inputs = Inputs(result, verdict, scan, image, odom_pose)
+        phase = self._phase
+        if self._router is not None:
+            phase = self._router.route(self._ctx, inputs, phase)
+        estimate, after = phase.step(self._ctx, inputs)
+        if self._router is not None:
+            self._router.after(phase, after)
+        self._enter(after)
         return estimate
 
     def _enter(self, phase: Phase) -> None:

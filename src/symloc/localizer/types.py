@@ -12,8 +12,8 @@ stand-ins and run with the real parts through the adapters in
 from __future__ import annotations
 
 import enum
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -29,8 +29,11 @@ __all__ = [
     "DecisionStatus",
     "Estimate",
     "Hypothesis",
+    "KeyframeStore",
     "Place",
     "PlaceStore",
+    "PoseProposer",
+    "Proposal",
     "Request",
     "RequestKind",
     "Status",
@@ -38,6 +41,7 @@ __all__ = [
     "SymmetryVerdict",
     "Tracker",
     "TrackerResult",
+    "Verification",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -295,3 +299,58 @@ class PlaceStore(Protocol):
         ``headings`` (m,) [rad], when given, are the measured map headings of the images
         (a turn by odometry is never exactly 360/m); the localizer always gives them.
         """
+
+
+# --------------------------------------------------------------------------- deciding here
+
+
+@dataclass(frozen=True, slots=True)
+class Proposal:
+    """Poses that explain one scan, from a single scan and the map alone.
+
+    ``poses`` (K, 3) robot poses in the map frame, best first; ``scores`` (K,) the share of
+    the scan's end points each explains; ``complete`` False when the list may miss poses that
+    explain the scan as well (a budget stopped the search, or more poses fit than are listed:
+    a corridor); ``reason`` why (empty when complete).
+    """
+
+    poses: FloatArray
+    scores: FloatArray
+    complete: bool
+    reason: str = ""
+
+
+class PoseProposer(Protocol):
+    """The laser's proposals from one scan (the global scan-to-map search,
+    :class:`symloc.localizer.adapters.GlobalSearchProposer`)."""
+
+    def propose(self, scan: object) -> Proposal:
+        """Every distinct pose of the map that explains ``scan``, best first."""
+
+
+@dataclass(frozen=True, slots=True)
+class Verification:
+    """What one image says about several pose hypotheses.
+
+    ``index`` is the single hypothesis the image verifies with margin (None: none);
+    ``pose`` (3,) that hypothesis with the camera's heading (None without a decision);
+    ``reason`` in words; ``counts`` how many hypotheses were verified, contradicted, unknown.
+    """
+
+    index: int | None
+    pose: FloatArray | None
+    reason: str
+    counts: Mapping[str, int] = field(default_factory=dict)
+
+
+class KeyframeStore(Protocol):
+    """The visual map's keyframes (map pose, ORB features, BoW vector), as the localizer
+    uses them: hypotheses verified by one image (:mod:`symloc.vision.verification`)."""
+
+    def keyframe_count(self) -> int:
+        """How many keyframes the visual map holds (0: the camera cannot decide here)."""
+
+    def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
+        """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
+        taken) against the keyframes it predicts the camera sees; name the single one verified
+        with margin, or none."""

@@ -1,11 +1,13 @@
-"""The visual map (:class:`symloc.vision.VisualMap`) as the localizer's :class:`PlaceStore`.
+"""The visual map (:class:`symloc.vision.VisualMap`) as the localizer's :class:`PlaceStore`
+and :class:`KeyframeStore`.
 
 G-V lookup (Algorithm 5 step 6) through :meth:`VisualMap.find_places`, the orientation decision
 (step 7) through :func:`symloc.vision.orientation.decide_orientation`, and new places
 (step 11) through :meth:`VisualMap.add_place` with ORB features and BoW vectors made here.
 A decision whose best BoW score is below the decision's ``min_score`` is reported as
 ``no_match`` (the image resembles none of the place's views: a different place with the same
-G-V distance, or a new one).
+G-V distance, or a new one). Pose hypotheses are verified against the map's keyframes
+(:meth:`VisionPlaceStore.verify`, :func:`symloc.vision.verification.verify_hypotheses`).
 """
 
 from __future__ import annotations
@@ -18,14 +20,61 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
+from symloc.geometry import wrap_angle
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
+from symloc.vision.verification import (
+    HypothesisCheck,
+    VerificationDecision,
+    VerificationSettings,
+    verify_hypotheses,
+)
 
-from .types import Decision, DecisionStatus, Place
+from .types import Decision, DecisionStatus, Place, Verification
 
-__all__ = ["UNANCHORED_LABEL", "VisionPlaceStore"]
+__all__ = ["UNANCHORED_LABEL", "VisionPlaceStore", "single_verified"]
 
 FloatArray = NDArray[np.float64]
+
+
+def single_verified(
+    dec: VerificationDecision, margin: float, heading_tolerance: float
+) -> tuple[int | None, str]:
+    """The one hypothesis ``dec`` verifies with margin, or None, and why.
+
+    As :func:`~symloc.vision.verification.verify_hypotheses` decides (exactly one verified,
+    with ``margin`` times the inliers of every rival), except for what counts as a rival. A
+    hypothesis turned away from the verified one (by more than ``heading_tolerance`` [rad])
+    whose best fit measures the camera's map heading as the verified one's (within the
+    tolerance) is no rival: that fit is evidence for the verified heading (near a symmetric
+    room's centre every rotated copy sees the same keyframes, and the measurement tells them
+    apart). Every other hypothesis with a fit is a rival: one with the verified heading (the
+    camera does not measure position), and one whose fit measures another heading."""
+    checks = dec.checks
+    verified = [i for i, c in enumerate(checks) if c.verified]
+    if len(verified) != 1:
+        return None, dec.reason
+    i = verified[0]
+    heading = float(checks[i].corrected_pose[2])
+
+    def rival(c: HypothesisCheck) -> bool:
+        if abs(float(wrap_angle(c.pose[2] - heading))) <= heading_tolerance:
+            return True
+        if not math.isfinite(c.heading_offset):
+            return True
+        measured = float(c.pose[2]) + c.heading_offset
+        return abs(float(wrap_angle(measured - heading))) > heading_tolerance
+
+    best_rival = max((c.inliers for j, c in enumerate(checks) if j != i and rival(c)), default=0)
+    if checks[i].inliers < margin * best_rival:
+        return None, (
+            f"hypothesis {i + 1} verified with {checks[i].inliers} inliers, but a rival fits "
+            f"with {best_rival} (margin {margin:g}x not met)"
+        )
+    return i, (
+        f"hypothesis {i + 1} verified: {checks[i].inliers} inliers against at most "
+        f"{best_rival} for a rival"
+    )
 
 
 class VisionPlaceStore:
@@ -62,6 +111,7 @@ class VisionPlaceStore:
         extractor: Any = None,
         keep_images: bool = True,
         dist_coeffs: Any = None,
+        verification: VerificationSettings | None = None,
     ) -> None:
         from symloc.vision.orb import OrbExtractor
         from symloc.vision.orientation import dist_coeffs_of
@@ -79,6 +129,10 @@ class VisionPlaceStore:
         self.keep_images = keep_images
         self._places: dict[int, Place] = {}
         self.last_decision: Any = None
+        #: thresholds of :meth:`verify` (:class:`symloc.vision.verification.VerificationSettings`)
+        self.verification = verification if verification is not None else VerificationSettings()
+        #: the last :meth:`verify`'s full answer (every hypothesis' check), for notes and tests
+        self.last_verification: VerificationDecision | None = None
 
     def _vplace(self, place_id: int) -> Place:
         if place_id not in self._places:
@@ -125,6 +179,31 @@ class VisionPlaceStore:
             reason=d.reason,
             heading=float(d.heading) if status is DecisionStatus.DECIDED else None,
         )
+
+    # ------------------------------------------------------------------ keyframes
+
+    def keyframe_count(self) -> int:
+        """Keyframes in the visual map (:class:`~symloc.localizer.types.KeyframeStore`)."""
+        return int(self.visual_map.keyframe_count())
+
+    def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
+        """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
+        ``image`` with this store's vocabulary, camera and :attr:`verification` settings."""
+        dec = verify_hypotheses(
+            np.asarray(poses, dtype=np.float64).reshape(-1, 3),
+            image,
+            self.visual_map,
+            self.vocabulary,
+            self.intrinsics,
+            self.verification,
+            extractor=self.extractor,
+            dist_coeffs=self.dist_coeffs,
+        )
+        self.last_verification = dec
+        cfg = self.verification
+        index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
+        pose = None if index is None else dec.checks[index].corrected_pose
+        return Verification(index, pose, reason, dict(dec.counts))
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""

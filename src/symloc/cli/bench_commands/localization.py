@@ -18,7 +18,7 @@ __all__ = ["register", "run"]
 
 def register(subparsers: Any) -> None:
     """Add ``localization`` to ``symloc bench``."""
-    from symloc.bench.trial import METHODS, TRIAL_KINDS
+    from symloc.bench.trial import DEFAULT_METHODS, METHODS, TRIAL_KINDS
     from symloc.bench.world_sources import BUILTIN_ROOMS
     from symloc.sim.generator import FAMILIES
     from symloc.sim.regimes import REGIMES
@@ -72,7 +72,12 @@ def register(subparsers: Any) -> None:
         help="trial kinds, alternated (default: global kidnap)",
     )
     parser.add_argument(
-        "--methods", nargs="+", choices=METHODS, default=list(METHODS), help="methods to run"
+        "--methods",
+        nargs="+",
+        choices=METHODS,
+        default=list(DEFAULT_METHODS),
+        help="methods to run (default: symloc amcl; decide: deciding from where the robot "
+        "stands, on keyframes recorded along the mapping trip)",
     )
     parser.add_argument(
         "--map",

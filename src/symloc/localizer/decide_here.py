@@ -1,0 +1,400 @@
+"""Deciding from where the robot stands: the laser proposes, the camera decides.
+
+With ``LocalizerConfig.decide_here`` set, whenever the pose is not earned (lost at start-up or
+after a kidnapping, AMCL not converging, a symmetric scan, a symmetric map leaving rotated
+copies open) the localizer first tries to decide without driving anywhere:
+
+1. **The laser proposes** (:func:`propose`): AMCL's clusters, the global scan-to-map search's
+   candidates (:class:`~symloc.localizer.types.PoseProposer`) and their rotated copies about
+   the map's symmetries and the known symmetric places; each is aligned to the map by the
+   claim gate's scan matcher and scored by the share of beams that then fit.
+2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete): AMCL is
+   reseeded there and the pose is earned as always, through :class:`~.phases.Lost`'s copy
+   checks and the claim gate.
+3. **Several survivors**: an image is requested where the robot stands; the hypotheses,
+   carried by odometry to the moment of the image, are verified against the visual map's
+   keyframes (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin:
+   the laser sets the pose from it (:meth:`ClaimGate.confirm`), AMCL is reseeded there, and the
+   pose is published only if the gate claims it. Otherwise the robot turns clockwise by
+   ``decide_turn`` and the laser proposes again, up to ``decide_views`` images.
+4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
+   and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
+   or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
+
+:class:`DecideRouter` is the one place that sends the localizer here: before a scan is given
+to :class:`~.phases.Lost` (or to a trip to the centre that has not started), unless the path
+is resting.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar, cast
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.geometry import angle_diff, compose, relative, wrap_angle
+from symloc.scan import LaserScan
+from symloc.symmetry.order import SymmetryOrder
+
+from .claim import Claim, Verdict
+from .context import Context, Inputs, cov_from_std, lost
+from .copies import known_place_at, rotated_copies
+from .phases import Centering, Lost, Phase, Step, Tracking, restart
+from .types import Estimate, Hypothesis, Request, RequestKind, Status
+
+__all__ = ["DecideHere", "DecideRouter", "Hypotheses", "propose"]
+
+FloatArray = NDArray[np.float64]
+
+#: Two hypotheses closer than this [m] and turned less than :data:`SAME_ANGLE` are one.
+SAME_DISTANCE = 0.2
+SAME_ANGLE = math.radians(10.0)
+#: Scans an image may take to arrive before the path gives up (no camera answering).
+IMAGE_PATIENCE = 3
+
+
+@dataclass(frozen=True, eq=False)
+class Hypotheses:
+    """:func:`propose`'s answer: ``poses`` (K, 3) aligned to the map, best first, with the
+    share of beams each explains (``fits`` (K,)); ``survivors`` how many of the first lie
+    within the laser's margin of the best; ``complete`` False when the laser may have missed
+    poses that explain the scan as well (so one survivor is not enough)."""
+
+    poses: FloatArray
+    fits: FloatArray
+    survivors: int
+    complete: bool
+    reason: str = ""
+
+
+def _distinct(poses: FloatArray) -> FloatArray:
+    """``poses`` (K, 3) without the later ones that repeat an earlier one."""
+    keep: list[int] = []
+    for i in range(poses.shape[0]):
+        p = poses[i]
+        same = any(
+            math.hypot(*(poses[j, :2] - p[:2])) < SAME_DISTANCE
+            and abs(float(wrap_angle(poses[j, 2] - p[2]))) < SAME_ANGLE
+            for j in keep
+        )
+        if not same:
+            keep.append(i)
+    return poses[keep]
+
+
+def propose(ctx: Context, inp: Inputs) -> Hypotheses:
+    """The laser's hypotheses for this scan (see the module docstring, step 1)."""
+    cfg = ctx.config
+    found: list[FloatArray] = []
+    complete = True
+    reason = ""
+    if ctx.proposer is not None:
+        proposal = ctx.proposer.propose(inp.scan)
+        found.extend(np.asarray(p, dtype=np.float64) for p in proposal.poses)
+        complete, reason = proposal.complete, proposal.reason
+    else:
+        complete, reason = False, "no global search"
+    found.extend(
+        np.asarray(h.pose, dtype=np.float64)
+        for h in inp.result.hypotheses
+        if h.weight >= cfg.min_cluster_weight
+    )
+    seeds = list(found)
+    for pose in seeds:
+        for sym in ctx.map_symmetries:
+            found.extend(rotated_copies(pose, sym.centre, SymmetryOrder.finite(sym.order))[1:])
+        place = known_place_at(pose, ctx.known_places, cfg.place_radius_factor)
+        if place is not None:
+            found.extend(rotated_copies(pose, place.center, place.order)[1:])
+    if not found:
+        return Hypotheses(np.zeros((0, 3)), np.zeros(0), 0, complete, "no pose explains the scan")
+    poses = _distinct(np.array(found, dtype=np.float64))
+    aligned, fits = _align(ctx, inp, poses)
+    order = np.argsort(-fits, kind="stable")
+    aligned, fits = _distinct_fits(aligned[order], fits[order])
+    keep = fits >= cfg.decide_min_fit
+    aligned, fits = (
+        aligned[keep][: cfg.decide_max_hypotheses],
+        fits[keep][: cfg.decide_max_hypotheses],
+    )
+    if fits.size == 0:
+        return Hypotheses(aligned, fits, 0, complete, "no pose explains the scan")
+    survivors = int(np.count_nonzero(fits >= fits[0] - cfg.decide_laser_margin))
+    return Hypotheses(aligned, fits, survivors, complete, reason)
+
+
+def _align(ctx: Context, inp: Inputs, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Each pose aligned to the map by the claim gate's matcher and the share of beams that
+    then fit; without a gate, the pose scorer's scores of the poses as given."""
+    gate = ctx.gate
+    if gate is not None:
+        scan = cast(LaserScan, inp.scan)
+        out = np.empty_like(poses)
+        fits = np.empty(poses.shape[0])
+        for i in range(poses.shape[0]):
+            pose, fit = gate.fit(poses[i], scan)
+            out[i], fits[i] = pose, fit
+        return out, fits
+    if ctx.scorer is not None:
+        return poses, np.asarray(ctx.scorer(poses, inp.scan), dtype=np.float64)
+    return poses, np.ones(poses.shape[0])
+
+
+def _distinct_fits(poses: FloatArray, fits: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Poses (best first) that aligned onto the same pose kept once, with their fits."""
+    keep: list[int] = []
+    for i in range(poses.shape[0]):
+        p = poses[i]
+        if not any(
+            math.hypot(*(poses[j, :2] - p[:2])) < SAME_DISTANCE
+            and abs(float(wrap_angle(poses[j, 2] - p[2]))) < SAME_ANGLE
+            for j in keep
+        ):
+            keep.append(i)
+    return poses[keep], fits[keep]
+
+
+def _hypotheses(poses: FloatArray) -> tuple[Hypothesis, ...]:
+    n = poses.shape[0]
+    return tuple(Hypothesis(pose=p.copy(), weight=1.0 / n) for p in poses)
+
+
+@dataclass
+class DecideHere:
+    """Deciding from where the robot stands (see the module docstring).
+
+    ``poses`` (K, 3) the hypotheses shown to the camera, at odometry pose ``odom0`` (None
+    between views); ``views`` images asked for; ``waited`` scans without the image;
+    ``turn_start`` / ``turn`` the odometry heading and angle [rad] of a turn under way;
+    ``rest_after`` scans the other phases get once this one hands over or gives up
+    (:class:`DecideRouter` reads it).
+    """
+
+    name: ClassVar[str] = "decide_here"
+    why: str
+    poses: FloatArray | None = None
+    odom0: FloatArray | None = None
+    views: int = 0
+    waited: int = 0
+    turn_start: float | None = None
+    turn: float = 0.0
+    rest_after: int = 0
+
+    def step(self, ctx: Context, inp: Inputs) -> Step:
+        if self.turn_start is not None:
+            turned = float(angle_diff(inp.odom_pose[2], self.turn_start))
+            remaining = float(angle_diff(self.turn, turned))
+            if abs(remaining) > ctx.config.rotate_tolerance:
+                return self._ask(
+                    inp,
+                    Request(RequestKind.ROTATE, angle=remaining),
+                    f"deciding here: turning to look elsewhere (view {self.views + 1})",
+                ), self
+            self.turn_start = None
+        if self.poses is None:
+            return self._propose(ctx, inp)
+        if inp.image is None:
+            self.waited += 1
+            if self.waited > IMAGE_PATIENCE:
+                return self._give_up(ctx, inp, "no image arrived")
+            return self._ask(inp, Request(RequestKind.CAPTURE_IMAGE), "waiting for the image"), self
+        return self._verify(ctx, inp, inp.image)
+
+    # ------------------------------------------------------------------ the laser
+
+    def _propose(self, ctx: Context, inp: Inputs) -> Step:
+        cfg = ctx.config
+        counts = ctx.record.decide
+        counts.proposals += 1
+        hyp = propose(ctx, inp)
+        if hyp.survivors == 0:
+            return self._give_up(ctx, inp, hyp.reason or "no pose explains the scan")
+        if hyp.survivors == 1 and hyp.complete:
+            counts.laser_single += 1
+            pose = hyp.poses[0]
+            cov = cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std)
+            ctx.tracker.initialize_pose(pose, cov)
+            if ctx.gate is not None:
+                ctx.gate.anchor(pose, cov, inp.odom_pose)
+            why = (
+                f"the laser alone leaves one pose ({100 * hyp.fits[0]:.0f} % of beams fit, "
+                f"the next {self._next_fit(hyp)}): AMCL reseeded there, pose to be earned"
+            )
+            ctx.note(f"deciding here: {why}")
+            self.rest_after = max(1, cfg.decide_rest // 3)
+            return lost(why, inp.result), restart(ctx)
+        poses = hyp.poses[: hyp.survivors]
+        keyframes = ctx.keyframes
+        if keyframes is None or keyframes.keyframe_count() == 0:
+            return self._give_up(
+                ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
+            )
+        self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
+        self.views += 1
+        ctx.note(
+            f"deciding here: {len(poses)} poses explain the scan "
+            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams); "
+            f"image {self.views} of {cfg.decide_views} requested"
+            + ("" if hyp.complete else f" (the search is incomplete: {hyp.reason})")
+        )
+        request = Request(RequestKind.CAPTURE_IMAGE)
+        return self._ask(
+            inp, request, f"{len(poses)} poses explain the scan; image requested"
+        ), self
+
+    @staticmethod
+    def _next_fit(hyp: Hypotheses) -> str:
+        return f"{100 * hyp.fits[1]:.0f} %" if hyp.fits.size > 1 else "none"
+
+    # ------------------------------------------------------------------ the camera
+
+    def _verify(self, ctx: Context, inp: Inputs, image: NDArray[np.uint8]) -> Step:
+        assert self.poses is not None
+        assert self.odom0 is not None
+        assert ctx.keyframes is not None
+        cfg = ctx.config
+        counts = ctx.record.decide
+        counts.images += 1
+        moved = relative(self.odom0, inp.odom_pose)
+        carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
+        answer = ctx.keyframes.verify(carried, image)
+        if answer.index is None or answer.pose is None:
+            return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
+        counts.verified += 1
+        pose = np.asarray(answer.pose, dtype=np.float64)
+        cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
+        gate = ctx.gate
+        claim = None
+        if gate is not None:
+            claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
+            if claim.verdict is Verdict.WITHHELD and claim.pose is not None:
+                return self._await_precision(ctx, inp, claim, answer.index, len(carried))
+            if claim.verdict is not Verdict.CLAIM:
+                counts.rejected += 1
+                return self._look_elsewhere(
+                    ctx,
+                    inp,
+                    f"image {self.views}: hypothesis {answer.index + 1} verified, but the laser "
+                    f"did not confirm it ({claim.reason})",
+                )
+            assert claim.pose is not None
+            assert claim.covariance is not None
+            pose, cov = claim.pose, claim.covariance
+        ctx.record.particles_before_decision = inp.result.particles
+        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
+        ctx.tracker.initialize_pose(pose, reseed_cov)
+        if claim is not None and gate is not None:
+            gate.anchor(pose, cov, inp.odom_pose)
+            gate.confirmed(claim, inp.odom_pose)
+        counts.claimed += 1
+        reason = (
+            f"decided here: hypothesis {answer.index + 1} of {len(carried)} verified by the "
+            f"camera ({answer.reason}); pose set by the laser"
+        )
+        ctx.note(reason + "; AMCL reseeded")
+        estimate = Estimate(
+            status=Status.TRACKING,
+            pose=pose,
+            covariance=cov,
+            hypotheses=(Hypothesis(pose=pose, weight=1.0),),
+            reason=reason,
+        )
+        return estimate, Tracking(restart(ctx))
+
+    def _await_precision(
+        self, ctx: Context, inp: Inputs, claim: Claim, index: int, count: int
+    ) -> Step:
+        """The camera chose a hypothesis and the laser fits it, but not yet precisely enough
+        to claim: AMCL is reseeded there and the pose becomes the claim chain's start (its
+        copy is chosen; :meth:`ClaimGate.step` publishes it once a scan confirms it with the
+        gate's precision). Nothing is published at this scan."""
+        cfg = ctx.config
+        gate = ctx.gate
+        assert gate is not None
+        assert claim.pose is not None
+        assert claim.covariance is not None
+        pose, cov = claim.pose, claim.covariance
+        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
+        ctx.tracker.initialize_pose(pose, reseed_cov)
+        gate.anchor(pose, cov, inp.odom_pose)
+        gate.confirmed(claim, inp.odom_pose)
+        ctx.record.decide.withheld += 1
+        why = (
+            f"decided here: hypothesis {index + 1} of {count} verified by the camera; the "
+            f"laser fits it but {claim.reason.removeprefix('claim withheld: ')}: AMCL reseeded, "
+            "pose published once a scan confirms it"
+        )
+        ctx.note(why)
+        estimate = Estimate(
+            status=Status.AMBIGUOUS, hypotheses=(Hypothesis(pose=pose, weight=1.0),), reason=why
+        )
+        return estimate, Tracking(restart(ctx))
+
+    def _look_elsewhere(self, ctx: Context, inp: Inputs, why: str) -> Step:
+        cfg = ctx.config
+        ctx.note(f"deciding here: {why}")
+        if self.views >= cfg.decide_views:
+            return self._give_up(ctx, inp, f"no hypothesis verified in {self.views} views ({why})")
+        ctx.record.decide.turns += 1
+        shown = self.poses
+        self.poses, self.odom0 = None, None
+        self.turn_start, self.turn = float(inp.odom_pose[2]), -cfg.decide_turn
+        request = Request(RequestKind.ROTATE, angle=self.turn)
+        estimate = Estimate(
+            status=Status.DECIDING,
+            hypotheses=() if shown is None else _hypotheses(shown),
+            request=request,
+            reason=f"{why}; turning clockwise by {math.degrees(cfg.decide_turn):.0f} deg",
+        )
+        return estimate, self
+
+    # ------------------------------------------------------------------ outcomes
+
+    def _ask(self, inp: Inputs, request: Request, reason: str) -> Estimate:
+        shown = self.poses
+        return Estimate(
+            status=Status.DECIDING,
+            hypotheses=inp.result.hypotheses if shown is None else _hypotheses(shown),
+            request=request,
+            reason=reason,
+        )
+
+    def _give_up(self, ctx: Context, inp: Inputs, why: str) -> Step:
+        ctx.record.decide.gave_up += 1
+        self.rest_after = ctx.config.decide_rest
+        reason = f"not decided here: {why}"
+        ctx.note(reason)
+        return lost(reason, inp.result), restart(ctx)
+
+
+@dataclass
+class DecideRouter:
+    """Sends the localizer to :class:`DecideHere` whenever the pose is not earned: before a
+    scan goes to :class:`~.phases.Lost`, or to a trip to the centre that has not started; not
+    for ``rest`` scans after it handed over or gave up (the other phases' turn)."""
+
+    rest: int = 0
+
+    def route(self, ctx: Context, inp: Inputs, phase: Phase) -> Phase:
+        """The phase that takes this scan."""
+        if isinstance(phase, DecideHere):
+            return phase
+        if self.rest > 0:
+            self.rest -= 1
+            return phase
+        if isinstance(phase, Lost) or (isinstance(phase, Centering) and phase.updates == 0):
+            ctx.record.decide.entered += 1
+            return DecideHere(why=f"pose not earned ({phase.name})")
+        return phase
+
+    def after(self, before: Phase, after: Phase) -> None:
+        """Note the transition ``before`` -> ``after`` (a hand-over starts the rest)."""
+        if isinstance(before, DecideHere) and not isinstance(after, DecideHere):
+            self.rest = before.rest_after
+
+    def reset(self) -> None:
+        """Start-up, a kidnapping or an operator's pose: decide here at once when lost."""
+        self.rest = 0

@@ -1,0 +1,204 @@
+"""Deciding from where the robot stands (LocalizerConfig.decide_here) with scripted parts."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _result
+
+from symloc.errors import ConfigurationError
+from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
+from symloc.localizer.settings import LocalizerSettings, leaf_paths
+from symloc.localizer.types import Proposal, Verification
+from symloc.localizer.vision_store import single_verified
+from symloc.odometry import OdometryReading
+from symloc.vision.verification import HypothesisCheck, VerificationDecision
+
+TRUE = np.array([1.0, 0.5, 0.3])
+COPY = np.array([3.0, 1.5, 0.3 - math.pi])
+IMAGE = np.zeros((4, 4), np.uint8)
+
+
+@dataclass
+class FakeProposer:
+    poses: list[np.ndarray]
+    complete: bool = True
+
+    def propose(self, scan: object) -> Proposal:
+        arr = np.array(self.poses, float).reshape(-1, 3)
+        return Proposal(arr, np.ones(len(arr)), self.complete)
+
+
+@dataclass
+class FakeKeyframes:
+    """Verifies hypothesis ``answer`` (None: none), records what it was shown."""
+
+    answer: list[int | None] = field(default_factory=list)
+    count: int = 10
+    shown: list[np.ndarray] = field(default_factory=list)
+
+    def keyframe_count(self) -> int:
+        return self.count
+
+    def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
+        self.shown.append(np.asarray(poses, float).copy())
+        i = self.answer.pop(0) if self.answer else None
+        pose = None if i is None else np.asarray(poses[i], float)
+        return Verification(i, pose, "scripted", {})
+
+
+def scorer_of(fits: dict[tuple[float, float], float]):
+    def score(poses, scan):
+        return np.array([fits.get((round(p[0], 1), round(p[1], 1)), 0.0) for p in poses])
+
+    return score
+
+
+def _localizer(proposer, keyframes, fits, **cfg) -> tuple[Localizer, FakeTracker]:
+    tracker = FakeTracker(default=_result([TRUE, COPY], [0.5, 0.5], std=0.5))
+    config = LocalizerConfig(decide_here=True, **cfg)
+    loc = Localizer(
+        tracker,
+        SquareJudge(symmetric=False),
+        FakeStore(),
+        config,
+        scorer=scorer_of(fits),
+        proposer=proposer,
+        keyframes=keyframes,
+    )
+    loc.reset_global()
+    return loc, tracker
+
+
+def _step(loc: Localizer, pose=TRUE, image=None):
+    return loc.update(OdometryReading(np.asarray(pose, float)), np.asarray(pose, float), image)
+
+
+def test_off_by_default_and_a_setting() -> None:
+    assert LocalizerConfig().decide_here is False
+    assert "localizer.decide_here" in leaf_paths()
+    s = LocalizerSettings().replace(**{"localizer.decide_here": True})
+    assert s.localizer.decide_here is True
+    with pytest.raises(ConfigurationError, match="decide_laser_margin"):
+        LocalizerConfig(decide_laser_margin=1.5)
+    with pytest.raises(ConfigurationError, match="decide_views"):
+        LocalizerConfig(decide_views=0)
+
+
+def test_one_pose_left_by_the_laser_goes_to_amcl() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 0.7}
+    loc, tracker = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(), fits)
+    est = _step(loc)
+    assert est.status is Status.LOST
+    assert "the laser alone leaves one pose" in est.reason
+    np.testing.assert_allclose(tracker.seeded[-1], TRUE)
+    assert loc.decide_counts.laser_single == 1
+    assert loc.phase == "lost"
+    # AMCL (reseeded there) converges: the pose is earned as always, by the lost phase
+    for _ in range(4):
+        est = _step(loc)
+    assert est.status is Status.TRACKING
+    np.testing.assert_allclose(est.pose, TRUE)
+
+
+def test_an_incomplete_search_never_leaves_one_pose() -> None:
+    fits = {(1.0, 0.5): 1.0}
+    loc, _tracker = _localizer(FakeProposer([TRUE], complete=False), FakeKeyframes([0]), fits)
+    est = _step(loc)
+    assert est.status is Status.DECIDING
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert loc.decide_counts.laser_single == 0
+
+
+def test_the_camera_picks_one_of_several() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 0.95}
+    kf = FakeKeyframes([1])
+    loc, tracker = _localizer(FakeProposer([COPY, TRUE]), kf, fits)
+    est = _step(loc)
+    assert est.status is Status.DECIDING
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert len(est.hypotheses) == 2
+    assert est.pose is None
+    est = _step(loc, image=IMAGE)
+    # the hypotheses are shown best first; the camera verified the second: the copy
+    np.testing.assert_allclose(kf.shown[0][0], TRUE)
+    assert est.status is Status.TRACKING
+    np.testing.assert_allclose(est.pose, COPY)
+    np.testing.assert_allclose(tracker.seeded[-1], COPY)
+    assert loc.phase == "tracking"
+    assert loc.decide_counts.claimed == 1
+
+
+def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    kf = FakeKeyframes([None])
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), kf, fits)
+    _step(loc, pose=np.zeros(3))
+    moved = np.array([0.2, 0.0, 0.0])
+    _step(loc, pose=moved, image=IMAGE)
+    step = np.array([0.2 * math.cos(0.3), 0.2 * math.sin(0.3), 0.0])
+    np.testing.assert_allclose(kf.shown[0][0], TRUE + step)
+
+
+def test_turns_then_gives_up_and_rests() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(), fits, decide_views=2)
+    heading = 0.0
+    est = _step(loc, pose=[0, 0, heading])
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    est = _step(loc, pose=[0, 0, heading], image=IMAGE)
+    assert est.request is not None
+    assert est.request.kind is RequestKind.ROTATE
+    assert est.request.angle == pytest.approx(-math.radians(75.0))
+    heading -= math.radians(75.0)  # the driver turns
+    est = _step(loc, pose=[0, 0, heading])
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    est = _step(loc, pose=[0, 0, heading], image=IMAGE)
+    assert est.status is Status.LOST
+    assert est.reason.startswith("not decided here: no hypothesis verified in 2 views")
+    assert loc.decide_counts.gave_up == 1
+    assert loc.decide_counts.turns == 1
+    # resting: the lost phase has the next scans
+    _step(loc, pose=[0, 0, heading])
+    assert loc.phase == "lost"
+    assert loc.decide_counts.entered == 1
+
+
+def test_no_keyframes_gives_up_at_once() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(count=0), fits)
+    est = _step(loc)
+    assert est.status is Status.LOST
+    assert "no keyframes" in est.reason
+
+
+def _check(pose, status, inliers, offset, kid) -> HypothesisCheck:
+    return HypothesisCheck(status, np.asarray(pose, float), 0.5, inliers, offset, kid, (kid,), "")
+
+
+def test_a_rival_that_measures_the_verified_heading_is_no_rival() -> None:
+    tol = math.radians(15.0)
+    good = _check([0, 0, 0.0], "verified", 60, math.radians(1.0), 3)
+    # a copy turned by 90 deg whose best fit says the camera looks along 0 deg: no rival
+    copy = _check([0, 0, math.pi / 2], "contradicted", 60, -math.pi / 2, 3)
+    dec = VerificationDecision(None, (good, copy), "")
+    index, _ = single_verified(dec, 2.0, tol)
+    assert index == 0
+    # a copy whose fit says the camera looks along 90 deg is a rival
+    rival = _check([0, 0, math.pi / 2], "contradicted", 40, 0.0, 5)
+    index, why = single_verified(VerificationDecision(None, (good, rival), ""), 2.0, tol)
+    assert index is None
+    assert "margin" in why
+    # a pose with the verified heading elsewhere is a rival whatever it measures
+    beside = _check([1.5, 0, 0.0], "contradicted", 40, 0.0, 3)
+    index, _ = single_verified(VerificationDecision(None, (good, beside), ""), 2.0, tol)
+    assert index is None
+    both = _check([0, 0, math.pi], "verified", 60, 0.0, 4)
+    assert single_verified(VerificationDecision(None, (good, both), "two"), 2.0, tol)[0] is None
