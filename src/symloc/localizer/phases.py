@@ -350,6 +350,18 @@ def abandon(ctx: Context, inp: Inputs, why: str) -> Step:
     return lost(why, inp.result), restart(ctx)
 
 
+def trip_failed(
+    ctx: Context, inp: Inputs, visit: Visit, updates: int, too_long: str
+) -> Step | None:
+    """The step that gives up the trip to the centre at its ``updates``-th scan (the scan no
+    longer symmetric, or ``max_centering_updates`` passed: ``too_long`` says why), else None."""
+    if not follow_centre(ctx, inp, visit):
+        return abandon(ctx, inp, "the scan is no longer judged symmetric")
+    if updates > ctx.config.max_centering_updates:
+        return abandon(ctx, inp, too_long)
+    return None
+
+
 @dataclass
 class Centering:
     """Going to the centre; ``updates`` counts this trip's scans (and facing's)."""
@@ -360,10 +372,9 @@ class Centering:
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         self.updates += 1
-        if not follow_centre(ctx, inp, self.visit):
-            return abandon(ctx, inp, "the scan is no longer judged symmetric")
-        if self.updates > ctx.config.max_centering_updates:
-            return abandon(ctx, inp, "did not reach the centre in time")
+        failed = trip_failed(ctx, inp, self.visit, self.updates, "did not reach the centre in time")
+        if failed is not None:
+            return failed
         target = self.visit.centre.update(inp.odom_pose, None)
         assert target is not None
         distance = float(np.hypot(*target))
@@ -390,10 +401,10 @@ class Facing:
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         self.updates += 1
-        if not follow_centre(ctx, inp, self.visit):
-            return abandon(ctx, inp, "the scan is no longer judged symmetric")
-        if self.updates > ctx.config.max_centering_updates:
-            return abandon(ctx, inp, "could not face the corner middle in time")
+        too_long = "could not face the corner middle in time"
+        failed = trip_failed(ctx, inp, self.visit, self.updates, too_long)
+        if failed is not None:
+            return failed
         verdict = inp.verdict
         facing = verdict.facing if verdict.symmetric else None
         if facing is None or abs(facing) <= ctx.config.facing_tolerance:
