@@ -343,6 +343,7 @@ class Verification:
     counts: Mapping[str, int] = field(default_factory=dict)
 
 
+@runtime_checkable
 class KeyframeStore(Protocol):
     """The visual map's keyframes (map pose, ORB features, BoW vector), as the localizer
     uses them: hypotheses verified by one image (:mod:`symloc.vision.verification`)."""

@@ -18,7 +18,7 @@ from symloc.grid import OccupancyGrid
 from symloc.localizer import Localizer
 from symloc.localizer.build import build_localizer
 from symloc.localizer.places import MemoryPlaces
-from symloc.localizer.types import PlaceStore
+from symloc.localizer.types import KeyframeStore, PlaceStore
 from symloc.ros.params import NodeParams
 
 __all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
@@ -81,9 +81,14 @@ def make_localizer(
     draws from ``numpy.random.default_rng(params.seed)``, so two localizers made with the same
     parameters and fed the same messages give the same estimates. ``params.laser_pose`` (the
     node sets it from TF) goes to every part that reads scans. Scans of an upside-down laser
-    arrive mirrored (the node does it).
+    arrive mirrored (the node does it). A visual map that holds keyframes is also the
+    localizer's :class:`~symloc.localizer.types.KeyframeStore`: with ``localizer.decide_here``
+    the camera decides where the robot stands (:mod:`symloc.localizer.decide_here`).
     """
     store = places if places is not None else open_places(params)
-    loc = build_localizer(grid, params.settings(), places=store)
+    # a visual map with keyframes lets the camera decide where the robot stands
+    # (localizer.decide_here); a store without them leaves that to the paper's path
+    keyframes = store if isinstance(store, KeyframeStore) else None
+    loc = build_localizer(grid, params.settings(), places=store, keyframes=keyframes)
     loc.reset_global()
     return loc
