@@ -10,8 +10,16 @@ import pytest
 
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
-from symloc.localizer.adapters import GridScorer, ReportJudge, corner_middle_bearing, verdict_from
+from symloc.localizer.adapters import (
+    GlobalSearchProposer,
+    GridScorer,
+    ReportJudge,
+    corner_middle_bearing,
+    open_width,
+    verdict_from,
+)
 from symloc.localizer.directions import directions_for
+from symloc.mcl.global_search import GlobalSearch
 from symloc.scan import LaserScan
 from symloc.symmetry.order import SymmetryOrder
 
@@ -149,3 +157,37 @@ def test_grid_scorer_scores_robot_poses_with_the_laser_offset():
     assert with_mount > 0.8
     assert without < 0.5 * with_mount
     assert with_mount == pytest.approx(GridScorer(grid)(np.array([at]), scan)[0])
+
+
+def _half_corridor(closed: bool) -> OccupancyGrid:
+    """A corridor 3.5 m x 1.5 m in unknown space, its far end unmapped unless ``closed``
+    (the map of a mapping trip that left the rest of the corridor out)."""
+    data = np.full((40, 90), -1, dtype=np.int8)
+    data[5:35, 5:80] = 0
+    data[5, 5:80] = 100
+    data[34, 5:80] = 100
+    data[5:35, 5] = 100
+    if closed:
+        data[5:35, 79] = 100
+    data[6:9, 6:9] = 100  # a box in the corner: one pose explains the scan
+    return OccupancyGrid(data, 0.05, np.zeros(3))
+
+
+def test_open_width_measures_where_free_space_meets_unmapped_space():
+    assert open_width(_half_corridor(closed=True)) == 0.0
+    assert open_width(_half_corridor(closed=False)) == pytest.approx(1.4, abs=0.15)
+
+
+def test_global_search_proposer_is_never_complete_on_an_open_map():
+    """Half a corridor mapped: the one pose the map has may be the 180-degree copy of where
+    the robot stands in the unmapped half, so the laser alone must not decide (the decide
+    path's "one survivor" needs a complete search)."""
+    pose = np.array([0.8, 1.0, 0.2])
+    closed = _half_corridor(closed=True)
+    found = GlobalSearchProposer(GlobalSearch(closed)).propose(_scan_from(closed, pose))
+    assert found.complete, found.reason
+    assert len(found.poses) >= 1
+    open_map = _half_corridor(closed=False)
+    found = GlobalSearchProposer(GlobalSearch(open_map)).propose(_scan_from(open_map, pose))
+    assert not found.complete
+    assert "the map is open" in found.reason

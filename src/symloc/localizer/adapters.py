@@ -40,6 +40,7 @@ __all__ = [
     "GridScorer",
     "ReportJudge",
     "corner_middle_bearing",
+    "open_width",
     "verdict_from",
 ]
 
@@ -264,14 +265,62 @@ def _pose3(value: ArrayLike, name: str) -> FloatArray:
     return p
 
 
+#: A map whose free space borders unmapped space (unknown cells or the grid's edge) along an
+#: opening at least this wide [m] is open: the robot may stand where the map does not reach.
+OPEN_WIDTH = 1.0
+
+
+def open_width(grid: OccupancyGrid) -> float:
+    """The widest opening [m] through which the map's free space meets unmapped space.
+
+    Free cells with a 4-neighbour that is unknown are the map's frontier; the extent of its
+    largest 8-connected piece is the opening (0 for a map closed by walls, or one with no
+    unknown cells). A map that covers only part of the world (a mapping trip that left half a
+    corridor out) has an opening about the width of the passage that goes on unmapped."""
+    from scipy import ndimage
+
+    free = np.asarray(grid.free_mask, dtype=bool)
+    if not free.any():
+        return 0.0
+    unknown = np.asarray(grid.unknown_mask, dtype=bool)
+    unmapped = np.pad(unknown, 1, constant_values=False)
+    near = unmapped[:-2, 1:-1] | unmapped[2:, 1:-1] | unmapped[1:-1, :-2] | unmapped[1:-1, 2:]
+    frontier = free & near
+    if not frontier.any():
+        return 0.0
+    labels, _count = ndimage.label(frontier, structure=np.ones((3, 3), dtype=bool))
+    widest = 0.0
+    for sl in ndimage.find_objects(labels):
+        if sl is None:
+            continue
+        rows = sl[0].stop - sl[0].start
+        cols = sl[1].stop - sl[1].start
+        widest = max(widest, math.hypot(rows, cols) * float(grid.resolution))
+    return widest
+
+
 class GlobalSearchProposer:
     """:class:`~symloc.mcl.global_search.GlobalSearch` as a
     :class:`~symloc.localizer.types.PoseProposer`: every distinct pose of the map that explains
-    one scan (the laser at ``laser_pose`` on the robot, ``base_from_laser``)."""
+    one scan (the laser at ``laser_pose`` on the robot, ``base_from_laser``).
+
+    The search's list is complete for the map only: when the map is open (:func:`open_width`
+    at least :data:`OPEN_WIDTH`), the robot may stand in the unmapped part of the world, and
+    a place there may look like the one place of the map that explains the scan (half a
+    corridor mapped: its one end is the 180-degree copy of the other). Every proposal is then
+    incomplete, so that the laser alone never decides."""
 
     def __init__(self, search: GlobalSearch, *, laser_pose: ArrayLike = (0.0, 0.0, 0.0)) -> None:
         self.search = search
         self.laser_pose = _pose3(laser_pose, "GlobalSearchProposer.laser_pose")
+        self._open: float | None = None
+
+    @property
+    def opening(self) -> float:
+        """:func:`open_width` of the search's map [m] (measured once)."""
+        if self._open is None:
+            self._open = open_width(self.search.grid)
+        return self._open
 
     def propose(self, scan: object) -> Proposal:
         if not isinstance(scan, LaserScan):
@@ -287,4 +336,10 @@ class GlobalSearchProposer:
             if found.truncated
             else ""
         )
+        if complete and self.opening >= OPEN_WIDTH:
+            complete = False
+            reason = (
+                f"the map is open ({self.opening:.1f} m of free space meet unmapped space): "
+                "poses outside the map may explain the scan as well"
+            )
         return Proposal(poses, scores, complete, reason)
