@@ -18,6 +18,7 @@ from symloc.grid import OccupancyGrid
 from symloc.grid.distance_field import compute_distance_field, compute_surface_distance_field
 from symloc.grid.fields import MapFields, distance_field, surface_distance_field
 from symloc.localizer.adapters import AmclTracker, GridScorer
+from symloc.localizer.build import grid_symmetries
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
 from symloc.mcl import Amcl, AmclParams, ConfidenceJudge
@@ -184,3 +185,14 @@ def test_clear_forgets_the_fields():
     assert a is not b
     assert np.array_equal(a.padded, b.padded)
     assert f.n_computed["distance"] == 2
+
+
+def test_the_map_symmetries_are_computed_once_per_map_and_kept_with_its_fields():
+    g = asymmetric_room()
+    first = grid_symmetries(g)
+    assert grid_symmetries(g) is first
+    assert MapFields.of(g).n_computed["map_symmetries"] == 1
+    assert [s.order for s in first] == [s.order for s in map_symmetries(g)]
+    MapFields.of(g).clear()
+    assert grid_symmetries(g) is not first  # cleared with the fields
+    assert MapFields.of(g).n_computed["map_symmetries"] == 2

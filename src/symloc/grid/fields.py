@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 import threading
 from collections import Counter
+from collections.abc import Callable
+from typing import TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,6 +49,8 @@ __all__ = [
 _ATTR = "_map_fields"
 _OF_LOCK = threading.Lock()
 
+T = TypeVar("T")
+
 
 class MapFields:
     """The fields of one map, each computed on first use and then shared.
@@ -64,8 +68,9 @@ class MapFields:
     grid : OccupancyGrid
     n_computed : collections.Counter of str
         How many times each kind of field was computed (``"distance"``, ``"surface"``,
-        ``"grown"``, ``"obstacle_distance"``, ``"blocked_distance"``, ``"precomputation"``):
-        with one shared cache each distinct field is computed once.
+        ``"grown"``, ``"obstacle_distance"``, ``"blocked_distance"``, ``"precomputation"``, and
+        the name of each :meth:`derived` value): with one shared cache each distinct field is
+        computed once.
     """
 
     def __init__(self, grid: OccupancyGrid) -> None:
@@ -80,6 +85,7 @@ class MapFields:
         self._obstacle: NDArray[np.float64] | None = None
         self._blocked: NDArray[np.float32] | None = None
         self._pyramids: dict[tuple[float, int], PrecomputationGrids] = {}
+        self._derived: dict[str, object] = {}
 
     @classmethod
     def of(cls, source: OccupancyGrid | MapFields) -> MapFields:
@@ -224,9 +230,19 @@ class MapFields:
                 self._pyramids[key] = pg
         return pg
 
+    def derived(self, name: str, compute: Callable[[OccupancyGrid], T]) -> T:
+        """A value the layers above compute from the map (e.g. its rotational symmetries),
+        computed once by ``compute(grid)`` under ``name`` and kept with the fields."""
+        with self._lock:
+            if name not in self._derived:
+                self._derived[name] = compute(self.grid)
+                self.n_computed[name] += 1
+            return cast(T, self._derived[name])
+
     def clear(self) -> None:
         """Forget every computed field (the counts stay)."""
         with self._lock:
+            self._derived.clear()
             self._pyramids.clear()
             self._distance.clear()
             self._surface.clear()

@@ -12,8 +12,6 @@ what ``symloc ros node`` runs when both are given the same settings.
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 
 from symloc.grid import OccupancyGrid
@@ -36,19 +34,11 @@ from symloc.symmetry import judge_symmetry
 
 __all__ = ["build_localizer", "grid_symmetries"]
 
-_SYMMETRIES: weakref.WeakKeyDictionary[OccupancyGrid, list[MapSymmetry]] = (
-    weakref.WeakKeyDictionary()
-)
-
 
 def grid_symmetries(grid: OccupancyGrid) -> list[MapSymmetry]:
     """:func:`~symloc.localizer.map_symmetry.map_symmetries` of ``grid``, computed once per
-    grid object (grids are immutable; the cache lets the grid go)."""
-    found = _SYMMETRIES.get(grid)
-    if found is None:
-        found = map_symmetries(grid)
-        _SYMMETRIES[grid] = found
-    return found
+    map and kept with its other derived fields (:meth:`MapFields.derived`)."""
+    return MapFields.of(grid).derived("map_symmetries", map_symmetries)
 
 
 def build_localizer(
