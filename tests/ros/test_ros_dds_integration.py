@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 import os
 import random
-import signal
 import subprocess
 import sys
 import time
@@ -27,6 +26,8 @@ pytest.importorskip(
     "rclpy", reason="rclpy absent: pip install '.[ros]' in symloc's checkout to run the ROS tests"
 )
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: symloc[ros]")
+
+from ros_processes import stop_node
 
 from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.grid import OccupancyGrid
@@ -183,13 +184,7 @@ def node_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
         yield sim, driver, proc, tmp_path / "node.log"
     finally:
         driver.close()
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_node(proc)
         log.close()
 
 

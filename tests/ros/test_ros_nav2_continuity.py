@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 import os
 import random
-import signal
 import subprocess
 import sys
 import time
@@ -45,6 +44,7 @@ pytest.importorskip("rclpy", reason="rclpy absent: see src/symloc/ros/README.md"
 pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent")
 pytest.importorskip("std_srvs.srv", reason="std_srvs absent")
 
+from ros_processes import stop_node
 from test_ros_nav2_dropin import _interfaces  # builds tf2_msgs & co. once
 
 from symloc.geometry import compose, wrap_angle
@@ -304,13 +304,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Run:
         rec.goals = side.goals
         rec.tf_delays = list(side.tf_delays)
         side.close()
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_node(proc)
         log.close()
         rec.log = log_path.read_text()
     return rec

@@ -26,7 +26,6 @@ import importlib
 import math
 import os
 import random
-import signal
 import subprocess
 import sys
 import time
@@ -45,6 +44,8 @@ pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent: 
 pytest.importorskip(
     "std_srvs.srv", reason="std_srvs absent: pip install '.[ros]' in symloc's checkout"
 )
+
+from ros_processes import stop_node
 
 from symloc.bench.sim_record import drive_command, prepare_session
 from symloc.geometry import compose, wrap_angle
@@ -387,13 +388,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Run:
         rec.goals = len(side.goals)
         rec.requests = sum(1 for s in side.statuses if s.request is not None)
         side.close()
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_node(proc)
         log.close()
         rec.log = log_path.read_text()
     return rec
