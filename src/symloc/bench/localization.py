@@ -139,6 +139,8 @@ def trial_rows(results: Sequence[WorldResult]) -> list[dict[str, Any]]:
                     "final_reason": mr.final_reason,
                     "collisions": mr.collisions,
                     "sim_time_s": mr.sim_time,
+                    # the localizer's last notes: why a trial ended as it did
+                    "steps": list(mr.steps),
                 }
                 row.update(mr.grade.as_dict())
                 rows.append(row)
