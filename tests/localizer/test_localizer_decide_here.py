@@ -43,6 +43,10 @@ class FakeKeyframes:
     def keyframe_count(self) -> int:
         return self.count
 
+    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+        """Every pose sees ``count`` keyframes in every direction (no view planning)."""
+        return np.full(len(np.asarray(poses).reshape(-1, 3)), self.count, np.int64)
+
     def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         i = self.answer.pop(0) if self.answer else None
@@ -155,8 +159,9 @@ def test_turns_then_gives_up_and_rests() -> None:
     est = _step(loc, pose=[0, 0, heading], image=IMAGE)
     assert est.request is not None
     assert est.request.kind is RequestKind.ROTATE
-    assert est.request.angle == pytest.approx(-math.radians(75.0))
-    heading -= math.radians(75.0)  # the driver turns
+    # keyframes everywhere: the smallest turn away from the heading already imaged
+    assert abs(est.request.angle) == pytest.approx(math.radians(60.0))
+    heading += est.request.angle  # the driver turns
     est = _step(loc, pose=[0, 0, heading])
     assert est.request is not None
     assert est.request.kind is RequestKind.CAPTURE_IMAGE
@@ -169,6 +174,55 @@ def test_turns_then_gives_up_and_rests() -> None:
     _step(loc, pose=[0, 0, heading])
     assert loc.phase == "lost"
     assert loc.decide_counts.entered == 1
+
+
+@dataclass
+class DirectionalKeyframes(FakeKeyframes):
+    """Keyframes that only a camera looking along ``+y`` (heading pi/2, within 40 deg) sees."""
+
+    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+        th = np.asarray(poses, float).reshape(-1, 3)[:, 2]
+        off = np.abs((th - math.pi / 2 + math.pi) % (2 * math.pi) - math.pi)
+        return (off <= math.radians(40.0)).astype(np.int64) * 2
+
+
+@dataclass
+class TurningProposer(FakeProposer):
+    """The same places, turned with the robot (the scripted "scan" is the odometry pose)."""
+
+    def propose(self, scan: object) -> Proposal:
+        turn = float(np.asarray(scan, float)[2])
+        arr = np.array(self.poses, float).reshape(-1, 3) + np.array([0.0, 0.0, turn])
+        return Proposal(arr, np.ones(len(arr)), self.complete)
+
+
+def test_turns_to_where_the_keyframes_are_before_the_image() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    kf = DirectionalKeyframes()
+    loc, _ = _localizer(TurningProposer([TRUE, COPY]), kf, fits)
+    # TRUE looks along 0.3 rad, COPY the other way: only TRUE turned by ~+1.27 rad sees them
+    est = _step(loc, pose=[0, 0, 0.0])
+    assert est.status is Status.DECIDING
+    assert est.request is not None
+    assert est.request.kind is RequestKind.ROTATE
+    turned = TRUE[2] + est.request.angle
+    assert abs(turned - math.pi / 2) <= math.radians(40.0)
+    assert "1 of 2 hypotheses expect keyframes" in est.reason
+    est = _step(loc, pose=[0, 0, est.request.angle])  # the driver turned: now the image
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert not kf.shown
+
+
+def test_no_keyframe_in_any_direction_gives_up_without_an_image() -> None:
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    kf = DirectionalKeyframes()
+    kf.expected_counts = lambda poses: np.zeros(len(poses), np.int64)  # type: ignore[method-assign]
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), kf, fits)
+    est = _step(loc)
+    assert est.status is Status.LOST
+    assert "no keyframe to compare 2 hypotheses with in any direction" in est.reason
+    assert not kf.shown
 
 
 def test_no_keyframes_gives_up_at_once() -> None:

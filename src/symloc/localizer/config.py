@@ -50,7 +50,8 @@ class LocalizerConfig:
     decide_laser_margin : a hypothesis survives the laser when its share of beams is within
         this of the best one's; exactly one survivor is handed to AMCL and the copy checks.
     decide_views : images asked for from where the robot stands before giving up.
-    decide_turn : turn [rad] (clockwise) between two views.
+    decide_turn : least angle [rad] between the headings of two views (the view planner,
+        :mod:`symloc.localizer.view_planning`, turns to where the keyframes are).
     decide_theta_std : how well a verified hypothesis' heading is known before the laser
         sets it [rad] (its position: ``decision_xy_std``).
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
@@ -80,7 +81,7 @@ class LocalizerConfig:
     decide_min_fit: float = 0.6
     decide_laser_margin: float = 0.15
     decide_views: int = 4
-    decide_turn: float = math.radians(75.0)
+    decide_turn: float = math.radians(45.0)
     decide_theta_std: float = math.radians(5.0)
     decide_max_hypotheses: int = 16
     decide_rest: int = 100

@@ -11,12 +11,16 @@ copies open) the localizer first tries to decide without driving anywhere:
 2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete): AMCL is
    reseeded there and the pose is earned as always, through :class:`~.phases.Lost`'s copy
    checks and the claim gate.
-3. **Several survivors**: an image is requested where the robot stands; the hypotheses,
-   carried by odometry to the moment of the image, are verified against the visual map's
-   keyframes (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin:
-   the laser sets the pose from it (:meth:`ClaimGate.confirm`), AMCL is reseeded there, and the
-   pose is published only if the gate claims it. Otherwise the robot turns clockwise by
-   ``decide_turn`` and the laser proposes again, up to ``decide_views`` images.
+3. **Several survivors**: the robot turns in place to where the keyframes are
+   (:func:`~symloc.localizer.view_planning.plan_turn`: the heading at which the most
+   hypotheses predict keyframes, at least ``decide_turn`` from every heading already
+   imaged), the laser proposes again and an image is requested; the hypotheses, carried by
+   odometry to the moment of the image, are verified against the visual map's keyframes
+   (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin: the
+   laser sets the pose from it (:meth:`ClaimGate.confirm`), AMCL is reseeded there, and the
+   pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
+   way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
+   no image is taken.
 4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
@@ -29,7 +33,7 @@ is resting.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar, cast
 
 import numpy as np
@@ -44,6 +48,7 @@ from .context import Context, Inputs, cov_from_std, lost
 from .copies import known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, Request, RequestKind, Status
+from .view_planning import plan_turn
 
 __all__ = ["DecideHere", "DecideRouter", "Hypotheses", "propose"]
 
@@ -54,6 +59,9 @@ SAME_DISTANCE = 0.2
 SAME_ANGLE = math.radians(10.0)
 #: Scans an image may take to arrive before the path gives up (no camera answering).
 IMAGE_PATIENCE = 3
+#: Turns in place per image allowed before the path gives up (re-planned views that never
+#: settle).
+TURNS_PER_VIEW = 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,7 +175,8 @@ class DecideHere:
     """Deciding from where the robot stands (see the module docstring).
 
     ``poses`` (K, 3) the hypotheses shown to the camera, at odometry pose ``odom0`` (None
-    between views); ``views`` images asked for; ``waited`` scans without the image;
+    between views); ``views`` images asked for, at odometry headings ``seen`` [rad];
+    ``waited`` scans without the image; ``turns`` turns in place made;
     ``turn_start`` / ``turn`` the odometry heading and angle [rad] of a turn under way;
     ``rest_after`` scans the other phases get once this one hands over or gives up
     (:class:`DecideRouter` reads it).
@@ -178,7 +187,9 @@ class DecideHere:
     poses: FloatArray | None = None
     odom0: FloatArray | None = None
     views: int = 0
+    seen: list[float] = field(default_factory=list)
     waited: int = 0
+    turns: int = 0
     turn_start: float | None = None
     turn: float = 0.0
     rest_after: int = 0
@@ -232,8 +243,25 @@ class DecideHere:
             return self._give_up(
                 ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
             )
+        heading = float(inp.odom_pose[2])
+        plan = plan_turn(
+            poses,
+            keyframes.expected_counts,
+            seen=[float(angle_diff(h, heading)) for h in self.seen],
+            spacing=cfg.decide_turn,
+        )
+        if not plan.useful:
+            where = "in any direction" if not self.seen else "in a direction not yet seen"
+            return self._give_up(
+                ctx, inp, f"no keyframe to compare {len(poses)} hypotheses with {where}"
+            )
+        here = int(np.count_nonzero(keyframes.expected_counts(poses) > 0))
+        seen_here = any(abs(float(angle_diff(h, heading))) <= cfg.decide_turn for h in self.seen)
+        if seen_here or here < plan.covered:
+            return self._turn_to(ctx, inp, poses, plan.turn, plan.covered)
         self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
         self.views += 1
+        self.seen.append(heading)
         ctx.note(
             f"deciding here: {len(poses)} poses explain the scan "
             f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams); "
@@ -244,6 +272,30 @@ class DecideHere:
         return self._ask(
             inp, request, f"{len(poses)} poses explain the scan; image requested"
         ), self
+
+    def _turn_to(
+        self, ctx: Context, inp: Inputs, poses: FloatArray, turn: float, covered: int
+    ) -> Step:
+        """Turn in place by ``turn`` [rad], where ``covered`` hypotheses expect keyframes; the
+        laser proposes again once there."""
+        if self.turns >= TURNS_PER_VIEW * ctx.config.decide_views:
+            return self._give_up(ctx, inp, f"{self.turns} turns without a view to compare")
+        self.turns += 1
+        ctx.record.decide.turns += 1
+        self.poses, self.odom0 = None, None
+        self.turn_start, self.turn = float(inp.odom_pose[2]), turn
+        why = (
+            f"deciding here: turning {math.degrees(turn):+.0f} deg to where {covered} of "
+            f"{len(poses)} hypotheses expect keyframes"
+        )
+        ctx.note(why)
+        estimate = Estimate(
+            status=Status.DECIDING,
+            hypotheses=_hypotheses(poses),
+            request=Request(RequestKind.ROTATE, angle=turn),
+            reason=why,
+        )
+        return estimate, self
 
     @staticmethod
     def _next_fit(hyp: Hypotheses) -> str:
@@ -334,22 +386,13 @@ class DecideHere:
         return estimate, Tracking(restart(ctx))
 
     def _look_elsewhere(self, ctx: Context, inp: Inputs, why: str) -> Step:
-        cfg = ctx.config
+        """This view decided nothing: the laser proposes again and the view planner turns
+        the robot to a heading not yet imaged (or the path gives up)."""
         ctx.note(f"deciding here: {why}")
-        if self.views >= cfg.decide_views:
+        if self.views >= ctx.config.decide_views:
             return self._give_up(ctx, inp, f"no hypothesis verified in {self.views} views ({why})")
-        ctx.record.decide.turns += 1
-        shown = self.poses
         self.poses, self.odom0 = None, None
-        self.turn_start, self.turn = float(inp.odom_pose[2]), -cfg.decide_turn
-        request = Request(RequestKind.ROTATE, angle=self.turn)
-        estimate = Estimate(
-            status=Status.DECIDING,
-            hypotheses=() if shown is None else _hypotheses(shown),
-            request=request,
-            reason=f"{why}; turning clockwise by {math.degrees(cfg.decide_turn):.0f} deg",
-        )
-        return estimate, self
+        return self._propose(ctx, inp)
 
     # ------------------------------------------------------------------ outcomes
 

@@ -351,6 +351,10 @@ class KeyframeStore(Protocol):
     def keyframe_count(self) -> int:
         """How many keyframes the visual map holds (0: the camera cannot decide here)."""
 
+    def expected_counts(self, poses: FloatArray) -> NDArray[np.int64]:
+        """How many keyframes a camera at each pose of ``poses`` (P, 3) (map frame) should be
+        seeing, (P,): 0 where an image there cannot verify anything (view planning)."""
+
     def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
         """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
         taken) against the keyframes it predicts the camera sees; name the single one verified

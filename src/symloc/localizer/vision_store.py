@@ -133,6 +133,7 @@ class VisionPlaceStore:
         self.verification = verification if verification is not None else VerificationSettings()
         #: the last :meth:`verify`'s full answer (every hypothesis' check), for notes and tests
         self.last_verification: VerificationDecision | None = None
+        self._kf_poses: FloatArray | None = None
 
     def _vplace(self, place_id: int) -> Place:
         if place_id not in self._places:
@@ -185,6 +186,29 @@ class VisionPlaceStore:
     def keyframe_count(self) -> int:
         """Keyframes in the visual map (:class:`~symloc.localizer.types.KeyframeStore`)."""
         return int(self.visual_map.keyframe_count())
+
+    def expected_counts(self, poses: FloatArray) -> NDArray[np.int64]:
+        """Keyframes each pose of ``poses`` (P, 3) should see, (P,): within the verification's
+        ``max_distance`` [m] and ``max_heading_difference`` [rad]
+        (:func:`symloc.vision.verification.expected_keyframes`, counted for many poses)."""
+        kp = self._keyframe_poses()
+        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        if kp.shape[0] == 0 or p.shape[0] == 0:
+            return np.zeros(p.shape[0], np.int64)
+        s = self.verification
+        d = np.hypot(p[:, None, 0] - kp[None, :, 0], p[:, None, 1] - kp[None, :, 1])
+        dth = np.abs(np.asarray(wrap_angle(kp[None, :, 2] - p[:, None, 2]), np.float64))
+        near = (d <= s.max_distance) & (dth <= s.max_heading_difference)
+        return np.asarray(near.sum(axis=1), dtype=np.int64)
+
+    def _keyframe_poses(self) -> FloatArray:
+        """The keyframes' map poses (N, 3), read once per keyframe count."""
+        n = self.keyframe_count()
+        if self._kf_poses is None or self._kf_poses.shape[0] != n:
+            self._kf_poses = np.asarray(self.visual_map.keyframe_poses()[1], np.float64).reshape(
+                -1, 3
+            )
+        return self._kf_poses
 
     def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
