@@ -199,34 +199,51 @@ def map_corners(grid: OccupancyGrid) -> FloatArray:
 
 
 def runs_out(
-    segment: AxisSegment, grid: OccupancyGrid, s: float, direction: int, *, unmapped: float = 0.5
+    segment: AxisSegment,
+    grid: OccupancyGrid,
+    s: float,
+    direction: int,
+    *,
+    unmapped: float = 0.5,
+    band: float = 0.2,
 ) -> bool:
     """Does the line run on into unmapped space beyond ``s`` [m] (walking towards
     ``direction``: +1 or -1 along ``unit``)?
 
-    Walked cell by cell until it leaves ``grid``: True when it meets ``unmapped`` [m] in a row
-    of unknown cells (or the grid's edge) before an occupied cell; False when a wall closes
-    it first. A few unknown cells in the free space (a SLAM map's holes) do not open it."""
+    Walked cell by cell until it leaves ``grid``. A wall closes it where occupied cells lie
+    across most of a band of ``band`` [m] either side of the line (within a cell along it), as
+    a corridor's end wall does; scattered occupied cells (a badly mapped stretch, furniture
+    legs) do not. True when ``unmapped`` [m] in a row of unknown cells (or the grid's edge) on
+    the line come before such a wall, or no wall comes at all; False when a wall closes it
+    first. A few unknown cells in the free space (a SLAM map's holes) do not open it."""
     step = float(grid.resolution)
     reach = line_reach(segment, map_corners(grid))
     far = reach[1] - s if direction > 0 else s - reach[0]
     n = max(1, math.ceil(max(far, 0.0) / step) + 1)
     ts = s + direction * step * np.arange(1, n + 1)
-    cells = grid.world_to_cell(segment.at(ts)[:, :2])
+    offsets = np.linspace(-band, band, 5)
+    xy = segment.at(ts)[:, None, :2] + offsets[None, :, None] * segment.normal[None, None, :]
+    cells = grid.world_to_cell(xy.reshape(-1, 2))
     inside = grid.in_bounds(cells)
-    occupied = np.zeros(n, dtype=bool)
-    known = np.zeros(n, dtype=bool)
+    occupied = np.zeros(cells.shape[0], dtype=bool)
+    known = np.zeros(cells.shape[0], dtype=bool)
     rc = cells[inside]
     occupied[inside] = grid.occupied_mask[rc[:, 0], rc[:, 1]]
     known[inside] = occupied[inside] | grid.free_mask[rc[:, 0], rc[:, 1]]
-    wall = int(np.argmax(occupied)) if occupied.any() else n
-    run = max(1, round(unmapped / step))
-    unknown = (~known).astype(np.int64)
+    hit = occupied.reshape(n, offsets.size)
+    # an occupied cell within one cell along the line counts (a wall crossed at a slant)
+    near = hit.copy()
+    near[1:] |= hit[:-1]
+    near[:-1] |= hit[1:]
+    solid = near.sum(axis=1) >= 3
+    wall = int(np.argmax(solid)) if solid.any() else n
+    unknown = (~known.reshape(n, offsets.size)[:, offsets.size // 2]).astype(np.int64)
     # length of the run of unknown cells ending at each cell
-    runs = np.cumsum(unknown) - np.maximum.accumulate(np.where(unknown == 0, np.cumsum(unknown), 0))
-    opened = np.flatnonzero(runs >= run)
+    total = np.cumsum(unknown)
+    runs = total - np.maximum.accumulate(np.where(unknown == 0, total, 0))
+    opened = np.flatnonzero(runs >= max(1, round(unmapped / step)))
     first_open = int(opened[0]) if opened.size else n
-    return first_open < wall or (wall == n and first_open == n)
+    return first_open < wall or wall == n
 
 
 def line_reach(segment: AxisSegment, corners: FloatArray) -> tuple[float, float]:

@@ -105,7 +105,8 @@ def axis_classes(
     out: list[AxisClass] = []
     for c in (0, 1):
         seg = family.segment(c)
-        lo, hi = seg.lo - 1.0, seg.hi + 1.0
+        # without the map, the line is swept as far as an unmapped stretch may reach
+        lo, hi = seg.lo - cfg.axis_open_reach, seg.hi + cfg.axis_open_reach
         if ctx.grid is not None:
             lo, hi = line_reach(seg, map_corners(ctx.grid))
         if scorer is not None:
