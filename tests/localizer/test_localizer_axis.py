@@ -118,9 +118,10 @@ def test_sweep_finds_where_the_scan_fits_along_the_line() -> None:
     assert sweep(lambda p: np.zeros(len(p)), seg, -5.0, 5.0) is None
 
 
-def _corridor_grid(open_end: bool, specks: bool = False) -> OccupancyGrid:
+def _corridor_grid(open_end: bool, specks: bool = False, pillar: bool = False) -> OccupancyGrid:
     """20 m x 2 m corridor along x in a 22 m x 4 m grid (5 cm cells): walls occupied, the
-    inside free, the outside unknown; ``open_end`` leaves x > 15 m unmapped."""
+    inside free, the outside unknown; ``open_end`` leaves x > 15 m unmapped; ``pillar`` puts
+    a 30 cm pillar on the line y = 0.3 m at x = 13 m."""
     res = 0.05
     data = np.full((80, 440), -1, np.int8)  # rows: y from -2 m, cols: x from -1 m
     x = -1.0 + (np.arange(440) + 0.5) * res
@@ -129,6 +130,8 @@ def _corridor_grid(open_end: bool, specks: bool = False) -> OccupancyGrid:
     wall = (np.abs(y)[:, None] < 1.1) & (x[None, :] > -0.1) & (x[None, :] < 20.1) & ~inside
     data[wall] = 100
     data[inside] = 0
+    if pillar:
+        data[np.ix_(np.abs(y - 0.3) < 0.15, np.abs(x - 13.0) < 0.15)] = 100
     if open_end:
         data[:, x > 15.0] = -1
         if specks:
@@ -144,6 +147,9 @@ def test_an_end_wall_closes_the_line_and_unmapped_space_opens_it() -> None:
     opened = _corridor_grid(open_end=True, specks=True)
     assert runs_out(seg, opened, seg.hi, +1)  # a speck is no end wall
     assert not runs_out(seg, opened, seg.lo, -1)
+    # a pillar on the line is no end wall either, open or closed beyond it
+    assert runs_out(seg, _corridor_grid(open_end=True, pillar=True), seg.hi, +1)
+    assert not runs_out(seg, _corridor_grid(open_end=False, pillar=True), seg.hi, +1)
 
 
 def test_the_axis_covariance_covers_the_whole_segment() -> None:

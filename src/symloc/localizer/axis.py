@@ -198,6 +198,32 @@ def map_corners(grid: OccupancyGrid) -> FloatArray:
     return np.asarray(compose(grid.origin, local)[:, :2], dtype=np.float64)
 
 
+def _cells(grid: OccupancyGrid, xy: FloatArray) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Whether each point ``xy`` (..., 2) [m] lies in an occupied and in a known (occupied or
+    free) cell of ``grid``; points off the grid are unknown."""
+    flat = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    cells = grid.world_to_cell(flat)
+    inside = grid.in_bounds(cells)
+    occupied = np.zeros(flat.shape[0], dtype=bool)
+    known = np.zeros(flat.shape[0], dtype=bool)
+    rc = cells[inside]
+    occupied[inside] = grid.occupied_mask[rc[:, 0], rc[:, 1]]
+    known[inside] = occupied[inside] | grid.free_mask[rc[:, 0], rc[:, 1]]
+    shape = np.asarray(xy).shape[:-1]
+    return occupied.reshape(shape), known.reshape(shape)
+
+
+def _free_reach(segment: AxisSegment, grid: OccupancyGrid, s: float, side: float) -> float:
+    """How far [m] the free space reaches from the line at ``s`` towards ``side`` (+1: along
+    the normal, -1: against it), up to 5 m: the corridor's half-width on that side."""
+    step = float(grid.resolution)
+    d = step * np.arange(1, int(5.0 / step) + 1)
+    xy = segment.at(s)[0, :2][None, :] + side * d[:, None] * segment.normal[None, :]
+    occupied, known = _cells(grid, xy)
+    stop = np.flatnonzero(occupied | ~known)
+    return float(d[stop[0]]) if stop.size else float(d[-1])
+
+
 def runs_out(
     segment: AxisSegment,
     grid: OccupancyGrid,
@@ -205,39 +231,33 @@ def runs_out(
     direction: int,
     *,
     unmapped: float = 0.5,
-    band: float = 0.2,
+    solid: float = 0.8,
 ) -> bool:
     """Does the line run on into unmapped space beyond ``s`` [m] (walking towards
     ``direction``: +1 or -1 along ``unit``)?
 
-    Walked cell by cell until it leaves ``grid``. A wall closes it where occupied cells lie
-    across most of a band of ``band`` [m] either side of the line (within a cell along it), as
-    a corridor's end wall does; scattered occupied cells (a badly mapped stretch, furniture
-    legs) do not. True when ``unmapped`` [m] in a row of unknown cells (or the grid's edge) on
-    the line come before such a wall, or no wall comes at all; False when a wall closes it
-    first. A few unknown cells in the free space (a SLAM map's holes) do not open it."""
+    Walked cell by cell until it leaves ``grid``. An end wall closes it: occupied cells (within
+    a cell along the line, a wall crossed at a slant) across at least ``solid`` of the
+    corridor's width, as the free space reaches either side of the line at ``s``; an obstacle
+    in the corridor, or scattered occupied cells of a badly mapped stretch, do not. True when
+    ``unmapped`` [m] in a row of unknown cells (or the grid's edge) on the line come before
+    such a wall, or no wall comes at all; False when a wall closes it first. A few unknown
+    cells in the free space (a SLAM map's holes) do not open it."""
     step = float(grid.resolution)
     reach = line_reach(segment, map_corners(grid))
     far = reach[1] - s if direction > 0 else s - reach[0]
     n = max(1, math.ceil(max(far, 0.0) / step) + 1)
     ts = s + direction * step * np.arange(1, n + 1)
-    offsets = np.linspace(-band, band, 5)
+    left, right = _free_reach(segment, grid, s, 1.0), _free_reach(segment, grid, s, -1.0)
+    offsets = np.arange(-right, left + 0.5 * step, step)
     xy = segment.at(ts)[:, None, :2] + offsets[None, :, None] * segment.normal[None, None, :]
-    cells = grid.world_to_cell(xy.reshape(-1, 2))
-    inside = grid.in_bounds(cells)
-    occupied = np.zeros(cells.shape[0], dtype=bool)
-    known = np.zeros(cells.shape[0], dtype=bool)
-    rc = cells[inside]
-    occupied[inside] = grid.occupied_mask[rc[:, 0], rc[:, 1]]
-    known[inside] = occupied[inside] | grid.free_mask[rc[:, 0], rc[:, 1]]
-    hit = occupied.reshape(n, offsets.size)
-    # an occupied cell within one cell along the line counts (a wall crossed at a slant)
-    near = hit.copy()
-    near[1:] |= hit[:-1]
-    near[:-1] |= hit[1:]
-    solid = near.sum(axis=1) >= 3
-    wall = int(np.argmax(solid)) if solid.any() else n
-    unknown = (~known.reshape(n, offsets.size)[:, offsets.size // 2]).astype(np.int64)
+    occupied, known = _cells(grid, xy)
+    near = occupied.copy()
+    near[1:] |= occupied[:-1]
+    near[:-1] |= occupied[1:]
+    walls = np.flatnonzero(near.mean(axis=1) >= solid)
+    wall = int(walls[0]) if walls.size else n
+    unknown = (~known[:, int(np.argmin(np.abs(offsets)))]).astype(np.int64)
     # length of the run of unknown cells ending at each cell
     total = np.cumsum(unknown)
     runs = total - np.maximum.accumulate(np.where(unknown == 0, total, 0))

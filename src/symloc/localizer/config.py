@@ -110,7 +110,7 @@ class LocalizerConfig:
     axis_heading_spread: float = math.radians(10.0)
     axis_min_length: float = 1.0
     axis_sweep_ratio: float = 0.7
-    axis_open_reach: float = 20.0
+    axis_open_reach: float = 40.0
     axis_spacing: float = 1.0
     axis_max_hypotheses: int = 24
     axis_min_inliers: int = 30
