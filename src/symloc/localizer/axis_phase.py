@@ -75,8 +75,9 @@ class AxisClass:
     ``fitted`` the stretch of the class' line where the scan fits the map (the camera's
     hypotheses are taken there); ``segment`` that stretch lengthened into unmapped space at
     ``open_ends`` of its ends (where the robot may be); ``reference`` (3,) the class'
-    best-fitting hypothesis (aligned by the laser); ``across_std`` [m] how far its hypotheses
-    scatter about the line (at least ``axis_across_std``)."""
+    best-fitting hypothesis (aligned by the laser); ``across_std`` [m] the std across the line:
+    how far its hypotheses scatter about it (at least ``axis_across_std``), with the sideways
+    error a line direction off by ``axis_line_std`` makes at the segment's far end."""
 
     fitted: AxisSegment
     segment: AxisSegment
@@ -129,7 +130,11 @@ def axis_classes(
                 seg, opened = replace(seg, hi=hi + cfg.axis_open_reach), opened + 1
         mine = np.flatnonzero(family.classes == c)
         reference = np.asarray(poses[mine[0]], dtype=np.float64).copy()
-        across = max(cfg.axis_across_std, family.spread)
+        # the line's direction is fitted where the scan fits; far from there a small error of
+        # it (a map bends a little over its length) moves the line sideways
+        middle = 0.5 * (fitted.lo + fitted.hi)
+        reach = max(abs(seg.lo - middle), abs(seg.hi - middle))
+        across = math.hypot(max(cfg.axis_across_std, family.spread), cfg.axis_line_std * reach)
         out.append(AxisClass(fitted, seg, reference, opened, across))
     return family, (out[0], out[1])
 

@@ -72,6 +72,9 @@ class LocalizerConfig:
         (one weak match never decides the heading).
     axis_across_std, axis_theta_std : least std [m], [rad] of the axis estimate across the axis
         and in heading.
+    axis_line_std : std [rad] of the axis' direction where it runs far from the stretch it was
+        fitted on (a SLAM map bends a little over tens of metres); it widens the estimate
+        across the axis in proportion to the segment's reach.
     axis_odometry : the segment lengthens at each end by this share of the distance travelled
         (odometry's error along the axis).
     axis_recheck : scans on the axis between two tries of deciding here (the laser proposes
@@ -116,6 +119,7 @@ class LocalizerConfig:
     axis_min_inliers: int = 30
     axis_across_std: float = 0.05
     axis_theta_std: float = math.radians(1.0)
+    axis_line_std: float = math.radians(0.3)
     axis_odometry: float = 0.05
     axis_recheck: int = 30
     axis_patience: int = 30
@@ -140,6 +144,7 @@ class LocalizerConfig:
             "axis_spacing",
             "axis_across_std",
             "axis_theta_std",
+            "axis_line_std",
         ):
             check_positive(getattr(self, name), f"LocalizerConfig.{name}")
         check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
