@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from symloc.errors import ConfigurationError
 from symloc.geometry import compose, wrap_angle
 from symloc.grid import OccupancyGrid
 
@@ -132,7 +133,7 @@ class AxisFamily:
     def segment(self, c: int) -> AxisSegment:
         """Class ``c`` (which must hold hypotheses) as the segment its positions span."""
         if self.count(c) == 0:
-            raise ValueError(f"AxisFamily.segment: class {c} holds no hypothesis")
+            raise ConfigurationError(f"AxisFamily.segment: class {c} holds no hypothesis")
         lo, hi = self.spans[c]
         return AxisSegment(self.points[c].copy(), self.unit.copy(), float(self.headings[c]), lo, hi)
 

@@ -39,7 +39,7 @@ through the claim gate (unless its heading contradicts the axis'). Nothing decid
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import ClassVar, cast
 
 import numpy as np
@@ -188,7 +188,6 @@ class OnAxis:
     lost: Lost
     why: str
     misses: int = 0
-    travelled: float = field(default=0.0)
 
     @property
     def heading(self) -> float:
@@ -226,7 +225,6 @@ class OnAxis:
         )
         self.reference = np.asarray(compose(self.reference, delta), dtype=np.float64)
         self.odom = odom.copy()
-        self.travelled += float(np.hypot(delta[0], delta[1]))
 
     def check(self, ctx: Context, inp: Inputs) -> str | None:
         """The laser's check of the heading (see the module docstring, step 3): None while
