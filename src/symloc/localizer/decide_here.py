@@ -285,7 +285,8 @@ class DecideHere:
             c = back.class_of(classes, SAME_CLASS)
             if c is not None:
                 back.renew(classes[c], inp.odom_pose)
-                ctx.note(f"deciding here: the laser proposes the axis again ({back.describe()})")
+                # said once while it lasts (the estimate's reason gives the segment each scan)
+                ctx.notes.note_once("deciding here: the laser proposes the axis again")
                 self.rest_after = cfg.axis_recheck
                 return back.estimate(cfg, back.headline()), back
             ctx.note("axis given up: the laser's axis no longer has the decided heading")
