@@ -110,12 +110,23 @@ def test_sweep_finds_where_the_scan_fits_along_the_line() -> None:
         on_line = np.abs(poses[:, 1] - 0.3) < 0.03
         return np.where(inside & on_line, 0.9, 0.1)
 
-    out = sweep(score, seg, -20.0, 20.0)
-    assert out is not None
+    found = sweep(score, seg, -20.0, 20.0)
+    assert found is not None
+    out, share = found
     assert out.point[1] == pytest.approx(0.33 - 0.05)  # moved onto the best offset
     assert out.lo == pytest.approx(-6.0, abs=0.1)
     assert out.hi == pytest.approx(10.0, abs=0.1)
+    assert share == pytest.approx(1.0)
     assert sweep(lambda p: np.zeros(len(p)), seg, -5.0, 5.0) is None
+
+    def pillars(poses: np.ndarray) -> np.ndarray:
+        # repeated features every 2 m: the scan fits only near x = 2, 4, ..., 18 m
+        near = np.abs((poses[:, 0] + 1.0) % 2.0 - 1.0) < 0.15
+        return np.where(near & (np.abs(poses[:, 1] - 0.3) < 0.03), 0.9, 0.1)
+
+    found = sweep(pillars, seg, -20.0, 20.0)
+    assert found is not None
+    assert found[1] < 0.3  # gaps between the pillars: not a corridor's continuous stretch
 
 
 def _corridor_grid(open_end: bool, specks: bool = False, pillar: bool = False) -> OccupancyGrid:
@@ -447,6 +458,26 @@ def test_an_axis_running_into_unmapped_space_is_lengthened_there() -> None:
     shown = kf.shown[0]
     forward = np.abs(wrap_angle(shown[:, 2] - TRUTH[2])) < 0.1
     assert shown[forward, 0].max() == pytest.approx(14.0, abs=0.1)
+
+
+def test_repeated_features_along_a_line_are_left_to_the_camera_one_by_one() -> None:
+    class Pillars(CorridorScore):
+        def __call__(self, poses: np.ndarray, scan: object) -> np.ndarray:
+            out = super().__call__(poses, scan)
+            x = np.asarray(poses, float).reshape(-1, 3)[:, 0]
+            return np.where(np.abs((x + 1.0) % 2.0 - 1.0) < 0.15, out, 0.05)
+
+    poses = np.vstack([_line([6.0, 8.0, 10.0], 0.3, TRUTH[2]), _line([10.0, 12.0], -0.3, FLIPPED)])
+    kf = CorridorKeyframes()
+    loc = _corridor_localizer(_spread(), FakeProposer(list(poses), complete=False), kf, Pillars())
+    est = _step(loc)
+    assert "along an axis" not in loc.log[-1]
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    est = _step(loc, image=IMAGE)
+    # the camera verified the one at the truth: the decide path's usual claim
+    assert est.status is Status.TRACKING
+    np.testing.assert_allclose(est.pose, TRUTH)
 
 
 def test_axis_estimates_carry_an_axis_and_nothing_else_does() -> None:

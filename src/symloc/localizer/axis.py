@@ -284,15 +284,17 @@ def sweep(
     across: float = 0.1,
     across_step: float = 0.05,
     ratio: float = 0.9,
-) -> AxisSegment | None:
-    """The stretch of ``segment``'s line between ``lo`` and ``hi`` [m] where the scan fits.
+) -> tuple[AxisSegment, float] | None:
+    """The stretch of ``segment``'s line between ``lo`` and ``hi`` [m] where the scan fits,
+    and the share of that stretch where it does.
 
     The line is sampled every ``step`` [m]; each sample takes the best ``score`` over offsets
     up to ``across`` [m] either side of the line (every ``across_step``), which absorbs a line
     slightly off its true direction. Samples scoring at least ``ratio`` of the best sample
-    explain the scan; the answer spans the first to the last of them (gaps included: the
-    robot may stand in any of them), with the segment's heading. None when no sample scores
-    above 0."""
+    explain the scan; the stretch spans the first to the last of them (gaps included: the
+    robot may stand in any of them), with the segment's heading, and the share is how many of
+    its samples explain the scan (1 along a featureless corridor; repeated features, such as
+    pillars, leave gaps). None when no sample scores above 0."""
     s = np.arange(lo, hi + 0.5 * step, step)
     if s.size == 0:
         s = np.array([0.5 * (lo + hi)])
@@ -307,13 +309,14 @@ def sweep(
     best = float(per_sample.max())
     if not best > 0.0:
         return None
-    keep = s[per_sample >= ratio * best]
+    fits = per_sample >= ratio * best
+    inside = np.flatnonzero(fits)
+    share = float(np.mean(fits[inside[0] : inside[-1] + 1]))
     # the line moved onto the best offset of the best sample (the laser's side position)
     k = int(np.argmax(per_sample))
     point = segment.point + offsets[int(np.argmax(best_across[k]))] * segment.normal
-    return AxisSegment(
-        point, segment.unit.copy(), segment.heading, float(keep.min()), float(keep.max())
-    )
+    lo_fit, hi_fit = float(s[inside[0]]), float(s[inside[-1]])
+    return AxisSegment(point, segment.unit.copy(), segment.heading, lo_fit, hi_fit), share
 
 
 def axis_covariance(

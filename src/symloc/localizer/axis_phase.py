@@ -10,7 +10,9 @@ claimed: the pose is not published as tracking, and it is not AMCL's.
 
 :func:`axis_classes` turns the laser's hypotheses into the two classes' segments: the family's
 line, swept by the pose scorer over the whole map to find where the scan fits (the search
-lists only a few dozen of the poses along a corridor), and lengthened by
+lists only a few dozen of the poses along a corridor; the scan must fit all along the stretch,
+``axis_continuity``, else the poses are discrete copies, such as between repeated pillars,
+which the decide path's camera tells apart one by one), and lengthened by
 ``axis_open_reach`` at an end where the line runs on into space the map does not cover (a
 mapping trip that stopped short of the corridor's end: the robot may stand there).
 
@@ -111,15 +113,18 @@ def axis_classes(
         if ctx.grid is not None:
             lo, hi = line_reach(seg, map_corners(ctx.grid))
         if scorer is not None:
-            swept = sweep(
+            found = sweep(
                 lambda p: np.asarray(scorer(p, scan), dtype=np.float64),
                 seg,
                 lo,
                 hi,
                 ratio=cfg.axis_sweep_ratio,
             )
-            if swept is None:
+            # repeated features along a line (pillars) leave gaps: those poses are told
+            # apart one by one, by the camera as anywhere else
+            if found is None or found[1] < cfg.axis_continuity:
                 return None
+            swept = found[0]
             # the laser's own hypotheses explain the scan whatever the scorer says
             seg = replace(swept, lo=min(swept.lo, seg.lo), hi=max(swept.hi, seg.hi))
         fitted, opened = seg, 0

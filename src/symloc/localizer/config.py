@@ -63,6 +63,9 @@ class LocalizerConfig:
     axis_min_length : ... and one class spans at least this [m] along the line.
     axis_sweep_ratio : along the line, the scan fits where the pose scorer gives at least this
         share of the line's best score (the segment's extent).
+    axis_continuity : ... and it must fit along at least this share of that stretch (a
+        corridor: all of it; repeated features such as pillars leave gaps, and their poses are
+        shown to the camera one by one as anywhere else).
     axis_open_reach : an end of the segment where the line runs into space the map does not
         cover is lengthened by this [m] beyond the map (the passage may go on unmapped).
     axis_spacing, axis_max_hypotheses : the hypotheses shown to the camera along each heading
@@ -113,6 +116,7 @@ class LocalizerConfig:
     axis_heading_spread: float = math.radians(10.0)
     axis_min_length: float = 1.0
     axis_sweep_ratio: float = 0.7
+    axis_continuity: float = 0.8
     axis_open_reach: float = 40.0
     axis_spacing: float = 1.0
     axis_max_hypotheses: int = 24
@@ -153,6 +157,7 @@ class LocalizerConfig:
         check_in_range(self.decide_min_fit, "LocalizerConfig.decide_min_fit", 0.0, 1.0)
         check_in_range(self.decide_laser_margin, "LocalizerConfig.decide_laser_margin", 0.0, 1.0)
         check_in_range(self.axis_sweep_ratio, "LocalizerConfig.axis_sweep_ratio", 0.0, 1.0)
+        check_in_range(self.axis_continuity, "LocalizerConfig.axis_continuity", 0.0, 1.0)
         check_positive(self.axis_open_reach, "LocalizerConfig.axis_open_reach", allow_zero=True)
         check_positive(self.axis_odometry, "LocalizerConfig.axis_odometry", allow_zero=True)
         if not isinstance(self.decide_here, bool):
