@@ -95,3 +95,91 @@ def test_tolerance_is_declared_once() -> None:
     assert TOLERANCE.position == 0.1
     assert math.degrees(TOLERANCE.heading) == pytest.approx(5.0)
     assert TOLERANCE.describe() == "0.1 m and 5 deg"
+
+
+AXIS_COV = np.diag([3.0**2, 0.05**2, math.radians(1.0) ** 2])
+
+
+def _axis_log(rows: list[tuple[str, float, float] | None], start_claims: int = 99) -> ScanLog:
+    """Scans along x at 1 m/s; ``rows[i]`` = (kind, along error [m], heading error [deg]) with
+    kind ``"axis"`` (an axis estimate) or ``"claim"`` (a pose published as tracking)."""
+    log = ScanLog()
+    for i, r in enumerate(rows):
+        truth = np.array([i * 0.1, 0.0, 0.0])
+        if r is None:
+            log.append(i * 0.1, truth, "lost", None, None, i * 0.1)
+            continue
+        kind, along, head = r
+        pose = truth + np.array([along, 0.0, math.radians(head)])
+        if kind == "axis":
+            log.append(i * 0.1, truth, "axis", None, None, i * 0.1, axis=(pose, AXIS_COV))
+        else:
+            log.append(i * 0.1, truth, "tracking", pose, COV, i * 0.1)
+    return log
+
+
+def test_axis_estimates_are_graded_for_their_heading_never_as_claims() -> None:
+    g = grade_trial(_axis_log([None, None, ("axis", 4.0, 1.0), ("axis", 12.0, 1.5), None]))
+    assert g.grade == "undetermined"  # an axis estimate is no claim, however far along
+    assert g.claims == 0
+    assert g.axis_estimates == 2
+    assert g.time_to_axis == pytest.approx(0.2)
+    assert g.first_axis_heading_error == pytest.approx(math.radians(1.0))
+    assert g.first_axis_heading_ok is True
+    assert g.first_axis_covered is True  # 4 m along, std 3 m: inside
+    assert g.axis_coverage == pytest.approx(0.5)  # 12 m along: outside
+    assert g.first_heading_ok is True
+    assert g.heading_wrong is False
+    assert g.axis_heading_wrong == 0
+    assert g.time_to_heading == pytest.approx(0.2)
+    row = json_safe(g.as_dict())
+    assert row["first_axis_covered"] is True
+    assert "grade" in row  # the claim keys stay
+    assert "coverage" in row
+
+
+def test_a_wrong_axis_heading_at_any_scan_makes_the_heading_wrong() -> None:
+    g = grade_trial(_axis_log([("axis", 0.0, 1.0), ("axis", 0.0, 7.0), ("axis", 0.0, 1.0)]))
+    assert g.first_heading_ok is True
+    assert g.heading_wrong is True
+    assert g.axis_heading_wrong == 1
+    assert g.grade == "undetermined"
+    # a claim's heading counts as a heading output too: first output right, then a wrong claim
+    g = grade_trial(_axis_log([("axis", 0.0, 1.0), ("claim", 0.0, 8.0)]))
+    assert g.heading_wrong is True
+    assert g.grade == "confident_wrong"
+    # no axis estimate, no claim: no heading
+    g = grade_trial(_axis_log([None, None]))
+    assert g.first_heading_ok is None
+    assert g.first_axis_covered is None
+    assert g.heading_wrong is False
+    assert math.isnan(g.time_to_axis)
+
+
+def test_the_first_heading_is_counted_from_the_kidnapping() -> None:
+    rows = [("claim", 0.0, 0.0), None, None, ("axis", 0.0, 179.0), ("axis", 0.0, 0.5)]
+    g = grade_trial(_axis_log(rows), start=1)
+    assert g.first_heading_ok is False  # the first heading since the kidnapping was flipped
+    assert g.heading_wrong is True
+    assert g.time_to_heading == pytest.approx(0.2)
+
+
+def test_the_summary_counts_heading_correct_and_wrong() -> None:
+    from symloc.bench.localization import summarize
+
+    base = {"family": "corridor_long", "method": "decide", "claims": 0, "coverage": math.nan,
+            "time_to_claim": math.nan, "distance_to_claim": math.nan, "error_p95": math.nan,
+            "heading_error_p95": math.nan, "fraction_tracking": 0.0, "grade": "undetermined"}  # fmt: skip
+    right = grade_trial(_axis_log([("axis", 0.0, 1.0)])).as_dict()
+    wrong = grade_trial(_axis_log([("axis", 0.0, 1.0), ("axis", 0.0, 9.0)])).as_dict()
+    old = dict(base)  # a row of an older JSON, without the heading's keys
+    rows = [base | right, base | right, base | wrong, old]
+    (fam, _all) = summarize(rows)
+    assert fam["trials"] == 4
+    assert fam["heading_correct"] == 3  # the first heading of the third was right too
+    assert fam["heading_wrong"] == 1
+    assert fam["axis_trials"] == 3
+    assert fam["axis_first_covered_rate"] == pytest.approx(1.0)
+    assert fam["median_time_to_heading_s"] == pytest.approx(0.0)
+    assert fam["correct"] == 0
+    assert fam["undetermined"] == 4

@@ -434,3 +434,57 @@ def test_images_are_bounded_and_only_decoded_when_requested() -> None:
     core.on_scan(_scan_msg(1.0))
     assert loc.calls[-1][2] is not None
     assert loc.calls[-1][2].shape == (20, 30, 3)
+
+
+def _axis_estimate() -> Estimate:
+    from symloc.localizer.types import AxisPose
+
+    ends = np.array([[1.0, 2.0], [13.0, 2.0]])
+    cov = np.diag([12.0**2 / 12.0, 0.05**2, math.radians(1.0) ** 2])
+    axis = AxisPose(np.array([7.0, 2.0, 0.1]), cov, ends, open_ends=1)
+    hyps = tuple(Hypothesis(np.array([*e, 0.1]), 0.5) for e in ends)
+    return Estimate(Status.AXIS, hypotheses=hyps, reason="heading decided", axis=axis)
+
+
+def test_an_axis_estimate_goes_on_its_own_topic_never_amcl_pose_nor_map_to_odom() -> None:
+    from symloc.ros.requests import status_from_msg
+
+    core, _, _ = _core([TRACK, _axis_estimate()])
+    core.on_map(_map_msg())
+    core.on_odom(_odom_msg(1.0))
+    assert core.on_scan(_scan_msg(1.0)).tf is not None  # tracking: map -> odom sent
+    core.on_odom(_odom_msg(1.1))
+    out = core.on_scan(_scan_msg(1.1))
+    assert out.estimate.status is Status.AXIS
+    assert out.amcl_pose is None  # nav2 never reads it as a localized pose
+    assert out.tf is None  # map -> odom withdrawn (left to age)
+    assert out.axis_pose is not None
+    assert out.axis_pose["header"]["frame_id"] == "map"
+    cov6 = np.asarray(out.axis_pose["pose"]["covariance"], float).reshape(6, 6)
+    assert cov6[0, 0] == pytest.approx(12.0)  # 12 m segment along x: (12 m)^2 / 12
+    assert cov6[1, 1] == pytest.approx(0.05**2)
+    assert cov6[5, 5] == pytest.approx(math.radians(1.0) ** 2)
+    diag = out.status["status"][0]
+    assert diag["level"] == 1  # WARN, as ambiguous
+    assert diag["message"].startswith("axis: ")
+    values = {kv["key"]: kv["value"] for kv in diag["values"]}
+    assert values["status"] == "axis"
+    assert values["pose"] == ""  # not a pose published as tracking
+    assert [float(v) for v in values["axis_ends"].split()] == [1.0, 2.0, 13.0, 2.0]
+    assert float(values["axis_length"]) == pytest.approx(12.0)
+    stds = [float(v) for v in values["axis_std"].split()]
+    assert stds == pytest.approx([12.0 / math.sqrt(12.0), 0.05, math.radians(1.0)])
+    assert values["axis_open_ends"] == "1"
+    assert "not updated since" in values["map_to_odom"] or "never" in values["map_to_odom"]
+    markers = out.candidates["markers"]
+    line = [m for m in markers if m.get("ns") == "symloc_axis"]
+    assert len(line) == 1
+    assert [p["x"] for p in line[0]["points"]] == [1.0, 13.0]
+    # the dicts build real messages, and a driver reads the axis back
+    _msg("geometry_msgs/msg/PoseWithCovarianceStamped", out.axis_pose)
+    _msg("visualization_msgs/msg/MarkerArray", out.candidates)
+    parsed = status_from_msg(_msg("diagnostic_msgs/msg/DiagnosticArray", out.status))
+    assert parsed.status is Status.AXIS
+    assert parsed.pose is None
+    np.testing.assert_allclose(parsed.axis_pose, [7.0, 2.0, 0.1])
+    np.testing.assert_allclose(parsed.axis_ends, [[1.0, 2.0], [13.0, 2.0]])

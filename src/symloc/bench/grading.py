@@ -14,12 +14,27 @@ percentile, position and heading) and whether the published covariance covered t
 the normalised estimation error squared ``NEES = e^T P^-1 e`` of each claim and the share of
 claims whose error lies inside the published 95 % ellipsoid (NEES below the chi-square 95 %
 quantile with 3 degrees of freedom, 7.81; Bar-Shalom, Li and Kirubarajan 2001, sec. 5.4).
+
+**Heading** (corridors: the localizer's status ``axis``, heading known and position along the
+corridor's axis not, :class:`~symloc.localizer.types.AxisPose`). An axis estimate is not a
+claim and never makes a trial confident wrong; it is graded on its own:
+
+- every scan's heading output is the axis estimate's heading, or the heading of a pose
+  published as tracking;
+- the trial's **heading is wrong** if any heading output, at any scan, is off by more than the
+  tolerance's heading (5 degrees), as a confident wrong claim would be;
+- its **first heading** is the first heading output since the start (or the kidnapping): right
+  when within the tolerance;
+- each axis estimate's position is honest when the truth lies inside its 95 % ellipsoid (NEES
+  below 7.81, as for claims): the time of the first one, whether its heading was right and it
+  covered the truth, and the share of axis estimates that covered it are reported.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -68,7 +83,9 @@ class ScanLog:
 
     ``t`` [s], ``truth`` (3,) true pose, ``status`` the published status, ``pose`` (3,) the
     pose published as tracking (None otherwise), ``cov`` (3, 3) its covariance, ``distance``
-    [m] travelled since the trial started, ``reason`` one line of why.
+    [m] travelled since the trial started, ``reason`` one line of why; ``axis`` (3,) and
+    ``axis_cov`` (3, 3) the axis estimate (status ``axis``: the middle of the segment with the
+    decided heading, and its elongated covariance; None otherwise).
     """
 
     t: list[float] = field(default_factory=list)
@@ -78,6 +95,8 @@ class ScanLog:
     cov: list[FloatArray | None] = field(default_factory=list)
     distance: list[float] = field(default_factory=list)
     reason: list[str] = field(default_factory=list)
+    axis: list[FloatArray | None] = field(default_factory=list)
+    axis_cov: list[FloatArray | None] = field(default_factory=list)
 
     def append(
         self,
@@ -88,8 +107,9 @@ class ScanLog:
         cov: FloatArray | None,
         distance: float,
         reason: str = "",
+        axis: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
-        """Record one scan."""
+        """Record one scan (``axis``: the axis estimate's pose (3,) and covariance (3, 3))."""
         self.t.append(float(t))
         self.truth.append(np.asarray(truth, dtype=np.float64).copy())
         self.status.append(status)
@@ -97,6 +117,8 @@ class ScanLog:
         self.cov.append(None if cov is None else np.asarray(cov, dtype=np.float64).copy())
         self.distance.append(float(distance))
         self.reason.append(reason)
+        self.axis.append(None if axis is None else np.asarray(axis[0], dtype=np.float64).copy())
+        self.axis_cov.append(None if axis is None else np.asarray(axis[1], dtype=np.float64).copy())
 
     def __len__(self) -> int:
         return len(self.t)
@@ -105,7 +127,17 @@ class ScanLog:
 @dataclass(frozen=True)
 class TrialGrade:
     """The grade of one trial (see the module docstring); times in s, distances in m,
-    angles in rad; NaN where undefined (e.g. no claim)."""
+    angles in rad; NaN where undefined (e.g. no claim).
+
+    The heading's grade (status ``axis``): ``axis_estimates`` scans with an axis estimate;
+    ``time_to_axis`` from the start (or the kidnapping) to the first since then;
+    ``first_axis_heading_error`` its heading error, ``first_axis_heading_ok`` whether within
+    the tolerance and ``first_axis_covered`` whether the truth lay inside its 95 % ellipsoid
+    (None without one); ``axis_coverage`` the share of axis estimates that covered the truth;
+    ``axis_heading_wrong`` axis estimates whose heading was off; ``time_to_heading`` to the
+    first heading output (axis or tracking) since the start, ``first_heading_ok`` whether it
+    was right (None without one); ``heading_wrong`` whether any heading output, at any scan,
+    was off by more than the tolerance."""
 
     grade: str
     claims: int
@@ -123,8 +155,18 @@ class TrialGrade:
     worst_heading_error: float
     first_wrong_t: float
     first_wrong_reason: str
+    axis_estimates: int = 0
+    time_to_axis: float = math.nan
+    first_axis_heading_error: float = math.nan
+    first_axis_heading_ok: bool | None = None
+    first_axis_covered: bool | None = None
+    axis_coverage: float = math.nan
+    axis_heading_wrong: int = 0
+    time_to_heading: float = math.nan
+    first_heading_ok: bool | None = None
+    heading_wrong: bool = False
 
-    def as_dict(self) -> dict[str, float | int | str]:
+    def as_dict(self) -> dict[str, float | int | str | bool | None]:
         """Plain values for JSON."""
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
@@ -166,7 +208,7 @@ def grade_trial(
         i for i in claimed if pos_err[i] > tolerance.position or head_err[i] > tolerance.heading
     ]
     after = [i for i in claimed if i >= start]
-    grade = "confident_wrong" if wrong else ("correct" if after else "undetermined")
+    verdict = "confident_wrong" if wrong else ("correct" if after else "undetermined")
     t0 = log.t[start] if n > start else math.nan
     d0 = log.distance[start] if n > start else math.nan
     first = after[0] if after else None
@@ -181,8 +223,8 @@ def grade_trial(
     ce = pos_err[claimed] if claimed else np.zeros(0)
     he = head_err[claimed] if claimed else np.zeros(0)
     worst = int(np.argmax(ce)) if claimed else -1
-    return TrialGrade(
-        grade=grade,
+    grade = TrialGrade(
+        grade=verdict,
         claims=len(claimed),
         scans=n,
         time_to_claim=(log.t[first] - t0) if first is not None else math.nan,
@@ -199,3 +241,43 @@ def grade_trial(
         first_wrong_t=log.t[wrong[0]] if wrong else math.nan,
         first_wrong_reason=log.reason[wrong[0]] if wrong else "",
     )
+    return replace(grade, **_heading_grade(log, tolerance, start, head_err))
+
+
+def _heading_grade(
+    log: ScanLog, tolerance: Tolerance, start: int, claim_heading_error: FloatArray
+) -> dict[str, Any]:
+    """The heading's fields of :class:`TrialGrade` (see the module docstring);
+    ``claim_heading_error`` (N,) [rad] of each scan's tracking claim (NaN: no claim)."""
+    n = len(log)
+    axis_err = np.full(n, np.nan)
+    covered = np.zeros(n, dtype=bool)
+    rows = [i for i in range(n) if log.axis[i] is not None]
+    for i in rows:
+        p, c = log.axis[i], log.axis_cov[i]
+        assert p is not None
+        assert c is not None
+        axis_err[i] = abs(float(angle_diff(p[2], log.truth[i][2])))
+        covered[i] = nees(p - log.truth[i], c) <= CHI2_3DOF_95
+    heading_err = np.where(np.isnan(axis_err), claim_heading_error, axis_err)
+    outputs = [i for i in range(start, n) if math.isfinite(heading_err[i])]
+    first_axis = next((i for i in rows if i >= start), None)
+    first = outputs[0] if outputs else None
+    t0 = log.t[start] if n > start else math.nan
+    tol = tolerance.heading
+    return {
+        "axis_estimates": len(rows),
+        "time_to_axis": log.t[first_axis] - t0 if first_axis is not None else math.nan,
+        "first_axis_heading_error": (
+            float(axis_err[first_axis]) if first_axis is not None else math.nan
+        ),
+        "first_axis_heading_ok": (
+            bool(axis_err[first_axis] <= tol) if first_axis is not None else None
+        ),
+        "first_axis_covered": bool(covered[first_axis]) if first_axis is not None else None,
+        "axis_coverage": float(np.mean(covered[rows])) if rows else math.nan,
+        "axis_heading_wrong": int(np.count_nonzero(axis_err > tol)),
+        "time_to_heading": log.t[first] - t0 if first is not None else math.nan,
+        "first_heading_ok": bool(heading_err[first] <= tol) if first is not None else None,
+        "heading_wrong": bool(np.any(np.nan_to_num(heading_err, nan=0.0) > tol)),
+    }

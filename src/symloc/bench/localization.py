@@ -9,7 +9,11 @@ sweep's JSON is the same for any worker count.
 
 :func:`summarize` folds the trials into rows per (family, method) with Wilson 95 % intervals of
 each rate, median time and distance to the first claim, the 95th percentile of the tracking
-error and the coverage of the published covariance.
+error and the coverage of the published covariance; and the heading's grade (corridors: status
+``axis``, :mod:`symloc.bench.grading`): the share of trials whose first heading output was
+right (``heading_correct``), the share with any heading output off by more than the tolerance
+(``heading_wrong``), the median time to the first heading, the trials with an axis estimate and
+how often the axis estimates' 95 % ellipsoids covered the truth.
 """
 
 from __future__ import annotations
@@ -189,8 +193,37 @@ def summarize(rows: list[dict[str, Any]], by: str = "family") -> list[dict[str, 
         )
         row["covariance_coverage"] = _pooled_coverage(claimed)
         row["fraction_tracking"] = _median([r["fraction_tracking"] for r in g])
+        row.update(_heading_summary(g))
         out.append(row)
     return out
+
+
+def _heading_summary(g: list[dict[str, Any]]) -> dict[str, Any]:
+    """The heading's columns of a summary row (rows without the heading's keys count as no
+    heading output)."""
+    n = len(g)
+    row: dict[str, Any] = {}
+    hits = {
+        "heading_correct": sum(1 for r in g if r.get("first_heading_ok") is True),
+        "heading_wrong": sum(1 for r in g if r.get("heading_wrong") is True),
+    }
+    for name, k in hits.items():
+        lo, hi = wilson_interval(k, n)
+        row[name] = k
+        row[f"{name}_rate"] = k / n if n else math.nan
+        row[f"{name}_ci95"] = [lo, hi]
+    row["median_time_to_heading_s"] = _median([r.get("time_to_heading", math.nan) for r in g])
+    axis = [r for r in g if r.get("axis_estimates", 0) > 0]
+    row["axis_trials"] = len(axis)
+    covered = [r.get("first_axis_covered") for r in axis]
+    known = [c for c in covered if c is not None]
+    row["axis_first_covered_rate"] = (
+        sum(1 for c in known if c is True) / len(known) if known else math.nan
+    )
+    num = sum(r["axis_coverage"] * r["axis_estimates"] for r in axis)
+    den = sum(r["axis_estimates"] for r in axis)
+    row["axis_coverage"] = num / den if den else math.nan
+    return row
 
 
 def method_order(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -66,8 +66,16 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 #: What a method publishes at one scan: status, pose (3,) or None, covariance (3, 3) or None,
-#: reason, and a request to the driver (or None).
-Published = tuple[str, FloatArray | None, FloatArray | None, str, Request | None]
+#: reason, a request to the driver (or None), and the axis estimate (status ``axis``: its
+#: pose (3,) and covariance (3, 3); None otherwise: graded for its heading, never a claim).
+Published = tuple[
+    str,
+    FloatArray | None,
+    FloatArray | None,
+    str,
+    Request | None,
+    tuple[FloatArray, FloatArray] | None,
+]
 
 TRIAL_KINDS = ("global", "kidnap")
 METHODS = ("symloc", "amcl", "decide")
@@ -244,9 +252,9 @@ def _run_method(
             deadline = t + cfg.claim_timeout
         world = scen.world_at(t)
         scan = setup.scan(world, body.pose, twist, t)
-        status, pose, cov, reason, request = runner.update(body.odom, scan, image)
+        status, pose, cov, reason, request, axis = runner.update(body.odom, scan, image)
         image = None
-        log.append(t, scen.to_map(body.pose), status, pose, cov, distance, reason)
+        log.append(t, scen.to_map(body.pose), status, pose, cov, distance, reason, axis)
         if pose is not None and kidnapped and not claimed_after_start:
             claimed_after_start = True
             deadline = max(t, claim_window_start) + cfg.track_time
@@ -305,12 +313,14 @@ class _SymlocRunner:
     ) -> Published:
         est = self.loc.update(odom, scan, image)
         tracking = est.status is Status.TRACKING
+        axis = est.axis
         return (
             est.status.value,
             est.pose if tracking else None,
             est.covariance if tracking else None,
             est.reason,
             est.request,
+            None if axis is None else (axis.pose, axis.covariance),
         )
 
     def steps(self) -> tuple[str, ...]:
@@ -345,7 +355,8 @@ class _AmclRunner:
         confident, reason = amcl_confident(conf)
         status = "tracking" if confident else "not_confident"
         cov = np.asarray(res.covariance, dtype=np.float64)
-        return status, carried if confident else None, cov if confident else None, reason, None
+        pose, pose_cov = (carried, cov) if confident else (None, None)
+        return status, pose, pose_cov, reason, None, None
 
     def steps(self) -> tuple[str, ...]:
         return ()

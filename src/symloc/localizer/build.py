@@ -97,4 +97,5 @@ def build_localizer(
         laser_pose=laser,
         proposer=proposer,
         keyframes=keyframes if decide else None,
+        grid=grid,
     )

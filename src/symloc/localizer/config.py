@@ -57,6 +57,34 @@ class LocalizerConfig:
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
     decide_rest : scans left to the other phases (AMCL's convergence, the drive to the centre)
         after deciding here handed over or gave up, before it is tried again.
+    axis_max_spread : the laser's hypotheses are an axis family (a corridor: heading known up to
+        a half turn, position along a line not; :mod:`symloc.localizer.axis`) when each lies
+        within this [m] of its heading class' line ...
+    axis_heading_spread : ... with headings within this [rad] of their class' mean ...
+    axis_min_length : ... and one class spans at least this [m] along the line.
+    axis_sweep_ratio : along the line, the scan fits where the pose scorer gives at least this
+        share of the line's best score (the segment's extent).
+    axis_continuity : ... and it must fit along at least this share of that stretch (a
+        corridor: all of it; repeated features such as pillars leave gaps, and their poses are
+        shown to the camera one by one as anywhere else).
+    axis_open_reach : an end of the segment where the line runs into space the map does not
+        cover is lengthened by this [m] beyond the map (the passage may go on unmapped).
+    axis_spacing, axis_max_hypotheses : the hypotheses shown to the camera along each heading
+        class' segment: this far apart [m], at most this many per class.
+    axis_min_inliers : the winning heading class' best verified hypothesis needs at least this
+        many inliers, and the camera's verification margin over the other class' best fit
+        (one weak match never decides the heading).
+    axis_across_std, axis_theta_std : least std [m], [rad] of the axis estimate across the axis
+        and in heading.
+    axis_line_std : std [rad] of the axis' direction where it runs far from the stretch it was
+        fitted on (a SLAM map bends a little over tens of metres); it widens the estimate
+        across the axis in proportion to the segment's reach.
+    axis_odometry : the segment lengthens at each end by this share of the distance travelled
+        (odometry's error along the axis).
+    axis_recheck : scans on the axis between two tries of deciding here (the laser proposes
+        again, the camera looks when an end, a door or a keyframe could pin the position).
+    axis_patience : scans in a row at which the laser does not confirm the axis (the scan no
+        longer fits the line with the decided heading) before it is given up.
     """
 
     min_cluster_weight: float = 0.05
@@ -85,6 +113,21 @@ class LocalizerConfig:
     decide_theta_std: float = math.radians(5.0)
     decide_max_hypotheses: int = 16
     decide_rest: int = 100
+    axis_max_spread: float = 0.2
+    axis_heading_spread: float = math.radians(10.0)
+    axis_min_length: float = 1.0
+    axis_sweep_ratio: float = 0.7
+    axis_continuity: float = 0.8
+    axis_open_reach: float = 40.0
+    axis_spacing: float = 1.0
+    axis_max_hypotheses: int = 24
+    axis_min_inliers: int = 30
+    axis_across_std: float = 0.05
+    axis_theta_std: float = math.radians(1.0)
+    axis_line_std: float = math.radians(0.3)
+    axis_odometry: float = 0.05
+    axis_recheck: int = 30
+    axis_patience: int = 30
 
     def __post_init__(self) -> None:
         for name in (
@@ -100,6 +143,13 @@ class LocalizerConfig:
             "decision_theta_std",
             "decide_turn",
             "decide_theta_std",
+            "axis_max_spread",
+            "axis_heading_spread",
+            "axis_min_length",
+            "axis_spacing",
+            "axis_across_std",
+            "axis_theta_std",
+            "axis_line_std",
         ):
             check_positive(getattr(self, name), f"LocalizerConfig.{name}")
         check_in_range(self.min_cluster_weight, "LocalizerConfig.min_cluster_weight", 0.0, 1.0)
@@ -107,6 +157,10 @@ class LocalizerConfig:
         check_in_range(self.copy_score_ratio, "LocalizerConfig.copy_score_ratio", 0.0, 1.0)
         check_in_range(self.decide_min_fit, "LocalizerConfig.decide_min_fit", 0.0, 1.0)
         check_in_range(self.decide_laser_margin, "LocalizerConfig.decide_laser_margin", 0.0, 1.0)
+        check_in_range(self.axis_sweep_ratio, "LocalizerConfig.axis_sweep_ratio", 0.0, 1.0)
+        check_in_range(self.axis_continuity, "LocalizerConfig.axis_continuity", 0.0, 1.0)
+        check_positive(self.axis_open_reach, "LocalizerConfig.axis_open_reach", allow_zero=True)
+        check_positive(self.axis_odometry, "LocalizerConfig.axis_odometry", allow_zero=True)
         if not isinstance(self.decide_here, bool):
             raise ConfigurationError(
                 f"LocalizerConfig.decide_here: expected a bool, got {self.decide_here!r}"
@@ -119,6 +173,10 @@ class LocalizerConfig:
             "decide_views",
             "decide_max_hypotheses",
             "decide_rest",
+            "axis_max_hypotheses",
+            "axis_min_inliers",
+            "axis_recheck",
+            "axis_patience",
         ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.geometry import compose, wrap_angle
+from symloc.grid import OccupancyGrid
 from symloc.symmetry.order import SymmetryOrder
 
 from .centering import CentreFilter
@@ -57,7 +58,8 @@ class DecideCounts:
     ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
     but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
     ``claimed`` poses published at once;
-    ``turns`` turns to look elsewhere; ``gave_up`` times nothing was decided here.
+    ``turns`` turns to look elsewhere; ``gave_up`` times nothing was decided here;
+    ``axis`` times the camera decided a corridor's heading class (status ``axis``).
     """
 
     entered: int = 0
@@ -70,6 +72,7 @@ class DecideCounts:
     claimed: int = 0
     turns: int = 0
     gave_up: int = 0
+    axis: int = 0
 
 
 @dataclass
@@ -91,7 +94,9 @@ class Context:
     ``known_places`` is the localizer's own list (a mapped place is appended to it);
     ``gate`` None publishes the tracker's estimate unchecked (scripted tests only);
     ``proposer`` (the global scan-to-map search) and ``keyframes`` (the visual map's
-    keyframes) serve deciding from where the robot stands (None: not available).
+    keyframes) serve deciding from where the robot stands (None: not available); ``grid`` the
+    map, for where a corridor's axis runs on into unmapped space (None: the axis ends where
+    the scan stops fitting, :mod:`symloc.localizer.axis_phase`).
     """
 
     tracker: Tracker
@@ -105,6 +110,7 @@ class Context:
     record: Record
     proposer: PoseProposer | None = None
     keyframes: KeyframeStore | None = None
+    grid: OccupancyGrid | None = None
 
     def note(self, text: str) -> None:
         """Log what happened (kept in the localizer's history)."""

@@ -25,6 +25,15 @@ copies open) the localizer first tries to decide without driving anywhere:
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
 
+**A corridor** (the survivors are an axis family, :mod:`symloc.localizer.axis`: one heading up
+to a half turn, along a line): no single pose can be verified, since the camera does not tell
+where along the corridor it stands. Hypotheses along both heading classes' segments are shown
+to the camera instead, and the image decides the heading class
+(:mod:`symloc.localizer.axis_heading`); the localizer then reports status ``axis``
+(:mod:`symloc.localizer.axis_phase`), and comes back here every ``axis_recheck`` scans to earn
+a full pose as above (with the axis as the phase to return to: an axis family with its
+heading renews it without an image; a pose verified against the axis' heading is refused).
+
 :class:`DecideRouter` is the one place that sends the localizer here: before a scan is given
 to :class:`~.phases.Lost` (or to a trip to the centre that has not started), unless the path
 is resting.
@@ -43,11 +52,13 @@ from symloc.geometry import angle_diff, compose, relative, wrap_angle
 from symloc.scan import LaserScan
 from symloc.symmetry.order import SymmetryOrder
 
+from .axis_heading import vote_heading
+from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
 from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
 from .copies import known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
-from .types import Estimate, Hypothesis, Request, RequestKind, Status
+from .types import Estimate, Hypothesis, KeyframeStore, Request, RequestKind, Status
 from .view_planning import plan_turn
 
 __all__ = ["DecideHere", "DecideRouter", "Hypotheses", "propose"]
@@ -62,6 +73,8 @@ IMAGE_PATIENCE = 3
 #: Turns in place per image allowed before the path gives up (re-planned views that never
 #: settle).
 TURNS_PER_VIEW = 2
+#: A heading class of a new axis family is the axis' own when within this [rad] of it.
+SAME_CLASS = math.pi / 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,7 +192,10 @@ class DecideHere:
     ``waited`` scans without the image; ``turns`` turns in place made;
     ``turn_start`` / ``turn`` the odometry heading and angle [rad] of a turn under way;
     ``rest_after`` scans the other phases get once this one hands over or gives up
-    (:class:`DecideRouter` reads it).
+    (:class:`DecideRouter` reads it). ``back`` the axis being reported, when deciding here
+    came from it (the estimates stay ``axis``, and nothing decided returns to it);
+    ``classes`` the two heading classes of an axis family and ``labels`` (K,) the class of
+    each pose shown, while the image is to decide the heading.
     """
 
     name: ClassVar[str] = "decide_here"
@@ -193,13 +209,17 @@ class DecideHere:
     turn_start: float | None = None
     turn: float = 0.0
     rest_after: int = 0
+    back: OnAxis | None = None
+    classes: tuple[AxisClass, AxisClass] | None = None
+    labels: NDArray[np.int64] | None = None
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         if self.turn_start is not None:
             turned = float(angle_diff(inp.odom_pose[2], self.turn_start))
             remaining = float(angle_diff(self.turn, turned))
             if abs(remaining) > ctx.config.rotate_tolerance:
-                return self._ask(
+                return self._wait(
+                    ctx,
                     inp,
                     Request(RequestKind.ROTATE, angle=remaining),
                     f"deciding here: turning to look elsewhere (view {self.views + 1})",
@@ -211,8 +231,15 @@ class DecideHere:
             self.waited += 1
             if self.waited > IMAGE_PATIENCE:
                 return self._give_up(ctx, inp, "no image arrived")
-            return self._ask(inp, Request(RequestKind.CAPTURE_IMAGE), "waiting for the image"), self
+            request = Request(RequestKind.CAPTURE_IMAGE)
+            return self._wait(ctx, inp, request, "waiting for the image"), self
         return self._verify(ctx, inp, inp.image)
+
+    def _wait(self, ctx: Context, inp: Inputs, request: Request, reason: str) -> Estimate:
+        """A scan spent turning or waiting for the image: the axis when deciding from it."""
+        if self.back is not None:
+            return self._on_axis(ctx, inp, request, reason)
+        return self._ask(inp, request, reason)
 
     # ------------------------------------------------------------------ the laser
 
@@ -238,11 +265,79 @@ class DecideHere:
             self.rest_after = max(1, cfg.decide_rest // 3)
             return lost(why, inp.result), restart(ctx)
         poses = hyp.poses[: hyp.survivors]
+        found = axis_classes(ctx, inp, poses)
+        if found is not None:
+            return self._axis(ctx, inp, found[1], len(poses))
         keyframes = ctx.keyframes
         if keyframes is None or keyframes.keyframe_count() == 0:
             return self._give_up(
                 ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
             )
+        turn = self._choose_view(ctx, inp, poses, keyframes)
+        if turn is not None:
+            return turn
+        self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
+        self.views += 1
+        self.seen.append(float(inp.odom_pose[2]))
+        ctx.note(
+            f"deciding here: {len(poses)} poses explain the scan "
+            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams); "
+            f"image {self.views} of {cfg.decide_views} requested"
+            + ("" if hyp.complete else f" (the search is incomplete: {hyp.reason})")
+        )
+        request = Request(RequestKind.CAPTURE_IMAGE)
+        why = f"{len(poses)} poses explain the scan; image requested"
+        return self._wait(ctx, inp, request, why), self
+
+    def _axis(
+        self, ctx: Context, inp: Inputs, classes: tuple[AxisClass, AxisClass], count: int
+    ) -> Step:
+        """The survivors are an axis family: renew the axis being reported when one class has
+        its heading, else show both classes to the camera."""
+        cfg = ctx.config
+        back = self.back
+        if back is not None:
+            c = back.class_of(classes, SAME_CLASS)
+            if c is not None:
+                back.renew(classes[c], inp.odom_pose)
+                # said once while it lasts (the estimate's reason gives the segment each scan)
+                ctx.notes.note_once("deciding here: the laser proposes the axis again")
+                self.rest_after = cfg.axis_recheck
+                return back.estimate(cfg, back.headline()), back
+            ctx.note("axis given up: the laser's axis no longer has the decided heading")
+            self.back = None
+        keyframes = ctx.keyframes
+        if keyframes is None or keyframes.keyframe_count() == 0:
+            return self._give_up(
+                ctx, inp, f"{count} poses along an axis explain the scan and no keyframes"
+            )
+        shown = [c.fitted.samples(cfg.axis_spacing, cfg.axis_max_hypotheses) for c in classes]
+        turn = self._choose_view(ctx, inp, np.vstack(shown), keyframes)
+        if turn is not None:
+            return turn
+        self.poses = np.vstack(shown)
+        self.labels = np.repeat(np.arange(2, dtype=np.int64), [len(s) for s in shown])
+        self.classes = classes
+        self.odom0, self.waited = inp.odom_pose.copy(), 0
+        self.views += 1
+        self.seen.append(float(inp.odom_pose[2]))
+        lengths = " and ".join(f"{c.fitted.length:.1f} m" for c in classes)
+        ctx.note(
+            f"deciding here: {count} poses explain the scan along an axis (heading known up to "
+            f"a half turn, {lengths} along the two lines); {len(self.poses)} hypotheses along "
+            f"both shown to the camera, image {self.views} of {cfg.decide_views} requested"
+        )
+        request = Request(RequestKind.CAPTURE_IMAGE)
+        why = "poses along an axis explain the scan; image requested"
+        return self._wait(ctx, inp, request, why), self
+
+    def _choose_view(
+        self, ctx: Context, inp: Inputs, poses: FloatArray, keyframes: KeyframeStore
+    ) -> Step | None:
+        """None when the image is to be taken here; else the step that turns the robot to
+        where more hypotheses of ``poses`` (K, 3) expect keyframes (or away from a heading
+        already imaged), or gives up when no heading left shows any a keyframe."""
+        cfg = ctx.config
         heading = float(inp.odom_pose[2])
         plan = plan_turn(
             poses,
@@ -259,19 +354,7 @@ class DecideHere:
         seen_here = any(abs(float(angle_diff(h, heading))) <= cfg.decide_turn for h in self.seen)
         if seen_here or here < plan.covered:
             return self._turn_to(ctx, inp, poses, plan.turn, plan.covered)
-        self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
-        self.views += 1
-        self.seen.append(heading)
-        ctx.note(
-            f"deciding here: {len(poses)} poses explain the scan "
-            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams); "
-            f"image {self.views} of {cfg.decide_views} requested"
-            + ("" if hyp.complete else f" (the search is incomplete: {hyp.reason})")
-        )
-        request = Request(RequestKind.CAPTURE_IMAGE)
-        return self._ask(
-            inp, request, f"{len(poses)} poses explain the scan; image requested"
-        ), self
+        return None
 
     def _turn_to(
         self, ctx: Context, inp: Inputs, poses: FloatArray, turn: float, covered: int
@@ -289,11 +372,11 @@ class DecideHere:
             f"{len(poses)} hypotheses expect keyframes"
         )
         ctx.note(why)
+        request = Request(RequestKind.ROTATE, angle=turn)
+        if self.back is not None:
+            return self._on_axis(ctx, inp, request, why), self
         estimate = Estimate(
-            status=Status.DECIDING,
-            hypotheses=_hypotheses(poses),
-            request=Request(RequestKind.ROTATE, angle=turn),
-            reason=why,
+            status=Status.DECIDING, hypotheses=_hypotheses(poses), request=request, reason=why
         )
         return estimate, self
 
@@ -313,10 +396,29 @@ class DecideHere:
         moved = relative(self.odom0, inp.odom_pose)
         carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
         answer = ctx.keyframes.verify(carried, image)
+        if self.classes is not None and self.labels is not None:
+            vote = vote_heading(carried, self.labels, answer, cfg.axis_min_inliers)
+            if vote.winner is None:
+                return self._look_elsewhere(
+                    ctx, inp, f"image {self.views}: heading not decided: {vote.reason}"
+                )
+            self.rest_after = cfg.axis_recheck
+            return enter_axis(ctx, inp, self.classes[vote.winner], self.odom0, vote.reason)
         if answer.index is None or answer.pose is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
         counts.verified += 1
         pose = np.asarray(answer.pose, dtype=np.float64)
+        if self.back is not None and abs(float(angle_diff(pose[2], self.back.heading))) > (
+            0.5 * math.pi
+        ):
+            ctx.note("axis given up: the camera now verifies a pose facing against it")
+            self.back = None
+            return self._look_elsewhere(
+                ctx,
+                inp,
+                f"image {self.views}: hypothesis {answer.index + 1} verified, but it faces "
+                "against the axis decided before: neither is trusted",
+            )
         cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
         gate = ctx.gate
         claim = None
@@ -391,7 +493,7 @@ class DecideHere:
         ctx.note(f"deciding here: {why}")
         if self.views >= ctx.config.decide_views:
             return self._give_up(ctx, inp, f"no hypothesis verified in {self.views} views ({why})")
-        self.poses, self.odom0 = None, None
+        self.poses, self.odom0, self.classes, self.labels = None, None, None, None
         return self._propose(ctx, inp)
 
     # ------------------------------------------------------------------ outcomes
@@ -405,19 +507,33 @@ class DecideHere:
             reason=reason,
         )
 
+    def _on_axis(self, ctx: Context, inp: Inputs, request: Request, reason: str) -> Estimate:
+        """While deciding here from the axis: the axis, carried by odometry, with the request
+        (the heading is still known)."""
+        back = self.back
+        assert back is not None
+        back.carry(ctx, inp.odom_pose)
+        return back.estimate(ctx.config, f"{back.headline()}; {reason}", request)
+
     def _give_up(self, ctx: Context, inp: Inputs, why: str) -> Step:
         ctx.record.decide.gave_up += 1
-        self.rest_after = ctx.config.decide_rest
         reason = f"not decided here: {why}"
         ctx.note(reason)
+        if self.back is not None:
+            self.rest_after = ctx.config.axis_recheck
+            back = self.back
+            back.carry(ctx, inp.odom_pose)
+            return back.estimate(ctx.config, f"{back.headline()}; {reason}"), back
+        self.rest_after = ctx.config.decide_rest
         return lost(reason, inp.result), restart(ctx)
 
 
 @dataclass
 class DecideRouter:
     """Sends the localizer to :class:`DecideHere` whenever the pose is not earned: before a
-    scan goes to :class:`~.phases.Lost`, or to a trip to the centre that has not started; not
-    for ``rest`` scans after it handed over or gave up (the other phases' turn)."""
+    scan goes to :class:`~.phases.Lost`, to a trip to the centre that has not started, or to
+    the axis (:class:`~.axis_phase.OnAxis`, which deciding here comes back to); not for
+    ``rest`` scans after it handed over or gave up (the other phases' turn)."""
 
     rest: int = 0
 
@@ -428,6 +544,9 @@ class DecideRouter:
         if self.rest > 0:
             self.rest -= 1
             return phase
+        if isinstance(phase, OnAxis):
+            ctx.record.decide.entered += 1
+            return DecideHere(why="on the axis, pose not earned", back=phase)
         if isinstance(phase, Lost) or (isinstance(phase, Centering) and phase.updates == 0):
             ctx.record.decide.entered += 1
             return DecideHere(why=f"pose not earned ({phase.name})")

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
+from symloc.grid import OccupancyGrid
 from symloc.odometry import OdometryReading, twist_between
 from symloc.scan import LaserScan, deskew, sensor_twist
 
@@ -105,6 +106,9 @@ class Localizer:
     keyframes : KeyframeStore, optional
         The visual map's keyframes, against which the camera verifies hypotheses where the
         robot stands (``config.decide_here``).
+    grid : OccupancyGrid, optional
+        The map, for where a corridor's axis runs on into space the map does not cover
+        (:mod:`symloc.localizer.axis_phase`; None: the axis ends where the scan stops fitting).
     """
 
     def __init__(
@@ -122,6 +126,7 @@ class Localizer:
         note_history: int = NOTE_HISTORY,
         proposer: PoseProposer | None = None,
         keyframes: KeyframeStore | None = None,
+        grid: OccupancyGrid | None = None,
     ) -> None:
         lp = np.asarray(laser_pose, dtype=np.float64).reshape(-1)
         if lp.shape != (3,) or not np.all(np.isfinite(lp)):
@@ -145,6 +150,7 @@ class Localizer:
             record=Record(),
             proposer=proposer,
             keyframes=keyframes,
+            grid=grid,
         )
         #: sends the localizer to decide where it stands (``config.decide_here``), else None
         self._router = DecideRouter() if self._ctx.config.decide_here else None

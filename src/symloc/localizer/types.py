@@ -12,6 +12,7 @@ stand-ins and run with the real parts through the adapters in
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
@@ -25,10 +26,12 @@ from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import Place
 
 __all__ = [
+    "AxisPose",
     "Decision",
     "DecisionStatus",
     "Estimate",
     "Hypothesis",
+    "HypothesisVerdict",
     "KeyframeStore",
     "Place",
     "PlaceStore",
@@ -54,7 +57,10 @@ class Status(enum.Enum):
     visual decision). ``AMBIGUOUS``: the pose is known only up to a symmetry of order ``k``; the
     ``k`` candidate poses are listed. ``GOING_TO_CENTRE``: ambiguous, and the robot has been asked
     to drive to the place's centre (Algorithm 2). ``DECIDING``: at the centre, images are being
-    compared with the visual map (Algorithm 3). ``LOST``: no pose worth reporting.
+    compared with the visual map (Algorithm 3). ``LOST``: no pose worth reporting. ``AXIS``: the
+    heading is known (the camera told the two headings of a corridor apart) but not the position
+    along the corridor's axis: :attr:`Estimate.axis` says where on which segment; nothing is
+    claimed (:mod:`symloc.localizer.axis_phase`).
     """
 
     TRACKING = "tracking"
@@ -62,6 +68,7 @@ class Status(enum.Enum):
     GOING_TO_CENTRE = "going_to_centre"
     DECIDING = "deciding"
     LOST = "lost"
+    AXIS = "axis"
 
 
 class RequestKind(enum.Enum):
@@ -112,6 +119,47 @@ class Request:
 
 
 @dataclass(frozen=True, slots=True)
+class AxisPose:
+    """Heading known, position along an axis not (status ``axis``).
+
+    Attributes
+    ----------
+    pose : ndarray of shape (3,)
+        The middle of the segment, with the decided heading (x [m], y [m], theta [rad]; map
+        frame). Not a claim: the robot is somewhere on the segment.
+    covariance : ndarray of shape (3, 3)
+        Long along the axis (std about length / sqrt(12), so that the whole segment lies inside
+        the 95 % ellipsoid), tight across it and in heading.
+    ends : ndarray of shape (2, 2)
+        The segment's end points [m] (map frame).
+    open_ends : int
+        How many of the ends were lengthened into space the map does not cover (the passage
+        may go on there; 0: both ends are where the scan stops fitting the map).
+    """
+
+    pose: FloatArray
+    covariance: FloatArray
+    ends: FloatArray
+    open_ends: int = 0
+
+    def __post_init__(self) -> None:
+        for name, shape in (("pose", (3,)), ("covariance", (3, 3)), ("ends", (2, 2))):
+            value = np.array(getattr(self, name), dtype=np.float64)
+            if value.shape != shape or not np.all(np.isfinite(value)):
+                raise ConfigurationError(
+                    f"AxisPose.{name}: expected a finite array of shape {shape}, got "
+                    f"{getattr(self, name)!r}"
+                )
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    @property
+    def length(self) -> float:
+        """The segment's length [m]."""
+        return float(np.hypot(*(self.ends[1] - self.ends[0])))
+
+
+@dataclass(frozen=True, slots=True)
 class Estimate:
     """One output of the localizer.
 
@@ -132,6 +180,9 @@ class Estimate:
         What the driver should do next; ``None`` means carry on.
     reason : str
         One line saying why the status is what it is (for logs and users).
+    axis : AxisPose or None
+        Set exactly when ``status`` is ``AXIS``: the heading and the segment the robot stands
+        on. ``pose`` stays None then: only an earned pose is ever a pose.
     """
 
     status: Status
@@ -141,6 +192,7 @@ class Estimate:
     order: SymmetryOrder | None = None
     request: Request | None = None
     reason: str = ""
+    axis: AxisPose | None = None
 
     def __post_init__(self) -> None:
         if self.order is not None and not isinstance(self.order, SymmetryOrder):
@@ -153,6 +205,11 @@ class Estimate:
         elif self.pose is not None:
             raise ConfigurationError(
                 f"Estimate.pose: only a tracking estimate carries a pose, not {self.status.value}"
+            )
+        if (self.status is Status.AXIS) != (self.axis is not None):
+            raise ConfigurationError(
+                "Estimate.axis: set exactly when the status is axis "
+                f"(status {self.status.value}, axis {'set' if self.axis is not None else 'None'})"
             )
 
 
@@ -329,18 +386,42 @@ class PoseProposer(Protocol):
 
 
 @dataclass(frozen=True, slots=True)
+class HypothesisVerdict:
+    """What one image says about one hypothesis: ``status`` ``"verified"``,
+    ``"contradicted"`` or ``"unknown"``; ``inliers`` of its best geometric fit (0 without
+    one); ``heading_offset`` [rad] the camera's heading measured by that fit minus the
+    hypothesis' heading (NaN without a fit)."""
+
+    status: str
+    inliers: int
+    heading_offset: float = math.nan
+
+    @property
+    def verified(self) -> bool:
+        """True when the image verifies the hypothesis."""
+        return self.status == "verified"
+
+
+@dataclass(frozen=True, slots=True)
 class Verification:
     """What one image says about several pose hypotheses.
 
     ``index`` is the single hypothesis the image verifies with margin (None: none);
     ``pose`` (3,) that hypothesis with the camera's heading (None without a decision);
     ``reason`` in words; ``counts`` how many hypotheses were verified, contradicted, unknown.
+    ``checks`` one :class:`HypothesisVerdict` per hypothesis in the order given (empty: the
+    store does not say), with the store's ``margin`` (how many times a rival's inliers the
+    winner needs) and ``heading_tolerance`` [rad] (NaN: not given); deciding a corridor's
+    heading class needs all three (:mod:`symloc.localizer.axis_heading`).
     """
 
     index: int | None
     pose: FloatArray | None
     reason: str
     counts: Mapping[str, int] = field(default_factory=dict)
+    checks: tuple[HypothesisVerdict, ...] = ()
+    margin: float = math.nan
+    heading_tolerance: float = math.nan
 
 
 @runtime_checkable

@@ -30,7 +30,7 @@ from symloc.vision.verification import (
     verify_hypotheses,
 )
 
-from .types import Decision, DecisionStatus, Place, Verification
+from .types import Decision, DecisionStatus, HypothesisVerdict, Place, Verification
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore", "single_verified"]
 
@@ -227,7 +227,16 @@ class VisionPlaceStore:
         cfg = self.verification
         index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
         pose = None if index is None else dec.checks[index].corrected_pose
-        return Verification(index, pose, reason, dict(dec.counts))
+        checks = tuple(HypothesisVerdict(c.status, c.inliers, c.heading_offset) for c in dec.checks)
+        return Verification(
+            index,
+            pose,
+            reason,
+            dict(dec.counts),
+            checks=checks,
+            margin=cfg.margin,
+            heading_tolerance=cfg.heading_tolerance,
+        )
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""

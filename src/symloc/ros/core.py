@@ -113,7 +113,11 @@ class Outputs:
     :data:`STALE_SCANS` unused scans in a row) and nothing else. ``amcl_pose``
     (PoseWithCovarianceStamped, map frame) only while tracking, as nav2_amcl publishes only
     poses it has; ``goal`` (PoseStamped, odom frame) for go-to-centre, face and rotate requests;
-    ``capture`` (std_msgs/Header) for a capture request.
+    ``capture`` (std_msgs/Header) for a capture request; ``axis_pose``
+    (PoseWithCovarianceStamped, map frame) only with status ``axis``: the middle of the
+    corridor segment with the decided heading and its elongated covariance, on its own topic
+    (never ``amcl_pose``, and no ``map -> odom``: nothing that drives the robot may take it
+    for a pose).
     """
 
     estimate: Estimate
@@ -124,6 +128,7 @@ class Outputs:
     amcl_pose: dict[str, Any] | None = None
     goal: dict[str, Any] | None = None
     capture: dict[str, Any] | None = None
+    axis_pose: dict[str, Any] | None = None
     used: bool = True
     #: The tracker's best pose (3,) at this scan, earned or not (for logs such as
     #: ``replay_scans.tum``; never published as a pose).
@@ -904,6 +909,10 @@ class NodeCore:
         if est.status is Status.TRACKING and est.pose is not None and est.covariance is not None:
             out.amcl_pose = pose_with_covariance_to_fields(
                 est.pose, est.covariance, stamp=stamp, frame_id=p.global_frame_id
+            )
+        if est.status is Status.AXIS and est.axis is not None:
+            out.axis_pose = pose_with_covariance_to_fields(
+                est.axis.pose, est.axis.covariance, stamp=stamp, frame_id=p.global_frame_id
             )
         req = est.request
         if req is None or req.kind is not RequestKind.CAPTURE_IMAGE:

@@ -473,6 +473,7 @@ class LocalizationNode(LifecycleNode):
             "candidates": MarkerArray,
             "goal": PoseStamped,
             "capture": Header,
+            "axis_pose": PoseWithCovarianceStamped,
             "tf": self.tf_message,
         }
         self._pub_handles = {
@@ -481,6 +482,7 @@ class LocalizationNode(LifecycleNode):
             "status": pub(DiagnosticArray, p.status_topic, 50),
             "candidates": pub(MarkerArray, p.candidates_topic, 10),
             "capture": pub(Header, p.capture_topic, 10),
+            "axis_pose": pub(PoseWithCovarianceStamped, p.axis_pose_topic, 10),
         }
         if p.publish_goals:  # off by default: nothing commands the robot unless asked
             self._pub_handles["goal"] = pub(PoseStamped, p.goal_topic, 10)
@@ -610,6 +612,7 @@ class LocalizationNode(LifecycleNode):
             "status": out.status,
             "goal": out.goal if p.publish_goals else None,
             "capture": out.capture,
+            "axis_pose": out.axis_pose,
             "candidates": out.candidates,
             "particle_cloud": out.particle_cloud,
         }

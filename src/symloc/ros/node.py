@@ -29,11 +29,19 @@ out ``symloc/goal``            geometry_msgs/PoseStamped, odom frame:      relia
                                go to the centre / face / rotate (only
                                with ``publish_goals``; off by default)
 out ``symloc/capture_request`` std_msgs/Header: take an image now          reliable
+out ``symloc/axis_pose``       geometry_msgs/PoseWithCovarianceStamped     reliable
+                               (only with status ``axis`` [3]_)
 =============================  ==========================================  ====================
 
 .. [1] best effort, depth 5, like nav2_amcl's scan subscription (matches reliable and
    best-effort publishers); ``sensor_qos: reliable`` makes them reliable, depth 50.
 .. [2] see :mod:`symloc.ros.status_msg` for the key / value layout.
+.. [3] a corridor: the camera decided the heading but not where along the corridor the robot
+   stands (:mod:`symloc.localizer.axis_phase`). The pose is the middle of the segment with the
+   decided heading, its covariance as long as the segment (std about length / sqrt(12) along
+   it) and tight across it and in heading. It is not a localized pose: nothing goes on
+   ``amcl_pose`` and no ``map -> odom`` is sent, so nav2 does not plan or drive on it (as
+   while lost); ``symloc/status`` says ``axis`` (level WARN) with the segment.
 
 The map frame's ``goal_pose`` of nav2 would need a pose the localizer has not earned, so the
 requests of Algorithm 2 are published in the odometry frame, which the robot knows; and only

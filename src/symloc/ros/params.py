@@ -199,8 +199,10 @@ class NodeParams:
     scan_topic, odom_topic, map_topic, image_topic, compressed_image_topic, initialpose_topic
         Inputs. An empty ``image_topic`` or ``compressed_image_topic`` is not subscribed.
     amcl_pose_topic, particle_cloud_topic, status_topic, candidates_topic, goal_topic,
-    capture_topic : str
-        Outputs (see :mod:`symloc.ros.node`).
+    capture_topic, axis_pose_topic : str
+        Outputs (see :mod:`symloc.ros.node`). ``axis_pose_topic`` carries the pose of status
+        ``axis`` (a corridor: heading known, position along its axis not; never on
+        ``amcl_pose``).
     publish_goals : bool
         Publish the localizer's requests to move the robot (go to a centre, face a direction,
         rotate) as geometry_msgs/PoseStamped in the odometry frame on ``goal_topic``
@@ -309,6 +311,7 @@ class NodeParams:
     goal_topic: str = "symloc/goal"
     publish_goals: bool = False
     capture_topic: str = "symloc/capture_request"
+    axis_pose_topic: str = "symloc/axis_pose"
     sensor_qos: str = "best_effort"
     mode: str = "localize"
     visual_map: str = ""

@@ -38,6 +38,11 @@ class NodeStatus:
     reason : str
     values : dict
         Every key / value of the message.
+    axis_pose : ndarray of shape (3,) or None
+        Status ``axis`` (heading known, position along a corridor not): the middle of the
+        segment with the decided heading (map frame). Not a pose to drive on.
+    axis_ends : ndarray of shape (2, 2) or None
+        Status ``axis``: the segment's ends [m] (map frame).
     """
 
     status: Status
@@ -47,6 +52,8 @@ class NodeStatus:
     candidates: NDArray[np.float64]
     reason: str
     values: dict[str, str]
+    axis_pose: NDArray[np.float64] | None = None
+    axis_ends: NDArray[np.float64] | None = None
 
 
 def _floats(text: str, key: str) -> NDArray[np.float64]:
@@ -95,6 +102,10 @@ def status_from_msg(msg: Any) -> NodeStatus:
         [_floats(values[f"candidate_{i}"], f"candidate_{i}") for i in range(n)]
     ).reshape(-1, 4)
     pose = _floats(values["pose"], "pose") if values.get("pose") else None
+    axis_pose = _floats(values["axis_pose"], "axis_pose") if values.get("axis_pose") else None
+    axis_ends = (
+        _floats(values["axis_ends"], "axis_ends").reshape(2, 2) if values.get("axis_ends") else None
+    )
     return NodeStatus(
         status=status,
         request=request,
@@ -103,4 +114,6 @@ def status_from_msg(msg: Any) -> NodeStatus:
         candidates=cands,
         reason=values.get("reason", ""),
         values=values,
+        axis_pose=axis_pose,
+        axis_ends=axis_ends,
     )

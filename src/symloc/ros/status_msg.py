@@ -3,16 +3,24 @@
 **Status** (``diagnostic_msgs/DiagnosticArray`` on ``symloc/status``, one per scan, used or
 not): one
 ``DiagnosticStatus`` named ``symloc: localization`` whose ``level`` is OK while tracking, WARN
-while ambiguous / going to the centre / deciding, ERROR when lost, and whose ``message`` is
-``"<status>: <reason>"``. Its ``values`` (key / value strings) are:
+while ambiguous / going to the centre / deciding / on a corridor's axis, ERROR when lost, and
+whose ``message`` is ``"<status>: <reason>"``. Its ``values`` (key / value strings) are:
 
 ==================  ==========================================================================
 key                 value
 ==================  ==========================================================================
-``status``          tracking, ambiguous, going_to_centre, deciding or lost
+``status``          tracking, ambiguous, going_to_centre, deciding, lost or axis
 ``reason``          one line saying why
 ``order``           symmetry order k when ambiguous ("" otherwise; 0 means a circle)
-``pose``            "x y theta" [m m rad] in the map frame when tracking, else ""
+``pose``            "x y theta" [m m rad] in the map frame when tracking, else "" (also
+                    while ``axis``: that pose is not earned)
+``axis_pose``       status ``axis`` only: "x y theta" of the middle of the segment the robot
+                    stands on, with the decided heading (map frame; also on
+                    ``symloc/axis_pose`` with its covariance)
+``axis_ends``       status ``axis`` only: "x0 y0 x1 y1" [m] the segment's ends
+``axis_length``     status ``axis`` only: the segment's length [m]
+``axis_std``        status ``axis`` only: "along across theta" stds [m m rad]
+``axis_open_ends``  status ``axis`` only: ends lengthened into space the map does not cover
 ``candidates``      number of candidate poses
 ``candidate_<i>``   "x y theta weight" of candidate i (map frame)
 ``request``         go_to_centre, face_direction, capture_image, rotate or ""
@@ -33,7 +41,9 @@ key                 value
 
 **Candidates** (``visualization_msgs/MarkerArray`` on ``symloc/candidates``): a DELETEALL
 marker, then one ARROW per candidate pose (namespace ``symloc_candidates``, map frame, length
-proportional to weight) and one TEXT_VIEW_FACING with the status, for RViz.
+proportional to weight; status ``axis``: the segment's two ends), a LINE_STRIP along the
+segment while ``axis`` (namespace ``symloc_axis``) and one TEXT_VIEW_FACING with the status,
+for RViz.
 """
 
 from __future__ import annotations
@@ -44,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from symloc.localizer import Estimate, Request, RequestKind, Status
+from symloc.localizer.types import AxisPose
 from symloc.msgs.header import header_fields
 from symloc.msgs.pose import pose_fields
 from symloc.symmetry.order import SymmetryOrder
@@ -56,9 +67,10 @@ LEVELS = {
     Status.GOING_TO_CENTRE: 1,
     Status.DECIDING: 1,
     Status.LOST: 2,
+    Status.AXIS: 1,
 }
 
-_ARROW, _TEXT, _DELETEALL = 0, 9, 3
+_ARROW, _LINE_STRIP, _TEXT, _DELETEALL = 0, 4, 9, 3
 
 
 def _order_text(order: SymmetryOrder | None) -> str:
@@ -76,6 +88,29 @@ def _order_value(order: SymmetryOrder | None) -> str:
 
 def _fmt(values: Any) -> str:
     return " ".join(f"{float(v):.6g}" for v in np.asarray(values, dtype=np.float64).reshape(-1))
+
+
+def _axis_values(axis: AxisPose | None) -> list[tuple[str, str]]:
+    """The ``axis_*`` values of status ``axis`` (none otherwise)."""
+    if axis is None:
+        return []
+    frame = axis.ends[1] - axis.ends[0]
+    length = float(np.hypot(*frame))
+    unit = frame / length if length > 0 else np.array([1.0, 0.0])
+    normal = np.array([-unit[1], unit[0]])
+    cxy = axis.covariance[:2, :2]
+    stds = [
+        float(np.sqrt(max(unit @ cxy @ unit, 0.0))),
+        float(np.sqrt(max(normal @ cxy @ normal, 0.0))),
+        float(np.sqrt(max(axis.covariance[2, 2], 0.0))),
+    ]
+    return [
+        ("axis_pose", _fmt(axis.pose)),
+        ("axis_ends", _fmt(axis.ends)),
+        ("axis_length", f"{length:.6g}"),
+        ("axis_std", _fmt(stds)),
+        ("axis_open_ends", str(axis.open_ends)),
+    ]
 
 
 def _request_values(req: Request | None) -> list[tuple[str, str]]:
@@ -108,6 +143,7 @@ def status_to_fields(
         ("candidates", str(len(est.hypotheses))),
     ]
     values += [(f"candidate_{i}", _fmt([*h.pose, h.weight])) for i, h in enumerate(est.hypotheses)]
+    values += _axis_values(est.axis)
     values += _request_values(est.request)
     values += [
         ("stamp", f"{stamp:.9f}"),
@@ -133,6 +169,11 @@ def status_to_fields(
     }
 
 
+def axis_ends(est: Estimate) -> list[Any]:
+    """The axis segment's two end points (2,) of status ``axis`` (none otherwise)."""
+    return [] if est.axis is None else list(est.axis.ends)
+
+
 def candidates_to_fields(est: Estimate, *, stamp: float, frame_id: str) -> dict[str, Any]:
     """A visualization_msgs/MarkerArray field dict of the candidate poses (see module doc)."""
     header = header_fields(stamp, frame_id)
@@ -152,6 +193,20 @@ def candidates_to_fields(est: Estimate, *, stamp: float, frame_id: str) -> dict[
                 "pose": pose_fields(h.pose),
                 "scale": {"x": 0.2 + 0.6 * float(h.weight), "y": 0.05, "z": 0.05},
                 "color": {"r": colour[0], "g": colour[1], "b": colour[2], "a": 1.0},
+            }
+        )
+    if est.axis is not None:
+        markers.append(
+            {
+                "header": header,
+                "ns": "symloc_axis",
+                "id": 0,
+                "type": _LINE_STRIP,
+                "action": 0,
+                "pose": pose_fields([0.0, 0.0, 0.0]),
+                "scale": {"x": 0.05, "y": 0.0, "z": 0.0},
+                "color": {"r": colour[0], "g": colour[1], "b": colour[2], "a": 1.0},
+                "points": [{"x": float(e[0]), "y": float(e[1]), "z": 0.0} for e in axis_ends(est)],
             }
         )
     if est.hypotheses:

@@ -234,7 +234,7 @@ def _print_table(summary: list[dict[str, Any]]) -> None:
     head = (
         f"{'family':<18} {'method':<7} {'trials':>6} {'correct %':>9} "
         f"{'conf. wrong % [95% CI]':>24} {'undet. %':>8} {'t claim':>8} {'d claim':>8} "
-        f"{'p95 err':>8} {'cov.':>5}"
+        f"{'p95 err':>8} {'cov.':>5} {'head ok %':>9} {'head wrong %':>12}"
     )
     print(head)
     print("-" * len(head))
@@ -252,11 +252,13 @@ def _print_table(summary: list[dict[str, Any]]) -> None:
             f"{'-' if math.isnan(t) else f'{t:.1f} s':>8} "
             f"{'-' if math.isnan(d) else f'{d:.2f} m':>8} "
             f"{'-' if math.isnan(e) else f'{100 * e:.1f} cm':>8} "
-            f"{'-' if math.isnan(c) else f'{c:.2f}':>5}"
+            f"{'-' if math.isnan(c) else f'{c:.2f}':>5} "
+            f"{_pct(r['heading_correct'], n):>9} {_pct(r['heading_wrong'], n):>12}"
         )
     print(
         "(t claim / d claim: median time and distance from the start or the kidnapping to the "
         "first pose published as tracking; p95 err: median over trials of the 95th percentile "
         "of the position error while tracking; cov.: share of claims inside their published "
-        "95 % covariance ellipsoid)"
+        "95 % covariance ellipsoid; head ok / head wrong: trials whose first heading (an axis "
+        "estimate or a claim) was within 5 deg / with any heading off by more)"
     )
