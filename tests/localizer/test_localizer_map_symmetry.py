@@ -8,8 +8,16 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
-from symloc.localizer import Hypothesis, Localizer, Status, SymmetryVerdict, TrackerResult
-from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
+from symloc.grid import OccupancyGrid
+from symloc.localizer import (
+    Hypothesis,
+    Localizer,
+    Status,
+    SymmetryVerdict,
+    TrackerResult,
+    map_symmetry,
+)
+from symloc.localizer.map_symmetry import PARTIAL_OVERLAP, MapSymmetry, map_symmetries
 from symloc.odometry import OdometryReading
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.rooms import build_room, hallway, l_shaped_room
@@ -35,6 +43,70 @@ def test_map_symmetries_rejects_bad_settings():
         map_symmetries(grid, tolerance=0.0)
     with pytest.raises(ConfigurationError, match="min_overlap"):
         map_symmetries(grid, min_overlap=1.5)
+    with pytest.raises(ConfigurationError, match="min_partial"):
+        map_symmetries(grid, min_overlap=0.6, min_partial=0.7)
+
+
+def _walls(segments, lo, hi, res=0.05) -> OccupancyGrid:
+    """A grid [lo, hi] x [lo, hi] (m) whose occupied cells are the wall ``segments``
+    ((x0, y0), (x1, y1)) [m], one cell thick; the rest free."""
+    n = round((hi - lo) / res)
+    data = np.zeros((n, n), np.int8)
+    for a, b in segments:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        t = np.linspace(0.0, 1.0, int(2 * np.hypot(*(b - a)) / res) + 2)
+        cells = np.floor((a + t[:, None] * (b - a) - lo) / res).astype(int)
+        data[cells[:, 1], cells[:, 0]] = 100
+    return OccupancyGrid(data, res, np.array([lo, lo, 0.0]))
+
+
+def _box(x0, y0, x1, y1):
+    return [((x0, y0), (x1, y0)), ((x1, y0), (x1, y1)), ((x1, y1), (x0, y1)), ((x0, y1), (x0, y0))]
+
+
+def test_a_box_off_centre_does_not_pull_the_centre_off_a_square():
+    # a 4 m square about the origin with a 0.8 m box near a corner: the occupied cells'
+    # centroid lies 0.3 m towards the box, where a quarter turn overlaps half the walls
+    grid = _walls(_box(-2, -2, 2, 2) + _box(0.8, 0.7, 1.6, 1.5), -2.5, 2.5)
+    found = {s.order: s for s in map_symmetries(grid, (2, 4)) if not s.partial}
+    for k in (4, 2):
+        assert found[k].overlap > 0.8
+        assert np.hypot(*found[k].centre) <= 2 * grid.resolution
+
+
+def test_the_bar_of_a_t_is_a_partial_symmetry():
+    # a 10 m x 2.5 m bar (centre (0, 1.25)) with a 3 m x 5 m stem below it, off the middle
+    tee = [
+        ((-5, 2.5), (5, 2.5)),
+        ((-5, 0), (-5, 2.5)),
+        ((5, 0), (5, 2.5)),
+        ((-5, 0), (0.5, 0)),
+        ((3.5, 0), (5, 0)),
+        ((0.5, 0), (0.5, -5)),
+        ((3.5, 0), (3.5, -5)),
+        ((0.5, -5), (3.5, -5)),
+    ]
+    grid = _walls(tee, -5.5, 5.5)
+    assert map_symmetries(grid) == []  # no whole-map symmetry
+    found = [s for s in map_symmetries(grid, min_partial=PARTIAL_OVERLAP) if s.order == 2]
+    bar = min(found, key=lambda s: float(np.hypot(*(s.centre - [0.0, 1.25]))))
+    assert bar.partial
+    assert PARTIAL_OVERLAP <= bar.overlap < 0.6
+    assert np.hypot(*(bar.centre - [0.0, 1.25])) <= 2 * grid.resolution
+
+
+def test_a_corridor_has_one_centre_and_a_coarse_search_finds_it_too(monkeypatch):
+    """A corridor's centres along its axis all overlap well (a ridge): one is reported. A map
+    too large for one correlation at full resolution (MAX_FFT_CELLS) is searched on coarser
+    cells first, and gives the same centre."""
+    grid = world_to_grid(hallway(30.0, 2.0).world, 0.05)
+    fine = map_symmetries(grid, (2, 3, 4), min_partial=PARTIAL_OVERLAP)
+    assert [s.order for s in fine] == [2]
+    monkeypatch.setattr(map_symmetry, "MAX_FFT_CELLS", 20_000)
+    coarse = map_symmetries(grid, (2, 3, 4), min_partial=PARTIAL_OVERLAP)
+    assert [s.order for s in coarse] == [2]
+    assert np.hypot(*(coarse[0].centre - fine[0].centre)) <= 2 * grid.resolution
+    assert coarse[0].overlap == pytest.approx(fine[0].overlap, abs=0.01)
 
 
 class _Tracker:

@@ -253,8 +253,9 @@ def copies_ambiguity(
                 "clearly better: AMCL reseeded there, pose not earned yet"
             )
         else:
+            what = "part of the map is" if sym.partial else "the map itself is"
             why = (
-                f"the map itself is symmetric (order {sym.order}, overlap "
+                f"{what} symmetric (order {sym.order}, overlap "
                 f"{100 * sym.overlap:.0f} %) and a rotated copy of AMCL's pose explains "
                 "the scan about as well: pose not earned"
             )
