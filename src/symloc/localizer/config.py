@@ -48,7 +48,8 @@ class LocalizerConfig:
         centre is the last resort. Off by default.
     decide_min_fit : least share of beams a hypothesis explains (after the laser aligned it).
     decide_laser_margin : a hypothesis survives the laser when its share of beams is within
-        this of the best one's; exactly one survivor is handed to AMCL and the copy checks.
+        this of the best one's (a rotated copy of the best also when it fits as well as the
+        claim gate needs to claim); exactly one survivor is handed to AMCL and the copy checks.
     decide_views : images asked for from where the robot stands before giving up.
     decide_turn : turn [rad] (clockwise) between two views.
     decide_theta_std : how well a verified hypothesis' heading is known before the laser

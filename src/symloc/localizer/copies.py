@@ -4,6 +4,13 @@ A pose inside a place of rotational order ``k`` has ``k - 1`` rotated copies tha
 room; AMCL may hold several of them (:func:`symmetry_consistent`) or collapse onto one. Before
 the localizer first publishes a pose it asks whether a copy fits the scan about as well
 (:func:`copies_verdict`, :func:`copies_fit`): then the pose is not earned.
+
+"About as well" has two sides. Relative: the copy's score is at least ``ratio`` x the pose's.
+Absolute: with the claim gate's aligned fits, a copy that fits at least the gate's
+``min_claim_fit`` is a pose the gate itself would claim, whatever the pose's own fit. The pose
+can fit clearly better than its true copy: a SLAM map a few centimetres to decimetres off near
+a wall costs the truth the beams on that wall, and a wrong copy whose view misses that wall then
+fits better (a T-shaped room: the truth 80 % of beams, the wrong end of the bar 94 %).
 """
 
 from __future__ import annotations
@@ -30,7 +37,9 @@ __all__ = [
     "CopiesKind",
     "CopiesVerdict",
     "PoseScorer",
+    "claim_floor",
     "copies_fit",
+    "copies_open",
     "copies_verdict",
     "known_place_at",
     "rotated_copies",
@@ -136,6 +145,23 @@ def copy_scores(
     return np.asarray(scorer(copies, scan), dtype=np.float64)
 
 
+def claim_floor(scan: object, gate: ClaimGate | None) -> float:
+    """The share of beams at which a copy fits well enough for the claim gate to claim it
+    (its ``min_claim_fit``) when :func:`copy_scores` reads the gate's aligned fits; infinity
+    with a pose scorer only (its scores are not shares of beams)."""
+    if gate is not None and isinstance(scan, LaserScan):
+        return float(gate.config.min_claim_fit)
+    return math.inf
+
+
+def copies_open(scores: FloatArray, ratio: float, floor: float) -> bool:
+    """True when a copy's score (``scores`` (k,), the pose's first) is at least ``ratio`` x
+    the pose's, or reaches ``floor`` on its own (:func:`claim_floor`)."""
+    own = max(float(scores[0]), 1e-12)
+    rest = scores[1:]
+    return bool(np.any(rest >= ratio * own) or np.any(rest >= floor))
+
+
 def copies_verdict(
     pose: FloatArray,
     center: FloatArray,
@@ -146,9 +172,14 @@ def copies_verdict(
     scorer: PoseScorer | None,
     ratio: float,
 ) -> CopiesVerdict:
-    """UNIQUE when every rotated copy of ``pose`` (3,) about ``center`` (2,) explains ``scan``
-    clearly worse (its score below ``ratio`` x the pose's), BETTER with the index of a copy
-    that explains it clearly better, else AMBIGUOUS (also when nothing can score)."""
+    """How the rotated copies of ``pose`` (3,) about ``center`` (2,) explain ``scan``.
+
+    BETTER with the index of a copy that explains it clearly better (the pose's score below
+    ``ratio`` x the copy's); UNIQUE when every copy explains it clearly worse: its score
+    below ``ratio`` x the pose's and, with the claim gate's aligned fits, below the gate's
+    ``min_claim_fit`` (a copy the gate would claim on its own is never ruled out, see the
+    module docstring); else AMBIGUOUS (also when nothing can score).
+    """
     copies = rotated_copies(pose, center, order)
     scores = copy_scores(copies, scan, gate, scorer)
     if scores is None:
@@ -157,7 +188,7 @@ def copies_verdict(
     best = int(np.argmax(scores))
     if best != 0 and ratio * float(scores[best]) >= own:
         return CopiesVerdict(CopiesKind.BETTER, best)
-    if np.any(scores[1:] >= ratio * own):
+    if copies_open(scores, ratio, claim_floor(scan, gate)):
         return CopiesVerdict(CopiesKind.AMBIGUOUS)
     return CopiesVerdict(CopiesKind.UNIQUE)
 
@@ -172,13 +203,12 @@ def copies_fit(
     scorer: PoseScorer | None,
     ratio: float,
 ) -> bool:
-    """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose`` (or
-    nothing can score them)."""
+    """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose`` (as
+    :func:`copies_verdict` judges it: AMBIGUOUS or BETTER), or nothing can score them."""
     scores = copy_scores(rotated_copies(pose, center, order), scan, gate, scorer)
     if scores is None:
         return True
-    own = max(float(scores[0]), 1e-12)
-    return bool(np.any(scores[1:] >= ratio * own))
+    return copies_open(scores, ratio, claim_floor(scan, gate))
 
 
 def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: float) -> Place | None:

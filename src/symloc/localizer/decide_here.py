@@ -8,9 +8,10 @@ copies open) the localizer first tries to decide without driving anywhere:
    candidates (:class:`~symloc.localizer.types.PoseProposer`) and their rotated copies about
    the map's symmetries and the known symmetric places; each is aligned to the map by the
    claim gate's scan matcher and scored by the share of beams that then fit.
-2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete): AMCL is
-   reseeded there and the pose is earned as always, through :class:`~.phases.Lost`'s copy
-   checks and the claim gate.
+2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete, and no
+   rotated copy of it fitting as well as the claim gate needs to claim: the copy check would
+   refuse the pose, so such a copy survives too): AMCL is reseeded there and the pose is
+   earned as always, through :class:`~.phases.Lost`'s copy checks and the claim gate.
 3. **Several survivors**: an image is requested where the robot stands; the hypotheses,
    carried by odometry to the moment of the image, are verified against the visual map's
    keyframes (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin:
@@ -41,7 +42,7 @@ from symloc.symmetry.order import SymmetryOrder
 
 from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
-from .copies import known_place_at, rotated_copies
+from .copies import claim_floor, known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, Request, RequestKind, Status
 
@@ -123,7 +124,46 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
     if fits.size == 0:
         return Hypotheses(aligned, fits, 0, complete, "no pose explains the scan")
     survivors = int(np.count_nonzero(fits >= fits[0] - cfg.decide_laser_margin))
+    survivors = max(survivors, _open_copies(ctx, inp, aligned, fits))
     return Hypotheses(aligned, fits, survivors, complete, reason)
+
+
+def _open_copies(ctx: Context, inp: Inputs, poses: FloatArray, fits: FloatArray) -> int:
+    """How many of the hypotheses ``poses`` (K, 3) (best first, with ``fits`` (K,)) to keep
+    so that every one that is a rotated copy of the best (about a map symmetry or the known
+    place there, within ``symmetry_position_tol`` and ``symmetry_angle_tol``) and fits at
+    least the claim gate's ``min_claim_fit`` stays: the copy check that earns the pose
+    (:func:`~.phases.copies_ambiguity`) would not let the best one be earned while such a
+    copy fits, so the camera must choose. 0 when there is none."""
+    cfg = ctx.config
+    floor = claim_floor(inp.scan, ctx.gate)
+    if not math.isfinite(floor) or poses.shape[0] < 2:
+        return 0
+    copies = _copies_of(ctx, poses[0])
+    if copies.shape[0] == 0:
+        return 0
+    keep = 0
+    for i in range(1, poses.shape[0]):
+        if fits[i] < floor:
+            break
+        near = np.hypot(copies[:, 0] - poses[i, 0], copies[:, 1] - poses[i, 1])
+        turn = np.abs(angle_diff(copies[:, 2], poses[i, 2]))
+        if np.any((near <= cfg.symmetry_position_tol) & (turn <= cfg.symmetry_angle_tol)):
+            keep = i + 1
+    return keep
+
+
+def _copies_of(ctx: Context, pose: FloatArray) -> FloatArray:
+    """The rotated copies (M, 3) of ``pose`` (3,) that the copy check weighs: about every
+    map symmetry and about the known place whose disc holds the pose."""
+    out = [
+        rotated_copies(pose, s.centre, SymmetryOrder.finite(s.order))[1:]
+        for s in ctx.map_symmetries
+    ]
+    place = known_place_at(pose, ctx.known_places, ctx.config.place_radius_factor)
+    if place is not None:
+        out.append(rotated_copies(pose, place.center, place.order)[1:])
+    return np.concatenate(out) if out else np.zeros((0, 3))
 
 
 def _align(ctx: Context, inp: Inputs, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
