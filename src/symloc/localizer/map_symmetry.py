@@ -27,6 +27,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 from scipy.ndimage import maximum_filter
 from scipy.signal import fftconvolve
@@ -58,9 +59,9 @@ RIDGE = 0.8
 #: corridor) is correlated on cells 2, 4, ... times coarser first, which bounds the overlap from
 #: above, and the best coarse shifts are then counted exactly.
 MAX_FFT_CELLS = 1 << 18
-#: Shifts counted exactly per order when the map is correlated coarsely: those of the blocks
-#: with the highest upper bounds.
-COARSE_SHIFTS = 1024
+#: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
+#: exactly around each).
+PEAKS = 12
 
 
 @dataclass(frozen=True)
@@ -200,13 +201,17 @@ def _best_shifts(cells: _Cells, turned: IntArray, need: int, sep: float) -> list
     """Whole-cell shifts (x, y) of the ``turned`` cells (N, 2) that put at least ``need`` of
     them on the hits and are the best within ``sep`` cells, best first."""
     b = _coarsening(cells.hits.shape, turned)
-    counts, lo = _shift_counts(cells, turned, b)
+    # most orders of most maps are ruled out on cells twice as coarse (a quarter of the work)
+    counts, lo = _shift_counts(cells, turned, max(b, 2))
+    if counts.size == 0 or float(counts.max()) < need:
+        return []
     if b == 1:
-        top = maximum_filter(counts, size=2 * max(1, math.ceil(sep)) + 1, mode="constant")
-        rows, cols = np.nonzero((counts >= need) & (counts >= top))
-        shifts, values = np.column_stack([cols, rows]) + lo, counts[rows, cols]
-    else:
-        shifts, values = _count_best_blocks(cells, turned, counts, lo, b, need)
+        counts, lo = _shift_counts(cells, turned, 1)
+    peaks = _local_maxima(counts, need, max(1, math.ceil(sep / b)))
+    shifts = np.array([p + lo for p in peaks], dtype=np.intp).reshape(-1, 2)
+    values = np.array([counts[p[1], p[0]] for p in peaks])
+    if b > 1:
+        shifts, values = _count_near_blocks(cells, turned, shifts, b, need)
     picked: list[IntArray] = []
     for i in np.argsort(-values, kind="stable"):
         s = shifts[i]
@@ -220,22 +225,58 @@ def _best_shifts(cells: _Cells, turned: IntArray, need: int, sep: float) -> list
     return [p.astype(np.float64) for p in picked]
 
 
-def _count_best_blocks(
-    cells: _Cells, turned: IntArray, bounds: FloatArray, lo: IntArray, b: int, need: int
+def _local_maxima(counts: FloatArray, need: int, r: int) -> list[IntArray]:
+    """Cells (column, row) of ``counts`` that reach ``need`` and are the largest within ``r``
+    cells, best first, one per plateau, at most :data:`PEAKS`."""
+    rows, cols = np.nonzero(counts >= need)
+    if rows.size == 0:
+        return []
+    # a cell below ``need`` cannot top one above it: filter only around those above
+    r0, c0 = max(int(rows.min()) - r, 0), max(int(cols.min()) - r, 0)
+    part = counts[r0 : int(rows.max()) + r + 1, c0 : int(cols.max()) + r + 1]
+    top = maximum_filter(part, size=2 * r + 1, mode="constant")
+    rows, cols = np.nonzero((part >= need) & (part >= top))
+    rows, cols = rows + r0, cols + c0
+    out: list[IntArray] = []
+    for i in np.argsort(-counts[rows, cols], kind="stable"):
+        at = np.array([cols[i], rows[i]], dtype=np.intp)
+        if all(np.abs(at - o).max() > r for o in out):
+            out.append(at)
+            if len(out) == PEAKS:
+                break
+    return out
+
+
+def _count_near_blocks(
+    cells: _Cells, turned: IntArray, blocks: IntArray, b: int, need: int
 ) -> tuple[IntArray, FloatArray]:
-    """The fine shifts (M, 2) (x, y) of the blocks with the highest upper ``bounds`` (at
-    most :data:`COARSE_SHIFTS` shifts in all) whose exact count reaches ``need``, and their
-    counts (M,)."""
-    flat = bounds.ravel()
-    idx = np.flatnonzero(flat >= need)
-    idx = idx[np.argsort(-flat[idx], kind="stable")][: max(1, COARSE_SHIFTS // (b * b))]
-    rows, cols = np.unravel_index(idx, bounds.shape)
-    blocks = np.column_stack([cols, rows]).astype(np.intp) + lo
-    offsets = np.stack(np.meshgrid(np.arange(b), np.arange(b)), axis=-1).reshape(-1, 2)
-    fine = (b * blocks[:, None, :] + offsets[None, :, :]).reshape(-1, 2)
-    exact = _exact_counts(cells.hits, turned, fine)
-    keep = exact >= need
-    return fine[keep], exact[keep]
+    """For each shift block (M, 2) (x, y) of ``b`` cells (a local maximum of the upper
+    bounds): the best fine shift of it and its eight neighbours (the bound's maximum and the
+    exact one need not share a block), counted exactly, and its count; those that reach
+    ``need``."""
+    size = 3 * b
+    shifts, values = [], []
+    for block in blocks:
+        origin = b * (block - 1)
+        counts = _window_counts(cells.hits, turned + origin, size)
+        dy, dx = np.unravel_index(int(np.argmax(counts)), counts.shape)
+        if counts[dy, dx] >= need:
+            shifts.append(origin + np.array([dx, dy], dtype=np.intp))
+            values.append(float(counts[dy, dx]))
+    return np.array(shifts, dtype=np.intp).reshape(-1, 2), np.array(values)
+
+
+def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
+    """How many ``cells`` (N, 2) (x, y) land on ``hits`` (H, W) when shifted by each (dx, dy)
+    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx]."""
+    h, w = hits.shape
+    padded = np.zeros((h + 2 * size, w + 2 * size), dtype=np.uint8)
+    padded[size : size + h, size : size + w] = hits
+    at = cells + size
+    ok = (at[:, 0] >= 0) & (at[:, 0] <= w + size) & (at[:, 1] >= 0) & (at[:, 1] <= h + size)
+    windows = sliding_window_view(padded, (size, size))
+    out: FloatArray = windows[at[ok, 1], at[ok, 0]].sum(axis=0, dtype=np.float64)
+    return out
 
 
 def _joined(
@@ -291,21 +332,6 @@ def _shift_counts(cells: _Cells, turned: IntArray, b: int) -> tuple[FloatArray, 
     counts = np.rint(np.asarray(fftconvolve(target, kernel[::-1, ::-1], mode="full")))
     lo = -np.array([kernel.shape[1] - 1, kernel.shape[0] - 1], dtype=np.intp) - qmin
     return counts, lo
-
-
-def _exact_counts(hits: BoolArray, turned: IntArray, shifts: IntArray) -> FloatArray:
-    """How many ``turned`` cells (N, 2) land on ``hits`` (H, W) for each shift (M, 2) (x, y)."""
-    h, w = hits.shape
-    out = np.empty(shifts.shape[0])
-    step = max(1, (1 << 18) // max(1, turned.shape[0]))  # bounded memory
-    for i in range(0, shifts.shape[0], step):
-        x = turned[None, :, 0] + shifts[i : i + step, None, 0]
-        y = turned[None, :, 1] + shifts[i : i + step, None, 1]
-        inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
-        on = np.zeros(x.shape, dtype=bool)
-        on[inside] = hits[y[inside], x[inside]]
-        out[i : i + step] = on.sum(axis=1)
-    return out
 
 
 def _to_world(grid: OccupancyGrid, xy: FloatArray) -> FloatArray:
