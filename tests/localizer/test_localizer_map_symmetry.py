@@ -9,6 +9,7 @@ import pytest
 
 from symloc.errors import ConfigurationError
 from symloc.grid import OccupancyGrid
+from symloc.grid.fields import MapFields
 from symloc.localizer import (
     Hypothesis,
     Localizer,
@@ -163,3 +164,23 @@ def test_converged_pose_is_earned_only_when_no_map_copy_fits(copy_fits):
     else:
         assert ests[-1].status is Status.TRACKING
         assert np.allclose(ests[-1].pose, pose)
+
+
+@pytest.mark.parametrize("b", [2, 4, 8])
+def test_coarse_counts_bound_every_shift_of_their_block(b):
+    """The coarse correlation must never count fewer cells than any shift of its block
+    (else the coarse search, and the screen that skips an order, would miss a symmetry);
+    checked on every order and every shift of an asymmetric map, near its edges too."""
+    data = np.zeros((60, 80), np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
+    data[15:25, 20:30] = 100
+    data[40:43, 50:70] = 100
+    grid = OccupancyGrid(data, 0.05)
+    cells = map_symmetry._Cells.of(grid, MapFields.of(grid).obstacle_distance() <= 0.1, 3)
+    for k in range(2, 13):
+        turned = np.floor(cells.xy @ map_symmetry._rotation(k).T + 0.5).astype(np.intp)
+        fine, lo = map_symmetry._shift_counts(cells, turned, 1)
+        coarse, clo = map_symmetry._shift_counts(cells, turned, b)
+        rows, cols = np.nonzero(fine > 0)
+        block = np.floor_divide(np.column_stack([cols, rows]) + lo, b) - clo
+        assert np.all(fine[rows, cols] <= coarse[block[:, 1], block[:, 0]])

@@ -303,12 +303,14 @@ def _coarsening(shape: tuple[int, ...], turned: IntArray) -> int:
 def _coarse_hits(hits: BoolArray, b: int) -> BoolArray:
     """``hits`` (H, W) on cells ``b`` times coarser, each block also true where the next block
     up either axis (or both) holds a hit: a cell shifted by part of a block lands in its own
-    block or the next one, so counting on these bounds every shift of a block from above."""
+    block or the next one, so counting on these bounds every shift of a block from above.
+    For ``b`` > 1 the answer starts one block early (its row and column 0 are block -1: a cell
+    just below the map may land in it)."""
     if b == 1:
         return hits
     h, w = hits.shape
-    padded = np.zeros((-(-h // b) * b + b, -(-w // b) * b + b), dtype=bool)
-    padded[:h, :w] = hits
+    padded = np.zeros((-(-h // b) * b + 2 * b, -(-w // b) * b + 2 * b), dtype=bool)
+    padded[b : b + h, b : b + w] = hits
     blocks: BoolArray = np.asarray(
         padded.reshape(padded.shape[0] // b, b, padded.shape[1] // b, b).any(axis=(1, 3))
     )
@@ -331,7 +333,7 @@ def _shift_counts(cells: _Cells, turned: IntArray, b: int) -> tuple[FloatArray, 
     np.add.at(kernel, (q[:, 1], q[:, 0]), 1.0)
     counts = np.rint(np.asarray(fftconvolve(target, kernel[::-1, ::-1], mode="full")))
     lo = -np.array([kernel.shape[1] - 1, kernel.shape[0] - 1], dtype=np.intp) - qmin
-    return counts, lo
+    return counts, lo - (b > 1)
 
 
 def _to_world(grid: OccupancyGrid, xy: FloatArray) -> FloatArray:
