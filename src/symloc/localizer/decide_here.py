@@ -9,9 +9,9 @@ copies open) the localizer first tries to decide without driving anywhere:
    the map's symmetries and the known symmetric places; each is aligned to the map by the
    claim gate's scan matcher and scored by the share of beams that then fit.
 2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete, and no
-   rotated copy of it fitting as well as the claim gate needs to claim: the copy check would
-   refuse the pose, so such a copy survives too): AMCL is reseeded there and the pose is
-   earned as always, through :class:`~.phases.Lost`'s copy checks and the claim gate.
+   rotated copy of it that the copy check would not rule out: such a copy survives too, or
+   the check would refuse the pose): AMCL is reseeded there and the pose is earned as always,
+   through :class:`~.phases.Lost`'s copy checks and the claim gate.
 3. **Several survivors**: an image is requested where the robot stands; the hypotheses,
    carried by odometry to the moment of the image, are verified against the visual map's
    keyframes (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin:
@@ -42,7 +42,7 @@ from symloc.symmetry.order import SymmetryOrder
 
 from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
-from .copies import claim_floor, known_place_at, rotated_copies
+from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, Request, RequestKind, Status
 
@@ -129,26 +129,34 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
 
 
 def _open_copies(ctx: Context, inp: Inputs, poses: FloatArray, fits: FloatArray) -> int:
-    """How many of the hypotheses ``poses`` (K, 3) (best first, with ``fits`` (K,)) to keep
-    so that every one that is a rotated copy of the best (about a map symmetry or the known
-    place there, within ``symmetry_position_tol`` and ``symmetry_angle_tol``) and fits at
-    least the claim gate's ``min_claim_fit`` stays: the copy check that earns the pose
-    (:func:`~.phases.copies_ambiguity`) would not let the best one be earned while such a
-    copy fits, so the camera must choose. 0 when there is none."""
+    """How many of the hypotheses ``poses`` (K, 3) (aligned, best first, with ``fits`` (K,))
+    to keep so that every rotated copy of the best (about a map symmetry or the known place
+    there, within ``symmetry_position_tol`` and ``symmetry_angle_tol``) that the copy check
+    would not rule out (:class:`~.copies.CopyRule`: the claim gate's floor, the map's slack)
+    stays: that check (:func:`~.phases.copies_ambiguity`) would not let the best one be
+    earned while such a copy fits, so the camera must choose. 0 when there is none."""
     cfg = ctx.config
-    floor = claim_floor(inp.scan, ctx.gate)
-    if not math.isfinite(floor) or poses.shape[0] < 2:
+    gate = ctx.gate
+    if gate is None or not isinstance(inp.scan, LaserScan) or poses.shape[0] < 2:
         return 0
     copies = _copies_of(ctx, poses[0])
     if copies.shape[0] == 0:
         return 0
+    scan = inp.scan
+    floor = claim_floor(scan, gate) if cfg.copy_claim_floor else math.inf
+    slack = cfg.copy_map_slack
+    own_loose = gate.share_within(poses[0], scan, slack) if slack > 0.0 else 0.0
     keep = 0
     for i in range(1, poses.shape[0]):
-        if fits[i] < floor:
-            break
         near = np.hypot(copies[:, 0] - poses[i, 0], copies[:, 1] - poses[i, 1])
         turn = np.abs(angle_diff(copies[:, 2], poses[i, 2]))
-        if np.any((near <= cfg.symmetry_position_tol) & (turn <= cfg.symmetry_angle_tol)):
+        if not np.any((near <= cfg.symmetry_position_tol) & (turn <= cfg.symmetry_angle_tol)):
+            continue
+        loose = None
+        if slack > 0.0:
+            loose = np.array([own_loose, gate.share_within(poses[i], scan, slack)])
+        pair = CopyScores(np.array([fits[0], fits[i]]), loose, floor)
+        if pair.open(cfg.copy_score_ratio):
             keep = i + 1
     return keep
 
