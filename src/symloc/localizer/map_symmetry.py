@@ -130,7 +130,8 @@ def map_symmetries(
         Also report *partial* near symmetries: centres about which at least this share (in
         (0, ``min_overlap``]) of the occupied cells match, a symmetric part of the map (the
         bar of a T-shaped room, one wing of an L) rather than the whole
-        (``MapSymmetry.partial``). None: whole-map symmetries only. The localizer asks for
+        (``MapSymmetry.partial``), whose centre lies in the map's free space (a part the robot
+        can be in). None: whole-map symmetries only. The localizer asks for
         them (:data:`PARTIAL_OVERLAP`): their copies are checked against the scan like any
         other, so a looser list costs time and refusals, never a wrong claim.
 
@@ -190,6 +191,8 @@ def _order_symmetries(
         centre, share = _polish(grid, cells, k, centre, tolerance)
         if share < least or any(np.hypot(*(centre - f.centre)) < SEPARATION for f in found):
             continue
+        if share < whole and not _free_at(grid, centre):
+            continue  # a part of the map the robot is never in (beside a corridor, in a wall)
         found.append(MapSymmetry(centre=centre, order=k, overlap=share, partial=share < whole))
         if len(found) == MAX_CENTRES:
             break
@@ -340,6 +343,13 @@ def _to_world(grid: OccupancyGrid, xy: FloatArray) -> FloatArray:
     """Fractional (column, row) cell coordinates (2,) of the grid to a world point (2,) [m]."""
     world = grid.cell_to_world(np.array([[xy[1], xy[0]]]))
     return np.asarray(world, dtype=np.float64).reshape(2)
+
+
+def _free_at(grid: OccupancyGrid, centre: FloatArray) -> bool:
+    """True when a free cell lies within one cell of ``centre`` (2,) [m]."""
+    r, c = (int(v) for v in np.asarray(grid.world_to_cell(centre[None, :]))[0])
+    free = np.asarray(grid.free_mask, dtype=bool)[max(r - 1, 0) : r + 2, max(c - 1, 0) : c + 2]
+    return bool(free.any())
 
 
 def _overlap(grid: OccupancyGrid, cells: _Cells, k: int, centre: FloatArray) -> float:
