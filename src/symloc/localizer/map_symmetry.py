@@ -56,8 +56,11 @@ SEPARATION = 1.0
 #: centre of the same order lies on the better one's ridge (a corridor's axis) and is dropped.
 RIDGE = 0.8
 #: Largest correlation (cells) computed at the map's resolution; a larger map (a 60 m
-#: corridor) is correlated on cells 2, 4, ... times coarser first, which bounds the overlap from
-#: above, and the best coarse shifts are then counted exactly.
+#: corridor) is correlated on cells 2, 4, ... times coarser, which bounds the overlap from
+#: above, and is counted exactly only around the bound's local maxima. Every order is first
+#: bounded on cells twice as coarse and skipped when no centre can reach the threshold. Cost
+#: (CPU, one core): 12-150 ms on the dev SLAM maps (median 38 ms), 60 ms for the 40 m
+#: hallway with its lab, 0.5 s for a 60 m x 60 m grid of offices (25,000 occupied cells).
 MAX_FFT_CELLS = 1 << 18
 #: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
 #: exactly around each).
