@@ -24,7 +24,7 @@ from symloc.localizer.adapters import (
 )
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.localizer import Localizer
-from symloc.localizer.map_symmetry import MapSymmetry, map_symmetries
+from symloc.localizer.map_symmetry import PARTIAL_OVERLAP, MapSymmetry, map_symmetries
 from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.settings import LocalizerSettings
 from symloc.localizer.types import KeyframeStore, PlaceStore
@@ -36,9 +36,15 @@ __all__ = ["build_localizer", "grid_symmetries"]
 
 
 def grid_symmetries(grid: OccupancyGrid) -> list[MapSymmetry]:
-    """:func:`~symloc.localizer.map_symmetry.map_symmetries` of ``grid``, computed once per
-    map and kept with its other derived fields (:meth:`MapFields.derived`)."""
-    return MapFields.of(grid).derived("map_symmetries", map_symmetries)
+    """:func:`~symloc.localizer.map_symmetry.map_symmetries` of ``grid``, the partial near
+    symmetries included (down to
+    :data:`~symloc.localizer.map_symmetry.PARTIAL_OVERLAP`), computed once per map and kept
+    with its other derived fields (:meth:`MapFields.derived`)."""
+    return MapFields.of(grid).derived("map_symmetries", _with_partial)
+
+
+def _with_partial(grid: OccupancyGrid) -> list[MapSymmetry]:
+    return map_symmetries(grid, min_partial=PARTIAL_OVERLAP)
 
 
 def build_localizer(

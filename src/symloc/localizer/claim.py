@@ -559,6 +559,17 @@ class ClaimGate:
         match = match_scan_to_map(self.field, pts, start, self.match_config)
         return match.pose, match.inlier_fraction
 
+    def share_within(self, pose: FloatArray, scan: LaserScan, distance: float) -> float:
+        """The share of ``scan``'s returning beams that end within ``distance`` [m] of the
+        map's walls (their centre lines, the gate's field) seen from ``pose`` (3,) as it is (no
+        alignment); 0 with too few beams."""
+        pts = self.points(scan)
+        if pts.shape[0] < self.config.min_beams:
+            return 0.0
+        c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
+        world = np.asarray(pose[:2], dtype=np.float64) + pts @ np.array([[c, s], [-s, c]])
+        return float(np.mean(np.abs(self.field.lookup(world)) <= distance))
+
     def confirm(self, candidate: FloatArray, covariance: FloatArray, scan: LaserScan) -> Claim:
         """Let the laser set a pose from a ``candidate`` (3,) known to ``covariance`` (e.g. the
         symmetric copy a visual decision picked): the same tests as :meth:`check`, without

@@ -27,6 +27,14 @@ class LocalizerConfig:
         the heaviest one to count as its symmetric image [m], [rad].
     copy_score_ratio : with a pose scorer, a rotated copy whose score is at least this fraction
         of the estimate's own score explains the scan as well (the ambiguity is real).
+    copy_claim_floor : a rotated copy whose aligned fit reaches the claim gate's
+        ``min_claim_fit`` explains the scan as well, whatever the estimate's own fit
+        (:class:`~symloc.localizer.copies.CopyRule`). Off by default: on the dev split
+        (t_shape, furnished, l_shape) ``copy_map_slack`` alone removes the same lie and the
+        floor halves l_shape's correct claims (17 -> 9 of 20).
+    copy_map_slack : a rotated copy whose share of beams within this distance [m] of the walls
+        (aligned) is at least ``copy_score_ratio`` x the estimate's explains the scan as well: a
+        map off by up to this much near a wall costs the truth its beams there (0: off).
     place_radius_factor : a known place covers the disc of radius factor x its G-V distance.
     centre_smoothing : weight of a new per-scan centre estimate (:class:`CentreFilter`).
     centre_tolerance : the robot has reached the centre when the scan's centre is this close [m].
@@ -48,7 +56,8 @@ class LocalizerConfig:
         centre is the last resort. Off by default.
     decide_min_fit : least share of beams a hypothesis explains (after the laser aligned it).
     decide_laser_margin : a hypothesis survives the laser when its share of beams is within
-        this of the best one's; exactly one survivor is handed to AMCL and the copy checks.
+        this of the best one's (a rotated copy of the best also when the copy check would not
+        rule it out); exactly one survivor is handed to AMCL and the copy checks.
     decide_views : images asked for from where the robot stands before giving up.
     decide_turn : least angle [rad] between the headings of two views (the view planner,
         :mod:`symloc.localizer.view_planning`, turns to where the keyframes are).
@@ -92,6 +101,8 @@ class LocalizerConfig:
     symmetry_position_tol: float = 0.35
     symmetry_angle_tol: float = math.radians(15.0)
     copy_score_ratio: float = 0.9
+    copy_claim_floor: bool = False
+    copy_map_slack: float = 0.3
     place_radius_factor: float = 1.2
     centre_tolerance: float = 0.01
     facing_tolerance: float = math.radians(1.5)
@@ -161,10 +172,12 @@ class LocalizerConfig:
         check_in_range(self.axis_continuity, "LocalizerConfig.axis_continuity", 0.0, 1.0)
         check_positive(self.axis_open_reach, "LocalizerConfig.axis_open_reach", allow_zero=True)
         check_positive(self.axis_odometry, "LocalizerConfig.axis_odometry", allow_zero=True)
-        if not isinstance(self.decide_here, bool):
-            raise ConfigurationError(
-                f"LocalizerConfig.decide_here: expected a bool, got {self.decide_here!r}"
-            )
+        check_positive(self.copy_map_slack, "LocalizerConfig.copy_map_slack", allow_zero=True)
+        for flag in ("decide_here", "copy_claim_floor"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ConfigurationError(
+                    f"LocalizerConfig.{flag}: expected a bool, got {getattr(self, flag)!r}"
+                )
         for name in (
             "converged_updates",
             "flip_patience",

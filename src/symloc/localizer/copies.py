@@ -4,6 +4,21 @@ A pose inside a place of rotational order ``k`` has ``k - 1`` rotated copies tha
 room; AMCL may hold several of them (:func:`symmetry_consistent`) or collapse onto one. Before
 the localizer first publishes a pose it asks whether a copy fits the scan about as well
 (:func:`copies_verdict`, :func:`copies_fit`): then the pose is not earned.
+
+"About as well" (:class:`CopyRule`) is first relative: the copy's score is at least ``ratio``
+x the pose's. But the pose can fit clearly better than its true copy: a SLAM map a few
+centimetres to decimetres off near a wall costs the truth the beams on that wall (they end
+beyond the match's 10 cm), and a wrong copy whose view misses that wall then fits better (a
+T-shaped room: the truth 80 % of beams, the wrong end of the bar 94 %). With the claim gate's
+aligned fits two more tests keep such a copy open:
+
+- *slack*: the shares of beams within ``slack`` [m] of the walls (a map error's size, not a
+  scan's noise) are compared by the same ratio. A map error moves the truth's beams by
+  centimetres to decimetres, inside the slack; what tells a wrong copy apart (furniture it
+  does not see, a wing of the room where its map has a wall) moves them by metres.
+- *claim floor*: a copy whose aligned fit reaches the gate's ``min_claim_fit`` is a pose the
+  gate itself would claim, whatever the pose's own fit. The strictest test: in a nearly
+  symmetric room (furniture, a wing of an L) most copies fit that well.
 """
 
 from __future__ import annotations
@@ -29,7 +44,10 @@ __all__ = [
     "CIRCLE_SAMPLES",
     "CopiesKind",
     "CopiesVerdict",
+    "CopyRule",
+    "CopyScores",
     "PoseScorer",
+    "claim_floor",
     "copies_fit",
     "copies_verdict",
     "known_place_at",
@@ -122,18 +140,71 @@ class CopiesVerdict:
     index: int | None = None
 
 
+@dataclass(frozen=True, slots=True)
+class CopyRule:
+    """When a rotated copy explains a scan about as well as the pose (see the module
+    docstring): its score is at least ``ratio`` x the pose's; or, with the claim gate's
+    aligned fits, ``claim_floor`` and its fit reaches the gate's ``min_claim_fit``; or
+    ``slack`` [m] > 0 and its share of beams within ``slack`` of the walls (at its aligned
+    pose) is at least ``ratio`` x the pose's."""
+
+    ratio: float
+    claim_floor: bool = True
+    slack: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class CopyScores:
+    """How well a scan fits the map at a pose and its copies (the pose first): ``fits`` (k,)
+    the scores, ``loose`` (k,) the shares of beams within the rule's slack (None without a
+    slack or a gate) and ``floor`` the share of beams at which a copy fits well enough for
+    the claim gate to claim it (infinity when that test is off or ``fits`` are a pose
+    scorer's, not shares of beams)."""
+
+    fits: FloatArray
+    loose: FloatArray | None
+    floor: float
+
+    def open(self, ratio: float) -> bool:
+        """True when a copy is about as good as the pose (:class:`CopyRule`)."""
+        rest = self.fits[1:]
+        if np.any(rest >= ratio * max(float(self.fits[0]), 1e-12)) or np.any(rest >= self.floor):
+            return True
+        loose = self.loose
+        return loose is not None and bool(np.any(loose[1:] >= ratio * max(float(loose[0]), 1e-12)))
+
+
 def copy_scores(
-    copies: FloatArray, scan: object, gate: ClaimGate | None, scorer: PoseScorer | None
-) -> FloatArray | None:
+    copies: FloatArray,
+    scan: object,
+    gate: ClaimGate | None,
+    scorer: PoseScorer | None,
+    rule: CopyRule | None = None,
+) -> CopyScores | None:
     """How well ``scan`` fits the map at each pose ``(k, 3)``: with a claim gate, each is
     first aligned to the map (a copy about an imprecise centre is a few centimetres off)
-    and scored by the share of beams that fit; else the pose scorer's score; None without
-    either."""
+    and scored by the share of beams that fit (and, with the ``rule``'s slack, the share
+    within the slack); else the pose scorer's score; None without either."""
     if gate is not None and isinstance(scan, LaserScan):
-        return np.array([gate.fit(c, scan)[1] for c in copies])
+        aligned = [gate.fit(c, scan) for c in copies]
+        fits = np.array([fit for _, fit in aligned])
+        loose = None
+        if rule is not None and rule.slack > 0.0:
+            loose = np.array([gate.share_within(p, scan, rule.slack) for p, _ in aligned])
+        floor = claim_floor(scan, gate) if rule is None or rule.claim_floor else math.inf
+        return CopyScores(fits, loose, floor)
     if scorer is None:
         return None
-    return np.asarray(scorer(copies, scan), dtype=np.float64)
+    return CopyScores(np.asarray(scorer(copies, scan), dtype=np.float64), None, math.inf)
+
+
+def claim_floor(scan: object, gate: ClaimGate | None) -> float:
+    """The share of beams at which a copy fits well enough for the claim gate to claim it
+    (its ``min_claim_fit``) when :func:`copy_scores` reads the gate's aligned fits; infinity
+    with a pose scorer only (its scores are not shares of beams)."""
+    if gate is not None and isinstance(scan, LaserScan):
+        return float(gate.config.min_claim_fit)
+    return math.inf
 
 
 def copies_verdict(
@@ -145,19 +216,28 @@ def copies_verdict(
     gate: ClaimGate | None,
     scorer: PoseScorer | None,
     ratio: float,
+    floor: bool = True,
+    slack: float = 0.0,
 ) -> CopiesVerdict:
-    """UNIQUE when every rotated copy of ``pose`` (3,) about ``center`` (2,) explains ``scan``
-    clearly worse (its score below ``ratio`` x the pose's), BETTER with the index of a copy
-    that explains it clearly better, else AMBIGUOUS (also when nothing can score)."""
+    """How the rotated copies of ``pose`` (3,) about ``center`` (2,) explain ``scan``.
+
+    BETTER with the index of a copy that explains it clearly better (the pose's score below
+    ``ratio`` x the copy's); UNIQUE when every copy explains it clearly worse (none is about
+    as good by the :class:`CopyRule` of ``ratio``, ``floor`` and ``slack`` [m]: a copy
+    the gate would claim on its own, or one that a map off by up to ``slack`` near a wall
+    may have cost beams, is never ruled out; see the module docstring); else AMBIGUOUS
+    (also when nothing can score).
+    """
     copies = rotated_copies(pose, center, order)
-    scores = copy_scores(copies, scan, gate, scorer)
+    rule = CopyRule(ratio, floor, slack)
+    scores = copy_scores(copies, scan, gate, scorer, rule)
     if scores is None:
         return CopiesVerdict(CopiesKind.AMBIGUOUS)
-    own = max(float(scores[0]), 1e-12)
-    best = int(np.argmax(scores))
-    if best != 0 and ratio * float(scores[best]) >= own:
+    fits = scores.fits
+    best = int(np.argmax(fits))
+    if best != 0 and ratio * float(fits[best]) >= max(float(fits[0]), 1e-12):
         return CopiesVerdict(CopiesKind.BETTER, best)
-    if np.any(scores[1:] >= ratio * own):
+    if scores.open(ratio):
         return CopiesVerdict(CopiesKind.AMBIGUOUS)
     return CopiesVerdict(CopiesKind.UNIQUE)
 
@@ -171,14 +251,14 @@ def copies_fit(
     gate: ClaimGate | None,
     scorer: PoseScorer | None,
     ratio: float,
+    floor: bool = True,
+    slack: float = 0.0,
 ) -> bool:
-    """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose`` (or
-    nothing can score them)."""
-    scores = copy_scores(rotated_copies(pose, center, order), scan, gate, scorer)
-    if scores is None:
-        return True
-    own = max(float(scores[0]), 1e-12)
-    return bool(np.any(scores[1:] >= ratio * own))
+    """True when a rotated copy of ``pose`` explains ``scan`` about as well as ``pose`` (as
+    :func:`copies_verdict` judges it: AMBIGUOUS or BETTER), or nothing can score them."""
+    rule = CopyRule(ratio, floor, slack)
+    scores = copy_scores(rotated_copies(pose, center, order), scan, gate, scorer, rule)
+    return scores is None or scores.open(ratio)
 
 
 def known_place_at(pose: FloatArray, places: Sequence[Place], radius_factor: float) -> Place | None:

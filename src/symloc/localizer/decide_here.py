@@ -8,9 +8,10 @@ copies open) the localizer first tries to decide without driving anywhere:
    candidates (:class:`~symloc.localizer.types.PoseProposer`) and their rotated copies about
    the map's symmetries and the known symmetric places; each is aligned to the map by the
    claim gate's scan matcher and scored by the share of beams that then fit.
-2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete): AMCL is
-   reseeded there and the pose is earned as always, through :class:`~.phases.Lost`'s copy
-   checks and the claim gate.
+2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete, and no
+   rotated copy of it that the copy check would not rule out: such a copy survives too, or
+   the check would refuse the pose): AMCL is reseeded there and the pose is earned as always,
+   through :class:`~.phases.Lost`'s copy checks and the claim gate.
 3. **Several survivors**: the robot turns in place to where the keyframes are
    (:func:`~symloc.localizer.view_planning.plan_turn`: the heading at which the most
    hypotheses predict keyframes, at least ``decide_turn`` from every heading already
@@ -56,7 +57,7 @@ from .axis_heading import vote_heading
 from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
 from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
-from .copies import known_place_at, rotated_copies
+from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, KeyframeStore, Request, RequestKind, Status
 from .view_planning import plan_turn
@@ -144,7 +145,54 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
     if fits.size == 0:
         return Hypotheses(aligned, fits, 0, complete, "no pose explains the scan")
     survivors = int(np.count_nonzero(fits >= fits[0] - cfg.decide_laser_margin))
+    survivors = max(survivors, _open_copies(ctx, inp, aligned, fits))
     return Hypotheses(aligned, fits, survivors, complete, reason)
+
+
+def _open_copies(ctx: Context, inp: Inputs, poses: FloatArray, fits: FloatArray) -> int:
+    """How many of the hypotheses ``poses`` (K, 3) (aligned, best first, with ``fits`` (K,))
+    to keep so that every rotated copy of the best (about a map symmetry or the known place
+    there, within ``symmetry_position_tol`` and ``symmetry_angle_tol``) that the copy check
+    would not rule out (:class:`~.copies.CopyRule`: the claim gate's floor, the map's slack)
+    stays: that check (:func:`~.phases.copies_ambiguity`) would not let the best one be
+    earned while such a copy fits, so the camera must choose. 0 when there is none."""
+    cfg = ctx.config
+    gate = ctx.gate
+    if gate is None or not isinstance(inp.scan, LaserScan) or poses.shape[0] < 2:
+        return 0
+    copies = _copies_of(ctx, poses[0])
+    if copies.shape[0] == 0:
+        return 0
+    scan = inp.scan
+    floor = claim_floor(scan, gate) if cfg.copy_claim_floor else math.inf
+    slack = cfg.copy_map_slack
+    own_loose = gate.share_within(poses[0], scan, slack) if slack > 0.0 else 0.0
+    keep = 0
+    for i in range(1, poses.shape[0]):
+        near = np.hypot(copies[:, 0] - poses[i, 0], copies[:, 1] - poses[i, 1])
+        turn = np.abs(angle_diff(copies[:, 2], poses[i, 2]))
+        if not np.any((near <= cfg.symmetry_position_tol) & (turn <= cfg.symmetry_angle_tol)):
+            continue
+        loose = None
+        if slack > 0.0:
+            loose = np.array([own_loose, gate.share_within(poses[i], scan, slack)])
+        pair = CopyScores(np.array([fits[0], fits[i]]), loose, floor)
+        if pair.open(cfg.copy_score_ratio):
+            keep = i + 1
+    return keep
+
+
+def _copies_of(ctx: Context, pose: FloatArray) -> FloatArray:
+    """The rotated copies (M, 3) of ``pose`` (3,) that the copy check weighs: about every
+    map symmetry and about the known place whose disc holds the pose."""
+    out = [
+        rotated_copies(pose, s.centre, SymmetryOrder.finite(s.order))[1:]
+        for s in ctx.map_symmetries
+    ]
+    place = known_place_at(pose, ctx.known_places, ctx.config.place_radius_factor)
+    if place is not None:
+        out.append(rotated_copies(pose, place.center, place.order)[1:])
+    return np.concatenate(out) if out else np.zeros((0, 3))
 
 
 def _align(ctx: Context, inp: Inputs, poses: FloatArray) -> tuple[FloatArray, FloatArray]:

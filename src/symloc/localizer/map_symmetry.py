@@ -4,39 +4,108 @@ A pose that AMCL converged to cannot be earned when the map maps onto itself und
 that also carries the pose onto a copy explaining the scan as well: in a 40 m hallway whose far
 ends the lidar sees one at a time, the two ends look alike and AMCL's particles die out at one
 of them by chance. :func:`map_symmetries` finds such rotations once per map: the occupied cells
-are rotated by ``2 pi / k`` about a centre (their centroid, refined by a local search: a box or
-a door pulls the centroid off the rotation centre) and the share of rotated cells landing
-within ``tolerance`` of an occupied cell is measured; orders whose share reaches
+are rotated by ``2 pi / k`` about a centre and the share of rotated cells landing within
+``tolerance`` of an occupied cell (the *overlap*) is measured; orders whose overlap reaches
 ``min_overlap`` are symmetries of the map. The default (0.6) keeps *near* symmetries too (a
 rectangle with one box, uneven chamfers): whether the scan tells their copies apart is the
 localizer's decision, made with the scan.
+
+The centre is searched over the whole map, not near one guess: rotating about ``c`` is
+rotating about the origin and then shifting by ``(I - R) c``, so the overlap of every centre
+whose shift is a whole number of cells is one cross-correlation of the rotated cells with the
+cells near an obstacle (an FFT per order). A feature that breaks the symmetry (a box, a door,
+a wing of the room) cannot pull the search off the rotation centre, and a symmetric *part* of
+the map (the bar of a T-shaped room, one wing of an L) is found about its own centre. Each
+order keeps up to :data:`MAX_CENTRES` centres, every one a local maximum of the overlap within
+:data:`SEPARATION` of itself, refined off the cell lattice by a short local search.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
+from scipy.ndimage import maximum_filter
+from scipy.signal import fftconvolve
 
 from symloc._checks import check_in_range, check_positive
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import MapFields
 
-__all__ = ["MapSymmetry", "map_symmetries"]
+__all__ = ["MAX_CENTRES", "PARTIAL_OVERLAP", "SEPARATION", "MapSymmetry", "map_symmetries"]
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+BoolArray = NDArray[np.bool_]
+
+logger = logging.getLogger(__name__)
+
+#: The least overlap of a partial near symmetry the localizer asks for
+#: (:func:`symloc.localizer.build.grid_symmetries`): the bar of a T-shaped room is 30-60 %
+#: of its walls, less on a SLAM map (44 % on a dev world whose bar is 11 m of a T 15 m long).
+PARTIAL_OVERLAP = 0.4
+#: Most centres kept per order (distinct local maxima of the overlap, best first).
+MAX_CENTRES = 3
+#: Two centres of one order closer than this [m] are one; a centre must be the best within it.
+SEPARATION = 1.0
+#: A centre whose overlap never drops below this share of its own on the way to a better
+#: centre of the same order lies on the better one's ridge (a corridor's axis) and is dropped.
+RIDGE = 0.8
+#: Largest correlation (cells) computed at the map's resolution; a larger map (a 60 m
+#: corridor) is correlated on cells 2, 4, ... times coarser, which bounds the overlap from
+#: above, and is counted exactly only around the bound's local maxima. Every order is first
+#: bounded on cells twice as coarse and skipped when no centre can reach the threshold. Cost
+#: (CPU, one core): 12-150 ms on the dev SLAM maps (median 38 ms), 60 ms for the 40 m
+#: hallway with its lab, 0.5 s for a 60 m x 60 m grid of offices (25,000 occupied cells).
+MAX_FFT_CELLS = 1 << 18
+#: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
+#: exactly around each).
+PEAKS = 12
 
 
 @dataclass(frozen=True)
 class MapSymmetry:
     """The map maps onto itself when rotated by ``2 pi / order`` about ``centre`` (2,) [m];
-    ``overlap`` is the share of occupied cells that land on occupied cells."""
+    ``overlap`` is the share of occupied cells that land on occupied cells. ``partial``: the
+    overlap is below the whole-map threshold, only a part of the map (the bar of a T-shaped
+    room) is symmetric about ``centre`` (see ``min_partial`` of :func:`map_symmetries`)."""
 
     centre: FloatArray
     order: int
     overlap: float
+    partial: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class _Cells:
+    """What the search reads from the map, cropped to the occupied cells' bounding box (plus
+    the tolerance): ``xy`` (N, 2) the occupied cells as integer (column, row) coordinates in
+    the crop, ``offset`` (2,) the crop's first (column, row) in the grid, ``world`` (N, 2) the
+    cells' centres [m] and ``hits`` (H, W) the crop's cells within the tolerance of an occupied
+    cell."""
+
+    xy: IntArray
+    offset: IntArray
+    world: FloatArray
+    hits: BoolArray
+
+    @classmethod
+    def of(cls, grid: OccupancyGrid, near: BoolArray, margin: int) -> _Cells:
+        """The occupied cells of ``grid`` and the cells ``near`` (H, W) one, cropped with a
+        border of ``margin`` cells."""
+        rc = np.argwhere(np.asarray(grid.occupied_mask, dtype=bool))
+        lo = np.maximum(rc.min(axis=0) - margin, 0)
+        hi = np.minimum(rc.max(axis=0) + margin + 1, near.shape)
+        return cls(
+            xy=(rc - lo)[:, ::-1].astype(np.intp),
+            offset=lo[::-1].astype(np.intp),
+            world=np.asarray(grid.cell_to_world(rc), dtype=np.float64),
+            hits=near[lo[0] : hi[0], lo[1] : hi[1]],
+        )
 
 
 def map_symmetries(
@@ -45,8 +114,9 @@ def map_symmetries(
     *,
     tolerance: float = 0.1,
     min_overlap: float = 0.6,
+    min_partial: float | None = None,
 ) -> list[MapSymmetry]:
-    """The rotational symmetries of ``grid`` about its occupied cells' centroid.
+    """The rotational symmetries of ``grid``, each about the centre that suits it best.
 
     Parameters
     ----------
@@ -59,50 +129,257 @@ def map_symmetries(
         A rotated occupied cell matches when it lies within this distance [m] of an occupied cell.
     min_overlap : float
         Share in (0, 1] of occupied cells that must match.
+    min_partial : float, optional
+        Also report *partial* near symmetries: centres about which at least this share (in
+        (0, ``min_overlap``]) of the occupied cells match, a symmetric part of the map (the
+        bar of a T-shaped room, one wing of an L) rather than the whole
+        (``MapSymmetry.partial``), whose centre lies in the map's free space (a part the robot
+        can be in). None: whole-map symmetries only. The localizer asks for
+        them (:data:`PARTIAL_OVERLAP`): their copies are checked against the scan like any
+        other, so a looser list costs time and refusals, never a wrong claim.
 
     Returns
     -------
     list of MapSymmetry
-        Every tested order that passes, highest first (empty for an asymmetric map).
+        Every tested order that passes, highest order first, up to :data:`MAX_CENTRES` centres
+        per order (best overlap first); empty for an asymmetric map.
     """
     check_positive(tolerance, "tolerance")
     check_in_range(min_overlap, "min_overlap", 1e-9, 1.0)
+    least = min_overlap
+    if min_partial is not None:
+        least = check_in_range(min_partial, "min_partial", 1e-9, min_overlap)
     fields = MapFields.of(grid)
     grid = fields.grid
-    occ = np.asarray(grid.occupied_mask, dtype=bool)
-    rc = np.argwhere(occ)
-    if rc.shape[0] < 10:
+    if int(np.count_nonzero(grid.occupied_mask)) < 10:
         return []
-    pts = np.asarray(grid.cell_to_world(rc), dtype=np.float64)[:, :2]
-    dist = fields.obstacle_distance()
-
-    def overlap(centre: FloatArray, k: int) -> float:
-        a = 2.0 * math.pi / k
-        c, s = math.cos(a), math.sin(a)
-        d = pts - centre
-        rot = centre + np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]])
-        cells = np.asarray(grid.world_to_cell(rot))
-        inside = np.asarray(grid.in_bounds(cells), dtype=bool)
-        hit = np.zeros(len(rot), dtype=bool)
-        ci = cells[inside].astype(int)
-        hit[inside] = dist[ci[:, 0], ci[:, 1]] <= tolerance
-        return float(hit.mean())
-
-    centroid = pts.mean(axis=0)
+    margin = math.ceil(tolerance / grid.resolution) + 1
+    cells = _Cells.of(grid, fields.obstacle_distance() <= tolerance, margin)
     out: list[MapSymmetry] = []
     for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
-        # a feature that breaks the symmetry (a box, a door, an uneven chamfer) pulls the
-        # centroid off the rotation centre: refine it by a coarse-to-fine local search
-        centre, best = centroid.copy(), overlap(centroid, k)
-        for step in (4.0 * tolerance, 2.0 * tolerance, tolerance, 0.5 * tolerance):
-            improved = True
-            while improved:
-                improved = False
-                for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
-                    cand = centre + np.array([dx, dy])
-                    share = overlap(cand, k)
-                    if share > best + 1e-9:
-                        centre, best, improved = cand, share, True
-        if best >= min_overlap:
-            out.append(MapSymmetry(centre=centre, order=k, overlap=best))
+        found = _order_symmetries(grid, cells, k, tolerance, least, min_overlap)
+        for sym in found:
+            logger.debug(
+                "map symmetry: order %d about (%.2f, %.2f) m, overlap %.2f",
+                k,
+                sym.centre[0],
+                sym.centre[1],
+                sym.overlap,
+            )
+        out.extend(found)
     return out
+
+
+def _rotation(k: int) -> FloatArray:
+    """The (2, 2) rotation by ``2 pi / k``."""
+    a = 2.0 * math.pi / k
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s], [s, c]])
+
+
+def _order_symmetries(
+    grid: OccupancyGrid, cells: _Cells, k: int, tolerance: float, least: float, whole: float
+) -> list[MapSymmetry]:
+    """The centres (world [m]) about which turning by ``2 pi / k`` reaches an overlap of
+    ``least``, best first; partial below ``whole``."""
+    rot = _rotation(k)
+    turned = np.floor(cells.xy @ rot.T + 0.5).astype(np.intp)
+    need = math.ceil(least * cells.xy.shape[0] - 1e-9)
+    # moving the centre by d [m] moves every turned cell by 2 sin(pi / k) d
+    sep = 2.0 * math.sin(math.pi / k) * SEPARATION / grid.resolution
+    to_centre = np.linalg.inv(np.eye(2) - rot)
+    found: list[MapSymmetry] = []
+    for shift in _best_shifts(cells, turned, need, sep):
+        centre = _to_world(grid, to_centre @ shift + cells.offset)
+        centre, share = _polish(grid, cells, k, centre, tolerance)
+        if share < least or any(np.hypot(*(centre - f.centre)) < SEPARATION for f in found):
+            continue
+        if share < whole and not _free_at(grid, centre):
+            continue  # a part of the map the robot is never in (beside a corridor, in a wall)
+        found.append(MapSymmetry(centre=centre, order=k, overlap=share, partial=share < whole))
+        if len(found) == MAX_CENTRES:
+            break
+    found.sort(key=lambda f: -f.overlap)
+    return found
+
+
+def _best_shifts(cells: _Cells, turned: IntArray, need: int, sep: float) -> list[FloatArray]:
+    """Whole-cell shifts (x, y) of the ``turned`` cells (N, 2) that put at least ``need`` of
+    them on the hits and are the best within ``sep`` cells, best first."""
+    b = _coarsening(cells.hits.shape, turned)
+    # most orders of most maps are ruled out on cells twice as coarse (a quarter of the work)
+    counts, lo = _shift_counts(cells, turned, max(b, 2))
+    if counts.size == 0 or float(counts.max()) < need:
+        return []
+    if b == 1:
+        counts, lo = _shift_counts(cells, turned, 1)
+    peaks = _local_maxima(counts, need, max(1, math.ceil(sep / b)))
+    shifts = np.array([p + lo for p in peaks], dtype=np.intp).reshape(-1, 2)
+    values = np.array([counts[p[1], p[0]] for p in peaks])
+    if b > 1:
+        shifts, values = _count_near_blocks(cells, turned, shifts, b, need)
+    picked: list[IntArray] = []
+    for i in np.argsort(-values, kind="stable"):
+        s = shifts[i]
+        if all(
+            np.hypot(*(s - p)) > max(1.0, sep) and not _joined(counts, lo, b, s, p, values[i])
+            for p in picked
+        ):
+            picked.append(s)
+            if len(picked) == MAX_CENTRES + 2:
+                break
+    return [p.astype(np.float64) for p in picked]
+
+
+def _local_maxima(counts: FloatArray, need: int, r: int) -> list[IntArray]:
+    """Cells (column, row) of ``counts`` that reach ``need`` and are the largest within ``r``
+    cells, best first, one per plateau, at most :data:`PEAKS`."""
+    rows, cols = np.nonzero(counts >= need)
+    if rows.size == 0:
+        return []
+    # a cell below ``need`` cannot top one above it: filter only around those above
+    r0, c0 = max(int(rows.min()) - r, 0), max(int(cols.min()) - r, 0)
+    part = counts[r0 : int(rows.max()) + r + 1, c0 : int(cols.max()) + r + 1]
+    top = maximum_filter(part, size=2 * r + 1, mode="constant")
+    rows, cols = np.nonzero((part >= need) & (part >= top))
+    rows, cols = rows + r0, cols + c0
+    out: list[IntArray] = []
+    for i in np.argsort(-counts[rows, cols], kind="stable"):
+        at = np.array([cols[i], rows[i]], dtype=np.intp)
+        if all(np.abs(at - o).max() > r for o in out):
+            out.append(at)
+            if len(out) == PEAKS:
+                break
+    return out
+
+
+def _count_near_blocks(
+    cells: _Cells, turned: IntArray, blocks: IntArray, b: int, need: int
+) -> tuple[IntArray, FloatArray]:
+    """For each shift block (M, 2) (x, y) of ``b`` cells (a local maximum of the upper
+    bounds): the best fine shift of it and its eight neighbours (the bound's maximum and the
+    exact one need not share a block), counted exactly, and its count; those that reach
+    ``need``."""
+    size = 3 * b
+    shifts, values = [], []
+    for block in blocks:
+        origin = b * (block - 1)
+        counts = _window_counts(cells.hits, turned + origin, size)
+        dy, dx = np.unravel_index(int(np.argmax(counts)), counts.shape)
+        if counts[dy, dx] >= need:
+            shifts.append(origin + np.array([dx, dy], dtype=np.intp))
+            values.append(float(counts[dy, dx]))
+    return np.array(shifts, dtype=np.intp).reshape(-1, 2), np.array(values)
+
+
+def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
+    """How many ``cells`` (N, 2) (x, y) land on ``hits`` (H, W) when shifted by each (dx, dy)
+    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx]."""
+    h, w = hits.shape
+    padded = np.zeros((h + 2 * size, w + 2 * size), dtype=np.uint8)
+    padded[size : size + h, size : size + w] = hits
+    at = cells + size
+    ok = (at[:, 0] >= 0) & (at[:, 0] <= w + size) & (at[:, 1] >= 0) & (at[:, 1] <= h + size)
+    windows = sliding_window_view(padded, (size, size))
+    out: FloatArray = windows[at[ok, 1], at[ok, 0]].sum(axis=0, dtype=np.float64)
+    return out
+
+
+def _joined(
+    counts: FloatArray, lo: IntArray, b: int, a: IntArray, other: IntArray, value: float
+) -> bool:
+    """True when the straight path from shift ``a`` (2,) (x, y) to a better ``other`` never
+    drops below :data:`RIDGE` x ``value`` (a's count) in ``counts`` (the counts of shift
+    blocks of ``b`` cells from ``lo``, see :func:`_shift_counts`): a ridge, such as a
+    corridor's centres along its axis, is one symmetry."""
+    n = int(np.abs(other - a).max()) + 1
+    path = np.floor_divide(np.rint(np.linspace(a, other, n)).astype(np.intp), b) - lo
+    return bool(counts[path[:, 1], path[:, 0]].min() >= RIDGE * value)
+
+
+def _coarsening(shape: tuple[int, ...], turned: IntArray) -> int:
+    """The smallest power of two b whose b-times-coarser correlation fits MAX_FFT_CELLS."""
+    span = turned.max(axis=0) - turned.min(axis=0) + 1
+    b = 1
+    while (shape[0] + span[1]) * (shape[1] + span[0]) > MAX_FFT_CELLS * b * b:
+        b *= 2
+    return b
+
+
+def _coarse_hits(hits: BoolArray, b: int) -> BoolArray:
+    """``hits`` (H, W) on cells ``b`` times coarser, each block also true where the next block
+    up either axis (or both) holds a hit: a cell shifted by part of a block lands in its own
+    block or the next one, so counting on these bounds every shift of a block from above.
+    For ``b`` > 1 the answer starts one block early (its row and column 0 are block -1: a cell
+    just below the map may land in it)."""
+    if b == 1:
+        return hits
+    h, w = hits.shape
+    padded = np.zeros((-(-h // b) * b + 2 * b, -(-w // b) * b + 2 * b), dtype=bool)
+    padded[b : b + h, b : b + w] = hits
+    blocks: BoolArray = np.asarray(
+        padded.reshape(padded.shape[0] // b, b, padded.shape[1] // b, b).any(axis=(1, 3))
+    )
+    grown = blocks.copy()
+    grown[:-1, :] |= blocks[1:, :]
+    grown[:, :-1] |= grown[:, 1:].copy()
+    return grown
+
+
+def _shift_counts(cells: _Cells, turned: IntArray, b: int) -> tuple[FloatArray, IntArray]:
+    """For every shift block (x, y) = ``lo`` + (column, row) of the answer: how many
+    ``turned`` cells (N, 2) land on the hits when shifted by ``b`` x the block (``b`` = 1:
+    exactly; else an upper bound for every shift ``b`` x block + [0, b) in each axis). Returns
+    the counts (rows: y, columns: x) and ``lo`` (2,) (x, y)."""
+    target = _coarse_hits(cells.hits, b).astype(np.float64)
+    q = np.floor_divide(turned, b)
+    qmin = q.min(axis=0)
+    q = q - qmin
+    kernel = np.zeros((int(q[:, 1].max()) + 1, int(q[:, 0].max()) + 1))
+    np.add.at(kernel, (q[:, 1], q[:, 0]), 1.0)
+    counts = np.rint(np.asarray(fftconvolve(target, kernel[::-1, ::-1], mode="full")))
+    lo = -np.array([kernel.shape[1] - 1, kernel.shape[0] - 1], dtype=np.intp) - qmin
+    return counts, lo - (b > 1)
+
+
+def _to_world(grid: OccupancyGrid, xy: FloatArray) -> FloatArray:
+    """Fractional (column, row) cell coordinates (2,) of the grid to a world point (2,) [m]."""
+    world = grid.cell_to_world(np.array([[xy[1], xy[0]]]))
+    return np.asarray(world, dtype=np.float64).reshape(2)
+
+
+def _free_at(grid: OccupancyGrid, centre: FloatArray) -> bool:
+    """True when a free cell lies within one cell of ``centre`` (2,) [m]."""
+    r, c = (int(v) for v in np.asarray(grid.world_to_cell(centre[None, :]))[0])
+    free = np.asarray(grid.free_mask, dtype=bool)[max(r - 1, 0) : r + 2, max(c - 1, 0) : c + 2]
+    return bool(free.any())
+
+
+def _overlap(grid: OccupancyGrid, cells: _Cells, k: int, centre: FloatArray) -> float:
+    """Share of occupied cells that land on the hits when turned by ``2 pi / k`` about
+    ``centre`` (2,) [m]."""
+    landed = np.asarray(grid.world_to_cell(centre + (cells.world - centre) @ _rotation(k).T))
+    landed = landed - cells.offset[::-1]
+    h, w = cells.hits.shape
+    inside = (landed[:, 0] >= 0) & (landed[:, 0] < h) & (landed[:, 1] >= 0) & (landed[:, 1] < w)
+    on = np.zeros(landed.shape[0], dtype=bool)
+    on[inside] = cells.hits[landed[inside, 0], landed[inside, 1]]
+    return float(on.mean())
+
+
+def _polish(
+    grid: OccupancyGrid, cells: _Cells, k: int, centre: FloatArray, tolerance: float
+) -> tuple[FloatArray, float]:
+    """``centre`` (2,) [m] moved off the cell lattice by a local search (steps of half and a
+    quarter of ``tolerance``) while the overlap grows; the centre and its overlap."""
+    best = _overlap(grid, cells, k, centre)
+    for step in (0.5 * tolerance, 0.25 * tolerance):
+        improved = True
+        while improved:
+            improved = False
+            for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
+                cand = centre + np.array([dx, dy])
+                share = _overlap(grid, cells, k, cand)
+                if share > best + 1e-9:
+                    centre, best, improved = cand, share, True
+    return centre, best

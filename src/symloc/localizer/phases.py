@@ -227,16 +227,33 @@ def copies_ambiguity(
     first published: on convergence, and when a claim chain starts while tracking."""
     cfg = ctx.config
     gate, scorer, ratio = ctx.gate, ctx.scorer, cfg.copy_score_ratio
+    floor, slack = cfg.copy_claim_floor, cfg.copy_map_slack
     place = known_place_at(pose, ctx.known_places, cfg.place_radius_factor)
     if place is not None and copies_fit(
-        pose, place.center, place.order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+        pose,
+        place.center,
+        place.order,
+        inp.scan,
+        gate=gate,
+        scorer=scorer,
+        ratio=ratio,
+        floor=floor,
+        slack=slack,
     ):
         back.converged.reset()
         return start_ambiguity_at_place(ctx, inp, place)
     for sym in ctx.map_symmetries:
         sym_order = SymmetryOrder.finite(sym.order)
         verdict = copies_verdict(
-            pose, sym.centre, sym_order, inp.scan, gate=gate, scorer=scorer, ratio=ratio
+            pose,
+            sym.centre,
+            sym_order,
+            inp.scan,
+            gate=gate,
+            scorer=scorer,
+            ratio=ratio,
+            floor=floor,
+            slack=slack,
         )
         if verdict.kind is CopiesKind.UNIQUE:
             continue
@@ -253,8 +270,9 @@ def copies_ambiguity(
                 "clearly better: AMCL reseeded there, pose not earned yet"
             )
         else:
+            what = "part of the map is" if sym.partial else "the map itself is"
             why = (
-                f"the map itself is symmetric (order {sym.order}, overlap "
+                f"{what} symmetric (order {sym.order}, overlap "
                 f"{100 * sym.overlap:.0f} %) and a rotated copy of AMCL's pose explains "
                 "the scan about as well: pose not earned"
             )

@@ -425,8 +425,8 @@ def near_symmetry_overlap(
     [m]); the overlap is the share of occupied cells that land within ``tolerance`` [m] of an
     occupied cell when turned by ``2 pi / order`` about the best centre near ``center``: the
     measure of :func:`symloc.localizer.map_symmetry.map_symmetries`, the number the localizer
-    itself reads off a map ("order 4, overlap 95 %"), but searched from the true centre (the
-    localizer starts from the occupied cells' centroid, which furniture pulls aside).
+    itself reads off a map ("order 4, overlap 95 %"), but searched near the true centre (the
+    localizer searches every centre of the map).
 
     Parameters
     ----------
