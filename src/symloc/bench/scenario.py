@@ -187,6 +187,11 @@ class Scenario:
     #: keyframes recorded along the mapping trip (``build_scenario(keyframes=...)``), stored in
     #: the visual map's ``keyframes`` table
     n_keyframes: int = 0
+    #: evaluation only (never stored in the map): the true pose (N, 3) in the map frame of each
+    #: stored keyframe's image, in keyframe id order, and the SLAM pose (N, 3) each had before
+    #: its heading was aligned with the images
+    keyframe_true_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    keyframe_slam_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def to_map(self, world_pose: FloatArray) -> FloatArray:
         """A true pose (3,) in the map frame (where the localizer's claims live)."""
@@ -535,6 +540,11 @@ def _map_with_slam(
             lambda i: np.asarray(slam.poses[i], dtype=np.float64),
             lambda f: vocab.bow(f.descriptors),
         )
+        scen.keyframe_slam_poses = np.array([kf.pose for kf in kfs], np.float64).reshape(-1, 3)
+        scen.keyframe_true_poses = np.asarray(
+            _compose(scen.map_from_world, np.array([truths[i] for i in recorder.indices])),
+            dtype=np.float64,
+        ).reshape(-1, 3)
         vm.add_keyframes(kfs)
         scen.n_keyframes = len(kfs)
         area = float(scen.room.area)
