@@ -4,27 +4,30 @@ A keyframe's map pose comes from SLAM. In a round room the laser cannot observe 
 headings drift with the gyro and wheel odometry (a degree or two over a lap), and whatever error
 a keyframe's heading carries goes straight into every heading later measured against it
 (:mod:`symloc.vision.verification`). Two overlapping keyframes, though, give their relative
-heading from the images alone (a homography or an essential matrix, :mod:`symloc.vision
-.two_view`) to a fraction of a degree. This module measures those relative headings and solves
-for headings that agree with them, keeping SLAM's headings as a weak prior:
+heading from the images alone. This module measures those relative headings and solves for
+headings that agree with them, keeping SLAM's as a prior:
 
 1. **Pairs** (:func:`candidate_pairs`). Keyframes within ``max_distance`` of each other whose
    SLAM headings differ by at most ``max_heading_difference`` (their fields of view overlap):
    the next ``trip_neighbours`` keyframes along the trip, and up to ``loop_pairs`` per keyframe
    of those far apart in the trip (loop closures: the pairs that tie the end of a lap to its
    start, which is where drift shows), nearest first.
-2. **Relative headings** (:func:`measure_pairs`). Each pair is fitted by
-   :func:`~symloc.vision.verification.measure_relative_heading`; a measurement counts with at
-   least ``min_inliers`` inliers, a tilt below ``max_tilt`` (the camera is level), and a yaw
-   within ``gate`` of SLAM's relative heading (SLAM drifts by degrees, a wrong homography
-   solution or a false match is off by far more).
+2. **Relative headings** (:func:`measure_pairs`). Each pair's ORB matches are fitted by a
+   planar motion (:func:`~symloc.vision.planar_motion.planar_yaw`: a level camera turning about
+   the vertical and moving on the floor; curved walls and pure turns are no special case),
+   searched within ``gate`` of SLAM's relative heading (SLAM drifts by degrees; a false match
+   lands anywhere). A measurement counts with at least ``min_inliers`` inliers and a profile
+   standard deviation of at most ``max_sigma`` (driving straight at a wall, a yaw error trades
+   against the direction of travel and the images fix little). Its weight is
+   ``hypot(profile sigma, measurement_sigma)``: the profile alone is optimistic (a simulated
+   realistic camera's pairs are off by ~0.4 degree median, more than their profiles say).
 3. **Averaging** (:func:`solve_headings`). A factor graph on ``Rot2`` (GTSAM; angles wrap
    around): one prior per keyframe on its SLAM heading (``prior_sigma``: this fixes the gauge,
    so the map frame does not turn), one between-factor per consecutive pair along the trip with
-   SLAM's relative heading (``chain_sigma``: a keyframe no image ties to follows its neighbours),
-   and one Huber-robust between-factor per measured pair (``measurement_sigma``). Measured pairs
-   whose residual exceeds ``outlier_threshold`` after a solve are dropped and the graph solved
-   again, until none is.
+   SLAM's relative heading (``chain_sigma``: locally the gyro is better than the images; a
+   keyframe no image ties to follows its neighbours), and one Huber-robust between-factor per
+   measured pair. Measured pairs whose residual exceeds ``outlier_threshold`` after a solve are
+   dropped (the worst first) and the graph solved again, until none is.
 
 With no measured pair every factor agrees with SLAM and the headings stay SLAM's. Positions are
 not changed: a round room's SLAM positions turn about its centre with the heading drift, which
@@ -50,12 +53,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import relative, wrap_angle
+from symloc.geometry import wrap_angle
 from symloc.vision.keyframes import Keyframe
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.orientation import dist_coeffs_of, intrinsics_matrix
-from symloc.vision.two_view import undistorted
-from symloc.vision.verification import VerificationSettings, measure_relative_heading
+from symloc.vision.planar_motion import planar_yaw
+from symloc.vision.two_view import ratio_matches, undistorted
 from symloc.vision.visual_map import VisualMap
 
 __all__ = [
@@ -96,17 +99,18 @@ class HeadingAlignmentSettings:
     min_features : int
         Keyframes with fewer ORB features are not measured, >= 0.
     min_inliers : int
-        Fewest RANSAC inliers of a measurement that counts, >= 8.
-    max_tilt : float
-        Largest roll/pitch [rad] left in a measured rotation, in (0, pi].
-    gate : float
-        Largest disagreement [rad] of a measured relative heading with SLAM's, in (0, pi].
+        Fewest inlier matches of a measurement that counts, >= 8.
     lowe_ratio : float
         Lowe's ratio of the ORB matching, in (0, 1).
-    ransac_threshold : float
-        RANSAC threshold [px] of the homography (half of it for the essential matrix), > 0.
+    threshold : float
+        Expected Sampson distance [px] of a correct match (the fit's truncation is 2.5 times
+        it), > 0.
+    gate : float
+        The relative heading is searched within this angle [rad] of SLAM's, in (0, pi/2].
+    max_sigma : float
+        Measurements whose profile standard deviation [rad] exceeds this are not used, > 0.
     measurement_sigma : float
-        Standard deviation [rad] of a measured relative heading, > 0.
+        Standard deviation [rad] added (in quadrature) to each measurement's profile, > 0.
     prior_sigma : float
         Standard deviation [rad] of a SLAM heading as an absolute prior, > 0.
     chain_sigma : float
@@ -117,25 +121,25 @@ class HeadingAlignmentSettings:
     outlier_threshold : float
         A measured pair whose residual [rad] exceeds this after a solve is dropped, > 0.
     max_rounds : int
-        Most solves (each drops the outliers of the one before), >= 1.
+        Most solves (each drops the worst outliers of the one before), >= 1.
     """
 
     max_distance: float = 1.5
     max_heading_difference: float = math.radians(30.0)
-    trip_neighbours: int = 3
+    trip_neighbours: int = 2
     loop_pairs: int = 4
     min_features: int = 50
     min_inliers: int = 40
-    max_tilt: float = math.radians(3.0)
-    gate: float = math.radians(10.0)
     lowe_ratio: float = 0.8
-    ransac_threshold: float = 2.0
-    measurement_sigma: float = math.radians(0.2)
+    threshold: float = 1.0
+    gate: float = math.radians(6.0)
+    max_sigma: float = math.radians(1.0)
+    measurement_sigma: float = math.radians(0.4)
     prior_sigma: float = math.radians(3.0)
-    chain_sigma: float = math.radians(0.5)
-    huber_k: float = 3.0
+    chain_sigma: float = math.radians(0.25)
+    huber_k: float = 2.0
     outlier_threshold: float = math.radians(1.5)
-    max_rounds: int = 5
+    max_rounds: int = 10
 
     def __post_init__(self) -> None:
         def check(name: str, ok: bool, what: str) -> None:
@@ -158,31 +162,27 @@ class HeadingAlignmentSettings:
                 f"an integer >= {low}",
             )
 
-        for name in ("max_distance", "ransac_threshold", "measurement_sigma", "prior_sigma"):
-            v = number(name)
-            check(name, math.isfinite(v) and v > 0, "a finite value > 0")
-        for name in ("huber_k", "outlier_threshold"):
+        for name in (
+            "max_distance",
+            "threshold",
+            "max_sigma",
+            "measurement_sigma",
+            "prior_sigma",
+            "huber_k",
+            "outlier_threshold",
+        ):
             v = number(name)
             check(name, math.isfinite(v) and v > 0, "a finite value > 0")
         check("chain_sigma", number("chain_sigma") > 0, "a value > 0 (inf: no chain)")
-        for name in ("max_heading_difference", "max_tilt", "gate"):
-            v = number(name)
-            check(name, math.isfinite(v) and 0 < v <= math.pi, "an angle in (0, pi] rad")
+        v = number("max_heading_difference")
+        check("max_heading_difference", 0 < v <= math.pi, "an angle in (0, pi] rad")
+        check("gate", 0 < number("gate") <= math.pi / 2, "an angle in (0, pi/2] rad")
         check("lowe_ratio", 0.0 < number("lowe_ratio") < 1.0, "a value in (0, 1)")
         integer("trip_neighbours", 0)
         integer("loop_pairs", 0)
         integer("min_features", 0)
         integer("min_inliers", 8)
         integer("max_rounds", 1)
-
-    def verification(self) -> VerificationSettings:
-        """The two-view settings of a measurement."""
-        return VerificationSettings(
-            lowe_ratio=self.lowe_ratio,
-            ransac_threshold=self.ransac_threshold,
-            min_inliers=self.min_inliers,
-            max_tilt=self.max_tilt,
-        )
 
 
 @dataclass(frozen=True)
@@ -195,27 +195,28 @@ class PairMeasurements:
         Keyframe indices ``(i, j)`` of the measurements that count.
     yaws : (P,) float64
         Heading of ``j`` minus heading of ``i`` [rad], from the images.
+    sigmas : (P,) float64
+        Standard deviation [rad] each is weighted with.
     inliers : (P,) int64
-        RANSAC inliers of each measurement.
-    methods : tuple of str
-        ``"homography"`` or ``"essential"`` per measurement.
+        Inlier matches of each measurement.
     tried : int
         Pairs fitted (those that count and those refused).
     refused : dict of str to int
-        Pairs refused, by reason (``"inliers"``, ``"tilt"``, ``"gate"``, ``"features"``).
+        Pairs refused, by reason (``"features"``: too few to try; ``"inliers"``; ``"sigma"``:
+        the images do not fix the yaw).
     """
 
     pairs: IntArray
     yaws: FloatArray
+    sigmas: FloatArray
     inliers: IntArray
-    methods: tuple[str, ...] = ()
     tried: int = 0
     refused: dict[str, int] = field(default_factory=dict)
 
     @classmethod
     def empty(cls) -> PairMeasurements:
         """No measurement."""
-        return cls(np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0, np.int64))
+        return cls(np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
 
 
 @dataclass(frozen=True)
@@ -371,7 +372,6 @@ def measure_pairs(
         raise ConfigurationError(f"pairs: indices outside 0..{p.shape[0] - 1}")
     K = intrinsics_matrix(intrinsics)
     dist = dist_coeffs_of(intrinsics, dist_coeffs)
-    vs = s.verification()
     und: dict[int, OrbFeatures] = {}
 
     def feats(i: int) -> OrbFeatures:
@@ -379,31 +379,32 @@ def measure_pairs(
             und[i] = undistorted(features[i], K, dist)
         return und[i]
 
-    # j's pose in i's robot frame, as SLAM has it: (forward, left, turn)
-    rel = np.asarray(relative(p[pr[:, 0]], p[pr[:, 1]]), np.float64).reshape(-1, 3)
-    refused = {"features": 0, "inliers": 0, "tilt": 0, "gate": 0}
-    kept: list[tuple[int, int, float, int, str]] = []
-    for (i, j), r in zip(pr.tolist(), rel, strict=True):
+    # SLAM's relative heading of each pair: the centre of the search
+    expected = np.asarray(wrap_angle(p[pr[:, 1], 2] - p[pr[:, 0], 2]), np.float64).reshape(-1)
+    refused = {"features": 0, "inliers": 0, "sigma": 0}
+    kept: list[tuple[int, int, float, float, int]] = []
+    for (i, j), y0 in zip(pr.tolist(), expected.tolist(), strict=True):
         if min(len(features[i]), len(features[j])) < max(s.min_features, 2):
             refused["features"] += 1
             continue
-        fit = measure_relative_heading(feats(j), feats(i), K, vs, predicted=r)
-        if fit.inliers < s.min_inliers or not math.isfinite(fit.yaw):
+        src, dst = ratio_matches(feats(j), feats(i), s.lowe_ratio)
+        fit = planar_yaw(src, dst, K, y0, s.gate, threshold=s.threshold, min_matches=s.min_inliers)
+        if not fit.fitted or fit.inliers < s.min_inliers:
             refused["inliers"] += 1
-        elif fit.tilt > s.max_tilt:
-            refused["tilt"] += 1
-        elif abs(float(wrap_angle(fit.yaw - r[2]))) > s.gate:
-            refused["gate"] += 1
+        elif not fit.sigma <= s.max_sigma:
+            refused["sigma"] += 1
         else:
-            kept.append((i, j, float(fit.yaw), int(fit.inliers), fit.method))
+            sigma = math.hypot(fit.sigma, s.measurement_sigma)
+            kept.append((i, j, float(wrap_angle(fit.yaw)), sigma, fit.inliers))
     tried = int(pr.shape[0]) - refused["features"]
+    log.debug("measured %d of %d pairs (refused: %s)", len(kept), pr.shape[0], refused)
     if not kept:
         return replace(PairMeasurements.empty(), tried=tried, refused=refused)
     return PairMeasurements(
         pairs=np.array([k[:2] for k in kept], np.int64).reshape(-1, 2),
         yaws=np.array([k[2] for k in kept], np.float64),
-        inliers=np.array([k[3] for k in kept], np.int64),
-        methods=tuple(k[4] for k in kept),
+        sigmas=np.array([k[3] for k in kept], np.float64),
+        inliers=np.array([k[4] for k in kept], np.int64),
         tried=tried,
         refused=refused,
     )
@@ -413,6 +414,7 @@ def _solve_once(
     prior: FloatArray,
     pairs: IntArray,
     yaws: FloatArray,
+    sigmas: FloatArray,
     s: HeadingAlignmentSettings,
 ) -> FloatArray:
     """One robust least-squares solve on Rot2 (see the module docstring)."""
@@ -428,12 +430,10 @@ def _solve_once(
         steps = np.asarray(wrap_angle(np.diff(prior)), np.float64)
         for i, d in enumerate(steps.tolist()):
             graph.add(gtsam.BetweenFactorRot2(i, i + 1, gtsam.Rot2(d), chain_noise))
-    robust = gtsam.noiseModel.Robust.Create(
-        gtsam.noiseModel.mEstimator.Huber.Create(s.huber_k),
-        gtsam.noiseModel.Isotropic.Sigma(1, s.measurement_sigma),
-    )
-    for (i, j), y in zip(pairs.tolist(), yaws.tolist(), strict=True):
-        graph.add(gtsam.BetweenFactorRot2(i, j, gtsam.Rot2(y), robust))
+    huber = gtsam.noiseModel.mEstimator.Huber.Create(s.huber_k)
+    for (i, j), y, sd in zip(pairs.tolist(), yaws.tolist(), sigmas.tolist(), strict=True):
+        noise = gtsam.noiseModel.Robust.Create(huber, gtsam.noiseModel.Isotropic.Sigma(1, sd))
+        graph.add(gtsam.BetweenFactorRot2(i, j, gtsam.Rot2(y), noise))
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(100)
     params.setRelativeErrorTol(1e-10)
@@ -454,6 +454,8 @@ def solve_headings(
     pairs: ArrayLike,
     yaws: ArrayLike,
     settings: HeadingAlignmentSettings | None = None,
+    *,
+    sigmas: ArrayLike | None = None,
 ) -> tuple[FloatArray, NDArray[np.bool_], int]:
     """Headings that agree with the measured relative headings and, weakly, with ``prior``.
 
@@ -466,6 +468,8 @@ def solve_headings(
     yaws : (P,) array
         Measured heading of ``j`` minus heading of ``i`` [rad].
     settings : HeadingAlignmentSettings, optional
+    sigmas : (P,) array, optional
+        Standard deviation [rad] of each measurement (default: ``measurement_sigma``).
 
     Returns
     -------
@@ -486,19 +490,27 @@ def solve_headings(
         raise ConfigurationError(f"yaws: expected {pa.shape[0]} finite relative headings")
     if pa.size and (pa.min() < 0 or pa.max() >= pr.size or np.any(pa[:, 0] == pa[:, 1])):
         raise ConfigurationError(f"pairs: expected two different indices in 0..{pr.size - 1}")
+    sd = (
+        np.full(ya.size, s.measurement_sigma)
+        if sigmas is None
+        else np.asarray(sigmas, np.float64).reshape(-1)
+    )
+    if sd.size != ya.size or not np.all(np.isfinite(sd) & (sd > 0)):
+        raise ConfigurationError(f"sigmas: expected {ya.size} standard deviations > 0")
     used = np.ones(pa.shape[0], bool)
     headings = np.asarray(wrap_angle(pr), np.float64)
     if pr.size == 0:
         return headings, used, 0
     rounds = 0
-    while rounds < s.max_rounds:
-        headings = np.asarray(wrap_angle(_solve_once(pr, pa[used], ya[used], s)), np.float64)
+    while True:
+        solved = _solve_once(pr, pa[used], ya[used], sd[used], s)
+        headings = np.asarray(wrap_angle(solved), np.float64)
         rounds += 1
-        bad = used & (np.abs(_residuals(headings, pa, ya)) > s.outlier_threshold)
-        if not bad.any():
+        res = np.abs(_residuals(headings, pa, ya))
+        bad = used & (res > s.outlier_threshold)
+        if not bad.any() or rounds >= s.max_rounds:
             break
         # drop the worst outliers only: one bad pair can pull good neighbours over the threshold
-        res = np.abs(_residuals(headings, pa, ya))
         worst = float(res[bad].max())
         drop = bad & (res >= max(s.outlier_threshold, 0.5 * worst))
         used &= ~drop
@@ -536,7 +548,9 @@ def align_headings(
     meas = measure_pairs(
         [kf.features for kf in keyframes], poses, pairs, intrinsics, s, dist_coeffs=dist_coeffs
     )
-    headings, used, rounds = solve_headings(poses[:, 2], meas.pairs, meas.yaws, s)
+    headings, used, rounds = solve_headings(
+        poses[:, 2], meas.pairs, meas.yaws, s, sigmas=meas.sigmas
+    )
     out = HeadingAlignment(
         headings=headings,
         prior=np.asarray(wrap_angle(poses[:, 2]), np.float64),
