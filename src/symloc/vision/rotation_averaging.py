@@ -53,7 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import relative, wrap_angle
 from symloc.vision.keyframes import Keyframe
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.orientation import dist_coeffs_of, intrinsics_matrix
@@ -107,6 +107,11 @@ class HeadingAlignmentSettings:
         it), > 0.
     gate : float
         The relative heading is searched within this angle [rad] of SLAM's, in (0, pi/2].
+    position_sigma : float
+        Standard deviation [m] of SLAM's relative position of trip neighbours, > 0: with the
+        distance between them it gives the prior on the direction of travel of the fit.
+    loop_position_sigma : float
+        ... of a loop pair (drift accumulates around the loop), > 0.
     max_sigma : float
         Measurements whose profile standard deviation [rad] exceeds this are not used, > 0.
     measurement_sigma : float
@@ -117,7 +122,7 @@ class HeadingAlignmentSettings:
         Standard deviation [rad] of SLAM's relative heading between consecutive keyframes of
         the trip, > 0 (``inf``: no chain).
     huber_k : float
-        Huber threshold of the measured pairs, in standard deviations, > 0.
+        Huber threshold of the measured pairs and of the chain, in standard deviations, > 0.
     outlier_threshold : float
         A measured pair whose residual [rad] exceeds this after a solve is dropped, > 0.
     max_rounds : int
@@ -133,6 +138,8 @@ class HeadingAlignmentSettings:
     lowe_ratio: float = 0.8
     threshold: float = 1.0
     gate: float = math.radians(6.0)
+    position_sigma: float = 0.02
+    loop_position_sigma: float = 0.10
     max_sigma: float = math.radians(1.0)
     measurement_sigma: float = math.radians(0.4)
     prior_sigma: float = math.radians(3.0)
@@ -164,6 +171,8 @@ class HeadingAlignmentSettings:
 
         for name in (
             "max_distance",
+            "position_sigma",
+            "loop_position_sigma",
             "threshold",
             "max_sigma",
             "measurement_sigma",
@@ -379,16 +388,38 @@ def measure_pairs(
             und[i] = undistorted(features[i], K, dist)
         return und[i]
 
-    # SLAM's relative heading of each pair: the centre of the search
-    expected = np.asarray(wrap_angle(p[pr[:, 1], 2] - p[pr[:, 0], 2]), np.float64).reshape(-1)
+    # SLAM's relative pose of each pair: its heading is the centre of the search; the direction
+    # of travel in the stored camera's frame (x right, z forward; t = -R c, c the query
+    # camera's centre) a prior, as sure as SLAM's relative position over the distance
+    rel = np.asarray(relative(p[pr[:, 0]], p[pr[:, 1]]), np.float64).reshape(-1, 3)
+    expected = rel[:, 2]
+    c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
+    cx, cz = -rel[:, 1], rel[:, 0]
+    travel = np.arctan2(-(c * cx + sn * cz), -(-sn * cx + c * cz))
+    pos_sd = np.where(
+        np.abs(pr[:, 1] - pr[:, 0]) <= s.trip_neighbours, s.position_sigma, s.loop_position_sigma
+    )
+    travel_sd = np.arctan2(pos_sd, np.hypot(rel[:, 0], rel[:, 1]))
     refused = {"features": 0, "inliers": 0, "sigma": 0}
     kept: list[tuple[int, int, float, float, int]] = []
-    for (i, j), y0 in zip(pr.tolist(), expected.tolist(), strict=True):
+    for (i, j), y0, ph0, ph_sd in zip(
+        pr.tolist(), expected.tolist(), travel.tolist(), travel_sd.tolist(), strict=True
+    ):
         if min(len(features[i]), len(features[j])) < max(s.min_features, 2):
             refused["features"] += 1
             continue
         src, dst = ratio_matches(feats(j), feats(i), s.lowe_ratio)
-        fit = planar_yaw(src, dst, K, y0, s.gate, threshold=s.threshold, min_matches=s.min_inliers)
+        fit = planar_yaw(
+            src,
+            dst,
+            K,
+            y0,
+            s.gate,
+            threshold=s.threshold,
+            min_matches=s.min_inliers,
+            direction=ph0,
+            direction_sigma=ph_sd,
+        )
         if not fit.fitted or fit.inliers < s.min_inliers:
             refused["inliers"] += 1
         elif not fit.sigma <= s.max_sigma:
@@ -425,12 +456,15 @@ def _solve_once(
     for i, h in enumerate(prior.tolist()):
         values.insert(i, gtsam.Rot2(h))
         graph.add(gtsam.PriorFactorRot2(i, gtsam.Rot2(h), prior_noise))
+    huber = gtsam.noiseModel.mEstimator.Huber.Create(s.huber_k)
     if math.isfinite(s.chain_sigma) and n > 1:
-        chain_noise = gtsam.noiseModel.Isotropic.Sigma(1, s.chain_sigma)
+        # robust too: SLAM's heading can jump between two keyframes (a slip, a bad match)
+        chain_noise = gtsam.noiseModel.Robust.Create(
+            huber, gtsam.noiseModel.Isotropic.Sigma(1, s.chain_sigma)
+        )
         steps = np.asarray(wrap_angle(np.diff(prior)), np.float64)
         for i, d in enumerate(steps.tolist()):
             graph.add(gtsam.BetweenFactorRot2(i, i + 1, gtsam.Rot2(d), chain_noise))
-    huber = gtsam.noiseModel.mEstimator.Huber.Create(s.huber_k)
     for (i, j), y, sd in zip(pairs.tolist(), yaws.tolist(), sigmas.tolist(), strict=True):
         noise = gtsam.noiseModel.Robust.Create(huber, gtsam.noiseModel.Isotropic.Sigma(1, sd))
         graph.add(gtsam.BetweenFactorRot2(i, j, gtsam.Rot2(y), noise))
