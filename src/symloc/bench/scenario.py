@@ -55,6 +55,8 @@ from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.keyframes import KeyframeSettings
+from symloc.vision.rotation_averaging import HeadingAlignmentSettings
+from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
 
 from .episode import Episode, RobotBody, drive_waypoints, run_episode
 from .exploration import exploration_path
@@ -281,6 +283,7 @@ def build_scenario(
     explore_laps: float = 0.0,
     regime: str = "ideal",
     keyframes: KeyframeSettings | bool | None = None,
+    align_headings: HeadingAlignmentSettings | bool = False,
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -309,6 +312,13 @@ def build_scenario(
     :class:`~symloc.vision.keyframes.KeyframeSettings`), each with the SLAM pose of its scan,
     into the visual map's ``keyframes`` table (:attr:`Scenario.n_keyframes`; a note gives the
     bytes per square metre).
+
+    ``align_headings`` (with ``keyframes``; default off): before they are stored, the keyframes'
+    SLAM headings are made consistent with the relative headings their images measure
+    (:func:`symloc.vision.rotation_averaging.align_headings`; True: the default
+    :class:`~symloc.vision.rotation_averaging.HeadingAlignmentSettings`); a note gives what it
+    changed and its cost. :attr:`Scenario.keyframe_slam_poses` keeps the SLAM poses and
+    :attr:`Scenario.keyframe_true_poses` the truth, for evaluation.
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
@@ -316,6 +326,9 @@ def build_scenario(
         raise ConfigurationError(
             "keyframes: recorded on SLAM mapping trips only (map_source='slam')"
         )
+
+    if align_headings not in (None, False) and keyframes in (None, False):
+        raise ConfigurationError("align_headings: aligns recorded keyframes (keyframes=...)")
 
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
@@ -389,8 +402,22 @@ def build_scenario(
             if isinstance(keyframes, KeyframeSettings)
             else None
         )
+        align = (
+            HeadingAlignmentSettings()
+            if align_headings is True
+            else align_headings
+            if isinstance(align_headings, HeadingAlignmentSettings)
+            else None
+        )
         scen.mapped = _map_with_slam(
-            scen, start, gen, dt, spec, explore_laps=explore_laps, keyframes=kf_settings
+            scen,
+            start,
+            gen,
+            dt,
+            spec,
+            explore_laps=explore_laps,
+            keyframes=kf_settings,
+            align=align,
         )
     if long_hallway:
         scen.notes.append(
@@ -417,6 +444,7 @@ def _map_with_slam(
     *,
     explore_laps: float = 0.0,
     keyframes: KeyframeSettings | None = None,
+    align: HeadingAlignmentSettings | None = None,
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -545,6 +573,10 @@ def _map_with_slam(
             _compose(scen.map_from_world, np.array([truths[i] for i in recorder.indices])),
             dtype=np.float64,
         ).reshape(-1, 3)
+        if align is not None and kfs:
+            aligned = align_keyframe_headings(kfs, scen.hardware.calibration, align)
+            kfs = aligned.apply(kfs)
+            scen.notes.append("mapping trip: " + aligned.summary())
         vm.add_keyframes(kfs)
         scen.n_keyframes = len(kfs)
         area = float(scen.room.area)

@@ -20,7 +20,7 @@ headings that agree with them, keeping SLAM's as a prior:
    standard deviation of at most ``max_sigma`` (driving straight at a wall, a yaw error trades
    against the direction of travel and the images fix little). Its weight is
    ``hypot(profile sigma, measurement_sigma)``: the profile alone is optimistic (a simulated
-   realistic camera's pairs are off by ~0.4 degree median, more than their profiles say).
+   realistic camera's pairs are off by 0.2-0.7 degree median, more than their profiles say).
 3. **Averaging** (:func:`solve_headings`). A factor graph on ``Rot2`` (GTSAM; angles wrap
    around): one prior per keyframe on its SLAM heading (``prior_sigma``: this fixes the gauge,
    so the map frame does not turn), one between-factor per consecutive pair along the trip with
@@ -141,10 +141,10 @@ class HeadingAlignmentSettings:
     position_sigma: float = 0.02
     loop_position_sigma: float = 0.10
     max_sigma: float = math.radians(1.0)
-    measurement_sigma: float = math.radians(0.4)
+    measurement_sigma: float = math.radians(0.5)
     prior_sigma: float = math.radians(3.0)
-    chain_sigma: float = math.radians(0.25)
-    huber_k: float = 2.0
+    chain_sigma: float = math.radians(0.1)
+    huber_k: float = 1.0
     outlier_threshold: float = math.radians(1.5)
     max_rounds: int = 10
 
