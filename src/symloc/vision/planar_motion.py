@@ -139,12 +139,21 @@ def _profile(
     phis: FloatArray,
     cap: float = math.inf,
     prior: tuple[float, float] | None = None,
+    scale: float = math.inf,
 ) -> tuple[FloatArray, FloatArray]:
     """Least cost ``(T,)`` over the directions of travel ``phis`` (P,) (an even grid over
     [-pi/2, pi/2)) for each yaw, and the direction ``(T,)`` that gives it. A match costs its
-    squared Sampson distance, at most ``cap``; ``prior = (phi0, weight)`` adds
+    squared Sampson distance ``r^2``, at most ``cap``, or with a finite ``scale`` the Cauchy
+    loss ``scale^2 log(1 + r^2 / scale^2)``; ``prior = (phi0, weight)`` adds
     ``weight * (phi - phi0)^2`` (modulo pi). Without a cap the best grid direction is refined by
     a parabola through it and its neighbours (the cost is then smooth in the yaw)."""
+
+    def loss(r2: FloatArray) -> FloatArray:
+        if math.isfinite(cap):
+            return np.minimum(r2, cap)
+        if math.isfinite(scale):
+            return np.asarray(scale * scale * np.log1p(r2 / (scale * scale)), np.float64)
+        return r2
 
     def penalty(ph: FloatArray) -> FloatArray:
         if prior is None:
@@ -160,7 +169,7 @@ def _profile(
     for a in range(0, yaws.size, chunk):
         ys = yaws[a : a + chunk]
         r2 = sampson_planar(x1, x2, ys, phis, focal)
-        cost = np.minimum(r2, cap).sum(axis=2) if math.isfinite(cap) else r2.sum(axis=2)
+        cost = loss(r2).sum(axis=2)
         cost += penalty(phis)[None, :]
         k = np.argmin(cost, axis=1)
         rows = np.arange(cost.shape[0])
@@ -177,7 +186,7 @@ def _profile(
             ph = ph + off * step
             refined = np.array(
                 [
-                    float(sampson_planar(x1, x2, ys[t : t + 1], ph[t : t + 1], focal).sum())
+                    float(loss(sampson_planar(x1, x2, ys[t : t + 1], ph[t : t + 1], focal)).sum())
                     for t in range(ys.size)
                 ]
             )
@@ -278,13 +287,13 @@ def planar_yaw(
     inl = r2 < cap
     if int(inl.sum()) < max(2, min_matches):
         return PlanarYaw(math.nan, math.inf, int(inl.sum()), n)
-    # 2. the profile of the inliers' plain least squares: smooth in the yaw
-    x1i, x2i = x1[inl], x2[inl]
+    # 2. the profile of a smooth robust loss (Cauchy, scale ``threshold``) over all matches:
+    # smooth in the yaw, and no hard inlier set chosen at the coarse fit to bias it
     span = math.radians(PROFILE_SPAN_DEG)
     yaws = coarse_yaws[k] + np.arange(-span, span + 1e-12, math.radians(0.1))
     yaws = yaws[np.abs(yaws - yaw0) <= window + 1e-12]
     phis = np.radians(np.arange(-90.0, 90.0, 1.0))
-    prof, pphi = _profile(x1i, x2i, focal, yaws, phis, prior=prior)
+    prof, pphi = _profile(x1, x2, focal, yaws, phis, prior=prior, scale=threshold)
     j = int(np.argmin(prof))
     yaw = float(yaws[j])
     travel = float(pphi[j])
@@ -293,8 +302,9 @@ def planar_yaw(
         den = a - 2.0 * b + c
         if den > 0:
             yaw += float(np.clip(0.5 * (a - c) / den, -0.5, 0.5)) * float(yaws[1] - yaws[0])
-    r2 = sampson_planar(x1i, x2i, np.array([yaw]), np.array([travel]), focal)[0, 0]
-    var = max(float(r2.mean()), 0.05)
+    r2 = sampson_planar(x1, x2, np.array([yaw]), np.array([travel]), focal)[0, 0]
+    inl = r2 < cap
+    var = max(float(r2[inl].mean()) if inl.any() else cap, 0.05)
     sigma = _half_width(yaws, (prof - prof[j]) / var, j)
     travel = float((travel + math.pi / 2) % math.pi - math.pi / 2)
     return PlanarYaw(yaw, sigma, int(inl.sum()), int(x1.shape[0]), travel, math.sqrt(var))

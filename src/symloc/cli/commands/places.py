@@ -128,6 +128,19 @@ def register(subparsers: Any) -> None:
         metavar="K",
         help="lens distortion k1 k2 p1 p2 [k3] (OpenCV; default: none)",
     )
+    options.add_angle(
+        al,
+        "--measurement-sigma",
+        default=0.5,
+        help="standard deviation added to each measured relative heading (smaller: trust the "
+        "images more)",
+    )
+    options.add_angle(
+        al,
+        "--chain-sigma",
+        default=0.1,
+        help="standard deviation of the stored relative heading of consecutive keyframes",
+    )
     al.add_argument(
         "--dry-run", action="store_true", help="measure and report; the map is not written"
     )
@@ -263,7 +276,7 @@ def _align_keyframes(args: argparse.Namespace) -> int:
     import numpy as np
 
     from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values
-    from symloc.vision.rotation_averaging import align_map_keyframes
+    from symloc.vision.rotation_averaging import HeadingAlignmentSettings, align_map_keyframes
 
     with _open(args.db, readonly=args.dry_run) as vmap:
         n = vmap.keyframe_count()
@@ -275,7 +288,12 @@ def _align_keyframes(args: argparse.Namespace) -> int:
             K = intrinsics_from_fov(args.hfov, w, h)
         else:
             K = intrinsics_from_values(*args.intrinsics)
-        res = align_map_keyframes(vmap, K, dist_coeffs=args.distortion, write=not args.dry_run)
+        settings = HeadingAlignmentSettings(
+            measurement_sigma=args.measurement_sigma, chain_sigma=args.chain_sigma
+        )
+        res = align_map_keyframes(
+            vmap, K, settings, dist_coeffs=args.distortion, write=not args.dry_run
+        )
     corr = np.degrees(res.corrections)
     print(f"{args.db}: {n} keyframe(s)")
     print(res.summary())
