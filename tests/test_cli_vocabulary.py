@@ -38,6 +38,7 @@ def _option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action | Non
 NOT_STOCHASTIC = {
     ("places", "add"),
     ("places", "keyframes"),
+    ("places", "align-keyframes"),
     ("places", "list"),
     ("places", "decide"),
     ("places", "remove"),

@@ -19,6 +19,10 @@ def test_keyframes_are_off_by_default() -> None:
     assert inspect.signature(build_scenario).parameters["keyframes"].default is None
     with pytest.raises(ConfigurationError, match="SLAM mapping trips only"):
         build_scenario("square", map_source="raster", keyframes=True)
+    # the heading alignment is off by default too, and needs keyframes
+    assert inspect.signature(build_scenario).parameters["align_headings"].default is False
+    with pytest.raises(ConfigurationError, match="align_headings"):
+        build_scenario("square", align_headings=True)
 
 
 def test_trip_keyframes_verify_the_true_copy(tmp_path: Path) -> None:

@@ -180,6 +180,11 @@ class KeyframeRecorder:
             self.selector.accept(odom_pose, feats)
             self.frames.append((int(index), float(stamp), feats))
 
+    @property
+    def indices(self) -> list[int]:
+        """Scan index of each kept frame, in order (the bench looks up its true pose)."""
+        return [i for i, _, _ in self.frames]
+
     def keyframes(
         self, map_pose: Callable[[int], FloatArray], bow: Callable[[OrbFeatures], BowVector]
     ) -> list[Keyframe]:

@@ -55,6 +55,8 @@ from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.keyframes import KeyframeSettings
+from symloc.vision.rotation_averaging import HeadingAlignmentSettings
+from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
 
 from .episode import Episode, RobotBody, drive_waypoints, run_episode
 from .exploration import exploration_path
@@ -187,6 +189,11 @@ class Scenario:
     #: keyframes recorded along the mapping trip (``build_scenario(keyframes=...)``), stored in
     #: the visual map's ``keyframes`` table
     n_keyframes: int = 0
+    #: evaluation only (never stored in the map): the true pose (N, 3) in the map frame of each
+    #: stored keyframe's image, in keyframe id order, and the SLAM pose (N, 3) each had before
+    #: its heading was aligned with the images
+    keyframe_true_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    keyframe_slam_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def to_map(self, world_pose: FloatArray) -> FloatArray:
         """A true pose (3,) in the map frame (where the localizer's claims live)."""
@@ -276,6 +283,7 @@ def build_scenario(
     explore_laps: float = 0.0,
     regime: str = "ideal",
     keyframes: KeyframeSettings | bool | None = None,
+    align_headings: HeadingAlignmentSettings | bool = False,
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -304,6 +312,13 @@ def build_scenario(
     :class:`~symloc.vision.keyframes.KeyframeSettings`), each with the SLAM pose of its scan,
     into the visual map's ``keyframes`` table (:attr:`Scenario.n_keyframes`; a note gives the
     bytes per square metre).
+
+    ``align_headings`` (with ``keyframes``; default off): before they are stored, the keyframes'
+    SLAM headings are made consistent with the relative headings their images measure
+    (:func:`symloc.vision.rotation_averaging.align_headings`; True: the default
+    :class:`~symloc.vision.rotation_averaging.HeadingAlignmentSettings`); a note gives what it
+    changed and its cost. :attr:`Scenario.keyframe_slam_poses` keeps the SLAM poses and
+    :attr:`Scenario.keyframe_true_poses` the truth, for evaluation.
     """
     if map_source not in ("slam", "raster"):
         raise ConfigurationError(f"map_source: expected 'slam' or 'raster', got {map_source!r}")
@@ -311,6 +326,9 @@ def build_scenario(
         raise ConfigurationError(
             "keyframes: recorded on SLAM mapping trips only (map_source='slam')"
         )
+
+    if align_headings not in (None, False) and keyframes in (None, False):
+        raise ConfigurationError("align_headings: aligns recorded keyframes (keyframes=...)")
 
     gen = as_rng(rng)
     preset = RPLIDAR_A2 if preset is None else preset
@@ -384,8 +402,22 @@ def build_scenario(
             if isinstance(keyframes, KeyframeSettings)
             else None
         )
+        align = (
+            HeadingAlignmentSettings()
+            if align_headings is True
+            else align_headings
+            if isinstance(align_headings, HeadingAlignmentSettings)
+            else None
+        )
         scen.mapped = _map_with_slam(
-            scen, start, gen, dt, spec, explore_laps=explore_laps, keyframes=kf_settings
+            scen,
+            start,
+            gen,
+            dt,
+            spec,
+            explore_laps=explore_laps,
+            keyframes=kf_settings,
+            align=align,
         )
     if long_hallway:
         scen.notes.append(
@@ -412,6 +444,7 @@ def _map_with_slam(
     *,
     explore_laps: float = 0.0,
     keyframes: KeyframeSettings | None = None,
+    align: HeadingAlignmentSettings | None = None,
 ) -> MappedPlace | None:
     """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
     turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
@@ -535,6 +568,15 @@ def _map_with_slam(
             lambda i: np.asarray(slam.poses[i], dtype=np.float64),
             lambda f: vocab.bow(f.descriptors),
         )
+        scen.keyframe_slam_poses = np.array([kf.pose for kf in kfs], np.float64).reshape(-1, 3)
+        scen.keyframe_true_poses = np.asarray(
+            _compose(scen.map_from_world, np.array([truths[i] for i in recorder.indices])),
+            dtype=np.float64,
+        ).reshape(-1, 3)
+        if align is not None and kfs:
+            aligned = align_keyframe_headings(kfs, scen.hardware.calibration, align)
+            kfs = aligned.apply(kfs)
+            scen.notes.append("mapping trip: " + aligned.summary())
         vm.add_keyframes(kfs)
         scen.n_keyframes = len(kfs)
         area = float(scen.room.area)

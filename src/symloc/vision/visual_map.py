@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import sqlite3
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -759,6 +759,40 @@ class VisualMap:
                 con.execute("DELETE FROM keyframes")
             else:
                 con.executemany("DELETE FROM keyframes WHERE id = ?", [(int(i),) for i in ids])
+
+    def set_keyframe_headings(
+        self,
+        ids: Sequence[int],
+        headings: ArrayLike,
+        *,
+        meta: Mapping[str, str] | None = None,
+    ) -> None:
+        """Replace the headings [rad] of the keyframes ``ids`` (positions unchanged), and write
+        the ``meta`` strings, in one transaction: all or none (an unknown id changes nothing).
+
+        Parameters
+        ----------
+        ids : sequence of N int
+        headings : (N,) array
+            New map headings [rad] (stored wrapped).
+        meta : mapping of str to str, optional
+            Metadata written with them (e.g. how the headings were aligned).
+        """
+        self._keyframes_table(writing=True)
+        kid = [int(i) for i in ids]
+        h = np.asarray(headings, np.float64).reshape(-1)
+        if h.size != len(kid) or not np.all(np.isfinite(h)):
+            raise ConfigurationError(f"headings: expected {len(kid)} finite headings [rad]")
+        if len(set(kid)) != len(kid):
+            raise ConfigurationError("ids: expected distinct keyframe ids")
+        wrapped = np.asarray(wrap_angle(h), np.float64).tolist()
+        with self._transaction() as con:
+            for i, th in zip(kid, wrapped, strict=True):
+                cur = con.execute("UPDATE keyframes SET heading = ? WHERE id = ?", (th, i))
+                if cur.rowcount != 1:
+                    raise DatabaseError(f"{self.path}: no keyframe with id {i}")
+            for key, value in (meta or {}).items():
+                con.execute("INSERT OR REPLACE INTO meta VALUES (?, ?)", (str(key), str(value)))
 
     def keyframe_count(self) -> int:
         """Number of stored keyframes (0 in a version-1 file)."""

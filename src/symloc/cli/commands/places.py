@@ -17,7 +17,8 @@ def register(subparsers: Any) -> None:
     """Add ``places`` with ``add``, ``list``, ``decide`` and ``remove``."""
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "places",
-        help="visual map of symmetric places (SQLite): add, list, keyframes, decide, remove",
+        help="visual map of symmetric places (SQLite): add, list, keyframes, align-keyframes, "
+        "decide, remove",
     )
     sub = parser.add_subparsers(dest="places_command", metavar="ACTION")
     sub.required = True
@@ -96,6 +97,54 @@ def register(subparsers: Any) -> None:
     )
     k.add_argument("--db", type=Path, required=True, help="visual map database (read only)")
     k.set_defaults(func=_keyframes)
+
+    al = sub.add_parser(
+        "align-keyframes",
+        help="make the keyframes' headings agree with their images (rotation averaging)",
+        description="Measures the relative heading of overlapping keyframes from their images "
+        "(homography / essential matrix) and solves for headings that agree with them, the "
+        "stored (SLAM) headings a weak prior; rewrites the headings in one transaction "
+        "(positions unchanged). Exit code 0.",
+    )
+    al.add_argument(
+        "--db", type=Path, required=True, help="visual map database (its headings are rewritten)"
+    )
+    cam_al = al.add_mutually_exclusive_group(required=True)
+    cam_al.add_argument(
+        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
+    )
+    cam_al.add_argument(
+        "--intrinsics",
+        type=options.finite_float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        help="camera intrinsics [px]",
+    )
+    al.add_argument(
+        "--distortion",
+        type=options.finite_float,
+        nargs="+",
+        default=None,
+        metavar="K",
+        help="lens distortion k1 k2 p1 p2 [k3] (OpenCV; default: none)",
+    )
+    options.add_angle(
+        al,
+        "--measurement-sigma",
+        default=0.5,
+        help="standard deviation added to each measured relative heading (smaller: trust the "
+        "images more)",
+    )
+    options.add_angle(
+        al,
+        "--chain-sigma",
+        default=0.1,
+        help="standard deviation of the stored relative heading of consecutive keyframes",
+    )
+    al.add_argument(
+        "--dry-run", action="store_true", help="measure and report; the map is not written"
+    )
+    al.set_defaults(func=_align_keyframes)
 
     r = sub.add_parser("remove", help="remove a place and its images")
     r.add_argument("--db", type=Path, required=True, help="visual map database")
@@ -220,6 +269,37 @@ def _keyframes(args: argparse.Namespace) -> int:
                 f"{kf.keyframe_id:>5}  {kf.stamp:>9.2f}  {len(kf.features):>8}  "
                 f"{len(kf.bow):>6}  ({x:.2f}, {y:.2f}, {math.degrees(th):.1f})"
             )
+    return 0
+
+
+def _align_keyframes(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values
+    from symloc.vision.rotation_averaging import HeadingAlignmentSettings, align_map_keyframes
+
+    with _open(args.db, readonly=args.dry_run) as vmap:
+        n = vmap.keyframe_count()
+        if n == 0:
+            print(f"{args.db}: no keyframes; nothing to align")
+            return 0
+        if args.hfov is not None:
+            w, h = vmap.keyframe(int(vmap.keyframe_poses()[0][0])).features.image_size
+            K = intrinsics_from_fov(args.hfov, w, h)
+        else:
+            K = intrinsics_from_values(*args.intrinsics)
+        settings = HeadingAlignmentSettings(
+            measurement_sigma=args.measurement_sigma, chain_sigma=args.chain_sigma
+        )
+        res = align_map_keyframes(
+            vmap, K, settings, dist_coeffs=args.distortion, write=not args.dry_run
+        )
+    corr = np.degrees(res.corrections)
+    print(f"{args.db}: {n} keyframe(s)")
+    print(res.summary())
+    if corr.size:
+        print(f"heading change [deg]: min {corr.min():+.2f}, max {corr.max():+.2f}")
+    print("dry run: nothing written" if args.dry_run else "headings rewritten (one transaction)")
     return 0
 
 
