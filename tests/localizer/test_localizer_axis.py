@@ -294,6 +294,9 @@ class SpreadTracker(FakeTracker):
 def _corridor_localizer(
     tracker: FakeTracker, proposer: FakeProposer, keyframes, score=None, **cfg
 ) -> Localizer:
+    """One image decides the heading class unless ``axis_views`` says otherwise (the
+    scripted keyframes answer the same at every heading)."""
+    cfg.setdefault("axis_views", 1)
     config = LocalizerConfig(decide_here=True, **cfg)
     loc = Localizer(
         tracker,
@@ -373,6 +376,46 @@ def test_the_axis_is_renewed_by_the_laser_without_an_image() -> None:
     assert loc.decide_counts.entered >= 3
 
 
+def test_the_heading_class_needs_two_views_that_agree() -> None:
+    kf = CorridorKeyframes(everywhere=True)
+    tracker = _spread()
+    proposer = FakeProposer(list(_corridor_poses()), complete=False)
+    loc = _corridor_localizer(tracker, proposer, kf, axis_views=2)
+    _step(loc)
+    est = _step(loc, image=IMAGE)
+    # the first image decides the class, but alone it is not enough: look elsewhere
+    assert est.status is Status.DECIDING
+    assert est.request is not None
+    assert est.request.kind is RequestKind.ROTATE
+    assert "1 of 2 views agree" in loc.log[-1] or any("1 of 2 views agree" in s for s in loc.log)
+    # the driver turns; the scripted laser proposes the same map poses, the camera agrees
+    odom = (0.0, 0.0, est.request.angle)
+    est = _step(loc, odom=odom)
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    est = _step(loc, odom=odom, image=IMAGE)
+    assert est.status is Status.AXIS
+    assert len(kf.shown) == 2
+
+
+def test_views_that_disagree_on_the_heading_class_decide_nothing() -> None:
+    kf = CorridorKeyframes(everywhere=True)
+    proposer = FakeProposer(list(_corridor_poses()), complete=False)
+    loc = _corridor_localizer(_spread(), proposer, kf, axis_views=2)
+    _step(loc)
+    est = _step(loc, image=IMAGE)
+    assert est.request is not None
+    odom = (0.0, 0.0, est.request.angle)
+    # the same map poses after the turn, but the camera now sees the other class: a robot
+    # whose odometry turned while the map heading it verifies did not
+    kf.facing = TRUTH[2] + math.pi
+    _step(loc, odom=odom)
+    est = _step(loc, odom=odom, image=IMAGE)
+    assert est.status is not Status.AXIS
+    assert any("disagree on the heading class" in s for s in loc.log)
+    assert loc.decide_counts.axis == 0
+
+
 def test_an_undecided_heading_is_not_an_axis() -> None:
     # keyframes expected here, but none looks either way along the axis
     kf = CorridorKeyframes(facing=TRUTH[2] + math.pi / 2, everywhere=True)
@@ -445,7 +488,7 @@ def test_an_end_in_view_lets_the_camera_earn_the_pose_with_the_axis_heading() ->
 
 def test_an_axis_running_into_unmapped_space_is_lengthened_there() -> None:
     kf = CorridorKeyframes()
-    config = LocalizerConfig(decide_here=True, axis_open_reach=10.0)
+    config = LocalizerConfig(decide_here=True, axis_open_reach=10.0, axis_views=1)
     score = CorridorScore(lo=2.0, hi=14.0)  # the map stops at 15 m: the scan fits up to 14 m
     loc = Localizer(
         _spread(),

@@ -83,6 +83,10 @@ class LocalizerConfig:
     axis_min_inliers : the winning heading class' best verified hypothesis needs at least this
         many inliers, and the camera's verification margin over the other class' best fit
         (one weak match never decides the heading).
+    axis_views : images, taken at headings at least ``decide_turn`` apart, that must each
+        decide the same heading class (and none the other) before the axis is reported: on
+        the dev split one image matched the half-turned class with 31-36 inliers where the
+        robot stood in the corridor's unmapped half.
     axis_across_std, axis_theta_std : least std [m], [rad] of the axis estimate across the axis
         and in heading.
     axis_line_std : std [rad] of the axis' direction where it runs far from the stretch it was
@@ -133,6 +137,7 @@ class LocalizerConfig:
     axis_spacing: float = 1.0
     axis_max_hypotheses: int = 24
     axis_min_inliers: int = 30
+    axis_views: int = 2
     axis_across_std: float = 0.05
     axis_theta_std: float = math.radians(1.0)
     axis_line_std: float = math.radians(0.3)
@@ -188,6 +193,7 @@ class LocalizerConfig:
             "decide_rest",
             "axis_max_hypotheses",
             "axis_min_inliers",
+            "axis_views",
             "axis_recheck",
             "axis_patience",
         ):

@@ -259,6 +259,9 @@ class DecideHere:
     rest_after: int = 0
     back: OnAxis | None = None
     classes: tuple[AxisClass, AxisClass] | None = None
+    #: each image's decided heading class, as the map-from-odometry rotation it implies [rad]
+    #: (the camera's map heading minus the odometry heading, unchanged by turns in place)
+    axis_votes: list[float] = field(default_factory=list)
     labels: NDArray[np.int64] | None = None
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
@@ -449,6 +452,21 @@ class DecideHere:
             if vote.winner is None:
                 return self._look_elsewhere(
                     ctx, inp, f"image {self.views}: heading not decided: {vote.reason}"
+                )
+            rotation = float(angle_diff(vote.heading, inp.odom_pose[2]))
+            self.axis_votes.append(rotation)
+            turned = np.abs(np.asarray(wrap_angle(np.array(self.axis_votes) - rotation)))
+            if np.any(turned > 0.5 * math.pi):
+                self.axis_votes.clear()
+                return self._look_elsewhere(
+                    ctx, inp, f"image {self.views}: the views disagree on the heading class"
+                )
+            if len(self.axis_votes) < cfg.axis_views:
+                return self._look_elsewhere(
+                    ctx,
+                    inp,
+                    f"image {self.views}: {vote.reason}; {len(self.axis_votes)} of "
+                    f"{cfg.axis_views} views agree so far",
                 )
             self.rest_after = cfg.axis_recheck
             return enter_axis(ctx, inp, self.classes[vote.winner], self.odom0, vote.reason)
