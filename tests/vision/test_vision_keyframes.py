@@ -24,6 +24,7 @@ from symloc.vision.keyframes import Keyframe, KeyframeSelector, KeyframeSettings
 from symloc.vision.orb import OrbExtractor, OrbFeatures
 from symloc.vision.verification import (
     VerificationSettings,
+    expected_counts,
     expected_keyframes,
     verify_hypotheses,
     verify_hypothesis,
@@ -480,3 +481,15 @@ def test_cli_lists_keyframes(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     out = capsys.readouterr().out
     assert "schema version 2, 3 keyframe(s)" in out
     assert len([ln for ln in out.splitlines() if ln.strip().startswith(("1 ", "2 ", "3 "))]) == 3
+
+
+def test_expected_counts_are_the_lengths_of_the_expected_keyframes() -> None:
+    rng = np.random.default_rng(3)
+    kf = np.column_stack([rng.uniform(-3, 3, (60, 2)), rng.uniform(-math.pi, math.pi, 60)])
+    poses = np.column_stack([rng.uniform(-3, 3, (40, 2)), rng.uniform(-math.pi, math.pi, 40)])
+    s = VerificationSettings(max_distance=1.5)
+    counts = expected_counts(poses, kf, s)
+    lengths = [len(expected_keyframes(p, np.arange(60), kf, s)) for p in poses]
+    assert counts.tolist() == lengths
+    assert max(lengths) > 0
+    assert expected_counts(poses, np.zeros((0, 3)), s).tolist() == [0] * 40

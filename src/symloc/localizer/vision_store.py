@@ -27,6 +27,7 @@ from symloc.vision.verification import (
     HypothesisCheck,
     VerificationDecision,
     VerificationSettings,
+    expected_counts,
     verify_hypotheses,
 )
 
@@ -188,18 +189,9 @@ class VisionPlaceStore:
         return int(self.visual_map.keyframe_count())
 
     def expected_counts(self, poses: FloatArray) -> NDArray[np.int64]:
-        """Keyframes each pose of ``poses`` (P, 3) should see, (P,): within the verification's
-        ``max_distance`` [m] and ``max_heading_difference`` [rad]
-        (:func:`symloc.vision.verification.expected_keyframes`, counted for many poses)."""
-        kp = self._keyframe_poses()
-        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
-        if kp.shape[0] == 0 or p.shape[0] == 0:
-            return np.zeros(p.shape[0], np.int64)
-        s = self.verification
-        d = np.hypot(p[:, None, 0] - kp[None, :, 0], p[:, None, 1] - kp[None, :, 1])
-        dth = np.abs(np.asarray(wrap_angle(kp[None, :, 2] - p[:, None, 2]), np.float64))
-        near = (d <= s.max_distance) & (dth <= s.max_heading_difference)
-        return np.asarray(near.sum(axis=1), dtype=np.int64)
+        """Keyframes each pose of ``poses`` (P, 3) should see, (P,)
+        (:func:`symloc.vision.verification.expected_counts` with :attr:`verification`)."""
+        return expected_counts(poses, self._keyframe_poses(), self.verification)
 
     def _keyframe_poses(self) -> FloatArray:
         """The keyframes' map poses (N, 3), read once per keyframe count."""

@@ -57,6 +57,7 @@ __all__ = [
     "RelativeHeading",
     "VerificationDecision",
     "VerificationSettings",
+    "expected_counts",
     "expected_keyframes",
     "measure_relative_heading",
     "verify_hypotheses",
@@ -267,6 +268,32 @@ def _pose3(pose: ArrayLike, name: str) -> FloatArray:
     return p
 
 
+def _expected(
+    poses: FloatArray, keyframe_poses: FloatArray, s: VerificationSettings
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+    """Which keyframes (N, 3) each pose (P, 3) should be seeing, (P, N), with the distances [m]
+    and heading differences [rad] (P, N) that decide it."""
+    d = np.hypot(
+        poses[:, None, 0] - keyframe_poses[None, :, 0],
+        poses[:, None, 1] - keyframe_poses[None, :, 1],
+    )
+    dth = np.abs(np.asarray(wrap_angle(keyframe_poses[None, :, 2] - poses[:, None, 2]), np.float64))
+    return (d <= s.max_distance) & (dth <= s.max_heading_difference), d, dth
+
+
+def expected_counts(
+    poses: ArrayLike, keyframe_poses: ArrayLike, settings: VerificationSettings | None = None
+) -> NDArray[np.int64]:
+    """How many keyframes each of ``poses`` (P, 3) should be seeing, (P,): those of
+    ``keyframe_poses`` (N, 3) that :func:`expected_keyframes` would list for it."""
+    s = settings if settings is not None else VerificationSettings()
+    p = np.asarray(poses, np.float64).reshape(-1, 3)
+    kp = np.asarray(keyframe_poses, np.float64).reshape(-1, 3)
+    if p.shape[0] == 0 or kp.shape[0] == 0:
+        return np.zeros(p.shape[0], np.int64)
+    return np.asarray(_expected(p, kp, s)[0].sum(axis=1), dtype=np.int64)
+
+
 def expected_keyframes(
     pose: ArrayLike,
     keyframe_ids: ArrayLike,
@@ -291,9 +318,8 @@ def expected_keyframes(
     kp = np.asarray(keyframe_poses, np.float64).reshape(-1, 3)
     if kp.shape[0] != ids.size:
         raise ConfigurationError(f"keyframe_poses: {kp.shape[0]} poses for {ids.size} keyframe ids")
-    d = np.hypot(kp[:, 0] - p[0], kp[:, 1] - p[1])
-    dth = np.abs(np.asarray(wrap_angle(kp[:, 2] - p[2]), np.float64))
-    keep = (d <= s.max_distance) & (dth <= s.max_heading_difference)
+    keep, d, dth = _expected(p[None, :], kp, s)
+    keep, d, dth = keep[0], d[0], dth[0]
     # nearest first: a metre of travel counts like the heading difference that is allowed
     cost = d / s.max_distance + dth / s.max_heading_difference
     order = np.argsort(cost[keep], kind="stable")
