@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -72,17 +73,7 @@ def register(subparsers: Any) -> None:
         "--place", type=options.positive_int, required=True, help="place id (see 'places list')"
     )
     d.add_argument("--query", type=Path, required=True, help="query photo")
-    cam = d.add_mutually_exclusive_group(required=True)
-    cam.add_argument(
-        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
-    )
-    cam.add_argument(
-        "--intrinsics",
-        type=options.finite_float,
-        nargs=4,
-        metavar=("FX", "FY", "CX", "CY"),
-        help="camera intrinsics [px]",
-    )
+    _add_camera(d)
     d.add_argument(
         "--vocabulary",
         type=Path,
@@ -109,17 +100,7 @@ def register(subparsers: Any) -> None:
     al.add_argument(
         "--db", type=Path, required=True, help="visual map database (its headings are rewritten)"
     )
-    cam_al = al.add_mutually_exclusive_group(required=True)
-    cam_al.add_argument(
-        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
-    )
-    cam_al.add_argument(
-        "--intrinsics",
-        type=options.finite_float,
-        nargs=4,
-        metavar=("FX", "FY", "CX", "CY"),
-        help="camera intrinsics [px]",
-    )
+    _add_camera(al)
     al.add_argument(
         "--distortion",
         type=options.finite_float,
@@ -272,10 +253,35 @@ def _keyframes(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_camera(parser: argparse.ArgumentParser) -> None:
+    """The camera of a command: ``--hfov`` or ``--intrinsics``, one of them."""
+    cam = parser.add_mutually_exclusive_group(required=True)
+    cam.add_argument(
+        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
+    )
+    cam.add_argument(
+        "--intrinsics",
+        type=options.finite_float,
+        nargs=4,
+        metavar=("FX", "FY", "CX", "CY"),
+        help="camera intrinsics [px]",
+    )
+
+
+def _camera_matrix(args: argparse.Namespace, image_size: Callable[[], tuple[int, int]]) -> Any:
+    """K (3, 3) from ``--intrinsics``, or from ``--hfov`` and ``image_size()`` (width, height
+    [px]; asked only then)."""
+    from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values
+
+    if args.hfov is not None:
+        w, h = image_size()
+        return intrinsics_from_fov(args.hfov, w, h)
+    return intrinsics_from_values(*args.intrinsics)
+
+
 def _align_keyframes(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values
     from symloc.vision.rotation_averaging import HeadingAlignmentSettings, align_map_keyframes
 
     with _open(args.db, readonly=args.dry_run) as vmap:
@@ -283,11 +289,9 @@ def _align_keyframes(args: argparse.Namespace) -> int:
         if n == 0:
             print(f"{args.db}: no keyframes; nothing to align")
             return 0
-        if args.hfov is not None:
-            w, h = vmap.keyframe(int(vmap.keyframe_poses()[0][0])).features.image_size
-            K = intrinsics_from_fov(args.hfov, w, h)
-        else:
-            K = intrinsics_from_values(*args.intrinsics)
+        K = _camera_matrix(
+            args, lambda: vmap.keyframe(int(vmap.keyframe_poses()[0][0])).features.image_size
+        )
         settings = HeadingAlignmentSettings(
             measurement_sigma=args.measurement_sigma, chain_sigma=args.chain_sigma
         )
@@ -304,7 +308,7 @@ def _align_keyframes(args: argparse.Namespace) -> int:
 
 
 def _decide(args: argparse.Namespace) -> int:
-    from symloc.vision.image_files import intrinsics_from_fov, intrinsics_from_values, read_image
+    from symloc.vision.image_files import read_image
     from symloc.vision.orientation import decide_orientation
 
     with _open(args.db, readonly=True) as vmap:
@@ -312,11 +316,7 @@ def _decide(args: argparse.Namespace) -> int:
         voc, _ = _vocabulary(args.vocabulary, vmap)
     query = read_image(args.query)
     h, w = query.shape[:2]
-    K = (
-        intrinsics_from_fov(args.hfov, w, h)
-        if args.hfov is not None
-        else intrinsics_from_values(*args.intrinsics)
-    )
+    K = _camera_matrix(args, lambda: (w, h))
     d = decide_orientation(query, place, voc, K)
     scores = ", ".join(f"{s:.3f}" for s in d.scores)
     print(f"place {place.place_id} ({place.kind}, M={place.m}), query {args.query}")
