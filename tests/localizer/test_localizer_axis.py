@@ -548,3 +548,19 @@ def test_axis_estimates_carry_an_axis_and_nothing_else_does() -> None:
         AxisPose(np.zeros(3), np.eye(3), np.zeros((3, 2)))
     with pytest.raises(ConfigurationError, match="axis_sweep_ratio"):
         LocalizerConfig(axis_sweep_ratio=1.5)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("axis_views", 0),
+        ("axis_views", 1.5),
+        ("axis_min_inliers", 0),
+        ("copy_map_slack", -0.1),
+        ("copy_claim_floor", "yes"),
+        ("decide_turn", -1.0),
+    ],
+)
+def test_bad_decide_settings_are_refused_by_name(field: str, value: object) -> None:
+    with pytest.raises(ConfigurationError, match=f"LocalizerConfig.{field}"):
+        LocalizerConfig(**{field: value})
