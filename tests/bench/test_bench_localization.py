@@ -12,7 +12,14 @@ import pytest
 from symloc.bench.localization import WorldTask, run_world, summarize, trial_rows
 from symloc.bench.scenario import build_scenario
 from symloc.bench.sweep import run_sweep
-from symloc.bench.trial import TrialConfig, TrialSpec, run_trial, sample_free_pose
+from symloc.bench.trial import (
+    DEFAULT_METHODS,
+    TrialConfig,
+    TrialSpec,
+    needs_keyframes,
+    run_trial,
+    sample_free_pose,
+)
 from symloc.bench.world_sources import WorldRef, build_world, split_seeds
 from symloc.cli.main import main
 from symloc.errors import ConfigurationError
@@ -52,7 +59,7 @@ def test_sweep_json_is_identical_for_one_and_two_workers(tmp_path: Path) -> None
     assert a == b
     doc = json.loads(a)
     assert doc["settings"]["world_seeds"] == [3, 4]
-    assert len(doc["trials"]) == 2 * 2 * 2  # worlds x trials x methods
+    assert len(doc["trials"]) == 2 * 2 * len(DEFAULT_METHODS)  # worlds x trials x methods
     # every finished world was saved as it finished, with the same trial rows
     lines = (tmp_path / "w2" / "bench_localization.partial.jsonl").read_text().splitlines()
     saved = sorted(
@@ -102,7 +109,7 @@ def test_trial_grades_every_scan_and_both_methods_share_the_start(tmp_path: Path
         scen.close()
     assert res.start == again.start
     assert res.kidnap_to == again.kidnap_to
-    assert set(res.results) == {"symloc", "amcl"}
+    assert set(res.results) == set(DEFAULT_METHODS)
     for m, r in res.results.items():
         assert r.grade == again.results[m].grade  # same seed, same trial
         # kidnapped after 1 s; then a claim (right or wrong) and 1 s of tracking, or 3 s
@@ -181,7 +188,7 @@ def test_a_furnished_world_runs_a_trial_and_records_its_near_symmetry() -> None:
     w = run_world(task)
     assert w.family == "furnished"
     assert len(w.trials) == 1
-    assert set(w.trials[0].results) == {"symloc", "amcl"}
+    assert set(w.trials[0].results) == set(DEFAULT_METHODS)
     for r in w.trials[0].results.values():
         assert r.collisions == 0
     meta = generate_world("furnished", 0).meta
@@ -189,3 +196,11 @@ def test_a_furnished_world_runs_a_trial_and_records_its_near_symmetry() -> None:
     assert w.order in (1, meta["base_order"])
     summary = json.loads(json.dumps(world_summary(w)))
     assert summary["metadata"]["overlap"] == meta["overlap"]
+
+
+def test_keyframes_are_recorded_for_the_methods_that_decide_where_the_robot_stands() -> None:
+    # symloc as shipped decides where it stands when its settings say so; centre never does
+    assert needs_keyframes(("symloc", "amcl"), default_decide_here=True)
+    assert not needs_keyframes(("symloc", "amcl"), default_decide_here=False)
+    assert not needs_keyframes(("centre", "amcl"), default_decide_here=True)
+    assert needs_keyframes(("decide",), default_decide_here=False)

@@ -81,11 +81,11 @@ def _step(loc: Localizer, pose=TRUE, image=None):
     return loc.update(OdometryReading(np.asarray(pose, float)), np.asarray(pose, float), image)
 
 
-def test_off_by_default_and_a_setting() -> None:
-    assert LocalizerConfig().decide_here is False
+def test_on_by_default_and_a_setting() -> None:
+    assert LocalizerConfig().decide_here is True
     assert "localizer.decide_here" in leaf_paths()
-    s = LocalizerSettings().replace(**{"localizer.decide_here": True})
-    assert s.localizer.decide_here is True
+    s = LocalizerSettings().replace(**{"localizer.decide_here": False})
+    assert s.localizer.decide_here is False
     with pytest.raises(ConfigurationError, match="decide_laser_margin"):
         LocalizerConfig(decide_laser_margin=1.5)
     with pytest.raises(ConfigurationError, match="decide_views"):

@@ -13,6 +13,7 @@ from symloc.grid.fields import MapFields
 from symloc.localizer import (
     Hypothesis,
     Localizer,
+    LocalizerConfig,
     Status,
     SymmetryVerdict,
     TrackerResult,
@@ -151,6 +152,7 @@ def test_converged_pose_is_earned_only_when_no_map_copy_fits(copy_fits):
         _Tracker(result),
         _asym,
         _Store(),
+        LocalizerConfig(decide_here=False),  # the paper's path's copy check
         scorer=scorer,
         map_symmetries=[MapSymmetry(np.zeros(2), 2, 1.0)],
     )

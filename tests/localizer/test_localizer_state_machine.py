@@ -31,6 +31,9 @@ from symloc.localizer.copies import CIRCLE_SAMPLES
 from symloc.odometry import OdometryReading
 from symloc.symmetry.order import SymmetryOrder
 
+# These tests follow the paper's path (Algorithms 2-5); deciding where the robot stands
+# (the default) is tested in test_localizer_decide_here.py.
+PAPER = LocalizerConfig(decide_here=False)
 CENTRE = np.array([2.0, 1.0])
 HALF = 1.5  # square room of side 3 m
 
@@ -170,7 +173,7 @@ def _ambiguous_tracker(true_pose) -> FakeTracker:
 
 def test_converged_in_asymmetric_place_is_earned_after_n_updates():
     tracker = FakeTracker(default=_result([[0.5, 0.5, 0.1]], [1.0]))
-    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore(), PAPER)
     statuses = [loc.update(OdometryReading(np.zeros(3)), None).status for _ in range(3)]
     assert statuses == [Status.LOST, Status.LOST, Status.TRACKING]
     est = loc.update(OdometryReading(np.zeros(3)), None)
@@ -180,7 +183,7 @@ def test_converged_in_asymmetric_place_is_earned_after_n_updates():
 
 def test_not_converged_is_lost_without_pose():
     tracker = FakeTracker(default=_result([[0, 0, 0], [1, 1, 1]], [0.5, 0.5], std=1.0))
-    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore(), PAPER)
     est = loc.update(OdometryReading(np.zeros(3)), None)
     assert est.status is Status.LOST
     assert est.pose is None
@@ -190,7 +193,7 @@ def test_full_resolution_path_goes_to_centre_faces_decides_and_reseeds():
     true = np.array([2.8, 0.4, 2.0])
     tracker = _ambiguous_tracker(true)
     store = FakeStore(places=[PLACE], decisions=[Decision("decided", 2, math.radians(3), 0.9)])
-    loc = Localizer(tracker, SquareJudge(), store)
+    loc = Localizer(tracker, SquareJudge(), store, PAPER)
     drv = Driver(loc, true)
     first = drv.step()
     assert first.status is Status.AMBIGUOUS
@@ -221,7 +224,7 @@ def test_undetermined_turns_clockwise_by_360_over_m_then_decides():
         places=[PLACE],
         decisions=[Decision("undetermined", reason="ratio"), Decision("decided", 1, 0.0, 0.8)],
     )
-    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store)
+    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store, PAPER)
     drv = Driver(loc, true)
     final = drv.run(300)
     rotates = [e.request for e in drv.history if e.request and e.request.kind is RequestKind.ROTATE]
@@ -233,7 +236,7 @@ def test_undetermined_turns_clockwise_by_360_over_m_then_decides():
 def test_featureless_images_end_ambiguous_undetermined_never_a_pose():
     true = np.array([1.2, 0.0, -1.0])
     store = FakeStore(places=[PLACE], decisions=[Decision("refused", reason="12 keypoints")] * 4)
-    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store)
+    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store, PAPER)
     drv = Driver(loc, true)
     final = drv.run(400)
     assert final.status is Status.AMBIGUOUS
@@ -249,7 +252,10 @@ def test_no_match_with_mapping_allowed_builds_a_new_place_and_says_so():
     true = np.array([2.5, 2.0, 0.7])
     store = FakeStore(places=[])  # nothing with this G-V distance
     loc = Localizer(
-        _ambiguous_tracker(true), SquareJudge(), store, LocalizerConfig(allow_mapping=True)
+        _ambiguous_tracker(true),
+        SquareJudge(),
+        store,
+        LocalizerConfig(decide_here=False, allow_mapping=True),
     )
     drv = Driver(loc, true)
     final = drv.run(600)
@@ -265,7 +271,7 @@ def test_no_match_with_mapping_allowed_builds_a_new_place_and_says_so():
 def test_no_match_without_mapping_is_undetermined():
     true = np.array([2.5, 2.0, 0.7])
     store = FakeStore(places=[PLACE], decisions=[Decision("no_match", reason="low")] * 4)
-    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store)
+    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), store, PAPER)
     final = Driver(loc, true).run(600)
     assert final.status is Status.AMBIGUOUS
     assert "no visual map matches" in final.reason
@@ -277,7 +283,9 @@ def test_symmetric_verdict_that_flips_back_abandons_the_trip_and_is_lost():
     judge = SquareJudge()
     judge.flip = [True] + [False] * 10
     tracker = _ambiguous_tracker(true)
-    loc = Localizer(tracker, judge, FakeStore(), LocalizerConfig(flip_patience=3))
+    loc = Localizer(
+        tracker, judge, FakeStore(), LocalizerConfig(decide_here=False, flip_patience=3)
+    )
     drv = Driver(loc, true)
     first = drv.step()
     assert first.status is Status.AMBIGUOUS
@@ -296,7 +304,12 @@ def test_a_single_spurious_verdict_keeps_going_on_odometry():
     true = np.array([2.9, 0.1, 0.0])
     judge = SquareJudge()
     judge.flip = [True, False, True, False]
-    loc = Localizer(_ambiguous_tracker(true), judge, FakeStore(), LocalizerConfig(flip_patience=3))
+    loc = Localizer(
+        _ambiguous_tracker(true),
+        judge,
+        FakeStore(),
+        LocalizerConfig(decide_here=False, flip_patience=3),
+    )
     drv = Driver(loc, true)
     est = drv.step()
     for _ in range(4):
@@ -307,7 +320,7 @@ def test_a_single_spurious_verdict_keeps_going_on_odometry():
 
 def test_tracking_with_one_cluster_in_symmetric_room_keeps_tracking():
     pose = [2.5, 1.5, 0.4]
-    loc = Localizer(FakeTracker(default=_result([pose], [1.0])), SquareJudge(), FakeStore())
+    loc = Localizer(FakeTracker(default=_result([pose], [1.0])), SquareJudge(), FakeStore(), PAPER)
     loc.set_pose(np.array(pose), np.eye(3) * 0.01)
     est = loc.update(OdometryReading(np.zeros(3)), np.array(pose))
     assert est.status is Status.TRACKING
@@ -317,7 +330,7 @@ def test_tracking_that_splits_into_rotated_clusters_becomes_ambiguous():
     pose = np.array([2.5, 1.5, 0.4])
     copies = rotated_copies(pose, CENTRE, SymmetryOrder.finite(4))
     tracker = FakeTracker(script=[_result(copies[:2], [0.6, 0.4])], default=_result([pose], [1]))
-    loc = Localizer(tracker, SquareJudge(), FakeStore())
+    loc = Localizer(tracker, SquareJudge(), FakeStore(), PAPER)
     loc.set_pose(pose, np.eye(3) * 0.01)
     est = loc.update(OdometryReading(np.zeros(3)), pose)
     assert est.status is Status.AMBIGUOUS
@@ -328,7 +341,7 @@ def test_tracking_that_splits_into_rotated_clusters_becomes_ambiguous():
 
 def test_tracking_that_loses_every_cluster_reports_lost():
     tracker = FakeTracker(script=[_result([[0, 0, 0]], [0.01])], default=_result([[0, 0, 0]], [1]))
-    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore(), PAPER)
     loc.set_pose(np.zeros(3), np.eye(3))
     est = loc.update(OdometryReading(np.zeros(3)), None)
     assert est.status is Status.LOST
@@ -338,7 +351,7 @@ def test_tracking_that_loses_every_cluster_reports_lost():
 def test_a_pose_lost_while_tracking_is_earned_again_only_after_n_converged_updates():
     good, weak = _result([[0.5, 0.5, 0.1]], [1.0]), _result([[0.5, 0.5, 0.1]], [0.01])
     tracker = FakeTracker(script=[good, good, good, weak], default=good)
-    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore(), PAPER)
     statuses = [loc.update(OdometryReading(np.zeros(3)), None).status for _ in range(7)]
     # earned at the 3rd, lost at the 4th, earned again only at the 3rd converged update after
     assert statuses == [Status.LOST] * 2 + [Status.TRACKING] + [Status.LOST] * 3 + [Status.TRACKING]
@@ -352,6 +365,7 @@ def test_collapsed_amcl_inside_known_symmetric_place_is_not_trusted():
         FakeTracker(default=_result([pose], [1.0])),
         SquareJudge(symmetric=False),
         FakeStore(),
+        PAPER,
         scorer=lambda poses, scan: np.ones(len(poses)),
         known_places=[PLACE],
     )
@@ -367,6 +381,7 @@ def test_copies_that_do_not_fit_the_map_let_the_pose_be_earned():
         FakeTracker(default=_result([pose], [1.0])),
         SquareJudge(symmetric=False),
         FakeStore(),
+        PAPER,
         scorer=lambda poses, scan: np.r_[1.0, np.full(len(poses) - 1, 0.2)],
         known_places=[PLACE],
     )
@@ -376,7 +391,7 @@ def test_copies_that_do_not_fit_the_map_let_the_pose_be_earned():
 
 def test_reset_global_forgets_the_pose():
     tracker = FakeTracker(default=_result([[0.5, 0.5, 0.1]], [1.0], std=1.0))
-    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore())
+    loc = Localizer(tracker, SquareJudge(symmetric=False), FakeStore(), PAPER)
     loc.set_pose(np.zeros(3), np.eye(3))
     loc.reset_global()
     assert tracker.globals_ == 1
@@ -389,7 +404,7 @@ def test_settled_ambiguity_relocalizes_globally_when_leaving_the_place():
     judge = SquareJudge()
     store = FakeStore(places=[PLACE], decisions=[Decision("refused")] * 4)
     tracker = _ambiguous_tracker(true)
-    loc = Localizer(tracker, judge, store, LocalizerConfig(flip_patience=2))
+    loc = Localizer(tracker, judge, store, LocalizerConfig(decide_here=False, flip_patience=2))
     Driver(loc, true).run(400)
     assert loc.phase == "settled"
     judge.symmetric = False
@@ -481,7 +496,7 @@ def test_candidates_from_scan_and_known_place_contain_the_true_pose():
     place = Place(3, CENTRE.copy(), heading0=0.0, m=4, order=4, gv_distance=HALF * math.sqrt(2))
     # AMCL knows nothing useful: one wide cluster somewhere else
     tracker = FakeTracker(default=_result([[0.0, 0.0, 0.0]], [1.0], std=2.0))
-    loc = Localizer(tracker, AxisSquareJudge(), FakeStore(places=[place]))
+    loc = Localizer(tracker, AxisSquareJudge(), FakeStore(places=[place]), PAPER)
     est = loc.update(OdometryReading(np.zeros(3)), true)
     assert est.status is Status.AMBIGUOUS
     poses = np.array([h.pose for h in est.hypotheses])
@@ -499,7 +514,10 @@ def test_mapping_gives_the_store_the_measured_headings():
     true = np.array([2.5, 2.0, 0.7])
     store = FakeStore(places=[])
     loc = Localizer(
-        _ambiguous_tracker(true), SquareJudge(), store, LocalizerConfig(allow_mapping=True)
+        _ambiguous_tracker(true),
+        SquareJudge(),
+        store,
+        LocalizerConfig(decide_here=False, allow_mapping=True),
     )
     final = Driver(loc, true).run(600)
     assert len(store.added) == 1
@@ -515,7 +533,7 @@ def test_decision_at_a_place_without_heading_reference_claims_no_pose():
     place = Place(9, CENTRE.copy(), 0.3, 4, 4, HALF * math.sqrt(2), heading_reliable=False)
     store = FakeStore(places=[place], decisions=[Decision("decided", 1, 0.0, 0.9)])
     tracker = _ambiguous_tracker(true)
-    loc = Localizer(tracker, SquareJudge(), store)
+    loc = Localizer(tracker, SquareJudge(), store, PAPER)
     final = Driver(loc, true).run(300)
     assert final.status is Status.AMBIGUOUS
     assert final.pose is None

@@ -28,12 +28,21 @@ from typing import Any
 
 import numpy as np
 
+from symloc.localizer.config import LocalizerConfig
 from symloc.sim.rooms import Room
 
 from .grading import GRADES
 from .scenario import build_scenario
 from .stats import wilson_interval
-from .trial import DEFAULT_METHODS, METHODS, TrialConfig, TrialResult, TrialSpec, run_trial
+from .trial import (
+    DEFAULT_METHODS,
+    METHODS,
+    TrialConfig,
+    TrialResult,
+    TrialSpec,
+    needs_keyframes,
+    run_trial,
+)
 from .world_sources import WorldRef, build_world, world_spec
 
 __all__ = ["WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
@@ -90,10 +99,15 @@ def run_world(task: WorldTask) -> WorldResult:
             map_source=task.map_source,
             explore_laps=1.0,
             regime=task.regime,
-            # the decide method verifies against keyframes of the mapping trip; recording
-            # them draws from their own stream, so the map and the other methods' trials are
-            # the same with and without them
-            keyframes=True if "decide" in task.methods else None,
+            # deciding where the robot stands verifies against keyframes of the mapping trip;
+            # recording them draws from their own stream, so the map and the other methods'
+            # trials are the same with and without them
+            keyframes=(
+                True
+                if task.map_source == "slam"
+                and needs_keyframes(task.methods, LocalizerConfig().decide_here)
+                else None
+            ),
         )
         t1 = time.perf_counter()
         trials = []

@@ -13,9 +13,10 @@ from symloc.figures._save import save_figure
 __all__ = ["outcome_figure"]
 
 _LABELS = {
-    "symloc": "symloc",
-    "amcl": "plain AMCL (nav2's filter alone)",
+    "symloc": "symloc (as shipped)",
     "decide": "symloc, deciding where it stands",
+    "centre": "symloc, the paper's drive to the centre",
+    "amcl": "plain AMCL (nav2's filter alone)",
 }
 
 

@@ -120,7 +120,7 @@ class LocalizerConfig:
     decision_xy_std: float = 0.15
     decision_theta_std: float = math.radians(2.0)
     centre_smoothing: float = 0.5
-    decide_here: bool = False
+    decide_here: bool = True
     decide_min_fit: float = 0.6
     decide_laser_margin: float = 0.15
     decide_views: int = 4

@@ -76,8 +76,10 @@ def register(subparsers: Any) -> None:
         nargs="+",
         choices=METHODS,
         default=list(DEFAULT_METHODS),
-        help="methods to run (default: symloc amcl; decide: deciding from where the robot "
-        "stands, on keyframes recorded along the mapping trip)",
+        help="methods to run (default: symloc centre amcl). symloc: as shipped (deciding "
+        "from where the robot stands, on keyframes recorded along the mapping trip); centre: "
+        "the paper's path alone (AMCL, then the drive to the centre); amcl: nav2's filter "
+        "alone; decide: deciding from where the robot stands, forced on",
     )
     parser.add_argument(
         "--map",
