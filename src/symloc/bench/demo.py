@@ -1,7 +1,10 @@
-"""The demo: map a room in a textured lab, kidnap the robot, plain AMCL and symloc side by side."""
+"""The demo: map a room in a textured lab, kidnap the robot, and run side by side plain AMCL,
+symloc as shipped (deciding from where the robot stands) and the paper's path alone (AMCL, then
+the drive to the centre)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -16,7 +19,15 @@ from symloc.localizer.types import Status
 from symloc.sim.rooms import Room
 from symloc.sim.symmetry_truth import truth_order
 
-from .scenario import AmclRun, Scenario, SymlocRun, build_scenario, run_plain_amcl, run_symloc
+from .scenario import (
+    LONG_HALLWAY,
+    AmclRun,
+    Scenario,
+    SymlocRun,
+    build_scenario,
+    run_plain_amcl,
+    run_symloc,
+)
 
 __all__ = ["DemoResult", "DemoStory", "run_demo"]
 
@@ -48,6 +59,12 @@ class DemoStory:
     amcl_path: FloatArray | None = None
     #: ``(xmin, xmax, ymin, ymax)`` [m] of the room's outline (the figure's view).
     room_box: tuple[float, float, float, float] | None = None
+    #: map poses (N, 3) of the visual map's keyframes (recorded along the mapping trip)
+    keyframes: FloatArray | None = None
+    #: the paper's path alone (the drive to the centre): true path (T, 3), final pose, summary
+    paper_path: FloatArray | None = None
+    paper_final: FloatArray | None = None
+    paper_summary: str = ""
 
 
 @dataclass
@@ -60,6 +77,8 @@ class DemoResult:
     amcl: AmclRun
     symloc: SymlocRun
     story: DemoStory
+    #: symloc with ``decide_here`` off: the paper's path alone
+    paper: SymlocRun | None = None
     timings: dict[str, float] = field(default_factory=dict)
 
     def rows(self) -> list[tuple[str, str]]:
@@ -99,20 +118,28 @@ class DemoResult:
                 f"{a.outcome.grade} (error {_err(a.outcome.position_error, a.outcome.heading_error)})",
             ),
         ]
-        fin = s.episode.final
-        rows += [
-            ("symloc: steps", "; ".join(s.steps[1:]) or "-"),
-            ("symloc: final status", f"{fin.status.value}: {fin.reason}"),
-            (
-                "symloc: travelled",
-                f"{s.episode.distance_to_final:.2f} m in {s.episode.time_to_final:.1f} s (simulated)",
-            ),
-            (
-                "symloc: verdict",
-                f"{s.outcome.grade} (error {_err(s.outcome.position_error, s.outcome.heading_error)})",
-            ),
-        ]
+        rows += _symloc_rows("symloc", s)
+        if self.paper is not None:
+            rows += _symloc_rows("paper's path", self.paper)
         return rows
+
+
+def _symloc_rows(name: str, run: SymlocRun) -> list[tuple[str, str]]:
+    fin = run.episode.final
+    return [
+        (f"{name}: steps", "; ".join(run.steps[1:]) or "-"),
+        (f"{name}: final status", f"{fin.status.value}: {fin.reason}"),
+        (
+            f"{name}: travelled",
+            f"{run.episode.distance_to_final:.2f} m in {run.episode.time_to_final:.1f} s "
+            "(simulated)",
+        ),
+        (
+            f"{name}: verdict",
+            f"{run.outcome.grade} "
+            f"(error {_err(run.outcome.position_error, run.outcome.heading_error)})",
+        ),
+    ]
 
 
 def _pose_str(p: FloatArray | None) -> str:
@@ -135,11 +162,14 @@ def run_demo(
     textured: bool = True,
     amcl_duration: float = 45.0,
 ) -> DemoResult:
-    """Build the maps, kidnap the robot to a random pose, run symloc and plain AMCL.
+    """Build the maps, kidnap the robot to a random pose, run symloc, plain AMCL and the paper's
+    path alone.
 
     ``room`` is a built-in room name or a ready :class:`~symloc.sim.rooms.Room` (a world
     file's, :func:`symloc.sim.world_file.load_world_file`); a ready room is also explored
-    along its outline while mapping, so that SLAM sees all of it.
+    along its outline while mapping, so that SLAM sees all of it. The mapping trip records
+    keyframes for deciding where the robot stands (not along the 40 m corridor, whose SLAM
+    map is a raster: SLAM cannot fix a position along it).
     """
     rng = as_rng(seed)
     timings: dict[str, float] = {}
@@ -150,6 +180,7 @@ def run_demo(
         rng=rng,
         workdir=workdir,
         explore_laps=1.0 if isinstance(room, Room) else 0.0,
+        keyframes=None if room == LONG_HALLWAY else True,
     )
     name = scen.room.name
     timings["maps"] = time.perf_counter() - t0
@@ -163,19 +194,41 @@ def run_demo(
         scen, start, np.random.default_rng(rng.integers(2**32)), duration=amcl_duration
     )
     timings["amcl"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    paper = run_symloc(
+        scen,
+        start,
+        np.random.default_rng(rng.integers(2**32)),
+        config=dataclasses.replace(scen.settings.localizer, decide_here=False),
+    )
+    timings["paper"] = time.perf_counter() - t0
     loc = srun.localizer
-    query = srun.episode.images[0] if srun.episode.images else None
-    matched, label = None, "no visual decision"
-    if loc.last_decision is not None:
+    query = srun.episode.images[-1] if srun.episode.images else None
+    counts = loc.decide_counts
+    label = (
+        f"the last image symloc asked for ({len(srun.episode.images)} in all; "
+        f"{counts.claimed} decision{'s' if counts.claimed != 1 else ''} here)"
+        if query is not None
+        else "symloc asked for no image"
+    )
+    matched = None
+    if loc.last_decision is not None:  # the paper's visual decision, at the centre
         place, dec = loc.last_decision
         matched = scen.store.stored_image(place.place_id, int(dec.direction or 0))
-        query = srun.episode.images[-1] if srun.episode.images else query
         label = (
-            f"place {place.place_id}, direction {int(dec.direction or 0) + 1} of {place.m}, "
-            f"offset {math.degrees(dec.offset):+.1f} deg"
+            f"decided at the centre: place {place.place_id}, direction "
+            f"{int(dec.direction or 0) + 1} of {place.m}, offset {math.degrees(dec.offset):+.1f} deg"
         )
     fin = srun.episode.final
-    amb = next((e for e in srun.episode.estimates if e.status is Status.AMBIGUOUS), None)
+    # the first scan with rival poses (deciding here, or ambiguous on the paper's path)
+    amb = next(
+        (
+            e
+            for e in srun.episode.estimates
+            if e.status in (Status.DECIDING, Status.AMBIGUOUS) and len(e.hypotheses) > 1
+        ),
+        None,
+    )
     candidates = [h.pose for h in amb.hypotheses] if amb is not None else []
     after = None
     tr = loc.tracker
@@ -184,7 +237,8 @@ def run_demo(
     story = DemoStory(
         title=(
             f"symloc demo: {name} room in a {'textured' if textured else 'plain'} lab, seed {seed}"
-            f" — plain AMCL {arun.outcome.grade}, symloc {srun.outcome.grade}"
+            f" — plain AMCL {arun.outcome.grade}, symloc {srun.outcome.grade}, "
+            f"the paper's path {paper.outcome.grade}"
         ),
         grid=scen.grid,
         room_center=np.asarray(scen.room.center),
@@ -203,13 +257,23 @@ def run_demo(
         path=np.asarray(srun.episode.path),
         particles_after=after,
         final_pose=fin.pose,
-        symloc_summary=f"{fin.status.value}",
+        symloc_summary=(
+            f"{srun.outcome.grade} after {srun.episode.distance_to_final:.2f} m"
+            f" / {srun.episode.time_to_final:.1f} s"
+        ),
         query_image=query,
         matched_image=matched,
         match_label=label,
         amcl_path=arun.path,
+        keyframes=scen.keyframe_slam_poses if scen.n_keyframes else None,
+        paper_path=np.asarray(paper.episode.path),
+        paper_final=paper.episode.final.pose,
+        paper_summary=(
+            f"{paper.outcome.grade} after "
+            f"{paper.episode.distance_to_final:.2f} m / {paper.episode.time_to_final:.1f} s"
+        ),
     )
-    return DemoResult(name, seed, scen, arun, srun, story, timings)
+    return DemoResult(name, seed, scen, arun, srun, story, paper=paper, timings=timings)
 
 
 def _box(boundary: Any) -> tuple[float, float, float, float]:

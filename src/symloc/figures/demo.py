@@ -77,7 +77,9 @@ def _view(story: Any) -> tuple[float, float, float, float]:
 
 
 def demo_figure(story: Any, path: Path) -> Path:
-    """The demo's picture: map, particles before/after, path to the centre, query vs stored.
+    """The demo's picture: the kidnapped robot, plain AMCL, the poses the laser leaves symloc
+    (with the visual map's keyframes), symloc's path and pose, the image that decided, and the
+    paper's path alone (the drive to the centre) from the same start.
 
     Map panels show the room (axes in metres, each with a legend); a long room (a corridor
     more than three times longer than wide) gets one full-width row per panel, so it is not
@@ -87,7 +89,8 @@ def demo_figure(story: Any, path: Path) -> Path:
     view = _view(story)
     width, height = view[1] - view[0], view[3] - view[2]
     long_room = max(width, height) > 3.0 * min(width, height)
-    images = story.query_image is not None or story.matched_image is not None
+    paper = getattr(story, "paper_path", None) is not None
+    images = story.query_image is not None or story.matched_image is not None or paper
     if long_room:
         # one full-width row per map panel, as tall as the room's outline needs
         row = 0.7 + 13.5 * min(width, height) / max(width, height)
@@ -137,7 +140,7 @@ def demo_figure(story: Any, path: Path) -> Path:
     legend(ax)
 
     ax = fig.add_subplot(slots[1])
-    map_axes(ax, f"plain AMCL: {story.amcl_summary}")
+    map_axes(ax, f"plain AMCL (nav2's filter)\n{story.amcl_summary}")
     p = story.amcl_particles
     apath = getattr(story, "amcl_path", None)
     if apath is not None and len(apath) > 1:
@@ -149,20 +152,32 @@ def demo_figure(story: Any, path: Path) -> Path:
     legend(ax)
 
     ax = fig.add_subplot(slots[2])
-    map_axes(ax, "symloc: k candidates + AMCL at the centre")
+    k = len(story.candidates)
+    map_axes(ax, f"symloc: {k} poses fit the scan;\nthe camera checks them on keyframes")
     p = story.particles_before
     if p is not None:
         ax.scatter(
-            p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3, label="AMCL particles at the centre"
+            p[:, 0], p[:, 1], s=1, c="tab:orange", alpha=0.3, label="AMCL before the decision"
         )
-    k = len(story.candidates)
+    kf = getattr(story, "keyframes", None)
+    if kf is not None and len(kf):
+        ax.quiver(
+            kf[:, 0],
+            kf[:, 1],
+            np.cos(kf[:, 2]),
+            np.sin(kf[:, 2]),
+            color="tab:cyan",
+            scale=25,
+            width=0.006,
+            label=f"{len(kf)} keyframes (mapping trip)",
+        )
     for i, h in enumerate(story.candidates):
-        arrow(ax, h, "m", f"the {k} symmetric candidates" if i == 0 else "")
+        arrow(ax, h, "m", f"the {k} poses the scan fits" if i == 0 else "")
     arrow(ax, story.kidnap_pose, "g", "true pose")
     legend(ax)
 
     ax = fig.add_subplot(slots[3])
-    map_axes(ax, f"symloc: path, final ({story.symloc_summary})")
+    map_axes(ax, f"symloc: path and pose\n({story.symloc_summary})")
     path_xy = np.asarray(story.path)
     ax.plot(path_xy[:, 0], path_xy[:, 1], "g-", lw=1.5, label="true path")
     p = story.particles_after
@@ -175,15 +190,30 @@ def demo_figure(story: Any, path: Path) -> Path:
 
     if len(slots) > 4:
         ax = fig.add_subplot(slots[4])
-        if story.query_image is not None:
-            ax.imshow(story.query_image)
-        ax.set_title("query image at the centre", fontsize=10)
+        shown = story.query_image if story.matched_image is None else story.matched_image
+        if shown is not None:
+            ax.imshow(shown)
+        ax.set_title(
+            story.match_label
+            if story.matched_image is not None
+            else f"camera: {story.match_label}",
+            fontsize=10,
+        )
         ax.axis("off")
         ax = fig.add_subplot(slots[5])
-        if story.matched_image is not None:
-            ax.imshow(story.matched_image)
-        ax.set_title(f"matched stored image: {story.match_label}", fontsize=10)
-        ax.axis("off")
+        if paper:
+            map_axes(ax, f"the paper's path alone (drive to the centre): {story.paper_summary}")
+            pp = np.asarray(story.paper_path)
+            ax.plot(pp[:, 0], pp[:, 1], "g-", lw=1.5, label="true path to the centre")
+            if story.paper_final is not None:
+                arrow(ax, story.paper_final, "r", "its pose")
+            arrow(ax, pp[-1], "g", "true pose")
+            legend(ax)
+        else:
+            if story.query_image is not None:
+                ax.imshow(story.query_image)
+            ax.set_title("query image", fontsize=10)
+            ax.axis("off")
     fig.suptitle(story.title)
     fig.tight_layout()
     return save_figure(fig, path, dpi=72)

@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {path}")
     print(
         f"time: maps {t['maps']:.1f} s, symloc {t['symloc']:.1f} s, plain AMCL {t['amcl']:.1f} s, "
+        f"the paper's path {t['paper']:.1f} s, "
         f"total {time.perf_counter() - t0:.1f} s"
     )
     scen.close()
