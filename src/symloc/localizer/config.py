@@ -53,7 +53,7 @@ class LocalizerConfig:
         while the pose is not earned, the laser proposes hypotheses (AMCL's clusters, the global
         scan-to-map search, rotated copies about the map's and the known places' symmetries)
         and the camera verifies them against the visual map's keyframes; the drive to the
-        centre is the last resort. Off by default.
+        centre is the last resort. On by default (off: the paper's path alone, Algorithms 2-5).
     decide_min_fit : least share of beams a hypothesis explains (after the laser aligned it).
     decide_laser_margin : a hypothesis survives the laser when its share of beams is within
         this of the best one's (a rotated copy of the best also when the copy check would not
