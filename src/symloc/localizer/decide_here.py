@@ -22,7 +22,7 @@ copies open) the localizer first tries to decide without driving anywhere:
    pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
    way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
    no image is taken.
-   **Without keyframes** (the search complete), the laser watches the survivors instead as the
+   **Without keyframes** (the search complete, the scan not judged symmetric), the laser watches the survivors instead as the
    robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
    every scan, the beams each explains summed over new views. When every rival's deficit
    against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
@@ -334,7 +334,7 @@ class DecideHere:
             return self._axis(ctx, inp, found[1], len(poses))
         keyframes = ctx.keyframes
         if keyframes is None or keyframes.keyframe_count() == 0:
-            if hyp.complete and ctx.gate is not None and isinstance(inp.scan, LaserScan):
+            if self._can_watch(ctx, inp, hyp):
                 return self._watch(ctx, inp, poses, hyp)
             return self._give_up(
                 ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
@@ -447,6 +447,16 @@ class DecideHere:
         return estimate, self
 
     # ------------------------------------------------------------------ the laser, moving
+
+    @staticmethod
+    def _can_watch(ctx: Context, inp: Inputs, hyp: Hypotheses) -> bool:
+        """The laser may watch the survivors: the search is complete (the truth is among
+        them), a claim gate aligns them, and the scan is not judged symmetric (a symmetric
+        scan is the paper's case: the drive to the place's centre, where the camera decides
+        against the visual map's places, has its turn after this path gives up)."""
+        symmetric = bool(inp.verdict.symmetric) and inp.verdict.center is not None
+        usable = ctx.gate is not None and isinstance(inp.scan, LaserScan)
+        return hyp.complete and usable and not symmetric
 
     def _watch(self, ctx: Context, inp: Inputs, poses: FloatArray, hyp: Hypotheses) -> Step:
         """Several survivors and no keyframes: watch them with the laser as the robot moves
