@@ -11,7 +11,13 @@ from symloc.geometry import compose, wrap_angle
 from symloc.lidar_spec import LDS01
 from symloc.localizer import Status
 from symloc.localizer.build import build_localizer
-from symloc.localizer.laser_watch import MIN_VIEWS, VIEW_ALLOWANCE, VIEW_STEP, LaserWatch
+from symloc.localizer.laser_watch import (
+    MIN_VIEWS,
+    STILL_SCANS,
+    VIEW_ALLOWANCE,
+    VIEW_STEP,
+    LaserWatch,
+)
 from symloc.localizer.settings import LocalizerSettings
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
@@ -140,3 +146,16 @@ def test_a_perfectly_symmetric_room_is_never_decided_without_keyframes() -> None
     assert not any(st is Status.TRACKING for st, _, _ in out)
     assert out[0][0] is Status.AMBIGUOUS
     assert "the laser watches them" in out[0][2]
+
+
+def test_the_watch_says_when_moving_teaches_nothing() -> None:
+    w = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    gate = FakeGate(0.95, 0.95)
+    for i in range(2 * MIN_VIEWS):
+        v = w.step(gate, SCAN, np.array([0.15 * (i + 1), 0.0, 0.0]))  # type: ignore[arg-type]
+        assert (w.learning(v) == "") == (i + 1 < 2 * MIN_VIEWS)
+    assert "fits as well" in w.learning(v)
+    still = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    for _ in range(STILL_SCANS + 1):
+        v = still.step(FakeGate(0.95, 0.5), SCAN, np.zeros(3))  # type: ignore[arg-type]
+    assert "has not moved" in still.learning(v)

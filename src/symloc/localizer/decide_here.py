@@ -22,14 +22,15 @@ copies open) the localizer first tries to decide without driving anywhere:
    pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
    way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
    no image is taken.
-   **Without keyframes** (the search complete, the scan not judged symmetric), the laser watches the survivors instead as the
+   **Without keyframes** (the search complete, the scan not judged symmetric, no known place
+   where the robot stands), the laser watches the survivors instead as the
    robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
    every scan, the beams each explains summed over new views. When every rival's deficit
    against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
    of furniture), the laser confirms the leader and tracking starts there, as after a visual
    decision; the status is ``ambiguous`` meanwhile, with the hypotheses. After
-   ``decide_watch_views`` views without a decision (a perfectly symmetric room) the path gives
-   up as in step 4.
+   ``decide_watch_views`` views without a decision, or when moving teaches nothing (a
+   perfectly symmetric room, a robot standing still), the path gives up as in step 4.
 4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
@@ -451,12 +452,14 @@ class DecideHere:
     @staticmethod
     def _can_watch(ctx: Context, inp: Inputs, hyp: Hypotheses) -> bool:
         """The laser may watch the survivors: the search is complete (the truth is among
-        them), a claim gate aligns them, and the scan is not judged symmetric (a symmetric
-        scan is the paper's case: the drive to the place's centre, where the camera decides
-        against the visual map's places, has its turn after this path gives up)."""
+        them), a claim gate aligns them, the scan is not judged symmetric and the best
+        hypothesis is not in a known symmetric place (both the paper's case: the drive to the
+        place's centre, where the camera decides against the visual map's places, has its
+        turn after this path gives up)."""
         symmetric = bool(inp.verdict.symmetric) and inp.verdict.center is not None
         usable = ctx.gate is not None and isinstance(inp.scan, LaserScan)
-        return hyp.complete and usable and not symmetric
+        place = known_place_at(hyp.poses[0], ctx.known_places, ctx.config.place_radius_factor)
+        return hyp.complete and usable and not symmetric and place is None
 
     def _watch(self, ctx: Context, inp: Inputs, poses: FloatArray, hyp: Hypotheses) -> Step:
         """Several survivors and no keyframes: watch them with the laser as the robot moves
@@ -490,6 +493,12 @@ class DecideHere:
             self.watch = None
             return self._give_up(
                 ctx, inp, "the laser's leading hypothesis no longer explains the scan"
+            )
+        idle = watch.learning(verdict)
+        if idle:
+            self.watch = None
+            return self._give_up(
+                ctx, inp, f"{len(watch.poses)} poses explain the scan, no keyframes, and {idle}"
             )
         if verdict.views >= cfg.decide_watch_views:
             self.watch = None

@@ -21,6 +21,11 @@ up to a decision: in a perfectly symmetric room nothing is ever decided. One sca
 evidence is the single-scan rule's margin (``decide_laser_margin``, 0.15 of the beams);
 ``evidence`` asks several of those, from different places.
 
+The watch is given up (:meth:`LaserWatch.learning`) when moving teaches nothing: after
+``2 * MIN_VIEWS`` views no rival is behind the leader by more than the allowance (the copies of
+a perfectly symmetric room fit alike: the paper's drive to the centre must have its turn), or
+the robot has not moved to a new view for :data:`STILL_SCANS` scans.
+
 The caller (:class:`~symloc.localizer.decide_here.DecideHere`) then lets the laser confirm the
 leader (:meth:`~symloc.localizer.claim.ClaimGate.confirm`) and starts tracking there, as after a
 visual decision: the choice among the copies is made, so the copy check is not asked again.
@@ -39,7 +44,15 @@ from symloc.scan import LaserScan
 
 from .claim import ClaimGate
 
-__all__ = ["MIN_VIEWS", "VIEW_ALLOWANCE", "VIEW_STEP", "VIEW_TURN", "LaserWatch", "WatchVerdict"]
+__all__ = [
+    "MIN_VIEWS",
+    "STILL_SCANS",
+    "VIEW_ALLOWANCE",
+    "VIEW_STEP",
+    "VIEW_TURN",
+    "LaserWatch",
+    "WatchVerdict",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -51,6 +64,8 @@ VIEW_TURN = math.radians(8.0)
 MIN_VIEWS = 4
 #: Share of beams per view a rival's deficit must exceed to count as evidence.
 VIEW_ALLOWANCE = 0.01
+#: Scans in a row without a new view (the robot standing) before the watch is given up.
+STILL_SCANS = 25
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,6 +99,8 @@ class LaserWatch:
     last_fits: FloatArray = field(default_factory=lambda: np.zeros(0))
     tight: list[FloatArray] = field(default_factory=list)
     loose: list[FloatArray] = field(default_factory=list)
+    #: scans since the last new view
+    still: int = 0
 
     @property
     def views(self) -> int:
@@ -116,6 +133,7 @@ class LaserWatch:
                 loose[i] = gate.share_within(pose, scan, self.slack)
         self.poses = carried
         self.last_fits = tight
+        self.still = 0 if view else self.still + 1
         if view:
             self.last_view = odom.copy()
             self.tight.append(tight)
@@ -136,6 +154,15 @@ class LaserWatch:
         if self.loose:
             least = min(least, self._least(np.array(self.loose), leader))
         return WatchVerdict(leader, n >= MIN_VIEWS and least >= self.evidence, least, n)
+
+    def learning(self, verdict: WatchVerdict) -> str:
+        """ "" while the watch may still decide; else why moving teaches nothing (see the
+        module docstring)."""
+        if self.still >= STILL_SCANS:
+            return f"the robot has not moved to a new view for {self.still} scans"
+        if verdict.views >= 2 * MIN_VIEWS and verdict.evidence <= 0.0:
+            return f"after {verdict.views} views every rival still fits as well as the leader"
+        return ""
 
     @staticmethod
     def _least(shares: FloatArray, leader: int) -> float:
