@@ -559,6 +559,8 @@ def test_axis_estimates_carry_an_axis_and_nothing_else_does() -> None:
         ("copy_map_slack", -0.1),
         ("copy_claim_floor", "yes"),
         ("decide_turn", -1.0),
+        ("decide_watch_evidence", 0.0),
+        ("decide_watch_views", 0),
     ],
 )
 def test_bad_decide_settings_are_refused_by_name(field: str, value: object) -> None:

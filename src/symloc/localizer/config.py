@@ -66,6 +66,12 @@ class LocalizerConfig:
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
     decide_rest : scans left to the other phases (AMCL's convergence, the drive to the centre)
         after deciding here handed over or gave up, before it is tried again.
+    decide_watch_evidence : without keyframes, the laser watches several surviving hypotheses
+        as the robot moves (:mod:`symloc.localizer.laser_watch`); a rival is ruled out when
+        its deficit of beams explained against the leader, summed over new views (less 1 %
+        per view), reaches this share of a scan (for the beams within the match's distance
+        and within ``copy_map_slack`` alike).
+    decide_watch_views : views watched without a decision before deciding here gives up.
     axis_max_spread : the laser's hypotheses are an axis family (a corridor: heading known up to
         a half turn, position along a line not; :mod:`symloc.localizer.axis`) when each lies
         within this [m] of its heading class' line ...
@@ -128,6 +134,8 @@ class LocalizerConfig:
     decide_theta_std: float = math.radians(5.0)
     decide_max_hypotheses: int = 16
     decide_rest: int = 100
+    decide_watch_evidence: float = 0.5
+    decide_watch_views: int = 40
     axis_max_spread: float = 0.2
     axis_heading_spread: float = math.radians(10.0)
     axis_min_length: float = 1.0
@@ -159,6 +167,7 @@ class LocalizerConfig:
             "decision_theta_std",
             "decide_turn",
             "decide_theta_std",
+            "decide_watch_evidence",
             "axis_max_spread",
             "axis_heading_spread",
             "axis_min_length",
@@ -191,6 +200,7 @@ class LocalizerConfig:
             "decide_views",
             "decide_max_hypotheses",
             "decide_rest",
+            "decide_watch_views",
             "axis_max_hypotheses",
             "axis_min_inliers",
             "axis_views",

@@ -58,7 +58,9 @@ class DecideCounts:
     ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
     but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
     ``claimed`` poses published at once;
-    ``turns`` turns to look elsewhere; ``gave_up`` times nothing was decided here;
+    ``turns`` turns to look elsewhere; ``watched`` times the laser watched several hypotheses
+    as the robot moved (no keyframes; :mod:`symloc.localizer.laser_watch`);
+    ``gave_up`` times nothing was decided here;
     ``axis`` times the camera decided a corridor's heading class (status ``axis``).
     """
 
@@ -71,6 +73,7 @@ class DecideCounts:
     withheld: int = 0
     claimed: int = 0
     turns: int = 0
+    watched: int = 0
     gave_up: int = 0
     axis: int = 0
 

@@ -22,6 +22,15 @@ copies open) the localizer first tries to decide without driving anywhere:
    pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
    way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
    no image is taken.
+   **Without keyframes** (the search complete, the scan not judged symmetric, no known place
+   where the robot stands), the laser watches the survivors instead as the
+   robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
+   every scan, the beams each explains summed over new views. When every rival's deficit
+   against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
+   of furniture), the laser confirms the leader and tracking starts there, as after a visual
+   decision; the status is ``ambiguous`` meanwhile, with the hypotheses. After
+   ``decide_watch_views`` views without a decision, or when moving teaches nothing (a
+   perfectly symmetric room, a robot standing still), the path gives up as in step 4.
 4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
@@ -58,6 +67,7 @@ from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
 from .claim import Claim, Verdict
 from .context import Context, Inputs, cov_from_std, lost
 from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
+from .laser_watch import LaserWatch, WatchVerdict
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, KeyframeStore, Request, RequestKind, Status
 from .view_planning import plan_turn
@@ -263,8 +273,12 @@ class DecideHere:
     #: (the camera's map heading minus the odometry heading, unchanged by turns in place)
     axis_votes: list[float] = field(default_factory=list)
     labels: NDArray[np.int64] | None = None
+    #: the survivors watched by the laser as the robot moves (no keyframes to show them to)
+    watch: LaserWatch | None = None
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
+        if self.watch is not None:
+            return self._watching(ctx, inp, self.watch)
         if self.turn_start is not None:
             turned = float(angle_diff(inp.odom_pose[2], self.turn_start))
             remaining = float(angle_diff(self.turn, turned))
@@ -321,6 +335,8 @@ class DecideHere:
             return self._axis(ctx, inp, found[1], len(poses))
         keyframes = ctx.keyframes
         if keyframes is None or keyframes.keyframe_count() == 0:
+            if self._can_watch(ctx, inp, hyp):
+                return self._watch(ctx, inp, poses, hyp)
             return self._give_up(
                 ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
             )
@@ -431,6 +447,103 @@ class DecideHere:
         )
         return estimate, self
 
+    # ------------------------------------------------------------------ the laser, moving
+
+    @staticmethod
+    def _can_watch(ctx: Context, inp: Inputs, hyp: Hypotheses) -> bool:
+        """The laser may watch the survivors: the search is complete (the truth is among
+        them), a claim gate aligns them, the scan is not judged symmetric and the best
+        hypothesis is not in a known symmetric place (both the paper's case: the drive to the
+        place's centre, where the camera decides against the visual map's places, has its
+        turn after this path gives up)."""
+        symmetric = bool(inp.verdict.symmetric) and inp.verdict.center is not None
+        usable = ctx.gate is not None and isinstance(inp.scan, LaserScan)
+        place = known_place_at(hyp.poses[0], ctx.known_places, ctx.config.place_radius_factor)
+        return hyp.complete and usable and not symmetric and place is None
+
+    def _watch(self, ctx: Context, inp: Inputs, poses: FloatArray, hyp: Hypotheses) -> Step:
+        """Several survivors and no keyframes: watch them with the laser as the robot moves
+        (:mod:`symloc.localizer.laser_watch`), from this scan on."""
+        cfg = ctx.config
+        ctx.record.decide.watched += 1
+        self.watch = LaserWatch(
+            poses=poses.copy(),
+            odom=inp.odom_pose.copy(),
+            slack=cfg.copy_map_slack,
+            evidence=cfg.decide_watch_evidence,
+        )
+        ctx.note(
+            f"deciding here: {len(poses)} poses explain the scan "
+            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams) and no "
+            "keyframes: the laser watches them as the robot moves"
+        )
+        return self._watching(ctx, inp, self.watch)
+
+    def _watching(self, ctx: Context, inp: Inputs, watch: LaserWatch) -> Step:
+        """One scan of the watch: decided (the laser confirms the leader), given up, or the
+        hypotheses reported as ambiguous."""
+        cfg = ctx.config
+        gate = ctx.gate
+        assert gate is not None
+        scan = cast(LaserScan, inp.scan)
+        verdict = watch.step(gate, scan, inp.odom_pose)
+        if verdict.decided and verdict.leader is not None:
+            return self._watched(ctx, inp, watch, verdict)
+        if verdict.leader is not None and watch.last_fits[verdict.leader] < cfg.decide_min_fit:
+            self.watch = None
+            return self._give_up(
+                ctx, inp, "the laser's leading hypothesis no longer explains the scan"
+            )
+        idle = watch.learning(verdict)
+        if idle:
+            self.watch = None
+            return self._give_up(
+                ctx, inp, f"{len(watch.poses)} poses explain the scan, no keyframes, and {idle}"
+            )
+        if verdict.views >= cfg.decide_watch_views:
+            self.watch = None
+            return self._give_up(
+                ctx,
+                inp,
+                f"{len(watch.poses)} poses still explain the scans after {verdict.views} views "
+                f"(least evidence {verdict.evidence:.2f} of {cfg.decide_watch_evidence:g}) and "
+                "no keyframes to tell them apart",
+            )
+        why = (
+            f"{len(watch.poses)} poses explain the scan and no keyframes: the laser watches them"
+            f" as the robot moves (view {verdict.views}, least evidence against a rival "
+            f"{max(0.0, verdict.evidence):.2f} of {cfg.decide_watch_evidence:g})"
+        )
+        estimate = Estimate(
+            status=Status.AMBIGUOUS, hypotheses=_hypotheses(watch.poses), reason=why
+        )
+        return estimate, self
+
+    def _watched(self, ctx: Context, inp: Inputs, watch: LaserWatch, verdict: WatchVerdict) -> Step:
+        """The laser's watch ruled every rival out: the laser confirms the leader and tracking
+        starts there (the choice among the copies is made, as after a visual decision)."""
+        assert verdict.leader is not None
+        cfg = ctx.config
+        gate = ctx.gate
+        assert gate is not None
+        self.watch = None
+        pose = watch.poses[verdict.leader]
+        count = len(watch.poses)
+        cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
+        claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
+        what = (
+            f"hypothesis {verdict.leader + 1} of {count} singled out by the laser over "
+            f"{verdict.views} views (least evidence against a rival {verdict.evidence:.2f})"
+        )
+        if claim.verdict is Verdict.WITHHELD and claim.pose is not None:
+            return self._await_precision(ctx, inp, claim, what)
+        if claim.verdict is not Verdict.CLAIM:
+            ctx.record.decide.rejected += 1
+            return self._give_up(ctx, inp, f"{what}, but the laser did not confirm it")
+        assert claim.pose is not None
+        assert claim.covariance is not None
+        return self._claimed(ctx, inp, claim, f"decided here: {what}; pose set by the laser")
+
     @staticmethod
     def _next_fit(hyp: Hypotheses) -> str:
         return f"{100 * hyp.fits[1]:.0f} %" if hyp.fits.size > 1 else "none"
@@ -491,7 +604,8 @@ class DecideHere:
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
             if claim.verdict is Verdict.WITHHELD and claim.pose is not None:
-                return self._await_precision(ctx, inp, claim, answer.index, len(carried))
+                what = f"hypothesis {answer.index + 1} of {len(carried)} verified by the camera"
+                return self._await_precision(ctx, inp, claim, what)
             if claim.verdict is not Verdict.CLAIM:
                 counts.rejected += 1
                 return self._look_elsewhere(
@@ -502,18 +616,16 @@ class DecideHere:
                 )
             assert claim.pose is not None
             assert claim.covariance is not None
-            pose, cov = claim.pose, claim.covariance
-        ctx.record.particles_before_decision = inp.result.particles
-        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
-        ctx.tracker.initialize_pose(pose, reseed_cov)
-        if claim is not None and gate is not None:
-            gate.anchor(pose, cov, inp.odom_pose)
-            gate.confirmed(claim, inp.odom_pose)
-        counts.claimed += 1
         reason = (
             f"decided here: hypothesis {answer.index + 1} of {len(carried)} verified by the "
             f"camera ({answer.reason}); pose set by the laser"
         )
+        if claim is not None:
+            return self._claimed(ctx, inp, claim, reason)
+        ctx.record.particles_before_decision = inp.result.particles
+        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
+        ctx.tracker.initialize_pose(pose, reseed_cov)
+        counts.claimed += 1
         ctx.note(reason + "; AMCL reseeded")
         estimate = Estimate(
             status=Status.TRACKING,
@@ -524,9 +636,32 @@ class DecideHere:
         )
         return estimate, Tracking(restart(ctx))
 
-    def _await_precision(
-        self, ctx: Context, inp: Inputs, claim: Claim, index: int, count: int
-    ) -> Step:
+    def _claimed(self, ctx: Context, inp: Inputs, claim: Claim, reason: str) -> Step:
+        """The laser claims a decided pose: AMCL is reseeded there, the claim chain starts
+        at it (no copy check: the choice among copies is made) and it is published now."""
+        cfg = ctx.config
+        gate = ctx.gate
+        assert gate is not None
+        assert claim.pose is not None
+        assert claim.covariance is not None
+        pose, cov = claim.pose, claim.covariance
+        ctx.record.particles_before_decision = inp.result.particles
+        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
+        ctx.tracker.initialize_pose(pose, reseed_cov)
+        gate.anchor(pose, cov, inp.odom_pose)
+        gate.confirmed(claim, inp.odom_pose)
+        ctx.record.decide.claimed += 1
+        ctx.note(reason + "; AMCL reseeded")
+        estimate = Estimate(
+            status=Status.TRACKING,
+            pose=pose,
+            covariance=cov,
+            hypotheses=(Hypothesis(pose=pose, weight=1.0),),
+            reason=reason,
+        )
+        return estimate, Tracking(restart(ctx))
+
+    def _await_precision(self, ctx: Context, inp: Inputs, claim: Claim, what: str) -> Step:
         """The camera chose a hypothesis and the laser fits it, but not yet precisely enough
         to claim: AMCL is reseeded there and the pose becomes the claim chain's start (its
         copy is chosen; :meth:`ClaimGate.step` publishes it once a scan confirms it with the
@@ -543,7 +678,7 @@ class DecideHere:
         gate.confirmed(claim, inp.odom_pose)
         ctx.record.decide.withheld += 1
         why = (
-            f"decided here: hypothesis {index + 1} of {count} verified by the camera; the "
+            f"decided here: {what}; the "
             f"laser fits it but {claim.reason.removeprefix('claim withheld: ')}: AMCL reseeded, "
             "pose published once a scan confirms it"
         )

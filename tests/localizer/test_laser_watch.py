@@ -1,0 +1,161 @@
+"""The laser watching several hypotheses as the robot moves (symloc.localizer.laser_watch)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from symloc.geometry import compose, wrap_angle
+from symloc.lidar_spec import LDS01
+from symloc.localizer import Status
+from symloc.localizer.build import build_localizer
+from symloc.localizer.laser_watch import (
+    MIN_VIEWS,
+    STILL_SCANS,
+    VIEW_ALLOWANCE,
+    VIEW_STEP,
+    LaserWatch,
+)
+from symloc.localizer.settings import LocalizerSettings
+from symloc.odometry import OdometryReading
+from symloc.scan import LaserScan
+from symloc.sim.lidar import simulate_scan
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.rooms import add_furniture, rectangle_room
+
+TRUE = np.array([1.0, 0.5, 0.3])
+COPY = np.array([-1.0, -0.5, 0.3 - math.pi])
+SCAN = LaserScan(
+    ranges=np.ones(8), angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=5.0
+)
+
+
+@dataclass
+class FakeGate:
+    """Fits by which hypothesis a pose is (near TRUE's half of the room or COPY's)."""
+
+    true_fit: float
+    copy_fit: float
+    true_loose: float = 1.0
+    copy_loose: float = 1.0
+
+    def _true(self, pose: np.ndarray) -> bool:
+        return float(pose[0]) > 0.0
+
+    def fit(self, pose: np.ndarray, scan: object) -> tuple[np.ndarray, float]:
+        return np.asarray(pose, float), self.true_fit if self._true(pose) else self.copy_fit
+
+    def share_within(self, pose: np.ndarray, scan: object, distance: float) -> float:
+        return self.true_loose if self._true(pose) else self.copy_loose
+
+
+def _watch(
+    gate: FakeGate, steps: int, *, move: float = 1.5 * VIEW_STEP
+) -> list[tuple[int | None, bool]]:
+    w = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    out = []
+    for i in range(steps):
+        v = w.step(gate, SCAN, np.array([move * (i + 1), 0.0, 0.0]))  # type: ignore[arg-type]
+        out.append((v.leader, v.decided))
+    return out
+
+
+def test_a_rival_short_of_beams_at_every_view_is_ruled_out() -> None:
+    gate = FakeGate(0.95, 0.90, 1.0, 0.95)  # 5 % fewer beams, tight and loose, at every view
+    per_view = 0.05 - VIEW_ALLOWANCE
+    need = max(MIN_VIEWS, math.ceil(0.5 / per_view - 1e-9))
+    out = _watch(gate, need + 2)
+    assert all(leader == 1 for leader, _ in out)
+    first = next(i for i, (_, decided) in enumerate(out) if decided)
+    assert first + 1 == need
+
+
+def test_equal_copies_are_never_decided() -> None:
+    assert not any(d for _, d in _watch(FakeGate(0.95, 0.95), 200))
+
+
+def test_a_bias_within_the_allowance_never_adds_up() -> None:
+    gate = FakeGate(0.95, 0.95 - 0.9 * VIEW_ALLOWANCE, 1.0, 1.0 - 0.9 * VIEW_ALLOWANCE)
+    assert not any(d for _, d in _watch(gate, 300))
+
+
+def test_the_loose_share_must_tell_them_apart_too() -> None:
+    # the copy misses beams by centimetres only (a map error's size): not ruled out
+    assert not any(d for _, d in _watch(FakeGate(0.95, 0.80, 1.0, 1.0), 100))
+
+
+def test_standing_still_is_one_view() -> None:
+    out = _watch(FakeGate(0.95, 0.5, 1.0, 0.5), 50, move=0.0)
+    assert not any(d for _, d in out)
+    w = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    for _ in range(10):
+        w.step(FakeGate(0.95, 0.5), SCAN, np.zeros(3))  # type: ignore[arg-type]
+    assert w.views == 1
+
+
+def test_hypotheses_are_carried_by_odometry() -> None:
+    w = LaserWatch(np.array([TRUE]), np.array([0.0, 0.0, 0.0]), slack=0.0, evidence=0.5)
+    w.step(FakeGate(1.0, 1.0), SCAN, np.array([1.0, 0.0, 0.0]))  # type: ignore[arg-type]
+    want = compose(TRUE, np.array([1.0, 0.0, 0.0]))
+    np.testing.assert_allclose(w.poses[0], want)
+
+
+def _drive(boxes: int, scans: int) -> list[tuple[Status, float, str]]:
+    """A TurtleBot3-like robot (laser 3.2 cm behind the base) on a 1 m circle in a 5 m x 3.6 m
+    room, no initial pose and no keyframes: (status, position error [m], reason) per scan."""
+    room = rectangle_room(5.0, 3.6)
+    world = add_furniture(room, boxes=boxes, rng=3).world if boxes else room.world
+    grid = world_to_grid(world, 0.05, free_seeds=[[0.0, -0.4]])
+    laser = np.array([-0.032, 0.0, 0.0])
+    settings = LocalizerSettings(laser_pose=(-0.032, 0.0, 0.0), seed=1)
+    loc = build_localizer(grid, settings)
+    loc.reset_global()
+    rng = np.random.default_rng(4)
+    truth, odom = np.array([0.0, -1.4, 0.0]), np.zeros(3)
+    out = []
+    dt, v, w = 0.2, 0.25, 0.25
+
+    def step(p: np.ndarray, v: float, w: float) -> np.ndarray:
+        th = p[2] + 0.5 * w * dt
+        x, y = p[0] + v * dt * math.cos(th), p[1] + v * dt * math.sin(th)
+        return np.array([x, y, wrap_angle(p[2] + w * dt)])
+
+    for i in range(scans):
+        truth, odom = step(truth, v, w), step(odom, v * 1.02, w + 0.01)
+        scan = simulate_scan(world, compose(truth, laser), LDS01, rng, stamp=0.2 * i)
+        est = loc.update(OdometryReading(odom.copy(), 0.2 * i), scan)
+        err = math.inf if est.pose is None else float(np.hypot(*(est.pose[:2] - truth[:2])))
+        out.append((est.status, err, est.reason))
+    return out
+
+
+def test_one_box_lets_the_laser_decide_as_the_robot_moves() -> None:
+    out = _drive(boxes=1, scans=60)
+    tracked = [i for i, (st, _, _) in enumerate(out) if st is Status.TRACKING]
+    assert tracked, out[-1][2]
+    first = tracked[0]
+    assert "singled out by the laser" in out[first][2]
+    assert all(out[i][0] is Status.AMBIGUOUS for i in range(first))
+    assert max(out[i][1] for i in tracked) < 0.1
+
+
+def test_a_perfectly_symmetric_room_is_never_decided_without_keyframes() -> None:
+    out = _drive(boxes=0, scans=60)
+    assert not any(st is Status.TRACKING for st, _, _ in out)
+    assert out[0][0] is Status.AMBIGUOUS
+    assert "the laser watches them" in out[0][2]
+
+
+def test_the_watch_says_when_moving_teaches_nothing() -> None:
+    w = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    gate = FakeGate(0.95, 0.95)
+    for i in range(2 * MIN_VIEWS):
+        v = w.step(gate, SCAN, np.array([0.15 * (i + 1), 0.0, 0.0]))  # type: ignore[arg-type]
+        assert (w.learning(v) == "") == (i + 1 < 2 * MIN_VIEWS)
+    assert "fits as well" in w.learning(v)
+    still = LaserWatch(np.array([COPY, TRUE]), np.zeros(3), slack=0.3, evidence=0.5)
+    for _ in range(STILL_SCANS + 1):
+        v = still.step(FakeGate(0.95, 0.5), SCAN, np.zeros(3))  # type: ignore[arg-type]
+    assert "has not moved" in still.learning(v)
