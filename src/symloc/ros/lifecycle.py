@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import importlib
 import math
-import os
 import uuid
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -56,6 +55,7 @@ from rclpy.parameter import Parameter
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import wrap_angle
 from symloc.grid.map_io import load_map
+from symloc.io.atomic import atomic_write_text
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
@@ -97,13 +97,11 @@ def save_pose(path: str | Path, pose: Any, stamp: float, frame_id: str) -> None:
     """Write ``pose`` (3,) in nav2_amcl's saved-pose format (atomically: a temporary file,
     then a rename), as its ``save_pose_rate`` timer does."""
     x, y, yaw = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
-    target = Path(path)
-    tmp = target.with_name(target.name + ".tmp")
-    tmp.write_text(
+    atomic_write_text(
+        path,
         f"timestamp: {stamp:.9f}\nframe_id: {frame_id}\n"
-        f"x: {x:.6f}\ny: {y:.6f}\nz: 0.000000\nyaw: {yaw:.6f}\n"
+        f"x: {x:.6f}\ny: {y:.6f}\nz: 0.000000\nyaw: {yaw:.6f}\n",
     )
-    os.replace(tmp, target)
 
 
 def load_saved_pose(path: str | Path) -> tuple[np.ndarray[Any, Any], str]:

@@ -83,6 +83,7 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc.errors import WorldError
+from symloc.io.atomic import atomic_write_text
 from symloc.sim.people import PERSON_HEIGHT, PERSON_RADIUS, WALKING_SPEED
 from symloc.sim.rooms import (
     BOARD_HEIGHT,
@@ -340,7 +341,7 @@ def save_world_file(spec: WorldSpec, path: str | Path, *, header: str = "") -> P
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     lines = "".join(f"# {line}\n" for line in header.splitlines())
-    p.write_text(lines + spec.to_yaml(), encoding="utf-8")
+    atomic_write_text(p, lines + spec.to_yaml())
     return p
 
 

@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import VocabularyFileError
+from symloc.io.atomic import atomic_open, atomic_write_text
 
 __all__ = [
     "MAGIC",
@@ -151,12 +152,9 @@ def write_vocabulary(voc: TreeArrays, path: str | Path, *, compress: bool = Fals
         len(payload),
         b"\x00" * 8,
     )
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_open(path, "wb") as fh:
         fh.write(header)
         fh.write(payload)
-    tmp.replace(path)
 
 
 def read_vocabulary(path: str | Path) -> VocabularyArrays:
@@ -491,4 +489,4 @@ def write_dbow2_text(voc: TreeArrays, path: str | Path) -> None:
     for i in range(1, n):
         d = " ".join(map(str, desc[i].tolist()))
         lines.append(f"{int(par[i])} {int(leaf[i])} {d}  {float(voc.weights[i])!r}")
-    Path(path).write_text("\n".join(lines) + "\n")
+    atomic_write_text(path, "\n".join(lines) + "\n")
