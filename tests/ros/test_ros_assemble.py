@@ -42,7 +42,9 @@ def test_a_visual_map_with_keyframes_reaches_the_localizer(
 
     monkeypatch.setattr(assemble, "build_localizer", build)
     params = NodeParams.from_dict({"localizer": {"decide_here": True}})
-    assemble.make_localizer(OccupancyGrid(np.zeros((8, 8), np.int8), 0.05), params, places=store)
+    room = np.zeros((8, 8), np.int8)
+    room[0] = 100  # a wall: a map with no occupied cell is refused
+    assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store)
     assert seen["places"] is store
     assert (seen["keyframes"] is store) is has_keyframes
     assert seen["settings"].localizer.decide_here

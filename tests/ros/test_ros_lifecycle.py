@@ -66,7 +66,9 @@ def ctx() -> Iterator[Any]:
 
 @pytest.fixture
 def map_yaml(tmp_path: Path) -> str:
-    save_map(OccupancyGrid(np.zeros((30, 30), np.int8), 0.1), tmp_path / "m.yaml")
+    room = np.full((30, 30), 100, np.int8)
+    room[1:-1, 1:-1] = 0  # walls around a free floor (a map with no wall is refused)
+    save_map(OccupancyGrid(room, 0.1), tmp_path / "m.yaml")
     return str(tmp_path / "m.yaml")
 
 

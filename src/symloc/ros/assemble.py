@@ -84,7 +84,19 @@ def make_localizer(
     arrive mirrored (the node does it). A visual map that holds keyframes is also the
     localizer's :class:`~symloc.localizer.types.KeyframeStore`: with ``localizer.decide_here``
     the camera decides where the robot stands (:mod:`symloc.localizer.decide_here`).
+
+    Raises
+    ------
+    ConfigurationError
+        The map has no occupied cell (a 1 x 1 map, a blank canvas: nothing a scan could match;
+        the node then keeps waiting for a usable map) or no free cell, or a file named by the
+        parameters cannot be used (:func:`open_places`).
     """
+    if not np.any(grid.occupied_mask):
+        raise ConfigurationError(
+            "map: no occupied cell (occupancy > occupied_thresh): nothing a scan could match;"
+            " waiting for a map with walls"
+        )
     store = places if places is not None else open_places(params)
     # a visual map with keyframes lets the camera decide where the robot stands
     # (localizer.decide_here); a store without them leaves that to the paper's path
