@@ -319,6 +319,11 @@ class NodeCore:
         )
         return True
 
+    @property
+    def map_refused(self) -> str:
+        """Why the last map offered was refused ("" when it was used)."""
+        return self._map_refused
+
     def _build_params(self) -> NodeParams:
         """The parameters the localizer is built with: the laser pose is the mount's."""
         if self.mount is None:

@@ -59,6 +59,7 @@ from symloc.io.atomic import atomic_write_text
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
+from symloc.ros.assemble import check_files
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.nav2_params import (
     WITHOUT_EFFECT,
@@ -236,7 +237,12 @@ class LocalizationNode(LifecycleNode):
         if self.core is None:  # not configured: read at configure
             return SetParametersResult(successful=True)
         try:
-            node_params_from_ros(self._values(changes))
+            new = node_params_from_ros(self._values(changes))
+            if self.params is None or (new.visual_map, new.vocabulary) != (
+                self.params.visual_map,
+                self.params.vocabulary,
+            ):
+                check_files(new)
         except ConfigurationError as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -279,6 +285,13 @@ class LocalizationNode(LifecycleNode):
         except ConfigurationError as err:
             log.error(f"configure failed: {err}")
             return Failed
+        try:
+            # as nav2 fails configure for a bad map: a visual map or vocabulary that cannot
+            # be used fails here, not at every map build while the node answers `lost`
+            check_files(params)
+        except ConfigurationError as err:
+            log.error(f"configure failed: {err}")
+            return Failed
         for name in ("odom_source", "laser_pose_source"):
             if getattr(params, name) == "tf" and self.tf_message is None:
                 other = "topic" if name == "odom_source" else "parameters"
@@ -298,9 +311,13 @@ class LocalizationNode(LifecycleNode):
         self._create_services()
         if params.map_yaml:
             try:
-                self.core.set_map(load_map(params.map_yaml))
+                used = self.core.set_map(load_map(params.map_yaml))
             except SymlocError as err:
                 log.error(f"configure failed: map_yaml: {err}")
+                self._release()
+                return Failed
+            if not used:
+                log.error(f"configure failed: map_yaml: {params.map_yaml}: {self.core.map_refused}")
                 self._release()
                 return Failed
         if not params.always_reset_initial_pose and self._last_pose is not None:
