@@ -153,7 +153,7 @@ def test_image_to_grid_trinary_includes_alpha() -> None:
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ("image: [unclosed", "malformed YAML"),
+        ("image: [unclosed", "not valid YAML"),
         ("- a\n- b\n", "expected a YAML mapping"),
         (ROS_WIKI_YAML.replace("image: testmap.png\n", ""), "missing required field 'image'"),
         (

@@ -73,6 +73,7 @@ from symloc.io.atomic import (
     atomic_write_text,
     remove_stale_temporaries,
 )
+from symloc.io.bounded import load_yaml_bounded, read_text_bounded
 
 __all__ = [
     "MAP_MODES",
@@ -90,6 +91,7 @@ MAP_MODES = ("trinary", "scale", "raw")
 MAX_MAP_PIXELS = 64 * 2**20
 _BLOCK_PIXELS = 1 << 20  # pixels converted at a time by image_to_grid
 _MAX_YAML_BYTES = 1 << 20
+_NAME_MAX = 255  # bytes in one file name (Linux NAME_MAX)
 log = logging.getLogger(__name__)
 _WRITE_ID = re.compile(r"[0-9a-f]{8}")
 _PGM_ID = re.compile(rb"P[25]\n# symloc write_id=([0-9a-f]{8})\n")
@@ -180,21 +182,9 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         range; the message names the field.
     """
     p = Path(path)
-    try:
-        if p.stat().st_size > _MAX_YAML_BYTES:
-            raise MapFileError(
-                f"{p}: {p.stat().st_size:,} bytes; a map YAML is a few lines (at most"
-                f" {_MAX_YAML_BYTES:,} bytes read)"
-            )
-        text = p.read_text()
-    except OSError as err:
-        raise MapFileError(f"{p}: cannot read map YAML ({err.strerror})") from err
-    except UnicodeDecodeError as err:
-        raise MapFileError(f"{p}: not a text file (byte {err.start} is not UTF-8)") from err
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise MapFileError(f"{p}: malformed YAML: {err}") from err
+    # a regular file of at most _MAX_YAML_BYTES (a map YAML is a few lines), bounded nesting
+    text = read_text_bounded(p, _MAX_YAML_BYTES, what="map YAML", error=MapFileError)
+    doc = load_yaml_bounded(text, where=str(p), error=MapFileError)
     if not isinstance(doc, dict):
         raise MapFileError(f"{p}: expected a YAML mapping with the map fields, got {type(doc)}")
     if "image" not in doc:
@@ -202,6 +192,12 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     image = doc["image"]
     if not isinstance(image, str) or not image.strip():
         raise MapFileError(f"{p}: field 'image' must be a non-empty file name, got {image!r}")
+    if "\x00" in image or any(len(part.encode()) > _NAME_MAX for part in Path(image).parts):
+        shown = image if len(image) <= 60 else f"{image[:40]!r}... ({len(image)} characters)"
+        raise MapFileError(
+            f"{p}: field 'image' must be a file name of at most {_NAME_MAX} bytes per path"
+            f" component and no NUL byte, got {shown}"
+        )
     resolution = _number(doc, "resolution", p)
     if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
         raise MapFileError(

@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 
 from symloc.errors import VocabularyFileError
 from symloc.io.atomic import atomic_open, atomic_write_text
+from symloc.io.bounded import read_bytes_bounded
 
 __all__ = [
     "MAGIC",
@@ -178,17 +179,11 @@ def read_vocabulary(path: str | Path) -> VocabularyArrays:
 
 
 def _read_bounded(path: Path) -> bytes:
-    """The file's bytes, refusing one larger than :data:`MAX_VOCABULARY_BYTES` unread."""
-    try:
-        size = path.stat().st_size
-        if size > MAX_VOCABULARY_BYTES:
-            raise VocabularyFileError(
-                f"{path}: {size:,} bytes; a vocabulary file is at most"
-                f" {MAX_VOCABULARY_BYTES:,} bytes"
-            )
-        return path.read_bytes()
-    except OSError as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+    """The file's bytes: a regular file (not a FIFO or device) of at most
+    :data:`MAX_VOCABULARY_BYTES`, refused unread otherwise."""
+    return read_bytes_bounded(
+        path, MAX_VOCABULARY_BYTES, what="the vocabulary file", error=VocabularyFileError
+    )
 
 
 def _gzip_chunks(data: bytes, name: str) -> Iterator[bytes]:
