@@ -139,3 +139,23 @@ def test_a_path_name_too_long_is_a_clean_error(tmp_path: Path) -> None:
         load_map(tmp_path / ("y" * 300 + ".yaml"))
     with pytest.raises(WorldError, match="too long"):
         load_world_file(tmp_path / ("w" * 300 + ".yaml"))
+
+
+def test_vocabulary_training_skips_images_too_small_with_a_count(tmp_path: Path) -> None:
+    """1 x 1 and 1 x 500 photos crashed `vocab train` in OpenCV's pyramid (issue 31)."""
+    import cv2
+
+    from symloc.vision.orb import OrbExtractor, OrbSettings
+    from symloc.vision.vocabulary import Vocabulary
+
+    rng = np.random.default_rng(0)
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / f"ok{i}.png"), (rng.random((120, 160)) * 255).astype(np.uint8))
+    cv2.imwrite(str(tmp_path / "dot.png"), np.zeros((1, 1), np.uint8))
+    cv2.imwrite(str(tmp_path / "line.png"), np.zeros((1, 500), np.uint8))
+    cv2.imwrite(str(tmp_path / "small.png"), np.zeros((40, 40), np.uint8))
+    ext = OrbExtractor(OrbSettings(n_features=50))
+    assert len(ext.extract(np.zeros((1, 500), np.uint8))) == 0  # no OpenCV error
+    with pytest.warns(UserWarning, match=r"skipped 3 image\(s\) smaller than 63 x 63 pixels"):
+        voc = Vocabulary.train_from_folder(tmp_path, extractor=ext, k=2, L=2, progress=False)
+    assert voc.n_words >= 1
