@@ -25,7 +25,7 @@ def test_readme_library_example_runs_and_prints_what_it_promises(tmp_path: Path)
     code, promised = _library_example()
     out = io.StringIO()
     cwd = Path.cwd()
-    os.chdir(tmp_path)  # the example writes map.yaml / map.pgm where it runs
+    os.chdir(tmp_path)  # the example writes map.yaml / map.<write id>.pgm where it runs
     try:
         with contextlib.redirect_stdout(out):
             exec(compile(code, "README.md (Library)", "exec"), {"__name__": "readme"})

@@ -201,20 +201,13 @@ def read_image_file(
     """
     import cv2
 
+    from symloc.io.bounded import read_bytes_bounded
+
     p = Path(path)
-    try:
-        size = p.stat().st_size
-        if not p.is_file():
-            raise DataFormatError(f"{p}: not a file")
-        if size > 8 * max_pixels + (1 << 20):
-            raise DataFormatError(
-                f"{p}: {size:,} bytes, more than an image of at most {max_pixels:,} pixels needs"
-            )
-        raw = p.read_bytes()
-    except FileNotFoundError as err:
-        raise DataFormatError(f"{p}: no such image file") from err
-    except OSError as err:
-        raise DataFormatError(f"{p}: cannot read ({err.strerror})") from err
+    # a regular file (a FIFO would block) no larger than any image of max_pixels needs
+    raw = read_bytes_bounded(
+        p, 8 * max_pixels + (1 << 20), what="the image file", error=DataFormatError
+    )
     check_image_size(image_header(raw, str(p)), max_pixels, str(p))
     img = cv2.imdecode(
         np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED if flags is None else flags

@@ -83,13 +83,17 @@ def test_round_trip_trinary_through_nav2_file_is_identical(tmp_path: Path) -> No
     grid = load_map(y)
     out = save_map(grid, tmp_path / "out" / "copy")
     assert out.name == "copy.yaml"
-    assert (tmp_path / "out" / "copy.pgm").is_file()
+    image = read_map_yaml(out).image  # copy.<write id>.pgm
+    assert image.parent == tmp_path / "out"
+    assert image.name.startswith("copy.")
+    assert image.suffix == ".pgm"
+    assert image.is_file()
     again = load_map(out)
     np.testing.assert_array_equal(again.data, grid.data)
     np.testing.assert_allclose(again.origin, grid.origin)
     assert again.resolution == grid.resolution
     # the written image is the nav2 map_saver's trinary image, pixel for pixel
-    np.testing.assert_array_equal(cv2.imread(str(tmp_path / "out" / "copy.pgm"), 0), _image())
+    np.testing.assert_array_equal(cv2.imread(str(image), 0), _image())
 
 
 @settings(max_examples=25, deadline=None)
@@ -112,7 +116,8 @@ def test_scale_mode_keeps_classes_and_unknown_transparency(tmp_path: Path) -> No
     data = np.array([[-1, 0, 100], [10, 50, 90]], dtype=np.int8)
     grid = OccupancyGrid(data, 0.1)
     y = save_map(grid, tmp_path / "s", mode="scale")
-    assert y.with_suffix(".png").is_file()
+    assert read_map_yaml(y).image.suffix == ".png"
+    assert read_map_yaml(y).image.is_file()
     back = load_map(y)
     assert back.data[0, 0] == -1
     assert back.data[0, 1] == 0
@@ -148,7 +153,7 @@ def test_image_to_grid_trinary_includes_alpha() -> None:
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ("image: [unclosed", "malformed YAML"),
+        ("image: [unclosed", "not valid YAML"),
         ("- a\n- b\n", "expected a YAML mapping"),
         (ROS_WIKI_YAML.replace("image: testmap.png\n", ""), "missing required field 'image'"),
         (

@@ -66,7 +66,9 @@ def ctx() -> Iterator[Any]:
 
 @pytest.fixture
 def map_yaml(tmp_path: Path) -> str:
-    save_map(OccupancyGrid(np.zeros((30, 30), np.int8), 0.1), tmp_path / "m.yaml")
+    room = np.full((30, 30), 100, np.int8)
+    room[1:-1, 1:-1] = 0  # walls around a free floor (a map with no wall is refused)
+    save_map(OccupancyGrid(room, 0.1), tmp_path / "m.yaml")
     return str(tmp_path / "m.yaml")
 
 
@@ -286,5 +288,56 @@ def test_the_example_of_symlocs_settings_configures_after_nav2s_file(
         assert node.params.lidar_preset == "lds01"
         assert node.params.confidence.min_weight_share == 0.9
         assert node.params.claim.gate_sigmas == 4.0
+    finally:
+        node.destroy_node()
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        "missing visual map",
+        "visual map of a future schema",
+        "garbage visual map",
+        "garbage vocabulary",
+    ],
+)
+def test_a_visual_map_or_vocabulary_that_cannot_be_used_fails_configure(
+    ctx: Any, map_yaml: str, tmp_path: Path, case: str
+) -> None:
+    """As nav2 fails configure for a bad map (issue 31: the node activated and answered
+    `lost: no map yet` forever); once the parameter names a good file, configure succeeds."""
+    from test_ros_assemble import _bad_files
+
+    from symloc.vision import VisualMap
+
+    changes, _ = _bad_files(tmp_path)[case]
+    base = {"map_yaml": map_yaml, "odom_source": "topic", "laser_pose_source": "parameters"}
+    node = _node(ctx, params=NodeParams(**base, **changes))
+    try:
+        assert node.trigger_configure() == FAIL
+        assert node.core is None
+        good = tmp_path / "good.db"
+        VisualMap(good, create=True).close()
+        node.set_parameters(
+            [Parameter("visual_map", value=str(good)), Parameter("vocabulary", value="")]
+        )
+        assert node.trigger_configure() == OK
+        assert node.core is not None
+        assert node.core.localizer is not None  # built on the map with the good visual map
+        # a bad file named at run time is refused with the reason; the good one stays
+        result = node.set_parameters([Parameter("visual_map", value=str(tmp_path / "nope.db"))])
+        assert not result[0].successful
+        assert "nope.db does not exist" in result[0].reason
+        assert node.get_parameter("visual_map").value == str(good)
+    finally:
+        node.destroy_node()
+
+
+def test_a_map_yaml_without_walls_fails_configure(ctx: Any, tmp_path: Path) -> None:
+    blank = save_map(OccupancyGrid(np.zeros((30, 30), np.int8), 0.1), tmp_path / "blank")
+    params = NodeParams(map_yaml=str(blank), odom_source="topic", laser_pose_source="parameters")
+    node = _node(ctx, params=params)
+    try:
+        assert node.trigger_configure() == FAIL
     finally:
         node.destroy_node()

@@ -50,6 +50,7 @@ class Run:
     t: float = T0
     clock_offset: float = 0.0
     odom_fix: np.ndarray | None = None
+    preset: str = "lds01"
     outputs: list[Outputs] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
 
@@ -73,7 +74,7 @@ class Run:
         sc = simulate_scan(
             self.room.world,  # type: ignore[attr-defined]
             self.truth(t),
-            PRESETS["lds01"],
+            PRESETS[self.preset],
             self.rng,
             stamp=s,
             frame_id="laser",
@@ -259,3 +260,132 @@ def test_localizer_that_keeps_failing_is_rebuilt(world: tuple[object, OccupancyG
     assert run.core.localizer is not broken
     assert run.core.recovered["localizer"] == 1
     assert outs[3].used  # the rebuilt localizer answers (globally initialised)
+
+
+# ---------------------------------------------------------------- first messages (issue 31)
+
+
+def _odd_scan(run: Run, n: int) -> object:
+    """A scan of ``n`` beams at the robot's pose: the simulated scan cut to its first ``n``
+    beams (n < 360), or resampled to ``n`` beams over the full circle (n > 360)."""
+    base = simulate_scan(
+        run.room.world,  # type: ignore[attr-defined]
+        run.truth(run.t),
+        PRESETS["lds01"],
+        run.rng,
+        stamp=run.t + run.clock_offset,
+        frame_id="laser",
+    )
+    f = scan_to_fields(base)
+    f["intensities"] = np.zeros(0, np.float32)
+    if n > len(base):
+        around = np.r_[base.ranges, base.ranges[0]]
+        f["ranges"] = np.interp(
+            np.linspace(0, len(base), n, endpoint=False), np.arange(len(around)), around
+        ).astype(np.float32)
+        f["angle_increment"] = float(base.angle_increment) * len(base) / n
+        f["angle_max"] = f["angle_min"] + f["angle_increment"] * (n - 1)
+    else:
+        f["ranges"] = np.asarray(f["ranges"])[:n]
+    return build_rosbags(TS, "sensor_msgs/msg/LaserScan", f)
+
+
+def _params(**changes: object) -> NodeParams:
+    return NodeParams(amcl=AmclParams(max_particles=500, min_particles=100), **changes)  # type: ignore[arg-type]
+
+
+def _tracks_within(run: Run, scans: int, within: int) -> list[bool]:
+    outs = [run.step() for _ in range(scans)]
+    ok = [run.correct(o) for o in outs]
+    assert True in ok, f"never tracked: {ok}"
+    first = ok.index(True)
+    assert first < within, ok
+    assert all(ok[first:]), f"lost again: {ok}"
+    return ok
+
+
+@pytest.mark.parametrize("beams", [1, 7, 359, 800, 65536])
+def test_an_odd_first_scan_does_not_fix_the_beam_count(
+    world: tuple[object, OccupancyGrid], beams: int
+) -> None:
+    """The first scan used has another length than all later ones: the later ones become the
+    beam count after CONFIRM scans (issue 31: they were dropped as `scan: wrong length`
+    forever)."""
+    room, grid = world
+    warnings: list[str] = []
+    core = NodeCore(_params(), warn=warnings.append)
+    run = Run(room, grid, core, np.random.default_rng(0), warnings=warnings)
+    core.on_map(map_msg(grid))
+    core.on_odom(run.odom(run.t))
+    core.on_initialpose(initialpose(run.truth(run.t), np.diag([0.01, 0.01, 0.01])))
+    run.t += 0.1
+    core.on_odom(run.odom(run.t))
+    core.on_scan(_odd_scan(run, beams))
+    ok = _tracks_within(run, 15, RECOVER_WITHIN)
+    if core.dropped["scan: wrong length"]:  # the odd scan was used: the good ones re-took
+        assert core.recovered["beam count"] == 1
+        assert any("beam count is now 360" in w for w in warnings)
+        # the status of a dropped scan said how the beam count changes
+        why = run.outputs[0].status["status"][0]["values"]
+        reason = {kv["key"]: kv["value"] for kv in why}["reason"]
+        assert f"360 beams, expected {beams}" in reason
+        assert "of 3 scans in a row" in reason
+    print(f"{beams} beams first: tracking from good scan {ok.index(True) + 1}")
+
+
+def test_a_new_laser_for_good_is_taken_within_a_few_scans(
+    world: tuple[object, OccupancyGrid],
+) -> None:
+    """The laser driver restarts with another resolution (360 -> 800 beams): tracking goes
+    on after CONFIRM scans, the pose kept."""
+    run = _start(world, lambda core: None)
+    run.preset = "rplidar_a2"
+    _tracks_within(run, 12, RECOVER_WITHIN)
+    assert run.core.recovered["beam count"] == 1
+    assert run.core.dropped["scan: wrong length"] == 2
+
+
+def test_one_short_scan_is_dropped_and_does_not_change_the_beam_count(
+    world: tuple[object, OccupancyGrid],
+) -> None:
+    run = _start(world, lambda core: None)
+    run.t += 0.1
+    run.core.on_odom(run.odom(run.t))
+    assert not run.core.on_scan(_odd_scan(run, 300)).used
+    _tracks_within(run, 5, 1)
+    assert run.core.dropped["scan: wrong length"] == 1
+    assert run.core.recovered["beam count"] == 0
+
+
+DEGENERATE = {
+    "1 x 1 free": np.zeros((1, 1), np.int8),
+    "1 x 1 wall": np.full((1, 1), 100, np.int8),
+    "3 x 3 free": np.zeros((3, 3), np.int8),
+    "3 x 3 unknown": np.full((3, 3), -1, np.int8),
+    "80 x 80 without walls": np.zeros((80, 80), np.int8),
+}
+
+
+@pytest.mark.parametrize("first_map_only", [False, True])
+@pytest.mark.parametrize("shape", list(DEGENERATE))
+def test_a_degenerate_first_map_gives_way_to_a_good_one(
+    world: tuple[object, OccupancyGrid], shape: str, first_map_only: bool
+) -> None:
+    """A 1 x 1, 3 x 3 or wall-less first map is refused (nothing a scan could match), the
+    scans say why, and the good map that follows is used, even with first_map_only."""
+    room, grid = world
+    warnings: list[str] = []
+    core = NodeCore(_params(first_map_only=first_map_only), warn=warnings.append)
+    run = Run(room, grid, core, np.random.default_rng(0), warnings=warnings)
+    core.on_map(map_msg(OccupancyGrid(DEGENERATE[shape], 0.05)))
+    assert core.grid is None
+    assert core.dropped["map: unusable"] == 1
+    out = run.step()
+    reason = {kv["key"]: kv["value"] for kv in out.status["status"][0]["values"]}["reason"]
+    assert not out.used
+    assert "the last map was refused" in reason, reason
+    core.on_map(map_msg(grid))
+    assert core.grid is not None
+    assert core.grid.width == grid.width
+    core.on_initialpose(initialpose(run.truth(run.t), np.diag([0.01, 0.01, 0.01])))
+    _tracks_within(run, 8, 2)

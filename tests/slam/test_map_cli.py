@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from symloc.cli.main import main
-from symloc.grid.map_io import load_map
+from symloc.grid.map_io import load_map, read_map_yaml
 
 
 def test_map_build_world_writes_map_server_files(tmp_path: Path, capsys) -> None:
@@ -19,7 +19,7 @@ def test_map_build_world_writes_map_server_files(tmp_path: Path, capsys) -> None
     assert "ATE RMSE" in out
     assert "map agreement" in out
     grid = load_map(tmp_path / "map.yaml")
-    assert (tmp_path / "map.pgm").is_file()
+    assert read_map_yaml(tmp_path / "map.yaml").image.is_file()  # map.<write id>.pgm
     assert (tmp_path / "map_trajectory.png").is_file()
     assert grid.resolution == pytest.approx(0.05)
     assert np.count_nonzero(grid.data == 100) > 100  # the board walls

@@ -171,3 +171,19 @@ def test_decide_refuses_another_vocabulary_and_stored_paths(
     assert "never opens a path stored in the database" in capsys.readouterr().err
     assert main([*decide, "--hfov", "60", "--vocabulary", str(voc)]) == 2
     assert "were made with /etc/passwd, not" in capsys.readouterr().err
+
+
+def test_photos_too_small_for_orb_are_clean_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 1 x 1 photo crashed places add and places decide in OpenCV (issue 31)."""
+    db, imgs = _setup(tmp_path)
+    capsys.readouterr()
+    tiny = tmp_path / "tiny.png"
+    cv2.imwrite(str(tiny), np.full((1, 1), 128, np.uint8))
+    add = ["places", "add", "--db", str(db), "--order", "2", "--gv", "1"]
+    assert main([*add, "--images", imgs[0], str(tiny)]) == 2
+    assert "tiny.png: 1 x 1 pixels; a photo needs at least 63 x 63" in capsys.readouterr().err
+    assert main(["places", "decide", "--db", str(db), "--place", "1", "--query", str(tiny),
+                 "--hfov", "60"]) == 2  # fmt: skip
+    assert "tiny.png: 1 x 1 pixels" in capsys.readouterr().err

@@ -73,8 +73,9 @@ except OSError as err:
     print(f"cannot run {sys.argv[2]!r}: {err}", file=sys.stderr)
     sys.exit(127)
 _, status, ru = os.wait4(pid, 0)
-with open(sys.argv[1], "w") as fh:
+with open(sys.argv[1] + ".tmp", "w") as fh:  # then renamed: the reader sees all or nothing
     json.dump([status, ru.ru_maxrss, ru.ru_utime + ru.ru_stime], fh)
+os.replace(sys.argv[1] + ".tmp", sys.argv[1])
 """
 
 

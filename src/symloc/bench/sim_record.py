@@ -13,7 +13,7 @@ Topics: ``/map`` (nav_msgs/OccupancyGrid, transient local, once), ``/odom``
 ``/ground_truth`` (nav_msgs/Odometry, map -> base_link, the simulator's true pose).
 
 Beside the bag, an assets folder holds what a replay or the ROS node needs: ``map.yaml`` +
-``map.pgm`` (map_server format, when :mod:`symloc.grid.map_io` is available), ``places.db``
+``map.<write id>.pgm`` (map_server format, when :mod:`symloc.grid.map_io` is available), ``places.db``
 (the visual map from the mapping stage), ``vocabulary.bin``, ``params.yaml`` (node parameters),
 ``truth.tum`` and ``estimate.tum``.
 """
@@ -34,6 +34,7 @@ from symloc.bench.episode import RobotBody, drive_command
 from symloc.bench.scenario import build_scenario
 from symloc.errors import ConfigurationError
 from symloc.grid.map_io import save_map
+from symloc.io.atomic import atomic_write_text
 from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.io.tum import TrajectoryPoint, write_tum
 from symloc.localizer import Estimate, Status
@@ -191,7 +192,7 @@ def prepare_session(
     )
     params = dataclasses.replace(params, **param_changes)
     params_path = assets_dir / "params.yaml"
-    params_path.write_text(yaml.safe_dump(_params_doc(params), sort_keys=False))
+    atomic_write_text(params_path, yaml.safe_dump(_params_doc(params), sort_keys=False))
     start = scen.random_pose(rng)
     body = RobotBody(DiffDriveRobot(start, rng=rng, world=scen.room.world))
     return SimSession(

@@ -36,6 +36,7 @@ from symloc.bench.peers.gmapping import GMappingPeer, PeerUnavailableError, writ
 from symloc.bench.slam_metrics import ate
 from symloc.bench.slam_runs import carmen_odometry, log_duration
 from symloc.errors import ConfigurationError
+from symloc.io.atomic import atomic_path
 from symloc.io.carmen import CarmenLog, read_carmen
 
 __all__ = [
@@ -134,7 +135,8 @@ def run_bench_task(task: SlamBenchTask) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="symloc-slam-bench-") as tmp:
         odo_path = Path(tmp) / "odometry.npy"
         out_path = Path(tmp) / "symloc.npz"
-        np.save(odo_path, odom)
+        with atomic_path(odo_path) as tmp_npy:
+            np.save(tmp_npy, odom)
         cmd = [sys.executable, "-m", "symloc.bench.slam_child"]
         cmd += ["--log", task.log, "--odometry", str(odo_path), "--out", str(out_path)]
         if task.max_scans is not None:

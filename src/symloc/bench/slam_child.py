@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from symloc.io.atomic import atomic_path
+
 __all__ = ["main"]
 
 
@@ -42,7 +44,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     odom = np.load(args.odometry)
     result = run_slam(scans, odom, progress=False)
     summary = result.summary()
-    np.savez(args.out, poses=result.poses, summary=json.dumps(summary))
+    with atomic_path(args.out) as tmp:
+        np.savez(tmp, poses=result.poses, summary=json.dumps(summary))
     return 0
 
 

@@ -399,11 +399,10 @@ def json_safe(value: Any) -> Any:
 
 def write_json(path: Path, data: Mapping[str, Any]) -> Path:
     """Write ``data`` as standard JSON (no NaN: null) to ``path``, creating its folder."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    from symloc.io.atomic import atomic_write_text
+
     text = json.dumps(json_safe(dict(data)), indent=2, sort_keys=True, allow_nan=False)
-    path.write_text(text + "\n")
-    return path
+    return atomic_write_text(Path(path), text + "\n")
 
 
 # ----------------------------------------------------------------------- inputs and outputs

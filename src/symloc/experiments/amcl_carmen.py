@@ -49,6 +49,7 @@ from symloc.bench.shared_data import find_carmen_dir
 from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.geometry import compose, inverse, wrap_angle
+from symloc.io.atomic import atomic_path
 from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [
@@ -82,10 +83,10 @@ def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> 
         lo.integrate(s.laser_pose, s.scan)
     grid = lo.to_occupancy_grid()
     if cache is not None:
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(
-            cache, data=grid.data, resolution=grid.resolution, origin=np.asarray(grid.origin)
-        )
+        with atomic_path(cache) as tmp:
+            np.savez_compressed(
+                tmp, data=grid.data, resolution=grid.resolution, origin=np.asarray(grid.origin)
+            )
     return grid
 
 

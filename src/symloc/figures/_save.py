@@ -5,18 +5,23 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from symloc.io.atomic import atomic_path
+
 __all__ = ["save_figure"]
 
 
 def save_figure(fig: Any, path: str | Path, *, dpi: float | None = None) -> Path:
-    """Save ``fig`` as ``path`` (folders created), close it, and return the path.
+    """Save ``fig`` as ``path`` (folders created; atomically), close it, and return the path.
 
     ``dpi=None`` keeps matplotlib's ``savefig.dpi`` default.
     """
     import matplotlib.pyplot as plt
 
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
+    try:
+        # atomically: a figure overwritten by a killed run stays the previous one
+        with atomic_path(out) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
     return out

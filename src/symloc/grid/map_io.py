@@ -26,12 +26,35 @@ Saving, as nav2's ``map_saver``: trinary writes 254 (free, ``<= rint(100 free_th
 0 (occupied, ``>= rint(100 occupied_thresh)``) and 205 (unknown); scale writes
 ``255 (100 - v) / 100`` with unknown cells transparent (RGBA PNG); raw writes ``v`` and
 255 for unknown. A trinary map or any map in raw mode round-trips exactly.
+
+Saving is crash-safe: a reader (or a process killed mid-save) sees the old map or the new one,
+never a torn pair. Each save draws a *write id* (8 hex digits) and writes
+
+1. the image as ``<stem>.<write id>.pgm`` (or ``.png``), a name no other save uses, atomically
+   (:mod:`symloc.io.atomic`: a temporary file, fsync, rename);
+2. the YAML last, atomically, naming that image and recording ``write_id: <write id>``;
+3. then removes the image the previous YAML named (when it is one of this map's own images,
+   ``<stem>.pgm`` or ``<stem>.<8 hex>.pgm``) and images of saves killed before their YAML
+   (after :data:`~symloc.io.atomic.STALE_SECONDS`).
+
+The write id is also stored inside the image (a PGM header comment ``# symloc write_id=<id>``
+on the second line; a PNG ``tEXt`` chunk ``symloc_write_id`` right after ``IHDR``). A reader
+that finds a YAML whose ``write_id`` differs from the one in its image, or whose ``width`` /
+``height`` differ from the image's, refuses the pair with :class:`~symloc.errors.MapFileError`.
+An image without a write id (another tool's, or one edited by hand) is accepted as it is.
+``write_id`` is not a map_server key; map_server ignores it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 import re
+import secrets
+import stat
+import struct
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -44,6 +67,13 @@ from numpy.typing import NDArray
 from symloc.errors import DataFormatError, MapFileError
 from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
 from symloc.image_header import check_image_size, image_header
+from symloc.io.atomic import (
+    STALE_SECONDS,
+    atomic_write_bytes,
+    atomic_write_text,
+    remove_stale_temporaries,
+)
+from symloc.io.bounded import load_yaml_bounded, read_text_bounded
 
 __all__ = [
     "MAP_MODES",
@@ -61,6 +91,12 @@ MAP_MODES = ("trinary", "scale", "raw")
 MAX_MAP_PIXELS = 64 * 2**20
 _BLOCK_PIXELS = 1 << 20  # pixels converted at a time by image_to_grid
 _MAX_YAML_BYTES = 1 << 20
+_NAME_MAX = 255  # bytes in one file name (Linux NAME_MAX)
+log = logging.getLogger(__name__)
+_WRITE_ID = re.compile(r"[0-9a-f]{8}")
+_PGM_ID = re.compile(rb"P[25]\n# symloc write_id=([0-9a-f]{8})\n")
+_PNG_ID_KEY = b"symloc_write_id\x00"
+_TEMPORARY = re.compile(r"\.(.+)\.[0-9a-f]{12}\.tmp\.(?:pgm|png)")  # atomic.temporary_name
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,6 +130,7 @@ class MapMetadata:
     mode: str = "trinary"
     width: int | None = None
     height: int | None = None
+    write_id: str | None = None
 
 
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -145,21 +182,9 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         range; the message names the field.
     """
     p = Path(path)
-    try:
-        if p.stat().st_size > _MAX_YAML_BYTES:
-            raise MapFileError(
-                f"{p}: {p.stat().st_size:,} bytes; a map YAML is a few lines (at most"
-                f" {_MAX_YAML_BYTES:,} bytes read)"
-            )
-        text = p.read_text()
-    except OSError as err:
-        raise MapFileError(f"{p}: cannot read map YAML ({err.strerror})") from err
-    except UnicodeDecodeError as err:
-        raise MapFileError(f"{p}: not a text file (byte {err.start} is not UTF-8)") from err
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise MapFileError(f"{p}: malformed YAML: {err}") from err
+    # a regular file of at most _MAX_YAML_BYTES (a map YAML is a few lines), bounded nesting
+    text = read_text_bounded(p, _MAX_YAML_BYTES, what="map YAML", error=MapFileError)
+    doc = load_yaml_bounded(text, where=str(p), error=MapFileError)
     if not isinstance(doc, dict):
         raise MapFileError(f"{p}: expected a YAML mapping with the map fields, got {type(doc)}")
     if "image" not in doc:
@@ -167,6 +192,12 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     image = doc["image"]
     if not isinstance(image, str) or not image.strip():
         raise MapFileError(f"{p}: field 'image' must be a non-empty file name, got {image!r}")
+    if "\x00" in image or any(len(part.encode()) > _NAME_MAX for part in Path(image).parts):
+        shown = image if len(image) <= 60 else f"{image[:40]!r}... ({len(image)} characters)"
+        raise MapFileError(
+            f"{p}: field 'image' must be a file name of at most {_NAME_MAX} bytes per path"
+            f" component and no NUL byte, got {shown}"
+        )
     resolution = _number(doc, "resolution", p)
     if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
         raise MapFileError(
@@ -209,6 +240,9 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v <= 0):
             raise MapFileError(f"{p}: field '{key}' must be a positive integer, got {v!r}")
         size[key] = v
+    write_id = doc.get("write_id")
+    if write_id is not None and not (isinstance(write_id, str) and _WRITE_ID.fullmatch(write_id)):
+        raise MapFileError(f"{p}: field 'write_id' must be 8 hex digits, got {write_id!r}")
     img = Path(image)
     if not img.is_absolute():
         img = p.parent / img
@@ -222,6 +256,7 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         mode=mode.lower(),
         width=size["width"],
         height=size["height"],
+        write_id=write_id,
     )
 
 
@@ -336,28 +371,21 @@ def load_map(path: str | Path, *, max_pixels: int = MAX_MAP_PIXELS) -> Occupancy
     ------
     MapFileError
         Malformed YAML or field (named), missing, unreadable or oversized image, or an image
-        whose size disagrees with the YAML's optional ``width``/``height``.
+        that does not belong to the YAML: its size disagrees with the YAML's optional
+        ``width``/``height``, or its write id with the YAML's ``write_id``.
     """
-    meta = read_map_yaml(path)
+    meta, raw = _read_pair(Path(path), max_pixels)
     where = f"{path}: field 'image' ({meta.image})"
-    if not meta.image.is_file():
-        raise MapFileError(f"{path}: field 'image': file not found: {meta.image}")
-    # a raw 16-bit RGBA image of max_pixels is the largest a bounded image can be
-    max_bytes = 8 * max_pixels + (1 << 20)
-    try:
-        size = meta.image.stat().st_size
-        if size > max_bytes:
-            raise MapFileError(
-                f"{where}: {size:,} bytes, more than any image of at most {max_pixels:,}"
-                " pixels needs"
-            )
-        raw = meta.image.read_bytes()
-    except OSError as err:
-        raise MapFileError(f"{where}: cannot read ({err.strerror})") from err
     try:
         head = check_image_size(image_header(raw, where), max_pixels, where)
     except DataFormatError as err:
         raise MapFileError(str(err)) from err
+    image_id = _image_write_id(raw)
+    if meta.write_id is not None and image_id is not None and image_id != meta.write_id:
+        raise MapFileError(
+            f"{path}: field 'write_id' is {meta.write_id}, but image {meta.image.name} was"
+            f" written by save {image_id}: the YAML and the image do not belong together"
+        )
     img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
     del raw
     if img is None or img.size == 0:
@@ -368,14 +396,12 @@ def load_map(path: str | Path, *, max_pixels: int = MAX_MAP_PIXELS) -> Occupancy
             f"{where}: decoded {w} x {h} pixels, its header declared"
             f" {head.width} x {head.height} (corrupt)"
         )
-    if meta.width is not None and meta.width != w:
-        raise MapFileError(
-            f"{path}: field 'width' is {meta.width} pixels but image {meta.image.name} is {w}"
-        )
-    if meta.height is not None and meta.height != h:
-        raise MapFileError(
-            f"{path}: field 'height' is {meta.height} pixels but image {meta.image.name} is {h}"
-        )
+    for key, want, got in (("width", meta.width, w), ("height", meta.height, h)):
+        if want is not None and want != got:
+            raise MapFileError(
+                f"{path}: field '{key}' is {want} pixels but image {meta.image.name} is {got}:"
+                " the YAML and the image do not belong together"
+            )
     data = image_to_grid(img, meta)
     return OccupancyGrid(
         data,
@@ -384,6 +410,94 @@ def load_map(path: str | Path, *, max_pixels: int = MAX_MAP_PIXELS) -> Occupancy
         meta.occupied_thresh,
         meta.free_thresh,
     )
+
+
+def _read_pair(path: Path, max_pixels: int) -> tuple[MapMetadata, bytes]:
+    """The YAML's fields and its image's bytes.
+
+    A save running meanwhile may replace the YAML and remove the image the old YAML named;
+    then the YAML is read again (a few times) rather than failing on the vanished image.
+    """
+    # a raw 16-bit RGBA image of max_pixels is the largest a bounded image can be
+    max_bytes = 8 * max_pixels + (1 << 20)
+    attempts = 3
+    for attempt in range(attempts):
+        meta = read_map_yaml(path)
+        where = f"{path}: field 'image' ({meta.image})"
+        try:
+            st = meta.image.stat()
+            if not stat.S_ISREG(st.st_mode):
+                raise MapFileError(f"{where}: not a regular file")
+            if st.st_size > max_bytes:
+                raise MapFileError(
+                    f"{where}: {st.st_size:,} bytes, more than any image of at most"
+                    f" {max_pixels:,} pixels needs"
+                )
+            with meta.image.open("rb") as fh:
+                # a regular file: its size bounds the read (more only if it grows meanwhile)
+                raw = fh.read(min(st.st_size, max_bytes) + 1)
+        except FileNotFoundError:
+            if attempt + 1 < attempts and read_map_yaml(path).image != meta.image:
+                continue  # replaced by a save meanwhile: read the new pair
+            raise MapFileError(f"{path}: field 'image': file not found: {meta.image}") from None
+        except OSError as err:
+            raise MapFileError(f"{where}: cannot read ({err.strerror})") from err
+        if len(raw) > max_bytes:
+            raise MapFileError(
+                f"{where}: more than {max_bytes:,} bytes, more than any image of at most"
+                f" {max_pixels:,} pixels needs"
+            )
+        return meta, raw
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _image_write_id(raw: bytes) -> str | None:
+    """The write id :func:`save_map` stored in an image, or None (another tool's image)."""
+    m = _PGM_ID.match(raw[:32])
+    if m is not None:
+        return m.group(1).decode()
+    # PNG: the tEXt chunk save_map puts right after IHDR (8 + 25 bytes)
+    if raw[:8] == b"\x89PNG\r\n\x1a\n" and raw[37:41] == b"tEXt":
+        (n,) = struct.unpack(">I", raw[33:37])
+        text = raw[41 : 41 + n]
+        if text.startswith(_PNG_ID_KEY):
+            value = text[len(_PNG_ID_KEY) :].decode("latin-1")
+            if _WRITE_ID.fullmatch(value):
+                return value
+    return None
+
+
+def _encode_image(img: NDArray[np.uint8], fmt: str, write_id: str) -> bytes:
+    """The image file's bytes, with ``write_id`` stored in it (see the module docstring)."""
+    if fmt == "pgm":
+        if img.ndim != 2:
+            raise MapFileError(f"image_format: pgm needs a grey image, got shape {img.shape}")
+        h, w = img.shape
+        head = f"P5\n# symloc write_id={write_id}\n{w} {h}\n255\n".encode()
+        return head + np.ascontiguousarray(img).tobytes()
+    ok, buf = cv2.imencode(".png", img)
+    if not ok:
+        raise MapFileError(f"cannot encode a {img.shape} image as png")
+    png = buf.tobytes()
+    text = _PNG_ID_KEY + write_id.encode()
+    chunk = struct.pack(">I", len(text)) + b"tEXt" + text
+    chunk += struct.pack(">I", zlib.crc32(b"tEXt" + text) & 0xFFFFFFFF)
+    return png[:33] + chunk + png[33:]
+
+
+def _own_image(name: str, stem: str) -> bool:
+    """Whether ``name`` is one of the images save_map writes for ``stem``."""
+    for fmt in ("pgm", "png"):
+        if name == f"{stem}.{fmt}":
+            return True
+        rest = name[len(stem) + 1 : -(len(fmt) + 1)]
+        if (
+            name.startswith(stem + ".")
+            and name.endswith("." + fmt)
+            and _WRITE_ID.fullmatch(rest) is not None
+        ):
+            return True
+    return False
 
 
 def save_map(
@@ -397,13 +511,16 @@ def save_map(
     write_size: bool = True,
     extra: dict[str, Any] | None = None,
 ) -> Path:
-    """Write ``grid`` as ``<stem>.yaml`` + ``<stem>.pgm`` (``.png`` for scale mode).
+    """Write ``grid`` as ``<stem>.yaml`` + ``<stem>.<write id>.pgm`` (``.png`` for scale).
+
+    Crash-safe (see the module docstring): the image first, under a name unique to this save,
+    then the YAML that names it, each atomically; then the previous save's image is removed.
 
     Parameters
     ----------
     grid : OccupancyGrid
     path : str or Path
-        The YAML path or its stem (``maps/lab`` -> ``maps/lab.yaml`` + ``maps/lab.pgm``).
+        The YAML path or its stem (``maps/lab`` -> ``maps/lab.yaml`` + ``maps/lab.<id>.pgm``).
     mode : str
         ``trinary``, ``scale`` or ``raw``.
     image_format : str, optional
@@ -419,7 +536,7 @@ def save_map(
     Returns
     -------
     Path
-        The YAML file written.
+        The YAML file written (:func:`read_map_yaml` names its image).
     """
     if mode not in MAP_MODES:
         raise MapFileError(f"mode: expected one of {MAP_MODES}, got {mode!r}")
@@ -430,17 +547,29 @@ def save_map(
         raise MapFileError("image_format: mode 'scale' needs transparency, use 'png'")
     p = Path(path)
     stem = p.with_suffix("") if p.suffix in (".yaml", ".yml") else p
+    if extra and {"image", "write_id", "width", "height"} & set(extra):
+        raise MapFileError(f"extra: keys {sorted(extra)} would override the map's own fields")
     free = grid.free_thresh if free_thresh is None else float(free_thresh)
     occ = grid.occupied_thresh if occupied_thresh is None else float(occupied_thresh)
     img = grid_to_image(grid, mode, free_thresh=free, occupied_thresh=occ)
     stem.parent.mkdir(parents=True, exist_ok=True)
-    image_path = stem.with_name(stem.name + "." + fmt)
-    if not cv2.imwrite(str(image_path), img):
-        raise MapFileError(f"{image_path}: cannot write image")
     yaml_path = stem.with_name(stem.name + ".yaml")
+    previous: Path | None = None
+    with contextlib.suppress(MapFileError):
+        previous = read_map_yaml(yaml_path).image
+    write_id = secrets.token_hex(4)
+    image_path = stem.with_name(f"{stem.name}.{write_id}.{fmt}")
+    while image_path.exists() or image_path == previous:
+        write_id = secrets.token_hex(4)
+        image_path = stem.with_name(f"{stem.name}.{write_id}.{fmt}")
+    try:
+        atomic_write_bytes(image_path, _encode_image(img, fmt, write_id))
+    except OSError as err:
+        raise MapFileError(f"{image_path}: cannot write image ({err.strerror})") from err
     o = grid.origin
     lines = [
         f"image: {image_path.name}",
+        f"write_id: '{write_id}'",
         f"mode: {mode}",
         f"resolution: {_yaml_float(grid.resolution)}",
         f"origin: [{_yaml_float(o[0])}, {_yaml_float(o[1])}, {_yaml_float(o[2])}]",
@@ -453,8 +582,41 @@ def save_map(
     text = "\n".join(lines) + "\n"
     if extra:
         text += yaml.safe_dump(dict(extra), sort_keys=False, default_flow_style=False)
-    yaml_path.write_text(text)
+    try:
+        atomic_write_text(yaml_path, text)
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            image_path.unlink()
+        raise MapFileError(f"{yaml_path}: cannot write map YAML ({err.strerror})") from err
+    _remove_replaced(stem, yaml_path, image_path, previous)
     return yaml_path
+
+
+def _remove_replaced(stem: Path, yaml_path: Path, image: Path, previous: Path | None) -> None:
+    """Remove the image the replaced YAML named, and this map's abandoned images and
+    temporary files (of saves killed before their YAML; older than STALE_SECONDS)."""
+    if (
+        previous is not None
+        and previous != image
+        and previous.parent == stem.parent
+        and _own_image(previous.name, stem.name)
+    ):
+        with contextlib.suppress(OSError):
+            previous.unlink()
+            log.debug("%s: removed the replaced image %s", yaml_path, previous.name)
+
+    def abandoned(candidate: Path) -> bool:
+        name = candidate.name
+        temporary = _TEMPORARY.fullmatch(name)
+        if temporary is not None:  # a temporary file of one of this map's images
+            name = temporary.group(1)
+        return (
+            candidate != image
+            and _own_image(name, stem.name)
+            and (temporary is not None or name not in (f"{stem.name}.pgm", f"{stem.name}.png"))
+        )
+
+    remove_stale_temporaries(yaml_path, older_than=STALE_SECONDS, extra=abandoned)
 
 
 def _yaml_float(value: float) -> str:

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from symloc.io.atomic import atomic_write_text
+
 __all__ = ["TrajectoryPoint", "write_tum"]
 
 FloatArray = NDArray[np.float64]
@@ -32,4 +34,4 @@ def write_tum(path: Path, rows: list[tuple[float, FloatArray]]) -> None:
     for t, p in rows:
         h = 0.5 * float(p[2])
         lines.append(f"{t:.9f} {p[0]:.9f} {p[1]:.9f} 0 0 0 {math.sin(h):.12f} {math.cos(h):.12f}")
-    path.write_text("\n".join(lines) + ("\n" if lines else ""))
+    atomic_write_text(path, "\n".join(lines) + ("\n" if lines else ""))

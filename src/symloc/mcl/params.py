@@ -23,9 +23,8 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from symloc.errors import ConfigurationError
+from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 
 __all__ = ["LASER_MODELS", "MOTION_MODELS", "AmclParams"]
 
@@ -254,17 +253,12 @@ class AmclParams:
         if isinstance(source, Path) or (
             isinstance(source, str) and "\n" not in source and source.endswith((".yaml", ".yml"))
         ):
-            path = Path(source)
-            try:
-                text = path.read_text()
-            except (OSError, UnicodeDecodeError) as err:
-                raise ConfigurationError(f"nav2 params file {path}: cannot read ({err})") from err
+            text = read_text_bounded(
+                source, MAX_PARAMS_FILE_BYTES, what="the nav2 params file", error=ConfigurationError
+            )
         else:
             text = str(source)
-        try:
-            doc = yaml.safe_load(text)
-        except yaml.YAMLError as err:
-            raise ConfigurationError(f"nav2 params: not valid YAML ({err})") from err
+        doc = load_yaml_bounded(text, where="nav2 params", error=ConfigurationError)
         if not isinstance(doc, dict):
             raise ConfigurationError("nav2 params: expected a mapping with an 'amcl' key")
         block = None

@@ -5,6 +5,10 @@ the node and of bag replay) opens the visual map named by the parameters and cal
 :func:`symloc.localizer.build.build_localizer` with :meth:`NodeParams.settings`, the same
 function the bench, the demo and the experiments build with. The localizer starts from a
 global initialisation (nothing earned).
+
+:func:`check_files` opens the files the parameters name once, so that the node's configure
+(and ``symloc replay``) fails with the reason, as nav2 fails configure for a bad map, instead
+of every map build failing later while the node answers ``lost`` to every scan.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.camera_model import pinhole_matrix
-from symloc.errors import ConfigurationError
+from symloc.errors import ConfigurationError, DatabaseError, SymlocError
 from symloc.grid import OccupancyGrid
 from symloc.localizer import Localizer
 from symloc.localizer.build import build_localizer
@@ -21,7 +25,7 @@ from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.types import KeyframeStore, PlaceStore
 from symloc.ros.params import NodeParams
 
-__all__ = ["MemoryPlaces", "camera_matrix", "make_localizer", "open_places"]
+__all__ = ["MemoryPlaces", "camera_matrix", "check_files", "make_localizer", "open_places"]
 
 
 def camera_matrix(params: NodeParams) -> NDArray[np.float64]:
@@ -71,6 +75,37 @@ def open_places(params: NodeParams) -> PlaceStore:
     )
 
 
+def check_files(params: NodeParams) -> None:
+    """Open the visual map and the vocabulary the parameters name, then close them.
+
+    Raises
+    ------
+    ConfigurationError
+        Naming the parameter (``visual_map`` or ``vocabulary``), the file and why it cannot be
+        used: missing (the visual map in ``localize`` mode), not a file, of a newer schema,
+        damaged or not a symloc file, or made with another vocabulary.
+    """
+    if params.visual_map:
+        try:
+            store = open_places(params)
+        except ConfigurationError:
+            raise
+        except DatabaseError as err:
+            raise ConfigurationError(f"visual_map: {err}") from err
+        except SymlocError as err:  # the vocabulary file (VocabularyFileError, ...)
+            raise ConfigurationError(f"vocabulary: {err}") from err
+        vmap = getattr(store, "visual_map", None)
+        if vmap is not None:
+            vmap.close()
+    elif params.vocabulary:
+        from symloc.vision import Vocabulary
+
+        try:
+            Vocabulary.load(params.vocabulary)
+        except SymlocError as err:
+            raise ConfigurationError(f"vocabulary: {err}") from err
+
+
 def make_localizer(
     grid: OccupancyGrid, params: NodeParams, *, places: PlaceStore | None = None
 ) -> Localizer:
@@ -84,7 +119,19 @@ def make_localizer(
     arrive mirrored (the node does it). A visual map that holds keyframes is also the
     localizer's :class:`~symloc.localizer.types.KeyframeStore`: with ``localizer.decide_here``
     the camera decides where the robot stands (:mod:`symloc.localizer.decide_here`).
+
+    Raises
+    ------
+    ConfigurationError
+        The map has no occupied cell (a 1 x 1 map, a blank canvas: nothing a scan could match;
+        the node then keeps waiting for a usable map) or no free cell, or a file named by the
+        parameters cannot be used (:func:`open_places`).
     """
+    if not np.any(grid.occupied_mask):
+        raise ConfigurationError(
+            "map: no occupied cell (occupancy > occupied_thresh): nothing a scan could match;"
+            " waiting for a map with walls"
+        )
     store = places if places is not None else open_places(params)
     # a visual map with keyframes lets the camera decide where the robot stands
     # (localizer.decide_here); a store without them leaves that to the paper's path

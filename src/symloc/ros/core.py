@@ -7,7 +7,7 @@ with :meth:`NodeCore.offer_scan`: a scan newer than the newest odometry waits fo
 ``transform_tolerance``, as nav2_amcl's tf2 message filter) and is answered by
 :meth:`NodeCore.ready_scans` after the odometry that covers it; :meth:`NodeCore.add_scan` answers
 at once (a simulator or a bag whose odometry comes first). It survives bad input: a
-malformed message, a scan of another length than the first, NaN poses, an unknown image
+malformed message, a scan of another length than the scans used, NaN poses, an unknown image
 encoding, a message in the wrong frame, a map that changes size, stamps that go backwards. Each
 is dropped, counted in :attr:`NodeCore.dropped` under a short reason, and reported through the
 ``warn`` callback (the first few of each reason, then every 100th); localization carries on.
@@ -20,7 +20,11 @@ It also never gets stuck (each case recovers within a few scans, :mod:`symloc.ro
   that persists (an odometry reset) is absorbed, the localizer seeing no motion across it;
 * a stream whose newest stamps turn out to be outliers (its next messages keep coming older)
   forgets them;
-* a map the localizer cannot be built on (no free cell) is not stored;
+* a map the localizer cannot be built on or localize in (no free cell, no occupied cell) is
+  not stored, so it cannot stand in the way of a good map even with ``first_map_only``; scans
+  that find no map say why the last map was refused;
+* a new beam count that :data:`CONFIRM` scans in a row agree on becomes the beam count (the
+  first scan used does not fix it for good);
 * an initial pose outside the map, or with a covariance that is not a covariance of it, is
   rejected at the door;
 * a localizer that fails three scans in a row is rebuilt (global initialisation);
@@ -69,7 +73,13 @@ from symloc.msgs.pose import (
 from symloc.msgs.scan import scan_from_msg
 from symloc.odometry import OdometryReading
 from symloc.ros.assemble import make_localizer
-from symloc.ros.guards import CONFIRM, MAX_ODOM_COORDINATE, OdometryGate, StampGate
+from symloc.ros.guards import (
+    CONFIRM,
+    MAX_ODOM_COORDINATE,
+    BeamCountGate,
+    OdometryGate,
+    StampGate,
+)
 from symloc.ros.pairing import (
     OdometryBuffer,
     Paired,
@@ -179,7 +189,9 @@ class NodeCore:
         self._failures = 0
         self._unused = 0
         self._last_drop = ("", "")
-        self._beams: int | None = None
+        self._beams = BeamCountGate()
+        #: why the last map was refused ("" when none was), told with scans that find no map
+        self._map_refused = ""
         self._last_scan_stamp = -math.inf
         self._image: tuple[float, NDArray[np.uint8]] | None = None
         self._want_image_after: float | None = None
@@ -273,8 +285,8 @@ class NodeCore:
         at the update (a tracked pose, or an operator's pose not yet confirmed) is seeded on
         the new map at the next scan, carried by odometry to its stamp; the claim gate confirms it at the next scans
         when the new map still fits the scan (else the pose is given up and earned again). A
-        map the localizer cannot be built on (no free cell, ...) is dropped and not stored.
-        Returns whether the map is now in use."""
+        map the localizer cannot be built on or localize in (no free cell, no occupied cell,
+        ...) is dropped and not stored. Returns whether the map is now in use."""
         old = self.grid
         if old is not None:
             same_geometry = (
@@ -289,8 +301,11 @@ class NodeCore:
         try:
             localizer = self.factory(grid, self._build_params())
         except SymlocError as err:
-            self.drop("map: unusable", f"{grid.width}x{grid.height} cells: {err}")
+            detail = f"{grid.width}x{grid.height} cells: {err}"
+            self.drop("map: unusable", detail)
+            self._map_refused = "the last map was refused: " + detail
             return False
+        self._map_refused = ""
         seed = self._pose_to_keep()
         self.grid = grid
         self.localizer = localizer
@@ -303,6 +318,11 @@ class NodeCore:
             + (f"; pose kept at {kept}" if kept else "; no pose to keep")
         )
         return True
+
+    @property
+    def map_refused(self) -> str:
+        """Why the last map offered was refused ("" when it was used)."""
+        return self._map_refused
 
     def _build_params(self) -> NodeParams:
         """The parameters the localizer is built with: the laser pose is the mount's."""
@@ -751,9 +771,22 @@ class NodeCore:
         for an upside-down laser), or the outputs of a scan not used."""
         if not self._frame_ok(scan.frame_id, self.params.laser_frame_id, "scan: wrong frame"):
             return self.unused_scan(scan.stamp)
-        if self._beams is not None and len(scan) != self._beams:
-            self.drop("scan: wrong length", f"{len(scan)} beams, expected {self._beams}")
+        expected = self._beams.count
+        verdict = self._beams.check(len(scan))
+        if verdict == "far":
+            self.drop(
+                "scan: wrong length",
+                f"{len(scan)} beams, expected {expected} (the beam count of the scans used);"
+                f" {self._beams.pending} of {CONFIRM} scans in a row of {len(scan)} beams make"
+                " it the new beam count",
+            )
             return self.unused_scan(scan.stamp)
+        if verdict == "rebase":
+            self._recover(
+                "beam count",
+                f"{CONFIRM} scans in a row of {len(scan)} beams, not {expected}: the laser's beam"
+                f" count is now {len(scan)}",
+            )
         if not np.any(scan.valid_mask):
             self.drop(
                 "scan: no valid readings", f"all {len(scan)} readings NaN, inf or out of range"
@@ -774,7 +807,7 @@ class NodeCore:
             self._last_scan_stamp = -math.inf
         self._backwards["scan"] = 0
         if self.localizer is None:
-            self.drop("scan: no map yet")
+            self.drop("scan: no map yet", self._map_refused)
             return self.unused_scan(scan.stamp)
         mount = self._laser_mount(scan.frame_id)
         if isinstance(mount, str):
@@ -800,8 +833,7 @@ class NodeCore:
             return self.unused_scan(scan.stamp)
         self._failures = 0
         self._unused = 0
-        if self._beams is None:
-            self._beams = len(scan)
+        self._beams.used(len(scan))
         self._last_scan_stamp = scan.stamp
         self.scans_used += 1
         if image is not None:

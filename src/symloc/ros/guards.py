@@ -30,7 +30,15 @@ from numpy.typing import NDArray
 
 from symloc.geometry import compose, inverse
 
-__all__ = ["CLOCK_MEMORY", "CONFIRM", "MAX_ODOM_COORDINATE", "OdometryGate", "StampGate", "Verdict"]
+__all__ = [
+    "CLOCK_MEMORY",
+    "CONFIRM",
+    "MAX_ODOM_COORDINATE",
+    "BeamCountGate",
+    "OdometryGate",
+    "StampGate",
+    "Verdict",
+]
 
 #: Far values in a row, agreeing with each other, that make a new reference.
 CONFIRM = 3
@@ -155,3 +163,42 @@ class OdometryGate:
         if self._last is not None:
             self._last = (None, self._last[1])
         self._pending.clear()
+
+
+@dataclass
+class BeamCountGate:
+    """The beam count of the scans: set by the first scan used, replaced when it changes.
+
+    A scan of another length than the scans used is dropped (a truncated or foreign scan), but
+    when :data:`CONFIRM` scans in a row have the same new length (no scan of the old length in
+    between), the laser really changed (a driver restarted with another resolution, or the
+    first scan was the odd one): the new length becomes the beam count. The localizer reads
+    each scan's own geometry, so nothing else has to change.
+    """
+
+    count: int | None = None
+    _candidate: int | None = None
+    _seen: int = 0
+
+    def check(self, n: int) -> Verdict:
+        """Judge a scan of ``n`` beams; ``rebase``: ``n`` is the beam count from now on."""
+        if self.count is None or n == self.count:
+            self._candidate, self._seen = None, 0
+            return "ok"
+        if n != self._candidate:
+            self._candidate, self._seen = n, 0
+        self._seen += 1
+        if self._seen < CONFIRM:
+            return "far"
+        self.count, self._candidate, self._seen = n, None, 0
+        return "rebase"
+
+    def used(self, n: int) -> None:
+        """A scan of ``n`` beams was used: the first one sets the beam count."""
+        if self.count is None:
+            self.count = n
+
+    @property
+    def pending(self) -> int:
+        """Scans in a row of the new length seen so far (0: none)."""
+        return self._seen

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from symloc.errors import ConfigurationError, SymlocError
+from symloc.io.atomic import atomic_write_text
 
 __all__ = [
     "PACKAGES",
@@ -260,19 +261,21 @@ def write_package_source(pkg: InterfacePackage, dest: Path) -> Path:
         target = src / rel
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(definitions_dir() / pkg.name / rel, target)
-    (src / "package.xml").write_text(
+    atomic_write_text(
+        src / "package.xml",
         _PACKAGE_XML.format(
             name=pkg.name,
             depends="\n".join(f"  <depend>{d}</depend>" for d in pkg.dependencies),
-        )
+        ),
     )
-    (src / "CMakeLists.txt").write_text(
+    atomic_write_text(
+        src / "CMakeLists.txt",
         _CMAKE_TEMPLATE.format(
             name=pkg.name,
             find_deps="\n".join(f"find_package({d} REQUIRED)" for d in pkg.dependencies),
             files="\n  ".join(f'"{rel}"' for rel in pkg.files),
             deps=" ".join(pkg.dependencies),
-        )
+        ),
     )
     return src
 
@@ -406,7 +409,7 @@ def setup_interfaces(
     def build_one(pkg: InterfacePackage) -> SetupResult:
         t0 = time.perf_counter()
         _build(pkg, root, work, n_jobs)
-        _stamp_path(root, pkg).write_text(fingerprint(pkg) + "\n")
+        atomic_write_text(_stamp_path(root, pkg), fingerprint(pkg) + "\n")
         if not _loads(pkg):
             raise SetupError(
                 f"{pkg.name}: built and installed into {root}, but {pkg.probe} does not load"

@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import importlib
 import math
-import os
 import uuid
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -56,9 +55,11 @@ from rclpy.parameter import Parameter
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.geometry import wrap_angle
 from symloc.grid.map_io import load_map
+from symloc.io.atomic import atomic_write_text
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
+from symloc.ros.assemble import check_files
 from symloc.ros.core import NodeCore, Outputs
 from symloc.ros.nav2_params import (
     WITHOUT_EFFECT,
@@ -97,13 +98,11 @@ def save_pose(path: str | Path, pose: Any, stamp: float, frame_id: str) -> None:
     """Write ``pose`` (3,) in nav2_amcl's saved-pose format (atomically: a temporary file,
     then a rename), as its ``save_pose_rate`` timer does."""
     x, y, yaw = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
-    target = Path(path)
-    tmp = target.with_name(target.name + ".tmp")
-    tmp.write_text(
+    atomic_write_text(
+        path,
         f"timestamp: {stamp:.9f}\nframe_id: {frame_id}\n"
-        f"x: {x:.6f}\ny: {y:.6f}\nz: 0.000000\nyaw: {yaw:.6f}\n"
+        f"x: {x:.6f}\ny: {y:.6f}\nz: 0.000000\nyaw: {yaw:.6f}\n",
     )
-    os.replace(tmp, target)
 
 
 def load_saved_pose(path: str | Path) -> tuple[np.ndarray[Any, Any], str]:
@@ -238,7 +237,12 @@ class LocalizationNode(LifecycleNode):
         if self.core is None:  # not configured: read at configure
             return SetParametersResult(successful=True)
         try:
-            node_params_from_ros(self._values(changes))
+            new = node_params_from_ros(self._values(changes))
+            if self.params is None or (new.visual_map, new.vocabulary) != (
+                self.params.visual_map,
+                self.params.vocabulary,
+            ):
+                check_files(new)
         except ConfigurationError as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -281,6 +285,13 @@ class LocalizationNode(LifecycleNode):
         except ConfigurationError as err:
             log.error(f"configure failed: {err}")
             return Failed
+        try:
+            # as nav2 fails configure for a bad map: a visual map or vocabulary that cannot
+            # be used fails here, not at every map build while the node answers `lost`
+            check_files(params)
+        except ConfigurationError as err:
+            log.error(f"configure failed: {err}")
+            return Failed
         for name in ("odom_source", "laser_pose_source"):
             if getattr(params, name) == "tf" and self.tf_message is None:
                 other = "topic" if name == "odom_source" else "parameters"
@@ -300,9 +311,13 @@ class LocalizationNode(LifecycleNode):
         self._create_services()
         if params.map_yaml:
             try:
-                self.core.set_map(load_map(params.map_yaml))
+                used = self.core.set_map(load_map(params.map_yaml))
             except SymlocError as err:
                 log.error(f"configure failed: map_yaml: {err}")
+                self._release()
+                return Failed
+            if not used:
+                log.error(f"configure failed: map_yaml: {params.map_yaml}: {self.core.map_refused}")
                 self._release()
                 return Failed
         if not params.always_reset_initial_pose and self._last_pose is not None:

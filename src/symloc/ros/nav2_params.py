@@ -43,9 +43,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from symloc.errors import ConfigurationError
+from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 from symloc.localizer.settings import LocalizerSettings
 from symloc.mcl.params import AmclParams
 from symloc.ros.params import ALIASES, SETTINGS_BLOCKS, NodeParams, split_aliases
@@ -319,10 +318,10 @@ def read_params_block(path: str | Path, node_name: str = "amcl") -> dict[str, An
     the ``ros__parameters`` of the blocks named ``/**``, ``node_name``, ``/node_name`` or
     ``<namespace>/node_name``, later blocks overriding earlier ones, nested mappings joined
     with dots (``initial_pose: {x: 1}`` is ``initial_pose.x``)."""
-    try:
-        doc = yaml.safe_load(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
-        raise ConfigurationError(f"params file {path}: cannot read ({err})") from err
+    text = read_text_bounded(
+        path, MAX_PARAMS_FILE_BYTES, what="the params file", error=ConfigurationError
+    )
+    doc = load_yaml_bounded(text, where=f"params file {path}", error=ConfigurationError)
     if not isinstance(doc, dict):
         raise ConfigurationError(f"params file {path}: expected a mapping of node names")
     out: dict[str, Any] = {}

@@ -42,10 +42,9 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
+from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 from symloc.localizer import LocalizerConfig
 from symloc.localizer.claim import ClaimConfig
 from symloc.localizer.settings import LocalizerSettings
@@ -572,16 +571,12 @@ class NodeParams:
         if isinstance(source, Path) or (
             isinstance(source, str) and "\n" not in source and source.endswith((".yaml", ".yml"))
         ):
-            try:
-                text = Path(source).read_text()
-            except (OSError, UnicodeDecodeError) as err:
-                raise ConfigurationError(f"params file {source}: cannot read ({err})") from err
+            text = read_text_bounded(
+                source, MAX_PARAMS_FILE_BYTES, what="the params file", error=ConfigurationError
+            )
         else:
             text = str(source)
-        try:
-            doc = yaml.safe_load(text)
-        except yaml.YAMLError as err:
-            raise ConfigurationError(f"params: not valid YAML ({err})") from err
+        doc = load_yaml_bounded(text, where="params", error=ConfigurationError)
         if not isinstance(doc, dict):
             raise ConfigurationError(f"params: expected a mapping with a {node_name!r} key")
         for key, value in doc.items():

@@ -23,6 +23,7 @@ from symloc.grid import OccupancyGrid
 from symloc.io.rosbag import BagTopics, bag_topics, read_bag
 from symloc.io.tum import TrajectoryPoint
 from symloc.localizer import Estimate
+from symloc.ros.assemble import check_files
 from symloc.ros.core import LocalizerFactory, NodeCore
 from symloc.ros.pairing import OdometryBuffer
 from symloc.ros.params import NodeParams
@@ -64,7 +65,15 @@ def replay_bag(
     """Replay ``path`` through the node logic; ``grid`` overrides the bag's map topic.
 
     Malformed messages are skipped and counted (``dropped["<topic>: malformed in bag"]``).
+
+    Raises
+    ------
+    ConfigurationError
+        The visual map or vocabulary the parameters name cannot be used
+        (:func:`symloc.ros.assemble.check_files`).
     """
+    if factory is None:
+        check_files(params)  # a bad visual map or vocabulary: one clear error, not 0 poses
     core = NodeCore(params, factory=factory, warn=warn)
     if grid is not None:
         core.set_map(grid)

@@ -83,6 +83,8 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc.errors import WorldError
+from symloc.io.atomic import atomic_write_text
+from symloc.io.bounded import load_yaml_bounded, read_text_bounded
 from symloc.sim.people import PERSON_HEIGHT, PERSON_RADIUS, WALKING_SPEED
 from symloc.sim.rooms import (
     BOARD_HEIGHT,
@@ -122,6 +124,9 @@ _COORD_LIMIT = 1000.0  # |x|, |y| [m]
 _SIZE_LIMIT = 1000.0  # sizes [m]
 _MAX_VERTICES = 200
 _MAX_ITEMS = 200
+#: Largest world file read [bytes]: far more than 200 vertices and 200 items of each kind need,
+#: so a file of a million vertices is refused before it is parsed.
+MAX_WORLD_FILE_BYTES = 2**20
 
 # --------------------------------------------------------------------------------------------
 # reading: small checks that name the key path
@@ -324,14 +329,9 @@ class WorldSpec:
 def load_world_file(path: str | Path) -> WorldSpec:
     """Read and validate a world file (YAML); errors name the file and the key path."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise WorldError(f"{p}: cannot read the world file: {err}") from err
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise WorldError(f"{p}: not valid YAML: {err}") from err
+    # a regular file of bounded size and nesting: parsed whole before any limit applies
+    text = read_text_bounded(p, MAX_WORLD_FILE_BYTES, what="the world file", error=WorldError)
+    doc = load_yaml_bounded(text, where=str(p), error=WorldError)
     return WorldSpec.from_dict(doc, str(p))
 
 
@@ -340,7 +340,7 @@ def save_world_file(spec: WorldSpec, path: str | Path, *, header: str = "") -> P
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     lines = "".join(f"# {line}\n" for line in header.splitlines())
-    p.write_text(lines + spec.to_yaml(), encoding="utf-8")
+    atomic_write_text(p, lines + spec.to_yaml())
     return p
 
 

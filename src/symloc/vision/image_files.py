@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -19,6 +20,7 @@ from symloc.vision.vocabulary import IMAGE_SUFFIXES, Vocabulary
 
 __all__ = [
     "IMAGE_SUFFIXES",
+    "check_photo_size",
     "intrinsics_from_fov",
     "intrinsics_from_values",
     "place_images_from_files",
@@ -53,6 +55,23 @@ def read_image(path: str | Path, *, max_pixels: int = MAX_PHOTO_PIXELS) -> NDArr
     elif img.ndim == 3:
         img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
     return np.ascontiguousarray(img, np.uint8)
+
+
+def check_photo_size(image: NDArray[Any], path: str | Path, extractor: OrbExtractor) -> None:
+    """Refuse a photo with a side below ``extractor.min_image_side`` (ORB finds nothing in it).
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file, its size and the minimum.
+    """
+    h, w = image.shape[:2]
+    side = extractor.min_image_side
+    if min(h, w) < side:
+        raise DataFormatError(
+            f"{path}: {w} x {h} pixels; a photo needs at least {side} x {side} pixels for ORB"
+            " to find a keypoint"
+        )
 
 
 def intrinsics_from_fov(hfov_deg: float, width: int, height: int) -> NDArray[np.float64]:
@@ -111,6 +130,7 @@ def place_images_from_files(
     out = []
     for j, p in enumerate(paths):
         img = read_image(p)
+        check_photo_size(img, p, ext)
         feats = ext.extract(img)
         if len(feats) < min_keypoints:
             raise DataFormatError(

@@ -7,6 +7,7 @@ positions, their scale/orientation attributes, and the 256-bit descriptors packe
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from operator import attrgetter
 from typing import Any
@@ -239,6 +240,15 @@ class OrbExtractor:
             fastThreshold=int(s.fast_threshold),
         )
 
+    @property
+    def min_image_side(self) -> int:
+        """The smallest side [px] of an image in which ORB can find a keypoint: every keypoint
+        lies ``edge_threshold`` pixels inside the border (and OpenCV's pyramid fails on an
+        image one pixel wide); with ``first_level > 0`` the image is enlarged first."""
+        s = self.settings
+        enlarged = float(s.scale_factor) ** int(s.first_level)
+        return max(2, math.ceil((2 * int(s.edge_threshold) + 1) / enlarged))
+
     def extract(self, image: ArrayLike, mask: ArrayLike | None = None) -> OrbFeatures:
         """Detect keypoints and compute descriptors.
 
@@ -252,7 +262,8 @@ class OrbExtractor:
         Returns
         -------
         OrbFeatures
-            At most ``settings.n_features`` features (fewer on a textureless image).
+            At most ``settings.n_features`` features (fewer on a textureless image; none on an
+            image with a side below :attr:`min_image_side`).
         """
         grey = to_grey_uint8(image)
         size = (int(grey.shape[1]), int(grey.shape[0]))
@@ -262,6 +273,8 @@ class OrbExtractor:
             if m.shape != grey.shape:
                 raise DataFormatError(f"mask: expected shape {grey.shape}, got {m.shape}")
             cv_mask = (m != 0).astype(np.uint8) * 255
+        if min(size) < self.min_image_side:
+            return OrbFeatures.empty(size)  # no keypoint fits; OpenCV would fail on 1 px
         threads = int(self.settings.threads)
         previous = cv2.getNumThreads()
         if threads and threads != previous:

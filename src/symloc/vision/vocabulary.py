@@ -428,20 +428,31 @@ class Vocabulary:
         ext = extractor or OrbExtractor()
         docs = []
         unreadable = []
+        too_small = []
+        side = ext.min_image_side
         for p in tqdm(files, desc="ORB features", unit="img", disable=not progress):
             try:
                 img = read_image_file(p, flags=cv2.IMREAD_GRAYSCALE)
             except DataFormatError:
                 unreadable.append(p)
                 continue
+            if min(img.shape[:2]) < side:
+                too_small.append(p)
+                continue
             d = ext.extract(img).descriptors
             if d.shape[0]:
                 docs.append(d)
-        if unreadable:
-            import warnings
+        import warnings
 
+        if unreadable:
             warnings.warn(
                 f"folder: skipped {len(unreadable)} unreadable image file(s), e.g. {unreadable[0]}",
+                stacklevel=2,
+            )
+        if too_small:
+            warnings.warn(
+                f"folder: skipped {len(too_small)} image(s) smaller than {side} x {side} pixels"
+                f" (ORB finds no keypoint in them), e.g. {too_small[0]}",
                 stacklevel=2,
             )
         if not docs:

@@ -53,6 +53,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import VocabularyFileError
+from symloc.io.atomic import atomic_open, atomic_write_text
+from symloc.io.bounded import read_bytes_bounded
 
 __all__ = [
     "MAGIC",
@@ -151,12 +153,9 @@ def write_vocabulary(voc: TreeArrays, path: str | Path, *, compress: bool = Fals
         len(payload),
         b"\x00" * 8,
     )
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_open(path, "wb") as fh:
         fh.write(header)
         fh.write(payload)
-    tmp.replace(path)
 
 
 def read_vocabulary(path: str | Path) -> VocabularyArrays:
@@ -180,17 +179,11 @@ def read_vocabulary(path: str | Path) -> VocabularyArrays:
 
 
 def _read_bounded(path: Path) -> bytes:
-    """The file's bytes, refusing one larger than :data:`MAX_VOCABULARY_BYTES` unread."""
-    try:
-        size = path.stat().st_size
-        if size > MAX_VOCABULARY_BYTES:
-            raise VocabularyFileError(
-                f"{path}: {size:,} bytes; a vocabulary file is at most"
-                f" {MAX_VOCABULARY_BYTES:,} bytes"
-            )
-        return path.read_bytes()
-    except OSError as err:
-        raise VocabularyFileError(f"{path}: cannot read vocabulary file: {err}") from err
+    """The file's bytes: a regular file (not a FIFO or device) of at most
+    :data:`MAX_VOCABULARY_BYTES`, refused unread otherwise."""
+    return read_bytes_bounded(
+        path, MAX_VOCABULARY_BYTES, what="the vocabulary file", error=VocabularyFileError
+    )
 
 
 def _gzip_chunks(data: bytes, name: str) -> Iterator[bytes]:
@@ -491,4 +484,4 @@ def write_dbow2_text(voc: TreeArrays, path: str | Path) -> None:
     for i in range(1, n):
         d = " ".join(map(str, desc[i].tolist()))
         lines.append(f"{int(par[i])} {int(leaf[i])} {d}  {float(voc.weights[i])!r}")
-    Path(path).write_text("\n".join(lines) + "\n")
+    atomic_write_text(path, "\n".join(lines) + "\n")

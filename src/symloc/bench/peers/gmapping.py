@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from symloc._checks import check_array
 from symloc.bench.measure import MeasuredRun, run_measured
 from symloc.errors import SymlocError
+from symloc.io.atomic import atomic_open
 from symloc.scan import LaserScan
 
 __all__ = [
@@ -82,7 +83,7 @@ def write_peer_log(
         else np.asarray(stamps, dtype=np.float64).reshape(len(scans))
     )
     p = Path(path)
-    with p.open("w", encoding="ascii") as fh:
+    with atomic_open(p, "w", encoding="ascii") as fh:
         for scan, pose, t in zip(scans, odo, st, strict=True):
             r = np.where(np.isfinite(scan.ranges), scan.ranges, scan.range_max)
             vals = " ".join(f"{v:.4f}" for v in r)

@@ -22,7 +22,7 @@ def register(subparsers: Any) -> None:
     sub.required = True
     b = sub.add_parser(
         "build",
-        help="SLAM from a simulated exploration run or a CARMEN log; writes map.yaml + map.pgm",
+        help="SLAM from a simulated exploration run or a CARMEN log; writes map.yaml + map.<write id>.pgm",
         description="Run laser SLAM (correlative scan matching against submaps, GTSAM pose graph "
         "with loop closures) and write the map in map_server format plus a PNG of the map and "
         "the trajectory.",
@@ -30,7 +30,7 @@ def register(subparsers: Any) -> None:
     src = b.add_mutually_exclusive_group(required=True)
     src.add_argument("--world", choices=sorted(SIM_WORLDS), help="simulated world to explore")
     src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
-    options.add_out(b, "map build", what="NAME.yaml, NAME.pgm and NAME_trajectory.png")
+    options.add_out(b, "map build", what="NAME.yaml, NAME.<write id>.pgm and NAME_trajectory.png")
     b.add_argument("--name", default="map", help="file stem of the map (default: map)")
     options.add_seed(b)
     b.add_argument(
@@ -70,7 +70,7 @@ def _build(args: argparse.Namespace) -> int:
     from symloc.errors import ConfigurationError
     from symloc.figures.slam import map_trajectory_figure
     from symloc.geometry import compose, inverse
-    from symloc.grid.map_io import save_map
+    from symloc.grid.map_io import read_map_yaml, save_map
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
     from symloc.slam.slam import SlamParams
 
@@ -140,7 +140,5 @@ def _build(args: argparse.Namespace) -> int:
     )
     for w in res.warnings:
         print(f"  warning: {w}")
-    print(
-        f"wrote {yaml_path}, {yaml_path.with_suffix('.pgm' if args.mode != 'scale' else '.png')}, {png}"
-    )
+    print(f"wrote {yaml_path}, {read_map_yaml(yaml_path).image}, {png}")
     return 0

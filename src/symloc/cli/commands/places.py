@@ -308,13 +308,15 @@ def _align_keyframes(args: argparse.Namespace) -> int:
 
 
 def _decide(args: argparse.Namespace) -> int:
-    from symloc.vision.image_files import read_image
+    from symloc.vision.image_files import check_photo_size, read_image
+    from symloc.vision.orb import OrbExtractor
     from symloc.vision.orientation import decide_orientation
 
     with _open(args.db, readonly=True) as vmap:
         place = vmap.place(args.place, with_images=False)
         voc, _ = _vocabulary(args.vocabulary, vmap)
     query = read_image(args.query)
+    check_photo_size(query, args.query, OrbExtractor())
     h, w = query.shape[:2]
     K = _camera_matrix(args, lambda: (w, h))
     d = decide_orientation(query, place, voc, K)

@@ -179,7 +179,9 @@ def _write_scans_csv(path: Path, trajectory: list[Any]) -> None:
     import csv
     import math
 
-    with open(path, "w", newline="") as fh:
+    from symloc.io.atomic import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["stamp", "status", "tracked", "x", "y", "theta_deg", "reason"])
         for p in trajectory:

@@ -204,9 +204,12 @@ def _render(args: argparse.Namespace) -> int:
     print(f"wrote {out}")
     import cv2
 
+    from symloc.io.atomic import atomic_path
+
     camera_png = Path(args.out) / "camera.png"
-    camera_png.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(camera_png), image[:, :, ::-1])
+    with atomic_path(camera_png) as tmp:
+        if not cv2.imwrite(str(tmp), image[:, :, ::-1]):
+            raise OSError(f"{camera_png}: OpenCV cannot write the image")
     print(f"wrote {camera_png}")
     return 0
 

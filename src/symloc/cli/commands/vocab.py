@@ -30,7 +30,7 @@ def register(subparsers: Any) -> None:
         help="train a vocabulary on the ORB features of every image in a folder",
         description="Hierarchical k-means of ORB descriptors (DBoW2's scheme: k-means++ seeding, "
         "bit-wise majority centres, Hamming distance), then word weights. Images are searched "
-        "recursively (png, jpg, bmp, tif, pgm, ppm); unreadable files are skipped with a warning.",
+        "recursively (png, jpg, bmp, tif, pgm, ppm); unreadable files and images too small for ORB (a side under 63 px) are skipped, counted in a warning.",
     )
     t.add_argument("folder", type=Path, help="folder of training images")
     t.add_argument(
