@@ -173,6 +173,11 @@ class SlamParams:
         Nodes between optimisations when new loop closures arrived.
     map_resolution : float
         Cell edge of the final map [m].
+    map_clamp : bool
+        Clamp the final map's log-odds after every scan as the submaps do (False, the
+        default: the final map sums all the evidence, so a wall's cells are judged by all the
+        beams that reached them, not by the last few; see
+        :class:`~symloc.grid.log_odds.LogOddsGrid`).
     table_cache_mb : float
         Memory budget [MiB] of the cached submap likelihood tables (least recently matched
         dropped first; a dropped table is rebuilt from the submap's occupied cells).
@@ -238,6 +243,7 @@ class SlamParams:
     loop_constrained_distance: float = 6.0
     optimize_every: int = 20
     map_resolution: float = 0.05
+    map_clamp: bool = False
     table_cache_mb: float = 16.0
 
     def __post_init__(self) -> None:
@@ -884,7 +890,7 @@ def run_slam(
         max_range=prm.max_range,
         no_return_range=prm.submap.model.no_return_range,
     )
-    grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2])
+    grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2], clamp=prm.map_clamp)
     for i in range(n):
         grid.integrate(poses[i], scans[i])
     occ = grid.to_occupancy_grid(crop_margin=10)
