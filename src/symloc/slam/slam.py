@@ -664,11 +664,15 @@ class _Run:
             # decides every direction it constrains
             cov_s = cov_s + np.eye(3) * 1.0e2
         self.n_gated = 0
-        fused, post = fuse(init, cov_s, res.pose, mc.covariance)
+        # the match's covariance comes from the scan's own points (the body frame): into the
+        # submap frame with the matched heading (a turn inside a submap must not rotate a
+        # corridor's free axis, or a round room's coupled turn-and-slide, into another one)
+        mc_cov_s = _rotate_cov(mc.covariance, float(res.pose[2]))
+        fused, post = fuse(init, cov_s, res.pose, mc_cov_s)
         self.local[i] = compose(target.local_pose, fused)
         self.cov = _rotate_cov(post, theta_s)
         self.gate_cov = self.cov.copy()
-        self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
+        self.match_cov[i] = _rotate_cov(mc_cov_s, theta_s)
         return mc
 
     def add_node(self, i: int, mc: MatchConstraint | None) -> int:
@@ -743,7 +747,7 @@ class _Run:
                     submap=j,
                     node=k,
                     measurement=res.pose,
-                    covariance=_in_body(mc.covariance, res.pose),
+                    covariance=mc.covariance,  # body frame, as the graph's factor wants
                     score=res.score,
                     runner_up=res.runner_up_score,
                     degenerate=mc.degenerate,
