@@ -205,6 +205,15 @@ class LogOddsGrid:
         Initial world position of the corner of cell (0, 0); the grid starts empty (1 x 1).
     chunk : int
         Cells added per side when the grid grows.
+    clamp : bool
+        Clamp every cell to ``[model.l_min, model.l_max]`` after each scan (default), so that
+        the grid can change: its cells follow the latest observations. False sums all the
+        evidence, whatever its order: a cell is then occupied when enough of the beams that
+        reached it ended in it (with the defaults, about a third), which is what a map of a
+        static world built from a whole run should say. Clamped, a wall cell seen head-on
+        hundreds of times is cleared by a few beams that graze it on their way to a farther
+        point of the same wall (a robot driving along a wall), and the wall's inner face
+        erodes to the cells behind it.
     """
 
     def __init__(
@@ -214,12 +223,14 @@ class LogOddsGrid:
         origin_xy: ArrayLike = (0.0, 0.0),
         *,
         chunk: int = 64,
+        clamp: bool = True,
     ) -> None:
         self.resolution = check_positive(resolution, "resolution")
         self.model = model if model is not None else InverseSensorModel()
         self.origin_xy = np.asarray(origin_xy, dtype=np.float64).reshape(2).copy()
         self.values = np.zeros((1, 1), dtype=np.float32)
         self.chunk = int(chunk)
+        self.clamp = bool(clamp)
         self.n_scans = 0
 
     @property
@@ -286,7 +297,8 @@ class LogOddsGrid:
         win = self.values[r0:r1, c0:c1]
         win[mark == 1] += np.float32(self.model.l_miss)
         win[mark == 2] += np.float32(self.model.l_hit)
-        np.clip(win, self.model.l_min, self.model.l_max, out=win)
+        if self.clamp:
+            np.clip(win, self.model.l_min, self.model.l_max, out=win)
         self.n_scans += 1
 
     def probability(self) -> FloatArray:
@@ -296,6 +308,7 @@ class LogOddsGrid:
     def occupancy_percent(self) -> NDArray[np.int8]:
         """``(H, W)`` occupancy 0..100 (rounded), computed in float32 (half the memory)."""
         v = self.values.astype(np.float32, copy=True)
+        np.clip(v, -30.0, 30.0, out=v)  # an unclamped grid's sums: no overflow in exp
         np.negative(v, out=v)
         np.exp(v, out=v)
         v += np.float32(1.0)

@@ -220,6 +220,21 @@ class PoseGraph:
         check = 0.5 * (cov + cov.T) + np.diag(np.array(self.params.loop_check_sigmas) ** 2)
         self._loops.append(_Loop(int(j), int(i), z, np.linalg.inv(check), self.graph.size() - 1))
 
+    def add_map_prior(self, i: int, pose: ArrayLike, covariance: ArrayLike) -> int:
+        """Node ``i`` matched at ``pose`` (3,) in the global map (the final refinement's
+        scan-to-map match), with ``covariance`` (3, 3) in the node's frame and a Huber loss;
+        returns the factor's index (for :meth:`remove_factors`)."""
+        noise = gtsam.noiseModel.Robust.Create(
+            gtsam.noiseModel.mEstimator.Huber.Create(self.params.huber_k), _gaussian(covariance)
+        )
+        self.graph.add(gtsam.PriorFactorPose2(_node(i), _pose2(pose), noise))
+        return int(self.graph.size() - 1)
+
+    def remove_factors(self, indices: list[int]) -> None:
+        """Remove the factors at ``indices`` (from :meth:`add_map_prior`)."""
+        for k in indices:
+            self.graph.remove(int(k))
+
     def loop_chi2(self) -> FloatArray:
         """Squared Mahalanobis residual ``(L,)`` of every loop closure at the current values
         (with ``loop_check_sigmas`` added to its covariance)."""

@@ -38,10 +38,11 @@ likelihood tables are cached within ``table_cache_mb``.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import time
 from collections import OrderedDict, deque
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,7 +55,7 @@ from symloc.geometry import compose, inverse, relative
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.scan import LaserScan
-from symloc.slam.correlative_scan_matching import CsmParams, match_scan
+from symloc.slam.correlative_scan_matching import CsmParams, match_scan, refine_pose
 from symloc.slam.degeneracy import (
     UNCONSTRAINED_SIGMA,
     MatchConstraint,
@@ -63,6 +64,7 @@ from symloc.slam.degeneracy import (
     scan_information,
 )
 from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
+from symloc.slam.map_refinement import density_table, nodes_in_map
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
@@ -70,6 +72,8 @@ from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
 __all__ = ["SlamParams", "SlamResult", "run_slam", "scan_points"]
 
 FloatArray = NDArray[np.float64]
+
+_LOG = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +177,25 @@ class SlamParams:
         Nodes between optimisations when new loop closures arrived.
     map_resolution : float
         Cell edge of the final map [m].
+    refine_rounds : int
+        Rounds of the final scan-to-map refinement (:mod:`symloc.slam.map_refinement`): each
+        node's scan aligned with the point density of all node scans, added to the graph as
+        a prior with the match's covariance, and the graph optimised again (0: off).
+    refine_resolution, refine_sigma : float
+        Cell edge [m] and Gaussian blur [m] of that density.
+    refine_max_cells : int
+        Largest density grid (cells); a larger map is not refined (a warning says so).
+    refine_degeneracy_threshold : float
+        Relative eigenvalue below which a direction of a refined node counts as
+        unconstrained (see ``degeneracy_threshold``; far lower, as many nodes share it).
+    refine_max_correction : tuple of 2 floats
+        ``(m, rad)``: a node whose scan-to-map match moves it farther is left out of that
+        round (a look-alike wall, a scan of people).
+    map_clamp : bool
+        Clamp the final map's log-odds after every scan as the submaps do (False, the
+        default: the final map sums all the evidence, so a wall's cells are judged by all the
+        beams that reached them, not by the last few; see
+        :class:`~symloc.grid.log_odds.LogOddsGrid`).
     table_cache_mb : float
         Memory budget [MiB] of the cached submap likelihood tables (least recently matched
         dropped first; a dropped table is rebuilt from the submap's occupied cells).
@@ -238,6 +261,13 @@ class SlamParams:
     loop_constrained_distance: float = 6.0
     optimize_every: int = 20
     map_resolution: float = 0.05
+    refine_rounds: int = 2
+    refine_resolution: float = 0.025
+    refine_sigma: float = 0.04
+    refine_max_cells: int = 8_000_000
+    refine_degeneracy_threshold: float = 0.002
+    refine_max_correction: tuple[float, float] = (0.25, math.radians(3.0))
+    map_clamp: bool = False
     table_cache_mb: float = 16.0
 
     def __post_init__(self) -> None:
@@ -259,6 +289,14 @@ class SlamParams:
         )
         check_positive(self.motion_filter_angle, "SlamParams.motion_filter_angle", allow_zero=True)
         check_positive(self.map_resolution, "SlamParams.map_resolution")
+        check_positive(self.refine_resolution, "SlamParams.refine_resolution")
+        check_positive(self.refine_sigma, "SlamParams.refine_sigma")
+        for k, v in enumerate(self.refine_max_correction):
+            check_positive(v, f"SlamParams.refine_max_correction[{k}]")
+        for name in ("refine_rounds", "refine_max_cells"):
+            v = getattr(self, name)
+            if int(v) != v or v < 0:
+                raise ConfigurationError(f"SlamParams.{name}: expected an integer >= 0, got {v}")
         check_positive(
             self.loop_resample_distance, "SlamParams.loop_resample_distance", allow_zero=True
         )
@@ -271,6 +309,11 @@ class SlamParams:
             check_positive(v, f"SlamParams.max_loop_window[{k}]")
         for k, v in enumerate(self.loop_ambiguity_radius):
             check_positive(v, f"SlamParams.loop_ambiguity_radius[{k}]", allow_zero=True)
+        if not 0.0 < self.refine_degeneracy_threshold < 1.0:
+            raise ConfigurationError(
+                "SlamParams.refine_degeneracy_threshold: expected a value in (0, 1), got"
+                f" {self.refine_degeneracy_threshold}"
+            )
         if not 0.0 < self.degeneracy_threshold < 1.0:
             raise ConfigurationError(
                 "SlamParams.degeneracy_threshold: expected a value in (0, 1), got"
@@ -658,11 +701,15 @@ class _Run:
             # decides every direction it constrains
             cov_s = cov_s + np.eye(3) * 1.0e2
         self.n_gated = 0
-        fused, post = fuse(init, cov_s, res.pose, mc.covariance)
+        # the match's covariance comes from the scan's own points (the body frame): into the
+        # submap frame with the matched heading (a turn inside a submap must not rotate a
+        # corridor's free axis, or a round room's coupled turn-and-slide, into another one)
+        mc_cov_s = _rotate_cov(mc.covariance, float(res.pose[2]))
+        fused, post = fuse(init, cov_s, res.pose, mc_cov_s)
         self.local[i] = compose(target.local_pose, fused)
         self.cov = _rotate_cov(post, theta_s)
         self.gate_cov = self.cov.copy()
-        self.match_cov[i] = _rotate_cov(mc.covariance, theta_s)
+        self.match_cov[i] = _rotate_cov(mc_cov_s, theta_s)
         return mc
 
     def add_node(self, i: int, mc: MatchConstraint | None) -> int:
@@ -737,7 +784,7 @@ class _Run:
                     submap=j,
                     node=k,
                     measurement=res.pose,
-                    covariance=_in_body(mc.covariance, res.pose),
+                    covariance=mc.covariance,  # body frame, as the graph's factor wants
                     score=res.score,
                     runner_up=res.runner_up_score,
                     degenerate=mc.degenerate,
@@ -753,6 +800,72 @@ class _Run:
                 found = bool(accepted)
             wait = prm.loop_constrained_distance if found else prm.loop_resample_distance
             self.next_search[j] = self.travel + wait
+
+    # -- final refinement ------------------------------------------------------------------
+    def _node_points(self) -> Iterator[FloatArray]:
+        prm = self.prm
+        for i in self.node_scans:
+            yield scan_points(self.scans[i], prm.max_range, prm.voxel)
+
+    def refine_to_map(self) -> bool:
+        """The final scan-to-map refinement (``refine_rounds`` rounds); False when the map
+        is too large to refine."""
+        prm = self.prm
+        graph = self.graph
+        priors: list[int] = []
+        max_t, max_r = prm.refine_max_correction
+        for _ in range(prm.refine_rounds):
+            poses = graph.node_poses()
+
+            def point_sets(p: FloatArray = poses) -> Iterator[FloatArray]:
+                return nodes_in_map(p, self._node_points())
+
+            table = density_table(
+                point_sets,
+                prm.refine_resolution,
+                prm.refine_sigma,
+                max_cells=prm.refine_max_cells,
+            )
+            if table is None:
+                return False
+            graph.remove_factors(priors)
+            priors = []
+            for k, pts in enumerate(self._node_points()):
+                if pts.shape[0] < 10:
+                    continue
+                refined = refine_pose(table, pts, poses[k])
+                step = relative(poses[k], refined)
+                if math.hypot(step[0], step[1]) > max_t or abs(step[2]) > max_r:
+                    continue
+                # the scan's own information, with a far lower degeneracy threshold than the
+                # front end's: a direction a few end points constrain (a corridor's end wall
+                # seen from afar) gets a weak but finite weight, and the many nodes that see it
+                # fix it together
+                info, _ = scan_information(pts)
+                st, sr = self._match_sigmas()
+                mc = analyse_match(
+                    info,
+                    pts,
+                    st,
+                    sigma_rot=sr,
+                    threshold=prm.refine_degeneracy_threshold,
+                    min_strength=prm.min_surface_fraction,
+                )
+                if mc.n_degenerate == 3:
+                    continue
+                priors.append(graph.add_map_prior(k, refined, mc.covariance))
+            graph.optimize()
+            self.n_opt += 1
+            moved = graph.node_poses() - poses
+            _LOG.debug(
+                "scan-to-map refinement: %d of %d nodes matched, nodes moved by median %.4f m,"
+                " max %.4f m",
+                len(priors),
+                len(poses),
+                float(np.median(np.hypot(moved[:, 0], moved[:, 1]))),
+                float(np.max(np.hypot(moved[:, 0], moved[:, 1]))),
+            )
+        return True
 
     def optimize(self, i: int, k: int) -> None:
         """Optimise, drop the loops the graph disagrees with, re-anchor the local frame."""
@@ -862,6 +975,16 @@ def run_slam(
     t2 = time.perf_counter()
     run.verifier.finish()
     run.optimize(run.node_scans[-1], len(run.node_scans) - 1)
+    timings["optimize"] += time.perf_counter() - t2
+    t_ref = time.perf_counter()
+    if not run.refine_to_map():
+        _LOG.warning(
+            "the map is larger than %d cells of %g m: no final scan-to-map refinement",
+            prm.refine_max_cells,
+            prm.refine_resolution,
+        )
+    timings["refine"] = time.perf_counter() - t_ref
+    t2 = time.perf_counter()
     graph = run.graph
     node_poses = graph.node_poses()
     nodes = np.array(run.node_scans, dtype=np.intp)
@@ -884,7 +1007,7 @@ def run_slam(
         max_range=prm.max_range,
         no_return_range=prm.submap.model.no_return_range,
     )
-    grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2])
+    grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2], clamp=prm.map_clamp)
     for i in range(n):
         grid.integrate(poses[i], scans[i])
     occ = grid.to_occupancy_grid(crop_margin=10)
