@@ -24,10 +24,10 @@ from symloc.errors import (
     VocabularyFileError,
     WorldError,
 )
+from symloc.files.bounded import MAX_YAML_ALIASES, MAX_YAML_DEPTH
 from symloc.grid import OccupancyGrid
 from symloc.grid.map_io import load_map, read_map_yaml, save_map
 from symloc.image_header import read_image_file
-from symloc.io.bounded import MAX_YAML_ALIASES, MAX_YAML_DEPTH
 from symloc.mcl.params import AmclParams
 from symloc.ros.nav2_params import read_params_block
 from symloc.ros.params import NodeParams

@@ -35,6 +35,7 @@ ROBOT_SIDE = (
     "vision",
     "localizer",
     "msgs",
+    "files",
     "io",
     "ros",
 )

@@ -201,7 +201,7 @@ def read_image_file(
     """
     import cv2
 
-    from symloc.io.bounded import read_bytes_bounded
+    from symloc.files.bounded import read_bytes_bounded
 
     p = Path(path)
     # a regular file (a FIFO would block) no larger than any image of max_pixels needs

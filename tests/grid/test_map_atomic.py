@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from symloc.errors import MapFileError
+from symloc.files.atomic import atomic_path, atomic_write_text, remove_stale_temporaries
 from symloc.grid import OccupancyGrid, map_io
 from symloc.grid.map_io import load_map, read_map_yaml, save_map
-from symloc.io.atomic import atomic_path, atomic_write_text, remove_stale_temporaries
 
 KILLS = 200
 

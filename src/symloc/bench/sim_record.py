@@ -33,8 +33,8 @@ from symloc._checks import as_rng, check_positive
 from symloc.bench.episode import RobotBody, drive_command
 from symloc.bench.scenario import build_scenario
 from symloc.errors import ConfigurationError
+from symloc.files.atomic import atomic_write_text
 from symloc.grid.map_io import save_map
-from symloc.io.atomic import atomic_write_text
 from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.io.tum import TrajectoryPoint, write_tum
 from symloc.localizer import Estimate, Status

@@ -36,7 +36,7 @@ from symloc.bench.peers.gmapping import GMappingPeer, PeerUnavailableError, writ
 from symloc.bench.slam_metrics import ate
 from symloc.bench.slam_runs import carmen_odometry, log_duration
 from symloc.errors import ConfigurationError
-from symloc.io.atomic import atomic_path
+from symloc.files.atomic import atomic_path
 from symloc.io.carmen import CarmenLog, read_carmen
 
 __all__ = [

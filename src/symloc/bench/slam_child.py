@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from symloc.io.atomic import atomic_path
+from symloc.files.atomic import atomic_path
 
 __all__ = ["main"]
 

@@ -399,7 +399,7 @@ def json_safe(value: Any) -> Any:
 
 def write_json(path: Path, data: Mapping[str, Any]) -> Path:
     """Write ``data`` as standard JSON (no NaN: null) to ``path``, creating its folder."""
-    from symloc.io.atomic import atomic_write_text
+    from symloc.files.atomic import atomic_write_text
 
     text = json.dumps(json_safe(dict(data)), indent=2, sort_keys=True, allow_nan=False)
     return atomic_write_text(Path(path), text + "\n")

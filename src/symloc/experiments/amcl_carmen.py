@@ -48,8 +48,8 @@ from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
 from symloc.bench.shared_data import find_carmen_dir
 from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.files.atomic import atomic_path
 from symloc.geometry import compose, inverse, wrap_angle
-from symloc.io.atomic import atomic_path
 from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [

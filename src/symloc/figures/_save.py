@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from symloc.io.atomic import atomic_path
+from symloc.files.atomic import atomic_path
 
 __all__ = ["save_figure"]
 

@@ -31,11 +31,11 @@ Saving is crash-safe: a reader (or a process killed mid-save) sees the old map o
 never a torn pair. Each save draws a *write id* (8 hex digits) and writes
 
 1. the image as ``<stem>.<write id>.pgm`` (or ``.png``), a name no other save uses, atomically
-   (:mod:`symloc.io.atomic`: a temporary file, fsync, rename);
+   (:mod:`symloc.files.atomic`: a temporary file, fsync, rename);
 2. the YAML last, atomically, naming that image and recording ``write_id: <write id>``;
 3. then removes the image the previous YAML named (when it is one of this map's own images,
    ``<stem>.pgm`` or ``<stem>.<8 hex>.pgm``) and images of saves killed before their YAML
-   (after :data:`~symloc.io.atomic.STALE_SECONDS`).
+   (after :data:`~symloc.files.atomic.STALE_SECONDS`).
 
 The write id is also stored inside the image (a PGM header comment ``# symloc write_id=<id>``
 on the second line; a PNG ``tEXt`` chunk ``symloc_write_id`` right after ``IHDR``). A reader
@@ -65,15 +65,15 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError, MapFileError
-from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
-from symloc.image_header import check_image_size, image_header
-from symloc.io.atomic import (
+from symloc.files.atomic import (
     STALE_SECONDS,
     atomic_write_bytes,
     atomic_write_text,
     remove_stale_temporaries,
 )
-from symloc.io.bounded import load_yaml_bounded, read_text_bounded
+from symloc.files.bounded import load_yaml_bounded, read_text_bounded
+from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
+from symloc.image_header import check_image_size, image_header
 
 __all__ = [
     "MAP_MODES",

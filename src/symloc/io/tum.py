@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from symloc.io.atomic import atomic_write_text
+from symloc.files.atomic import atomic_write_text
 
 __all__ = ["TrajectoryPoint", "write_tum"]
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from symloc.errors import ConfigurationError
-from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
+from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 
 __all__ = ["LASER_MODELS", "MOTION_MODELS", "AmclParams"]
 

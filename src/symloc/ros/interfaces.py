@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from symloc.errors import ConfigurationError, SymlocError
-from symloc.io.atomic import atomic_write_text
+from symloc.files.atomic import atomic_write_text
 
 __all__ = [
     "PACKAGES",

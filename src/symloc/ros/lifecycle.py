@@ -53,9 +53,9 @@ from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackRet
 from rclpy.parameter import Parameter
 
 from symloc.errors import ConfigurationError, SymlocError
+from symloc.files.atomic import atomic_write_text
 from symloc.geometry import wrap_angle
 from symloc.grid.map_io import load_map
-from symloc.io.atomic import atomic_write_text
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg

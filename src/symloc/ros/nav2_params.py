@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from symloc.errors import ConfigurationError
-from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
+from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 from symloc.localizer.settings import LocalizerSettings
 from symloc.mcl.params import AmclParams
 from symloc.ros.params import ALIASES, SETTINGS_BLOCKS, NodeParams, split_aliases

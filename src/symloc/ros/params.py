@@ -44,7 +44,7 @@ from typing import Any
 
 from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
-from symloc.io.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
+from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 from symloc.localizer import LocalizerConfig
 from symloc.localizer.claim import ClaimConfig
 from symloc.localizer.settings import LocalizerSettings

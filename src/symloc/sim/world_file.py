@@ -83,8 +83,8 @@ import yaml
 from numpy.typing import NDArray
 
 from symloc.errors import WorldError
-from symloc.io.atomic import atomic_write_text
-from symloc.io.bounded import load_yaml_bounded, read_text_bounded
+from symloc.files.atomic import atomic_write_text
+from symloc.files.bounded import load_yaml_bounded, read_text_bounded
 from symloc.sim.people import PERSON_HEIGHT, PERSON_RADIUS, WALKING_SPEED
 from symloc.sim.rooms import (
     BOARD_HEIGHT,

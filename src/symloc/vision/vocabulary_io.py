@@ -53,8 +53,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import VocabularyFileError
-from symloc.io.atomic import atomic_open, atomic_write_text
-from symloc.io.bounded import read_bytes_bounded
+from symloc.files.atomic import atomic_open, atomic_write_text
+from symloc.files.bounded import read_bytes_bounded
 
 __all__ = [
     "MAGIC",

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from symloc._checks import check_array
 from symloc.bench.measure import MeasuredRun, run_measured
 from symloc.errors import SymlocError
-from symloc.io.atomic import atomic_open
+from symloc.files.atomic import atomic_open
 from symloc.scan import LaserScan
 
 __all__ = [

@@ -179,7 +179,7 @@ def _write_scans_csv(path: Path, trajectory: list[Any]) -> None:
     import csv
     import math
 
-    from symloc.io.atomic import atomic_open
+    from symloc.files.atomic import atomic_open
 
     with atomic_open(path, "w", newline="") as fh:
         w = csv.writer(fh)

@@ -204,7 +204,7 @@ def _render(args: argparse.Namespace) -> int:
     print(f"wrote {out}")
     import cv2
 
-    from symloc.io.atomic import atomic_path
+    from symloc.files.atomic import atomic_path
 
     camera_png = Path(args.out) / "camera.png"
     with atomic_path(camera_png) as tmp:
