@@ -23,8 +23,10 @@ _LABELS = {
 def outcome_figure(
     summary: Sequence[dict[str, Any]], path: Path, *, by: str = "family", title: str = ""
 ) -> Path:
-    """Stacked shares correct / confident wrong / undetermined per group, one panel per method,
-    with the confident-wrong rate's Wilson 95 % interval as an error bar (right axis)."""
+    """Stacked shares correct / confident wrong / undetermined per group, one panel per method
+    (stacked, so that the methods compare group by group), with the confident-wrong rate's
+    Wilson 95 % interval as an error bar; each panel's title gives the method's overall rates
+    (the ``all`` group) when the summary has them."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -33,14 +35,15 @@ def outcome_figure(
     methods = [m for m in _LABELS if any(r["method"] == m for r in summary)]
     groups = list(dict.fromkeys(str(r[by]) for r in summary))
     fig, axes = plt.subplots(
-        1,
         len(methods),
-        figsize=(max(7.0, 0.55 * len(groups) * len(methods) + 3), 4.8),
+        1,
+        figsize=(max(7.0, 0.6 * len(groups) + 3), 2.4 * len(methods) + 1.4),
+        sharex=True,
         sharey=True,
         squeeze=False,
     )
     x = np.arange(len(groups))
-    for ax, method in zip(axes[0], methods, strict=True):
+    for ax, method in zip(axes[:, 0], methods, strict=True):
         rows = {str(r[by]): r for r in summary if r["method"] == method}
 
         def share(key: str, rows: dict[str, Any] = rows) -> Any:
@@ -70,12 +73,23 @@ def outcome_figure(
             rotation=45,
             ha="right",
         )
-        ax.set_title(_LABELS[method])
+        overall = rows.get("all")
+        ax.set_title(
+            _LABELS[method]
+            + (
+                f": {100 * overall['correct_rate']:.0f} % correct, "
+                f"{100 * overall['confident_wrong_rate']:.1f} % confident wrong, "
+                f"{100 * overall['undetermined_rate']:.0f} % undetermined"
+                if overall is not None
+                else ""
+            ),
+            fontsize=10,
+        )
         ax.set_ylim(0, 1.05)
-    axes[0, 0].set_ylabel("share of trials")
+        ax.set_ylabel("share of trials", fontsize=8)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0, 0.08, 1, 0.95 if title else 1))
+    fig.tight_layout(rect=(0, 0.05, 1, 0.96 if title else 1))
     return save_figure(fig, path, dpi=110)
