@@ -19,6 +19,7 @@ from symloc.localizer.laser_watch import (
     LaserWatch,
 )
 from symloc.localizer.settings import LocalizerSettings
+from symloc.localizer.types import KeyframeStore, Verification
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 from symloc.sim.lidar import simulate_scan
@@ -102,15 +103,31 @@ def test_hypotheses_are_carried_by_odometry() -> None:
     np.testing.assert_allclose(w.poses[0], want)
 
 
-def _drive(boxes: int, scans: int) -> list[tuple[Status, float, str]]:
+class _KeyframesOutOfView:
+    """A visual map whose keyframes no pose of this room sees (the camera is done at once)."""
+
+    def keyframe_count(self) -> int:
+        return 5
+
+    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+        return np.zeros(len(poses), np.int64)
+
+    def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
+        raise AssertionError("no image is asked for: no keyframe is in view")
+
+
+def _drive(
+    boxes: int, scans: int, keyframes: KeyframeStore | None = None
+) -> list[tuple[Status, float, str]]:
     """A TurtleBot3-like robot (laser 3.2 cm behind the base) on a 1 m circle in a 5 m x 3.6 m
-    room, no initial pose and no keyframes: (status, position error [m], reason) per scan."""
+    room, no initial pose and no keyframes (or ``keyframes``): (status, position error [m],
+    reason) per scan."""
     room = rectangle_room(5.0, 3.6)
     world = add_furniture(room, boxes=boxes, rng=3).world if boxes else room.world
     grid = world_to_grid(world, 0.05, free_seeds=[[0.0, -0.4]])
     laser = np.array([-0.032, 0.0, 0.0])
     settings = LocalizerSettings(laser_pose=(-0.032, 0.0, 0.0), seed=1)
-    loc = build_localizer(grid, settings)
+    loc = build_localizer(grid, settings, keyframes=keyframes)
     loc.reset_global()
     rng = np.random.default_rng(4)
     truth, odom = np.array([0.0, -1.4, 0.0]), np.zeros(3)
@@ -138,6 +155,17 @@ def test_one_box_lets_the_laser_decide_as_the_robot_moves() -> None:
     first = tracked[0]
     assert "singled out by the laser" in out[first][2]
     assert all(out[i][0] is Status.AMBIGUOUS for i in range(first))
+    assert max(out[i][1] for i in tracked) < 0.1
+
+
+def test_when_the_camera_cannot_decide_the_laser_watches_as_without_keyframes() -> None:
+    # keyframes exist but none is in view of any hypothesis: the camera is done, and the
+    # laser watches the survivors as the robot moves, as with no keyframes at all
+    out = _drive(boxes=1, scans=60, keyframes=_KeyframesOutOfView())
+    tracked = [i for i, (st, _, _) in enumerate(out) if st is Status.TRACKING]
+    assert tracked, out[-1][2]
+    assert "no keyframe to compare them with in any direction: the laser watches" in out[0][2]
+    assert "singled out by the laser" in out[tracked[0]][2]
     assert max(out[i][1] for i in tracked) < 0.1
 
 

@@ -167,7 +167,9 @@ def test_turns_then_gives_up_and_rests() -> None:
     assert est.request.kind is RequestKind.CAPTURE_IMAGE
     est = _step(loc, pose=[0, 0, heading], image=IMAGE)
     assert est.status is Status.LOST
-    assert est.reason.startswith("not decided here: no hypothesis verified in 2 views")
+    assert est.reason.startswith(
+        "not decided here: 2 poses explain the scan and no hypothesis verified in 2 views"
+    )
     assert loc.decide_counts.gave_up == 1
     assert loc.decide_counts.turns == 1
     # resting: the lost phase has the next scans
@@ -221,7 +223,7 @@ def test_no_keyframe_in_any_direction_gives_up_without_an_image() -> None:
     loc, _ = _localizer(FakeProposer([TRUE, COPY]), kf, fits)
     est = _step(loc)
     assert est.status is Status.LOST
-    assert "no keyframe to compare 2 hypotheses with in any direction" in est.reason
+    assert "no keyframe to compare them with in any direction" in est.reason
     assert not kf.shown
 
 

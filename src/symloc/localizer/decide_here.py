@@ -273,8 +273,12 @@ class DecideHere:
     #: (the camera's map heading minus the odometry heading, unchanged by turns in place)
     axis_votes: list[float] = field(default_factory=list)
     labels: NDArray[np.int64] | None = None
-    #: the survivors watched by the laser as the robot moves (no keyframes to show them to)
+    #: the survivors watched by the laser as the robot moves (no keyframes to show them to,
+    #: or the camera decided nothing)
     watch: LaserWatch | None = None
+    #: why the camera is done here (its views used up, no keyframe in view): the laser's
+    #: proposals go to the watch from then on; empty while the camera may still decide
+    camera_done: str = ""
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         if self.watch is not None:
@@ -335,12 +339,17 @@ class DecideHere:
             return self._axis(ctx, inp, found[1], len(poses))
         keyframes = ctx.keyframes
         if keyframes is None or keyframes.keyframe_count() == 0:
+            self.camera_done = "no keyframes to tell them apart"
+        turn = None
+        if keyframes is not None and not self.camera_done:
+            turn = self._choose_view(ctx, inp, poses, keyframes)
+        if self.camera_done:
+            # the camera cannot decide here: the laser watches the survivors as the robot moves
             if self._can_watch(ctx, inp, hyp):
                 return self._watch(ctx, inp, poses, hyp)
             return self._give_up(
-                ctx, inp, f"{len(poses)} poses explain the scan and no keyframes to tell them apart"
+                ctx, inp, f"{len(poses)} poses explain the scan and {self.camera_done}"
             )
-        turn = self._choose_view(ctx, inp, poses, keyframes)
         if turn is not None:
             return turn
         self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
@@ -379,7 +388,13 @@ class DecideHere:
                 ctx, inp, f"{count} poses along an axis explain the scan and no keyframes"
             )
         shown = [c.fitted.samples(cfg.axis_spacing, cfg.axis_max_hypotheses) for c in classes]
-        turn = self._choose_view(ctx, inp, np.vstack(shown), keyframes)
+        turn = None
+        if not self.camera_done:
+            turn = self._choose_view(ctx, inp, np.vstack(shown), keyframes)
+        if self.camera_done:
+            return self._give_up(
+                ctx, inp, f"{count} poses along an axis explain the scan and {self.camera_done}"
+            )
         if turn is not None:
             return turn
         self.poses = np.vstack(shown)
@@ -403,7 +418,8 @@ class DecideHere:
     ) -> Step | None:
         """None when the image is to be taken here; else the step that turns the robot to
         where more hypotheses of ``poses`` (K, 3) expect keyframes (or away from a heading
-        already imaged), or gives up when no heading left shows any a keyframe."""
+        already imaged). When no heading left shows any a keyframe, the camera is done here
+        (``camera_done`` says why) and None is returned."""
         cfg = ctx.config
         heading = float(inp.odom_pose[2])
         plan = plan_turn(
@@ -414,9 +430,8 @@ class DecideHere:
         )
         if not plan.useful:
             where = "in any direction" if not self.seen else "in a direction not yet seen"
-            return self._give_up(
-                ctx, inp, f"no keyframe to compare {len(poses)} hypotheses with {where}"
-            )
+            self.camera_done = f"no keyframe to compare them with {where}"
+            return None
         here = int(np.count_nonzero(keyframes.expected_counts(poses) > 0))
         seen_here = any(abs(float(angle_diff(h, heading))) <= cfg.decide_turn for h in self.seen)
         if seen_here or here < plan.covered:
@@ -462,7 +477,8 @@ class DecideHere:
         return hyp.complete and usable and not symmetric and place is None
 
     def _watch(self, ctx: Context, inp: Inputs, poses: FloatArray, hyp: Hypotheses) -> Step:
-        """Several survivors and no keyframes: watch them with the laser as the robot moves
+        """Several survivors and the camera cannot decide (no keyframes, none in view, or its
+        views used up): watch them with the laser as the robot moves
         (:mod:`symloc.localizer.laser_watch`), from this scan on."""
         cfg = ctx.config
         ctx.record.decide.watched += 1
@@ -474,8 +490,8 @@ class DecideHere:
         )
         ctx.note(
             f"deciding here: {len(poses)} poses explain the scan "
-            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams) and no "
-            "keyframes: the laser watches them as the robot moves"
+            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams) and "
+            f"{self.camera_done}: the laser watches them as the robot moves"
         )
         return self._watching(ctx, inp, self.watch)
 
@@ -498,7 +514,9 @@ class DecideHere:
         if idle:
             self.watch = None
             return self._give_up(
-                ctx, inp, f"{len(watch.poses)} poses explain the scan, no keyframes, and {idle}"
+                ctx,
+                inp,
+                f"{len(watch.poses)} poses explain the scan, {self.camera_done}, and {idle}",
             )
         if verdict.views >= cfg.decide_watch_views:
             self.watch = None
@@ -507,10 +525,10 @@ class DecideHere:
                 inp,
                 f"{len(watch.poses)} poses still explain the scans after {verdict.views} views "
                 f"(least evidence {verdict.evidence:.2f} of {cfg.decide_watch_evidence:g}) and "
-                "no keyframes to tell them apart",
+                f"{self.camera_done}",
             )
         why = (
-            f"{len(watch.poses)} poses explain the scan and no keyframes: the laser watches them"
+            f"{len(watch.poses)} poses explain the scan and {self.camera_done}: the laser watches them"
             f" as the robot moves (view {verdict.views}, least evidence against a rival "
             f"{max(0.0, verdict.evidence):.2f} of {cfg.decide_watch_evidence:g})"
         )
@@ -692,9 +710,11 @@ class DecideHere:
         """This view decided nothing: the laser proposes again and the view planner turns
         the robot to a heading not yet imaged (or the path gives up)."""
         ctx.note(f"deciding here: {why}")
-        if self.views >= ctx.config.decide_views:
-            return self._give_up(ctx, inp, f"no hypothesis verified in {self.views} views ({why})")
         self.poses, self.odom0, self.classes, self.labels = None, None, None, None
+        if self.views >= ctx.config.decide_views:
+            # the camera is done: the laser proposes once more and watches the survivors as
+            # the robot moves (or the path gives up)
+            self.camera_done = f"no hypothesis verified in {self.views} views ({why})"
         return self._propose(ctx, inp)
 
     # ------------------------------------------------------------------ outcomes
