@@ -22,8 +22,9 @@ copies open) the localizer first tries to decide without driving anywhere:
    pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
    way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
    no image is taken.
-   **Without keyframes** (the search complete, the scan not judged symmetric, no known place
-   where the robot stands), the laser watches the survivors instead as the
+   **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
+   hypothesis, or its ``decide_views`` used up; the search complete, the scan not judged
+   symmetric, no known place where the robot stands), the laser watches the survivors as the
    robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
    every scan, the beams each explains summed over new views. When every rival's deficit
    against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
