@@ -61,7 +61,7 @@ from .axis import (
     sweep,
 )
 from .config import LocalizerConfig
-from .context import Context, Inputs, cov_from_std, lost
+from .context import Context, Inputs, lost, reseed_tracker
 from .phases import Lost, Step, restart
 from .types import AxisPose, Estimate, Hypothesis, Request, Status
 
@@ -161,10 +161,7 @@ def enter_axis(
         why=why,
     )
     phase.carry(ctx, inp.odom_pose)
-    seed_cov = np.maximum(
-        phase.covariance(cfg), cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std)
-    )
-    ctx.tracker.initialize_pose(phase.segment.middle(), seed_cov)
+    reseed_tracker(ctx, phase.segment.middle(), phase.covariance(cfg))
     ctx.record.decide.axis += 1
     ctx.note(
         f"axis: {why}; the position along the axis is not known ({phase.describe()}): "

@@ -196,6 +196,15 @@ def cov_from_std(xy_std: float, theta_std: float) -> FloatArray:
     return np.diag([xy_std**2, xy_std**2, theta_std**2])
 
 
+def reseed_tracker(ctx: Context, pose: FloatArray, cov: FloatArray) -> None:
+    """AMCL reseeded at ``pose`` (3,) with ``cov`` (3, 3) widened to at least the reseed spread
+    (``reseed_xy_std``, ``reseed_theta_std``): a decision's covariance can be tighter than the
+    particle cloud should start."""
+    cfg = ctx.config
+    floor = cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std)
+    ctx.tracker.initialize_pose(pose, np.maximum(cov, floor))
+
+
 def people(direction: int | None) -> str:
     """A direction index (0-based in the library) as people count it (1-based), for logs."""
     return "?" if direction is None else str(int(direction) + 1)

@@ -66,7 +66,7 @@ from symloc.symmetry.order import SymmetryOrder
 from .axis_heading import vote_heading
 from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
 from .claim import Claim, Verdict
-from .context import Context, Inputs, cov_from_std, lost
+from .context import Context, Inputs, cov_from_std, lost, reseed_tracker
 from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .laser_watch import LaserWatch, WatchVerdict
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
@@ -633,42 +633,33 @@ class DecideHere:
                     f"image {self.views}: hypothesis {answer.index + 1} verified, but the laser "
                     f"did not confirm it ({claim.reason})",
                 )
-            assert claim.pose is not None
-            assert claim.covariance is not None
         reason = (
             f"decided here: hypothesis {answer.index + 1} of {len(carried)} verified by the "
             f"camera ({answer.reason}); pose set by the laser"
         )
         if claim is not None:
             return self._claimed(ctx, inp, claim, reason)
-        ctx.record.particles_before_decision = inp.result.particles
-        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
-        ctx.tracker.initialize_pose(pose, reseed_cov)
-        counts.claimed += 1
-        ctx.note(reason + "; AMCL reseeded")
-        estimate = Estimate(
-            status=Status.TRACKING,
-            pose=pose,
-            covariance=cov,
-            hypotheses=(Hypothesis(pose=pose, weight=1.0),),
-            reason=reason,
-        )
-        return estimate, Tracking(restart(ctx))
+        return self._published(ctx, inp, pose, cov, reason)
 
     def _claimed(self, ctx: Context, inp: Inputs, claim: Claim, reason: str) -> Step:
         """The laser claims a decided pose: AMCL is reseeded there, the claim chain starts
         at it (no copy check: the choice among copies is made) and it is published now."""
-        cfg = ctx.config
         gate = ctx.gate
         assert gate is not None
         assert claim.pose is not None
         assert claim.covariance is not None
-        pose, cov = claim.pose, claim.covariance
-        ctx.record.particles_before_decision = inp.result.particles
-        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
-        ctx.tracker.initialize_pose(pose, reseed_cov)
-        gate.anchor(pose, cov, inp.odom_pose)
+        gate.anchor(claim.pose, claim.covariance, inp.odom_pose)
         gate.confirmed(claim, inp.odom_pose)
+        return self._published(ctx, inp, claim.pose, claim.covariance, reason)
+
+    @staticmethod
+    def _published(
+        ctx: Context, inp: Inputs, pose: FloatArray, cov: FloatArray, reason: str
+    ) -> Step:
+        """A decided pose (3,) with its covariance (3, 3) published now: AMCL reseeded there,
+        tracking from this scan."""
+        ctx.record.particles_before_decision = inp.result.particles
+        reseed_tracker(ctx, pose, cov)
         ctx.record.decide.claimed += 1
         ctx.note(reason + "; AMCL reseeded")
         estimate = Estimate(
@@ -685,14 +676,12 @@ class DecideHere:
         to claim: AMCL is reseeded there and the pose becomes the claim chain's start (its
         copy is chosen; :meth:`ClaimGate.step` publishes it once a scan confirms it with the
         gate's precision). Nothing is published at this scan."""
-        cfg = ctx.config
         gate = ctx.gate
         assert gate is not None
         assert claim.pose is not None
         assert claim.covariance is not None
         pose, cov = claim.pose, claim.covariance
-        reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
-        ctx.tracker.initialize_pose(pose, reseed_cov)
+        reseed_tracker(ctx, pose, cov)
         gate.anchor(pose, cov, inp.odom_pose)
         gate.confirmed(claim, inp.odom_pose)
         ctx.record.decide.withheld += 1

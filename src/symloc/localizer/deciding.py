@@ -21,7 +21,7 @@ from symloc.geometry import wrap_angle
 from symloc.scan import LaserScan
 
 from .claim import Verdict
-from .context import Context, Inputs, Outcome, Visit, cov_from_std, people
+from .context import Context, Inputs, Outcome, Visit, cov_from_std, people, reseed_tracker
 from .directions import directions_for
 from .types import Decision, DecisionStatus, Estimate, Hypothesis, Place, Status
 
@@ -124,8 +124,7 @@ def reseed(ctx: Context, inp: Inputs, visit: Visit, place: Place, dec: Decision)
         pose, cov = claim.pose, claim.covariance
         reason += "; pose set by the laser"
     ctx.record.particles_before_decision = inp.result.particles
-    reseed_cov = np.maximum(cov, cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std))
-    ctx.tracker.initialize_pose(pose, reseed_cov)
+    reseed_tracker(ctx, pose, cov)
     ctx.note(
         f"decided direction {people(dec.direction)} of {place.m} at place {place.place_id}"
         f" (offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
