@@ -14,7 +14,13 @@ import numpy as np
 import pytest
 
 from symloc.errors import MapFileError
-from symloc.files.atomic import atomic_path, atomic_write_text, remove_stale_temporaries
+from symloc.files.atomic import (
+    atomic_path,
+    atomic_write_text,
+    remove_stale_temporaries,
+    temporary_name,
+    temporary_target,
+)
 from symloc.grid import OccupancyGrid, map_io
 from symloc.grid.map_io import load_map, read_map_yaml, save_map
 
@@ -248,3 +254,10 @@ def test_stale_temporaries_are_removed_only_when_old(tmp_path: Path) -> None:
     os.utime(stray, (time.time() - 3600, time.time() - 3600))
     assert remove_stale_temporaries(target) == 1
     assert not stray.exists()
+
+
+def test_a_temporary_name_gives_back_its_target_and_nothing_else_does() -> None:
+    for target in ("map.0123abcd.pgm", "map.yaml", "noext"):
+        assert temporary_target(temporary_name(Path("/x") / target).name) == target
+    for other in ("map.pgm", ".map.pgm.0123.tmp.pgm", ".map.pgm.0123456789ab.tmp.png", "x.tmp"):
+        assert temporary_target(other) is None

@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
 import secrets
 import stat
 import time
@@ -46,9 +47,21 @@ log = logging.getLogger(__name__)
 STALE_SECONDS = 600.0
 
 
+_TEMPORARY = re.compile(r"\.(?P<target>.+)\.[0-9a-f]{12}\.tmp(?P<suffix>.*)")
+
+
 def temporary_name(target: Path) -> Path:
     """A fresh temporary path next to ``target``: ``.<name>.<12 hex>.tmp<suffix>``."""
     return target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp{target.suffix}")
+
+
+def temporary_target(name: str) -> str | None:
+    """The file name that a temporary file called ``name`` (as :func:`temporary_name` names
+    them) was to become; None for any other name."""
+    found = _TEMPORARY.fullmatch(name)
+    if found is None or Path(found["target"]).suffix != found["suffix"]:
+        return None
+    return found["target"]
 
 
 def _create_temporary(target: Path) -> tuple[Path, int]:
@@ -171,7 +184,6 @@ def remove_stale_temporaries(
     still running keeps its file.
     """
     folder = target.parent
-    prefix = f".{target.name}."
     now = time.time()
     removed = 0
     try:
@@ -180,7 +192,7 @@ def remove_stale_temporaries(
         return 0
     for entry in entries:
         name = entry.name
-        ours = name.startswith(prefix) and f".tmp{target.suffix}" in name[len(prefix) :]
+        ours = temporary_target(name) == target.name
         if not ours and not (extra is not None and extra(Path(entry.path))):
             continue
         try:

@@ -70,6 +70,7 @@ from symloc.files.atomic import (
     atomic_write_bytes,
     atomic_write_text,
     remove_stale_temporaries,
+    temporary_target,
 )
 from symloc.files.bounded import load_yaml_bounded, read_text_bounded
 from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
@@ -96,7 +97,6 @@ log = logging.getLogger(__name__)
 _WRITE_ID = re.compile(r"[0-9a-f]{8}")
 _PGM_ID = re.compile(rb"P[25]\n# symloc write_id=([0-9a-f]{8})\n")
 _PNG_ID_KEY = b"symloc_write_id\x00"
-_TEMPORARY = re.compile(r"\.(.+)\.[0-9a-f]{12}\.tmp\.(?:pgm|png)")  # atomic.temporary_name
 
 
 @dataclass(frozen=True, slots=True)
@@ -606,14 +606,12 @@ def _remove_replaced(stem: Path, yaml_path: Path, image: Path, previous: Path | 
             log.debug("%s: removed the replaced image %s", yaml_path, previous.name)
 
     def abandoned(candidate: Path) -> bool:
-        name = candidate.name
-        temporary = _TEMPORARY.fullmatch(name)
-        if temporary is not None:  # a temporary file of one of this map's images
-            name = temporary.group(1)
+        target = temporary_target(candidate.name)  # a temporary file: the image it was for
+        name = candidate.name if target is None else target
         return (
             candidate != image
             and _own_image(name, stem.name)
-            and (temporary is not None or name not in (f"{stem.name}.pgm", f"{stem.name}.png"))
+            and (target is not None or name not in (f"{stem.name}.pgm", f"{stem.name}.png"))
         )
 
     remove_stale_temporaries(yaml_path, older_than=STALE_SECONDS, extra=abandoned)
