@@ -51,7 +51,7 @@ pytest.importorskip("diagnostic_msgs.msg", reason="ROS message packages absent")
 pytest.importorskip("std_srvs.srv", reason="std_srvs absent")
 
 from ros_processes import stop_node
-from test_ros_nav2_dropin import _interfaces  # builds tf2_msgs & co. once
+from test_ros_nav2_dropin import _interfaces  # tf2_msgs & co., from `symloc ros setup`
 
 from symloc.geometry import compose, wrap_angle
 from symloc.lidar_spec import LDS01
