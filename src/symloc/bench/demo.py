@@ -29,9 +29,28 @@ from .scenario import (
     run_symloc,
 )
 
-__all__ = ["DemoResult", "DemoStory", "run_demo"]
+__all__ = ["CameraCheck", "DemoResult", "DemoStory", "run_demo"]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass
+class CameraCheck:
+    """The camera's last check of the hypotheses while symloc decided where it stood.
+
+    ``poses`` (K, 3) the hypotheses (map frame) when the image was taken; ``inliers`` (K,)
+    the inliers of each one's best geometric fit against the keyframes it predicts;
+    ``verdicts`` (K,) ``verified`` / ``contradicted`` / ``unknown``; ``chosen`` the index the
+    image decided (None: none); ``min_inliers`` the fewest inliers that verify; ``true_pose``
+    (3,) where the robot really was.
+    """
+
+    poses: FloatArray
+    inliers: NDArray[np.int64]
+    verdicts: list[str]
+    chosen: int | None
+    min_inliers: int
+    true_pose: FloatArray | None
 
 
 @dataclass
@@ -65,6 +84,12 @@ class DemoStory:
     paper_path: FloatArray | None = None
     paper_final: FloatArray | None = None
     paper_summary: str = ""
+    #: the camera's last check while deciding here (None: the camera was not asked)
+    check: CameraCheck | None = None
+    #: symloc's final position [m] and heading [rad] errors (None: no pose)
+    symloc_error: tuple[float, float] | None = None
+    #: one row per method, for the summary panel: (method, verdict, error, travelled)
+    summary: list[tuple[str, str, str, str]] = field(default_factory=list)
 
 
 @dataclass
@@ -115,7 +140,7 @@ class DemoResult:
             ),
             (
                 "plain AMCL: verdict",
-                f"{a.outcome.grade} (error {_err(a.outcome.position_error, a.outcome.heading_error)})",
+                f"{_human(a.outcome.grade)} (error {_err(a.outcome.position_error, a.outcome.heading_error)})",
             ),
         ]
         rows += _symloc_rows("symloc", s)
@@ -136,10 +161,22 @@ def _symloc_rows(name: str, run: SymlocRun) -> list[tuple[str, str]]:
         ),
         (
             f"{name}: verdict",
-            f"{run.outcome.grade} "
+            f"{_human(run.outcome.grade)} "
             f"(error {_err(run.outcome.position_error, run.outcome.heading_error)})",
         ),
     ]
+
+
+def _human(grade: str) -> str:
+    """A grade as the figure spells it (``confident_wrong`` -> ``confident wrong``)."""
+    return grade.replace("_", " ")
+
+
+def _short_err(dpos: float, dth: float) -> str:
+    """Position and heading error as a table cell (``-`` without a pose)."""
+    if not math.isfinite(dpos):
+        return "-"
+    return f"{100 * dpos:.1f} cm, {math.degrees(dth):.0f}\N{DEGREE SIGN}"
 
 
 def _pose_str(p: FloatArray | None) -> str:
@@ -206,7 +243,7 @@ def run_demo(
     query = srun.episode.images[-1] if srun.episode.images else None
     counts = loc.decide_counts
     label = (
-        f"the last image symloc asked for ({len(srun.episode.images)} in all; "
+        f"the last image symloc asked for\n({len(srun.episode.images)} in all; "
         f"{counts.claimed} decision{'s' if counts.claimed != 1 else ''} here)"
         if query is not None
         else "symloc asked for no image"
@@ -230,6 +267,17 @@ def run_demo(
         None,
     )
     candidates = [h.pose for h in amb.hypotheses] if amb is not None else []
+    check = None
+    if loc.last_camera_check is not None:
+        poses, ver = loc.last_camera_check
+        check = CameraCheck(
+            poses=np.asarray(poses, dtype=np.float64).reshape(-1, 3),
+            inliers=np.array([c.inliers for c in ver.checks], dtype=np.int64),
+            verdicts=[c.status for c in ver.checks],
+            chosen=ver.index,
+            min_inliers=int(scen.store.verification.min_inliers),
+            true_pose=srun.episode.image_poses[-1] if srun.episode.image_poses else None,
+        )
     after = None
     tr = loc.tracker
     if getattr(tr, "last", None) is not None:
@@ -237,8 +285,8 @@ def run_demo(
     story = DemoStory(
         title=(
             f"symloc demo: {name} room in a {'textured' if textured else 'plain'} lab, seed {seed}"
-            f" — plain AMCL {arun.outcome.grade}, symloc {srun.outcome.grade}, "
-            f"the paper's path {paper.outcome.grade}"
+            f" — plain AMCL {_human(arun.outcome.grade)}, symloc {_human(srun.outcome.grade)}, "
+            f"the paper's path {_human(paper.outcome.grade)}"
         ),
         grid=scen.grid,
         room_center=np.asarray(scen.room.center),
@@ -249,8 +297,9 @@ def run_demo(
         amcl_true_pose=arun.true_pose,
         amcl_estimate=arun.estimate,
         amcl_summary=(
-            f"{arun.outcome.grade}, {'confident' if arun.converged else 'not confident'}, "
-            f"weight {arun.weight:.2f}"
+            f"{_human(arun.outcome.grade)} ({'confident' if arun.converged else 'not confident'},"
+            f" weight {arun.weight:.2f}): off by "
+            f"{_err(arun.outcome.position_error, arun.outcome.heading_error)}"
         ),
         particles_before=loc.particles_before_decision,
         candidates=candidates,
@@ -258,7 +307,7 @@ def run_demo(
         particles_after=after,
         final_pose=fin.pose,
         symloc_summary=(
-            f"{srun.outcome.grade} after {srun.episode.distance_to_final:.2f} m"
+            f"{_human(srun.outcome.grade)} after {srun.episode.distance_to_final:.2f} m"
             f" / {srun.episode.time_to_final:.1f} s"
         ),
         query_image=query,
@@ -269,9 +318,32 @@ def run_demo(
         paper_path=np.asarray(paper.episode.path),
         paper_final=paper.episode.final.pose,
         paper_summary=(
-            f"{paper.outcome.grade} after "
+            f"{_human(paper.outcome.grade)} after "
             f"{paper.episode.distance_to_final:.2f} m / {paper.episode.time_to_final:.1f} s"
         ),
+        check=check,
+        symloc_error=(
+            (srun.outcome.position_error, srun.outcome.heading_error)
+            if math.isfinite(srun.outcome.position_error)
+            else None
+        ),
+        summary=[
+            (
+                "plain AMCL",
+                _human(arun.outcome.grade),
+                _short_err(arun.outcome.position_error, arun.outcome.heading_error),
+                f"{arun.distance:.1f} m, {arun.time:.0f} s",
+            ),
+            *[
+                (
+                    what,
+                    _human(run.outcome.grade),
+                    _short_err(run.outcome.position_error, run.outcome.heading_error),
+                    f"{run.episode.distance_to_final:.2f} m, {run.episode.time_to_final:.1f} s",
+                )
+                for what, run in (("symloc", srun), ("paper's path", paper))
+            ],
+        ],
     )
     return DemoResult(name, seed, scen, arun, srun, story, paper=paper, timings=timings)
 

@@ -216,14 +216,16 @@ def go_to_centre(
 class Episode:
     """The record of one :func:`run_episode`.
 
-    ``estimates`` every output; ``path`` (T, 3) true poses; ``status_path`` the status at each
-    step; ``query_image`` the image of the decision (if any); ``time`` simulated seconds until
-    the final status; ``distance`` [m] travelled; ``wall_time`` [s] of computation.
+    ``estimates`` every output; ``path`` (T, 3) true poses; ``images`` the images the
+    localizer asked for, ``image_poses`` the true pose (3,) where each was taken; ``time``
+    simulated seconds until the final status; ``distance`` [m] travelled; ``wall_time`` [s] of
+    computation.
     """
 
     estimates: list[Estimate] = field(default_factory=list)
     path: list[FloatArray] = field(default_factory=list)
     images: list[NDArray[np.uint8]] = field(default_factory=list)
+    image_poses: list[FloatArray] = field(default_factory=list)
     commands: list[tuple[float, float]] = field(default_factory=list)
     time: float = 0.0
     distance: float = 0.0
@@ -354,6 +356,7 @@ def run_episode(
             calm = 0
         if est.request is not None and est.request.kind is RequestKind.CAPTURE_IMAGE:
             image = image_at(body.pose)
+            ep.image_poses.append(body.pose)
             continue
         v, w = drive_command(est.status, est.request, scan, cfg, explore_w)
         before = body.pose

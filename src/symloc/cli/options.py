@@ -181,20 +181,22 @@ class _Given(argparse.Action):
         setattr(namespace, self.dest + "_given", True)
 
 
-def add_seed(parser: argparse._ActionsContainer, *, overrides: str = "") -> None:
-    """``--seed N``: an integer >= 0, default 0.
+def add_seed(
+    parser: argparse._ActionsContainer, *, overrides: str = "", default: int = DEFAULT_SEED
+) -> None:
+    """``--seed N``: an integer >= 0, default ``default`` (0).
 
     ``overrides`` names another source of the seed (``"the --params file's seed"``) that is
     used unless ``--seed`` is given; ``args.seed_given`` tells which.
     """
-    default = f"default {DEFAULT_SEED}" if not overrides else f"default {overrides}"
+    said = f"default {default}" if not overrides else f"default {overrides}"
     parser.add_argument(
         "--seed",
         type=nonnegative_int,
-        default=DEFAULT_SEED,
+        default=default,
         action=_Given,
         metavar="N",
-        help=f"random seed, an integer >= 0 ({default}; printed)",
+        help=f"random seed, an integer >= 0 ({said}; printed)",
     )
     parser.set_defaults(seed_given=False)
 
@@ -280,14 +282,15 @@ def add_room(
     *,
     choices: Sequence[str] = ROOMS,
     help: str = "simulated room",
+    default: str = DEFAULT_ROOM,
 ) -> None:
-    """``--room NAME``: a simulated room, default ``square``."""
+    """``--room NAME``: a simulated room, default ``default`` (``square``)."""
     parser.add_argument(
         "--room",
         choices=tuple(choices),
-        default=DEFAULT_ROOM,
+        default=default,
         metavar="NAME",
-        help=f"{help}: {', '.join(choices)} (default {DEFAULT_ROOM})",
+        help=f"{help}: {', '.join(choices)} (default {default})",
     )
 
 

@@ -41,6 +41,7 @@ from .types import (
     SymmetryVerdict,
     Tracker,
     TrackerResult,
+    Verification,
 )
 
 __all__ = ["Context", "DecideCounts", "Inputs", "MappingRun", "Outcome", "Record", "Visit"]
@@ -82,11 +83,14 @@ class DecideCounts:
 class Record:
     """What the phases leave for callers (figures, the demo): the last visual decision that
     reseeded AMCL, AMCL's particles (N, 3) when the ambiguity was declared and just before
-    a decision reseeded it, and the counters of deciding here."""
+    a decision reseeded it, the camera's last check of the hypotheses deciding here (their
+    map poses (K, 3) when the image was taken, and what the image said of each), and the
+    counters of deciding here."""
 
     last_decision: tuple[Place, Decision] | None = None
     particles_at_ambiguity: FloatArray | None = None
     particles_before_decision: FloatArray | None = None
+    last_camera_check: tuple[FloatArray, Verification] | None = None
     decide: DecideCounts = field(default_factory=DecideCounts)
 
 

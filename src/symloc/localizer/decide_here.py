@@ -579,6 +579,7 @@ class DecideHere:
         moved = relative(self.odom0, inp.odom_pose)
         carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
         answer = ctx.keyframes.verify(carried, image)
+        ctx.record.last_camera_check = (carried, answer)
         if self.classes is not None and self.labels is not None:
             vote = vote_heading(carried, self.labels, answer, cfg.axis_min_inliers)
             if vote.winner is None:

@@ -54,6 +54,7 @@ from .types import (
     SymmetryJudge,
     Tracker,
     TrackerResult,
+    Verification,
 )
 
 __all__ = ["Localizer", "LocalizerConfig", "rotated_copies", "symmetry_consistent"]
@@ -235,6 +236,13 @@ class Localizer:
     def particles_before_decision(self) -> FloatArray | None:
         """AMCL's particles (N, 3) just before the visual decision reseeded it (for figures)."""
         return self._ctx.record.particles_before_decision
+
+    @property
+    def last_camera_check(self) -> tuple[FloatArray, Verification] | None:
+        """The camera's last check of the hypotheses while deciding here: their map poses
+        (K, 3) when the image was taken and the :class:`Verification` (one verdict with its
+        inliers per hypothesis, the one chosen if any); None before any (for figures)."""
+        return self._ctx.record.last_camera_check
 
     @property
     def decide_counts(self) -> DecideCounts:

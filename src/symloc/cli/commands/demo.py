@@ -22,6 +22,12 @@ ROOMS = (
     "hallway_40m",
 )
 
+#: The default story: in this room and seed plain AMCL ends confidently on the wrong copy
+#: (rotated 180 deg, 0.76 m off) while symloc decides from one image where it stands. In the
+#: square, plain AMCL's four clusters keep splitting the weight and it is never confident.
+DEFAULT_ROOM = "rectangle"
+DEFAULT_SEED = 1
+
 
 def register(subparsers: Any) -> None:
     """Add ``demo`` to the ``symloc`` command."""
@@ -30,7 +36,9 @@ def register(subparsers: Any) -> None:
         help="kidnapped robot in a symmetric room: plain AMCL vs symloc (table + PNG)",
     )
     where = parser.add_mutually_exclusive_group()
-    options.add_room(where, choices=ROOMS, help="symmetric room inside the lab")
+    options.add_room(
+        where, choices=ROOMS, help="symmetric room inside the lab", default=DEFAULT_ROOM
+    )
     where.add_argument(
         "--world",
         type=Path,
@@ -38,7 +46,7 @@ def register(subparsers: Any) -> None:
         metavar="FILE",
         help="a world file (YAML, see docs/world_files.md) instead of a built-in room",
     )
-    options.add_seed(parser)
+    options.add_seed(parser, default=DEFAULT_SEED)
     options.add_out(parser, "demo", what="the map, visual map and demo_<room>.png")
     parser.add_argument(
         "--untextured", action="store_true", help="plain lab walls (the camera's failure case)"
