@@ -15,7 +15,12 @@ not change the map, so they are off unless ``--keyframes``). Printed per world:
   A 5 cm cell's centre is up to 3.5 cm from the wall it contains, so the same figures for the
   ground-truth raster of the world (:func:`symloc.sim.rasterize.world_to_grid`) are printed as
   the floor (``raster p95/max``);
-- loop closures accepted, and the seconds SLAM took (wall and CPU).
+- loop closures accepted, and the seconds SLAM took (wall and CPU);
+- **the map's own error as SLAM estimates it** (:mod:`symloc.slam.map_error`: its node scans
+  aligned again to the finished map), std and p95 [cm], beside the truth it should cover: at the
+  end, how many worlds' shape p95 (the map's distortion, scale removed) lies within the 95 %
+  radius (2.45 std) of the error the claim gate then assumes (the larger of the estimate and
+  its 2 cm default).
 
 Per family the worst world is printed at the end. Each world's row is appended to
 ``<out>/bench_mapping_trip.partial.jsonl`` as soon as it is done.
@@ -231,6 +236,8 @@ def _row(
         "slam_s": seconds,
         "slam_cpu_s": float(s["slam_cpu_s"]),
         "warnings": list(slam.warnings),
+        "est_std": math.nan if slam.map_error is None else float(slam.map_error.std_xy),
+        "est_p95": math.nan if slam.map_error is None else float(slam.map_error.p95_xy),
     }
 
 
@@ -283,7 +290,7 @@ HEADER = (
     f"{'world':<18}{'scans':>6}  {'pose p95/mean/max [cm]':>23}  {'shape p95':>9}"
     f"  {'face p95/p99/max [cm]':>22}"
     f"  {'cells p95/p99/max [cm]':>22}  {'raster face/cells p95':>21}  {'loops':>5}"
-    f"  {'slam s':>6}  {'cpu s':>6}  {'lidar/map scale':>15}"
+    f"  {'slam s':>6}  {'cpu s':>6}  {'lidar/map scale':>15}  {'est std/p95':>11}"
 )
 
 
@@ -296,6 +303,7 @@ def _fmt(r: dict[str, Any]) -> str:
         f"{100 * r['wall_p95']:>6.1f}{100 * r['wall_p99']:>7.1f}{100 * r['wall_max']:>9.1f}  "
         f"{100 * r['raster_face_p95']:>10.1f}{100 * r['raster_p95']:>11.1f}  {r['loops']:>5}  "
         f"{r['slam_s']:>6.1f}  {r['slam_cpu_s']:>6.1f}  {100 * r['lidar_scale']:>+7.2f}/{100 * (r['map_scale'] - 1):+.2f}%"
+        f"  {100 * r.get('est_std', math.nan):>5.1f}/{100 * r.get('est_p95', math.nan):<5.1f}"
     )
 
 
@@ -363,7 +371,39 @@ def main() -> int:
             f"{100 * p95.max():.1f} cm; {int(np.sum(p95 <= 0.02))} at most 2 cm; SLAM seconds "
             f"total {sum(r['slam_s'] for r in rows):.0f}"
         )
+        _coverage(rows)
     return 0
+
+
+def _coverage(rows: list[dict[str, Any]], default_std: float = 0.02) -> None:
+    """How often the error the claim gate assumes covers the map's distortion (shape p95)."""
+    est = np.array([r.get("est_std", math.nan) for r in rows])
+    shape = np.array([r["shape_p95"] for r in rows])
+    assumed = np.fmax(est, default_std)  # NaN estimate: the default
+    covered = shape <= 2.45 * assumed
+    print(
+        f"# map error: estimated std median {100 * np.nanmedian(est):.1f} cm, max"
+        f" {100 * np.nanmax(est):.1f} cm; shape p95 within 2.45 x the assumed std (larger of the"
+        f" estimate and {100 * default_std:.0f} cm) in {int(covered.sum())} of {len(rows)} worlds"
+        f" (with the {100 * default_std:.0f} cm default alone:"
+        f" {int(np.sum(shape <= 2.45 * default_std))}); Spearman rank correlation of the"
+        f" estimate with shape p95 {_spearman(est, shape):.2f}"
+    )
+    for r, ok in zip(rows, covered, strict=True):
+        if not ok:
+            print(
+                f"#   not covered: {r['world']} shape p95 {100 * r['shape_p95']:.1f} cm,"
+                f" estimated std {100 * r.get('est_std', math.nan):.1f} cm"
+            )
+
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> float:
+    ok = np.isfinite(a) & np.isfinite(b)
+    if ok.sum() < 3:
+        return math.nan
+    ra = np.argsort(np.argsort(a[ok]))
+    rb = np.argsort(np.argsort(b[ok]))
+    return float(np.corrcoef(ra, rb)[0, 1])
 
 
 if __name__ == "__main__":

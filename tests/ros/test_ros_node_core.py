@@ -312,6 +312,24 @@ def test_every_new_map_rebuilds_and_keeps_the_pose() -> None:
     assert len(built) == 3
 
 
+def test_a_map_file_s_own_error_reaches_the_claim_gate() -> None:
+    """A map whose file declares its error (``symloc_slam.map_error``) raises the claim gate's
+    map error to it; the next map, from the topic, declares none and the default is back."""
+    stds: list[float] = []
+
+    def factory(grid, params):  # type: ignore[no-untyped-def]
+        stds.append(params.claim.map_std_xy)
+        return ScriptedLocalizer([TRACK])
+
+    core = NodeCore(NodeParams(), factory=factory)
+    grid = OccupancyGrid(np.zeros((20, 20), np.int8), 0.1)
+    assert core.set_map(grid, map_std_xy=0.07)
+    assert core.set_map(OccupancyGrid(np.zeros((30, 20), np.int8), 0.1))
+    assert core.set_map(OccupancyGrid(np.zeros((30, 30), np.int8), 0.1), map_std_xy=0.001)
+    default = NodeParams().claim.map_std_xy
+    assert stds == [pytest.approx(0.07), pytest.approx(default), pytest.approx(default)]
+
+
 def test_warnings_are_rate_limited() -> None:
     core, _, warns = _core([LOST])
     for _ in range(250):

@@ -174,6 +174,9 @@ class Scenario:
     workdir: Path
     notes: list[str] = field(default_factory=list)
     slam_seconds: float = 0.0
+    #: the map's own error [m] (std) as SLAM estimated it (None: not estimated; the claim gate
+    #: then assumes its default, ``ClaimConfig.map_std_xy``)
+    map_std_xy: float | None = None
     #: 95th percentile [m] of the mapping trip's SLAM pose error in the map frame (NaN: raster)
     slam_error_p95: float = math.nan
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
@@ -234,7 +237,12 @@ class Scenario:
         if config is not None:
             settings = dataclasses.replace(settings, localizer=config)
         return build_localizer(
-            self.grid, settings, places=self.store, rng=rng, keyframes=self.store
+            self.grid,
+            settings,
+            places=self.store,
+            rng=rng,
+            keyframes=self.store,
+            map_std_xy=self.map_std_xy,
         )
 
     def map_symmetries(self) -> list[Any]:
@@ -543,6 +551,12 @@ def _map_with_slam(
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
+    if slam.map_error is not None:
+        scen.map_std_xy = slam.map_error.std_xy
+        scen.notes.append(
+            f"mapping trip: the map's own error (SLAM's estimate) {100 * slam.map_error.std_xy:.1f}"
+            f" cm std, p95 {100 * slam.map_error.p95_xy:.1f} cm over {slam.map_error.nodes} nodes"
+        )
     # The truth is expressed in the SLAM map frame by the rigid transform that best fits the
     # whole trip (least squares over its positions, as ATE aligns trajectories), not by the
     # first pose alone: anchoring at the first pose would put all the drift SLAM left at the

@@ -119,6 +119,10 @@ class MapMetadata:
     width, height : int or None
         Optional image size in pixels (not a map_server key; checked against the image when
         present).
+    map_std_xy : float or None
+        The map's own position error [m] (std) as the SLAM that built it estimated it
+        (``symloc_slam: {map_error: {std_xy: ...}}``, written by ``symloc map build``; not a
+        map_server key). None when the file does not say.
     """
 
     image: Path
@@ -131,6 +135,7 @@ class MapMetadata:
     width: int | None = None
     height: int | None = None
     write_id: str | None = None
+    map_std_xy: float | None = None
 
 
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -246,6 +251,7 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     img = Path(image)
     if not img.is_absolute():
         img = p.parent / img
+    map_std_xy = _map_error(doc, p)
     return MapMetadata(
         image=img,
         resolution=resolution,
@@ -257,7 +263,29 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         width=size["width"],
         height=size["height"],
         write_id=write_id,
+        map_std_xy=map_std_xy,
     )
+
+
+#: The largest map error [m] a map file may declare (a map off by more is not a map).
+_MAX_MAP_STD = 1.0
+
+
+def _map_error(doc: dict[str, Any], path: Path) -> float | None:
+    """``symloc_slam.map_error.std_xy`` [m] of a map YAML ``doc``, or None when absent."""
+    slam = doc.get("symloc_slam")
+    if slam is None:
+        return None
+    err = slam.get("map_error") if isinstance(slam, dict) else None
+    if err is None:
+        return None
+    value = _as_number(err.get("std_xy")) if isinstance(err, dict) else None
+    if value is None or not math.isfinite(value) or not 0.0 <= value <= _MAX_MAP_STD:
+        raise MapFileError(
+            f"{path}: field 'symloc_slam.map_error.std_xy' must be a number of metres in"
+            f" 0..{_MAX_MAP_STD:g}, got {err!r}"
+        )
+    return float(value)
 
 
 def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:

@@ -12,6 +12,10 @@ what ``symloc ros node`` runs when both are given the same settings.
 
 from __future__ import annotations
 
+import dataclasses
+import logging
+import math
+
 import numpy as np
 
 from symloc.grid import OccupancyGrid
@@ -22,7 +26,7 @@ from symloc.localizer.adapters import (
     GridScorer,
     ReportJudge,
 )
-from symloc.localizer.claim import ClaimGate
+from symloc.localizer.claim import ClaimConfig, ClaimGate
 from symloc.localizer.localizer import Localizer
 from symloc.localizer.map_symmetry import PARTIAL_OVERLAP, MapSymmetry, map_symmetries
 from symloc.localizer.places import MemoryPlaces
@@ -33,6 +37,8 @@ from symloc.mcl.global_search import GlobalSearch
 from symloc.symmetry import judge_symmetry
 
 __all__ = ["build_localizer", "grid_symmetries"]
+
+logger = logging.getLogger(__name__)
 
 
 def grid_symmetries(grid: OccupancyGrid) -> list[MapSymmetry]:
@@ -54,6 +60,7 @@ def build_localizer(
     places: PlaceStore | None = None,
     rng: np.random.Generator | None = None,
     keyframes: KeyframeStore | None = None,
+    map_std_xy: float | None = None,
 ) -> Localizer:
     """The localizer on ``grid`` configured by ``settings``; not initialised yet.
 
@@ -75,6 +82,12 @@ def build_localizer(
         The visual map's keyframes (a :class:`~symloc.localizer.vision_store.VisionPlaceStore`
         is one), for deciding where the robot stands (``settings.localizer.decide_here``, which
         also builds the global scan-to-map search on ``grid``). Unused when that is off.
+    map_std_xy : float, optional
+        The map's own position error [m] (std) as the SLAM that built it estimated it
+        (:mod:`symloc.slam.map_error`; a saved map's ``symloc_slam.map_error.std_xy``,
+        :func:`symloc.grid.map_io.read_map_error`). The claim gate adds the larger of it and
+        ``settings.claim.map_std_xy`` to every match's covariance, so on a map that disagrees
+        with itself claims are withheld rather than wrong.
 
     The caller starts it: :meth:`Localizer.reset_global` (lost, AMCL over the whole map) or
     :meth:`Localizer.set_pose`. ``settings.laser_pose`` goes to every part that reads scans:
@@ -99,9 +112,23 @@ def build_localizer(
         scorer=GridScorer(fields, laser_pose=laser),
         known_places=known,
         map_symmetries=grid_symmetries(grid),
-        claim_gate=ClaimGate(fields.surface(), config=settings.claim, laser_pose=laser),
+        claim_gate=ClaimGate(
+            fields.surface(), config=_with_map_error(settings.claim, map_std_xy), laser_pose=laser
+        ),
         laser_pose=laser,
         proposer=proposer,
         keyframes=keyframes if decide else None,
         grid=grid,
     )
+
+
+def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig:
+    """``claim`` with its map error raised to ``map_std_xy`` [m] when that is larger."""
+    if map_std_xy is None or not math.isfinite(map_std_xy) or map_std_xy <= claim.map_std_xy:
+        return claim
+    logger.info(
+        "claim gate: the map's own error %.3f m (std) replaces the default %.3f m",
+        map_std_xy,
+        claim.map_std_xy,
+    )
+    return dataclasses.replace(claim, map_std_xy=float(map_std_xy))

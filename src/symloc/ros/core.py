@@ -179,6 +179,7 @@ class NodeCore:
         self.recovered: Counter[str] = Counter()
         self.received: Counter[str] = Counter()
         self.grid: OccupancyGrid | None = None
+        self._map_std_xy: float | None = None  # the map's own error, as its file declares it
         self.localizer: Localizer | None = None
         self.scans_used = 0
         self.last: Outputs | None = None
@@ -279,14 +280,18 @@ class NodeCore:
             return
         self.set_map(grid)
 
-    def set_map(self, grid: OccupancyGrid) -> bool:
+    def set_map(self, grid: OccupancyGrid, *, map_std_xy: float | None = None) -> bool:
         """Use ``grid`` as nav2_amcl does: the first usable map builds the localizer, and every
         new map after it rebuilds the localizer on it unless ``first_map_only``. A pose held
         at the update (a tracked pose, or an operator's pose not yet confirmed) is seeded on
         the new map at the next scan, carried by odometry to its stamp; the claim gate confirms it at the next scans
         when the new map still fits the scan (else the pose is given up and earned again). A
         map the localizer cannot be built on or localize in (no free cell, no occupied cell,
-        ...) is dropped and not stored. Returns whether the map is now in use."""
+        ...) is dropped and not stored. Returns whether the map is now in use.
+
+        ``map_std_xy`` [m]: the map's own error as its file declares it
+        (:attr:`symloc.grid.map_io.MapMetadata.map_std_xy`); the claim gate assumes the larger
+        of it and ``claim.map_std_xy``. A map from the topic declares none."""
         old = self.grid
         if old is not None:
             same_geometry = (
@@ -298,9 +303,11 @@ class NodeCore:
                 return True  # re-published (transient local): nothing new
             if self.params.first_map_only:
                 return False  # nav2's first_map_only: later maps are ignored
+        previous_std, self._map_std_xy = self._map_std_xy, map_std_xy
         try:
             localizer = self.factory(grid, self._build_params())
         except SymlocError as err:
+            self._map_std_xy = previous_std
             detail = f"{grid.width}x{grid.height} cells: {err}"
             self.drop("map: unusable", detail)
             self._map_refused = "the last map was refused: " + detail
@@ -325,10 +332,17 @@ class NodeCore:
         return self._map_refused
 
     def _build_params(self) -> NodeParams:
-        """The parameters the localizer is built with: the laser pose is the mount's."""
+        """The parameters the localizer is built with: the laser pose is the mount's, and the
+        claim gate's map error at least the map's own (:meth:`set_map`)."""
+        params = self.params
+        std = self._map_std_xy
+        if std is not None and std > params.claim.map_std_xy:
+            params = dataclasses.replace(
+                params, claim=dataclasses.replace(params.claim, map_std_xy=std)
+            )
         if self.mount is None:
-            return self.params
-        return dataclasses.replace(self.params, laser_pose=tuple(float(v) for v in self.mount.pose))
+            return params
+        return dataclasses.replace(params, laser_pose=tuple(float(v) for v in self.mount.pose))
 
     @staticmethod
     def _map_odom(params: NodeParams) -> MapToOdom:

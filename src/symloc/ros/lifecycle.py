@@ -55,7 +55,7 @@ from rclpy.parameter import Parameter
 from symloc.errors import ConfigurationError, SymlocError
 from symloc.files.atomic import atomic_write_text
 from symloc.geometry import wrap_angle
-from symloc.grid.map_io import load_map
+from symloc.grid.map_io import load_map, read_map_yaml
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
@@ -311,7 +311,10 @@ class LocalizationNode(LifecycleNode):
         self._create_services()
         if params.map_yaml:
             try:
-                used = self.core.set_map(load_map(params.map_yaml))
+                used = self.core.set_map(
+                    load_map(params.map_yaml),
+                    map_std_xy=read_map_yaml(params.map_yaml).map_std_xy,
+                )
             except SymlocError as err:
                 log.error(f"configure failed: map_yaml: {err}")
                 self._release()

@@ -64,6 +64,7 @@ from symloc.slam.degeneracy import (
     scan_information,
 )
 from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
+from symloc.slam.map_error import MapError, estimate_map_error
 from symloc.slam.map_refinement import density_table, nodes_in_map
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
@@ -196,6 +197,13 @@ class SlamParams:
         default: the final map sums all the evidence, so a wall's cells are judged by all the
         beams that reached them, not by the last few; see
         :class:`~symloc.grid.log_odds.LogOddsGrid`).
+    map_error : bool
+        Estimate the final map's own error from its node scans aligned again to it
+        (:mod:`symloc.slam.map_error`; :attr:`SlamResult.map_error`, written beside a saved
+        map) and move the map by the shift those alignments share, so that a scan aligned to
+        the map lands where SLAM put it: the surface a localizer aligns to lies on a wall
+        band's centre line, up to half a cell from the hits that drew it (2-3 cm at 5 cm
+        cells). Skipped on maps above ``refine_max_cells`` cells.
     table_cache_mb : float
         Memory budget [MiB] of the cached submap likelihood tables (least recently matched
         dropped first; a dropped table is rebuilt from the submap's occupied cells).
@@ -268,6 +276,7 @@ class SlamParams:
     refine_degeneracy_threshold: float = 0.002
     refine_max_correction: tuple[float, float] = (0.25, math.radians(3.0))
     map_clamp: bool = False
+    map_error: bool = True
     table_cache_mb: float = 16.0
 
     def __post_init__(self) -> None:
@@ -394,6 +403,9 @@ class SlamResult:
         not matched).
     gated_scans : ndarray of shape (N,)
         Scans whose match the odometry gate refused (they followed the odometry).
+    map_error : MapError or None
+        The map's own error estimated from its node scans (:mod:`symloc.slam.map_error`;
+        None when not estimated); :attr:`grid` was already moved by its ``shift``.
     """
 
     poses: FloatArray
@@ -414,6 +426,7 @@ class SlamResult:
     odometry_model: dict[str, float | bool | int] = field(default_factory=dict)
     match_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     gated_scans: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
+    map_error: MapError | None = None
 
     @property
     def doubtful(self) -> bool:
@@ -427,6 +440,8 @@ class SlamResult:
         meta: dict[str, object] = {k: s[k] for k in keep}
         meta["doubtful"] = self.doubtful
         meta["warnings"] = list(self.warnings)
+        if self.map_error is not None:
+            meta["map_error"] = self.map_error.as_dict()
         return {"symloc_slam": meta}
 
     def summary(self) -> dict[str, object]:
@@ -451,6 +466,7 @@ class SlamResult:
             "odometry_model": dict(self.odometry_model),
             "doubtful": self.doubtful,
             "warnings": list(self.warnings),
+            "map_error": None if self.map_error is None else self.map_error.as_dict(),
         }
 
 
@@ -1012,6 +1028,22 @@ def run_slam(
         grid.integrate(poses[i], scans[i])
     occ = grid.to_occupancy_grid(crop_margin=10)
     timings["map"] = time.perf_counter() - t3
+    map_error = None
+    if prm.map_error and occ.data.size <= prm.refine_max_cells:
+        t4 = time.perf_counter()
+        map_error = estimate_map_error(occ, [scans[int(i)] for i in nodes], poses[nodes])
+        if map_error is not None:
+            origin = np.asarray(occ.origin, dtype=np.float64).copy()
+            origin[:2] -= map_error.shift
+            occ = dataclasses.replace(occ, origin=origin)
+            _LOG.info(
+                "map error: std %.3f m (p95 %.3f m over %d nodes); map moved by %s m",
+                map_error.std_xy,
+                map_error.p95_xy,
+                map_error.nodes,
+                np.round(-map_error.shift, 4),
+            )
+        timings["map_error"] = time.perf_counter() - t4
     timings["total"] = time.perf_counter() - t_start
     timings["total_cpu"] = time.process_time() - cpu_start
     rejected = [(c.submap, int(nodes[c.node]), c.reason) for c in run.verifier.rejected]
@@ -1035,4 +1067,5 @@ def run_slam(
         odometry_model=run.model.summary(),
         match_poses=run.match_pose,
         gated_scans=run.gated,
+        map_error=map_error,
     )

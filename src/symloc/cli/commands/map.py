@@ -140,5 +140,14 @@ def _build(args: argparse.Namespace) -> int:
     )
     for w in res.warnings:
         print(f"  warning: {w}")
+    me = res.map_error
+    if me is not None:
+        print(
+            f"map's own error (its node scans aligned again to it): std {100 * me.std_xy:.1f} cm,"
+            f" p95 {100 * me.p95_xy:.1f} cm over {me.nodes} nodes; in the YAML as"
+            " symloc_slam.map_error (the localizer's claim gate reads it)"
+        )
+    else:
+        print("map's own error: not estimated (too few usable scans, or a map too large)")
     print(f"wrote {yaml_path}, {read_map_yaml(yaml_path).image}, {png}")
     return 0
