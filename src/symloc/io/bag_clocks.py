@@ -8,12 +8,14 @@ stamping with its device clock from boot, a camera with a clock that started in 
 whose odometry comes from another computer that is not synchronised. Then the scans' stamps
 and the odometry's are seconds or decades apart, and no scan finds the odometry at its stamp.
 
-:func:`stream_lags` measures each stream's usual lag (the median over its messages, so bursts
-and jitter do not move it); :func:`clock_offsets` tells the streams whose lag differs from the
-odometry's by more than ``tolerance`` (more than a transport latency can explain: another
-clock) and the offset that puts their stamps on the odometry's clock. The accuracy of such a
-re-stamping is the jitter of the recording's latency (milliseconds on one machine), so it is
-reported, never silent.
+:func:`stream_lags` measures each stream's lag behind the recorder: the 90th percentile of
+``stamp - log_time`` over its messages, i.e. the messages that arrived fastest (the minimum-delay
+filter of clock synchronisation: a message held up in a burst only ever arrives later, so the
+fastest ones show the clock offset best; the top tenth is left out against outliers).
+:func:`clock_offsets` tells the streams whose lag differs from the odometry's by more than
+``tolerance`` (more than a transport latency can explain: another clock) and the offset that
+puts their stamps on the odometry's clock. The accuracy of such a re-stamping is about the
+spread of the two streams' latencies, so it is reported, never silent.
 """
 
 from __future__ import annotations
@@ -33,8 +35,9 @@ _STREAMS = ("scan", "image")
 
 
 def stream_lags(messages: Iterable[BagMessage]) -> dict[str, tuple[float, float, int]]:
-    """Per kind (``scan``, ``odom``, ``image``): the median lag ``stamp - log_time`` [s], the
-    spread of the lags around it (median absolute deviation) [s], and the message count."""
+    """Per kind (``scan``, ``odom``, ``image``): the lag ``stamp - log_time`` [s] of the
+    fastest messages (90th percentile), the spread of the lags (90th minus 10th percentile)
+    [s], and the message count."""
     lags: dict[str, list[float]] = defaultdict(list)
     for m in messages:
         if m.kind in ("scan", "odom", "image"):
@@ -42,8 +45,8 @@ def stream_lags(messages: Iterable[BagMessage]) -> dict[str, tuple[float, float,
     out: dict[str, tuple[float, float, int]] = {}
     for kind, values in lags.items():
         a = np.asarray(values, dtype=np.float64)
-        med = float(np.median(a))
-        out[kind] = (med, float(np.median(np.abs(a - med))), int(a.size))
+        hi, lo = np.percentile(a, [90.0, 10.0])
+        out[kind] = (float(hi), float(hi - lo), int(a.size))
     return out
 
 
@@ -84,10 +87,11 @@ def clock_offsets(lags: dict[str, tuple[float, float, int]], tolerance: float) -
         if abs(lag - ref) <= tolerance:
             continue
         offsets[kind] = ref - lag
+        accuracy = max(spread, lags["odom"][1], 1e-3)
         notes.append(
-            f"{kind} stamps are {lag - ref:+.3f} s from the odometry's (median over {n}"
-            f" messages of stamp - log time): another clock; re-stamped onto the odometry's"
-            f" clock by the recording's log times (accuracy about {max(spread, 1e-3):.3f} s,"
-            " the spread of the recording latency)"
+            f"{kind} stamps are {lag - ref:+.3f} s from the odometry's (stamp - log time of the"
+            f" fastest of {n} messages): another clock; re-stamped onto the odometry's clock by"
+            f" the recording's log times (accuracy about {accuracy:.3f} s, the spread of the"
+            " recording latency)"
         )
     return ClockOffsets(offsets, notes)

@@ -33,6 +33,7 @@ from symloc.io.bag_clocks import ClockOffsets, clock_offsets, stream_lags
 from symloc.io.rosbag import BagMessage, BagTopics, bag_topics, read_bag
 from symloc.io.tum import TrajectoryPoint
 from symloc.localizer import Estimate
+from symloc.odometry import OdometryReading
 from symloc.ros.assemble import check_files
 from symloc.ros.core import LocalizerFactory, NodeCore, Outputs
 from symloc.ros.pairing import OdometryBuffer
@@ -143,7 +144,9 @@ def replay_verdict(res: ReplayResult) -> ReplayVerdict:
             " stamps that jump without the recording's log time jumping with them"
         )
     if problems:
-        return ReplayVerdict(False, f"recording not usable as it is: {head}; " + "; ".join(problems))
+        return ReplayVerdict(
+            False, f"recording not usable as it is: {head}; " + "; ".join(problems)
+        )
     return ReplayVerdict(True, f"recording usable: {head}")
 
 
@@ -243,16 +246,12 @@ def replay_bag(
     )
 
 
-def bag_clock_offsets(
-    path: str | Path, topics: BagTopics | None, tolerance: float
-) -> ClockOffsets:
+def bag_clock_offsets(path: str | Path, topics: BagTopics | None, tolerance: float) -> ClockOffsets:
     """The streams of the bag on another clock than its odometry (:mod:`symloc.io.bag_clocks`),
     from a first pass over its scans and odometry (images are not decoded for it)."""
     wanted = dataclasses.replace(topics or BagTopics(), truth=None)
     kinds = ("scan", "odom")
-    lags = stream_lags(
-        m for m in read_bag(path, topics=wanted, on_error="skip") if m.kind in kinds
-    )
+    lags = stream_lags(m for m in read_bag(path, topics=wanted, on_error="skip") if m.kind in kinds)
     return clock_offsets(lags, tolerance)
 
 
@@ -291,8 +290,8 @@ def pair_scans_offline(
     its stamp from the readings on both sides, whenever in the bag they were recorded (odometry
     at another rate than the scans, late or in bursts). Odometry readings whose stamp is older
     than an earlier reading's are outliers and left out; a scan stamped before the previous
-    scan is left out (mapping needs time order); a scan more than ``transform_tolerance`` [s]
-    beyond the odometry's first or last reading gets none. Streams on another clock than the
+    scan is left out (mapping needs time order); a scan within ``transform_tolerance`` [s]
+    before the first or after the last reading takes that reading, one further away gets none. Streams on another clock than the
     odometry's are re-stamped first (:mod:`symloc.io.bag_clocks`). Each is counted in
     ``dropped``.
     """
@@ -321,6 +320,12 @@ def pair_scans_offline(
             dropped["scan: stamp went backwards"] += 1
             continue
         reading = buf.at(scan.stamp, transform_tolerance)
+        if (
+            isinstance(reading, str)
+            and buf.stamps
+            and 0 < buf.stamps[0] - scan.stamp <= transform_tolerance
+        ):
+            reading = OdometryReading(buf.poses[0], buf.stamps[0])  # as after the last reading
         if isinstance(reading, str):
             dropped[f"scan: {reading}"] += 1
             continue
@@ -371,8 +376,8 @@ def build_map_from_bag(
     n = len(got.scans)
     if n < 2 or n < MIN_PAIRED_SHARE * got.total:
         raise DataFormatError(
-            f"bag {path}: {n} of {got.total} scans pair with odometry at their stamps, expected"
-            f" at least {100 * MIN_PAIRED_SHARE:.0f} % to build a map (dropped:"
+            f"bag {path}: expected scans with odometry at their stamps to build a map (at least"
+            f" {100 * MIN_PAIRED_SHARE:.0f} % of the bag's scans), got {n} of {got.total} (dropped:"
             f" {got.dropped or 'none'}); check --odom-topic and that scans and odometry come"
             " from one clock"
         )
