@@ -42,6 +42,7 @@ from symloc.ros.params import NodeParams
 __all__ = [
     "MAX_DROPPED_SHARE",
     "MIN_PAIRED_SHARE",
+    "BagMap",
     "ReplayResult",
     "ReplayVerdict",
     "ScansWithOdometry",
@@ -355,13 +356,22 @@ def scans_with_odometry(
 MIN_PAIRED_SHARE = 0.8
 
 
+@dataclass(frozen=True)
+class BagMap:
+    """A map built from a bag: ``slam`` the :class:`symloc.slam.slam.SlamResult` (``.grid``,
+    ``.poses`` (N, 3) in the map frame), ``stamps`` (N,) [s] of the scans used, ``paired`` how
+    the scans were paired with odometry."""
+
+    slam: Any
+    stamps: FloatArray
+    paired: ScansWithOdometry
+
+
 def build_map_from_bag(
     path: str | Path, *, topics: BagTopics | None = None, slam_params: Any = None
-) -> Any:
+) -> BagMap:
     """Build the occupancy grid from a bag's scans and odometry with symloc's SLAM
     (the scans paired by :func:`pair_scans_offline`).
-
-    Returns the :class:`symloc.slam.slam.SlamResult` (``.grid``, ``.poses``).
 
     Raises
     ------
@@ -381,4 +391,6 @@ def build_map_from_bag(
             f" {got.dropped or 'none'}); check --odom-topic and that scans and odometry come"
             " from one clock"
         )
-    return run_slam(got.scans, got.odometry, slam_params, progress=True, desc="slam (bag)")
+    slam = run_slam(got.scans, got.odometry, slam_params, progress=True, desc="slam (bag)")
+    stamps = np.array([s.stamp for s in got.scans], dtype=np.float64)
+    return BagMap(slam, stamps, got)

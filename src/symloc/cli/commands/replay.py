@@ -202,13 +202,25 @@ def _write_scans_csv(path: Path, trajectory: list[Any]) -> None:
 def _build_map(args: argparse.Namespace) -> int:
     from symloc.grid.map_io import save_map
     from symloc.io.rosbag import BagTopics
+    from symloc.io.tum import write_tum
     from symloc.ros.replay import build_map_from_bag
 
     options.refuse_overwriting_inputs({"bag": args.bag}, {"--build-map": args.build_map})
     print(f"# symloc replay {args.bag} --build-map {args.build_map}")
     topics = BagTopics(scan=args.scan_topic, odom=args.odom_topic, truth=None)
-    res = build_map_from_bag(args.bag, topics=topics)
+    built = build_map_from_bag(args.bag, topics=topics)
+    res = built.slam
+    paired = built.paired
+    print(
+        f"scans paired with odometry: {len(paired.scans)} of {paired.total}"
+        f" (dropped: {paired.dropped or 'none'})"
+    )
+    for note in paired.clock_notes:
+        print(f"clock: {note}")
     path = save_map(res.grid, args.build_map, extra=res.map_metadata())
+    stem = Path(args.build_map)
+    tum = stem.with_name(stem.name.removesuffix(".yaml") + "_trajectory.tum")
+    write_tum(tum, list(zip(built.stamps.tolist(), res.poses, strict=True)))
     print(
         f"map: {res.grid.width} x {res.grid.height} cells at {res.grid.resolution} m;"
         f" {len(res.poses)} scans, {len(res.loop_closures)} loop closures accepted,"
@@ -217,7 +229,7 @@ def _build_map(args: argparse.Namespace) -> int:
     )
     for w in res.warnings:
         print(f"  warning: {w}")
-    print(f"wrote {path}")
+    print(f"wrote {path} and {tum} (the SLAM poses of the scans, TUM)")
     if res.doubtful:
         print(
             f"symloc: warning: the map in {path} is doubtful (see the warnings above): look at"
