@@ -17,8 +17,10 @@ kind          ROS message type                value
 ``initialpose``  PoseWithCovarianceStamped    ``(pose (3,), covariance (3, 3))``
 ============  ==============================  ============================================
 
-Topics are found by message type unless named in :class:`BagTopics`; the ground truth is only
-read from a topic named explicitly or called ``ground_truth`` (it is an Odometry too).
+Topics are found by message type unless named in :class:`BagTopics` (the usual name first,
+``/scan``, ``/odom``, ...); the ground truth is only read from a topic named explicitly or
+called ``ground_truth``, and a topic whose name says it is a reference (``ground_truth``,
+``truth``, ``gt``, ``mocap``) is never taken for the robot's odometry by type.
 
 Writing (:class:`BagWriter`) produces a ROS 2 bag (sqlite3 or MCAP storage) or a ROS 1 bag
 with the same topics, serialised by a rosbags typestore; the map topic is offered with
@@ -178,11 +180,38 @@ def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
     for kind, types in _TYPES.items():
         if getattr(topics, kind) is not None or kind == "truth":
             continue
-        for name, msgtype in sorted(by_topic.items()):
-            if msgtype in types and name not in chosen:
-                chosen[name] = kind
-                break
+        candidates = [
+            name
+            for name, msgtype in by_topic.items()
+            if msgtype in types and name not in chosen and not _is_reference_topic(name)
+        ]
+        if candidates:
+            chosen[min(candidates, key=lambda n: _auto_rank(kind, n))] = kind
     return chosen
+
+
+#: The usual topic names per kind, preferred when a bag has several topics of a type.
+_USUAL_NAMES = {
+    "scan": ("/scan",),
+    "odom": ("/odom", "/odometry/filtered", "/wheel/odometry"),
+    "image": ("/camera/image_raw", "/camera/image_raw/compressed", "/image_raw"),
+    "map": ("/map",),
+    "initialpose": ("/initialpose",),
+}
+
+
+def _auto_rank(kind: str, name: str) -> tuple[int, str]:
+    """Sort key of a topic picked by type: the usual names first, then by name."""
+    usual = _USUAL_NAMES.get(kind, ())
+    key = "/" + name.lstrip("/")
+    return (usual.index(key) if key in usual else len(usual), name)
+
+
+def _is_reference_topic(name: str) -> bool:
+    """A ground-truth topic (``ground_truth``, ``/robot/truth``, ``gt``): an Odometry too, but
+    never the robot's own odometry, so never picked by type (only when named)."""
+    parts = [p for p in name.lower().split("/") if p]
+    return any("truth" in p or p in ("gt", "mocap") for p in parts)
 
 
 def _open_reader(bag: Path) -> Any:

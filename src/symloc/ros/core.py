@@ -233,8 +233,9 @@ class NodeCore:
             return False
         return True
 
-    def _time_ok(self, stamp: float, stream: str) -> bool:
-        """The time gate (:class:`~symloc.ros.guards.StampGate`) for a scan, odom or image."""
+    def _time_ok(self, stamp: float, stream: str, received: float | None = None) -> bool:
+        """The time gate (:class:`~symloc.ros.guards.StampGate`) for a scan, odom or image
+        received at ``received`` [s] on the receiver's clock (a bag's log time; None: unknown)."""
         if not (math.isfinite(stamp) and 0.0 <= stamp <= MAX_STAMP):
             self.drop(
                 f"{stream}: stamp out of range",
@@ -242,7 +243,7 @@ class NodeCore:
             )
             return False
         clock = self._clock.clock
-        verdict = self._clock.check(stamp, stream)
+        verdict = self._clock.check(stamp, stream, received)
         if verdict == "far":
             self.drop(
                 f"{stream}: stamp jump",
@@ -532,8 +533,10 @@ class NodeCore:
             return
         self.add_odometry(reading)
 
-    def add_odometry(self, reading: OdometryReading) -> None:
-        """An odometry reading (odom frame), through the time and odometry gates."""
+    def add_odometry(self, reading: OdometryReading, *, received: float | None = None) -> None:
+        """An odometry reading (odom frame), through the time and odometry gates; ``received``
+        [s]: when it was received on the receiver's own clock (a bag's log time), which tells a
+        pause in the stream from a clock jump (:class:`~symloc.ros.guards.StampGate`)."""
         raw = np.asarray(reading.pose, dtype=np.float64)
         if OdometryGate.absurd(raw):
             self.drop(
@@ -541,7 +544,7 @@ class NodeCore:
                 f"{raw.tolist()}: expected finite coordinates within {MAX_ODOM_COORDINATE:g} m",
             )
             return
-        if not self._time_ok(reading.stamp, "odom"):
+        if not self._time_ok(reading.stamp, "odom", received):
             return
         verdict = self._odom_gate.check(reading.stamp, raw)
         if verdict == "far":
@@ -597,8 +600,11 @@ class NodeCore:
             return
         self.add_image(img, stamp)
 
-    def add_image(self, image: NDArray[np.uint8], stamp: float) -> None:
-        """Keep the newest ``(H, W, 3)`` RGB image while a capture request is pending."""
+    def add_image(
+        self, image: NDArray[np.uint8], stamp: float, *, received: float | None = None
+    ) -> None:
+        """Keep the newest ``(H, W, 3)`` RGB image while a capture request is pending
+        (``received`` as in :meth:`add_odometry`)."""
         if self._want_image_after is None:
             return
         img = np.asarray(image)
@@ -612,7 +618,7 @@ class NodeCore:
                 f" {self.params.max_image_pixels:,}",
             )
             return
-        if not self._time_ok(float(stamp), "image"):
+        if not self._time_ok(float(stamp), "image", received):
             return
         self._image = (float(stamp), img)
 
@@ -730,12 +736,13 @@ class NodeCore:
             return [*self.ready_scans(now), self.unused_scan(None)]
         return self.offer_scan(scan, now)
 
-    def add_scan(self, scan: LaserScan) -> Outputs:
+    def add_scan(self, scan: LaserScan, *, received: float | None = None) -> Outputs:
         """One localizer step with ``scan`` now (see :meth:`on_scan`), for callers that cannot
         wait (a simulator that publishes odometry before its scan): the odometry at the scan's
         stamp, interpolated, or the newest reading when the scan is newer than it by at most
-        ``transform_tolerance``. The live node waits instead (:meth:`offer_scan`)."""
-        admitted = self._admit(scan)
+        ``transform_tolerance``. The live node waits instead (:meth:`offer_scan`). ``received``
+        as in :meth:`add_odometry`."""
+        admitted = self._admit(scan, received)
         if isinstance(admitted, Outputs):
             return admitted
         odom = self._odom.at(admitted.stamp, self.params.transform_tolerance)
@@ -744,7 +751,9 @@ class NodeCore:
             return self.unused_scan(admitted.stamp)
         return self._step(admitted, odom)
 
-    def offer_scan(self, scan: LaserScan, now: float | None = None) -> list[Outputs]:
+    def offer_scan(
+        self, scan: LaserScan, now: float | None = None, *, received: float | None = None
+    ) -> list[Outputs]:
         """A scan as nav2_amcl's tf2 message filter takes it: paired with the odometry at its
         own stamp (interpolated between the readings around it). A scan newer than the newest
         odometry is held until the odometry reaches its stamp (:meth:`ready_scans`, called
@@ -752,8 +761,8 @@ class NodeCore:
         when it has waited more than ``transform_tolerance`` (``now`` - its arrival, on the
         node's clock; or a newer scan stamped that much later), or more than
         :data:`~symloc.ros.pairing.MAX_HELD_SCANS` wait. Returns the outputs of the scans answered now, in order
-        (none while this one waits)."""
-        admitted = self._admit(scan)
+        (none while this one waits). ``received`` as in :meth:`add_odometry`."""
+        admitted = self._admit(scan, received)
         if isinstance(admitted, Outputs):
             return [*self.ready_scans(now), admitted]
         held = self._pairing.newest_stamp
@@ -762,6 +771,12 @@ class NodeCore:
             return [*self.ready_scans(now), self.unused_scan(admitted.stamp)]
         self._pairing.hold(admitted, now)
         return self.ready_scans(now)
+
+    @property
+    def pauses(self) -> int:
+        """Stamps taken as time that passed, not a clock jump: far from the node's clock but
+        received as late as the stream's messages usually are (:class:`StampGate`)."""
+        return self._clock.pauses
 
     @property
     def held_scans(self) -> int:
@@ -780,7 +795,7 @@ class NodeCore:
                 outs.append(self.unused_scan(item.scan.stamp))
         return outs
 
-    def _admit(self, scan: LaserScan) -> LaserScan | Outputs:
+    def _admit(self, scan: LaserScan, received: float | None = None) -> LaserScan | Outputs:
         """The checks a scan passes before it is paired with odometry: the scan to use (mirrored
         for an upside-down laser), or the outputs of a scan not used."""
         if not self._frame_ok(scan.frame_id, self.params.laser_frame_id, "scan: wrong frame"):
@@ -806,7 +821,7 @@ class NodeCore:
                 "scan: no valid readings", f"all {len(scan)} readings NaN, inf or out of range"
             )
             return self.unused_scan(scan.stamp)
-        if not self._time_ok(scan.stamp, "scan"):
+        if not self._time_ok(scan.stamp, "scan", received):
             return self.unused_scan(scan.stamp)
         if scan.stamp < self._last_scan_stamp:
             self._backwards["scan"] += 1

@@ -67,34 +67,62 @@ class StampGate:
         Streams that must all be among the confirming stamps of a new time base once they have
         fed the node (a clock jump moves every stream; one broken publisher must not drag the
         others along). Other streams (images) count but are not required.
+
+    A caller that knows when each message was received on a clock of its own (a bag's log
+    time, ``received`` in :meth:`check`) lets the gate tell a pause from a jump: a stamp far
+    from the node's clock whose lag behind the receiving clock (``stamp - received``) is the
+    usual one is time that passed (a robot that stood still and sent nothing, a recording
+    paused, a log that keeps only the scans where the robot moved), not a jump, and is
+    accepted. Stamps on another clock than the receiver's (a constant lag, however large) are
+    the same time base too. A jump is a stamp that moved and whose lag moved with it.
     """
 
     max_jump: float
     required: Iterable[str] = ("scan", "odom")
     _recent: deque[float] = field(default_factory=lambda: deque(maxlen=CLOCK_MEMORY))
+    _lags: deque[float] = field(default_factory=lambda: deque(maxlen=CLOCK_MEMORY))
     _active: set[str] = field(default_factory=set)
-    _pending: list[tuple[float, str]] = field(default_factory=list)
+    _pending: list[tuple[float, str, float | None]] = field(default_factory=list)
+    #: stamps accepted only because their lag was the usual one (pauses in the stream)
+    pauses: int = 0
 
     @property
     def clock(self) -> float | None:
         """The node's clock [s]: the median of the recent accepted stamps (None before any)."""
         return float(np.median(self._recent)) if self._recent else None
 
-    def check(self, stamp: float, stream: str) -> Verdict:
-        """Judge ``stamp`` [s] of a message of ``stream``; ``rebase`` moves the clock to it."""
+    @property
+    def lag(self) -> float | None:
+        """The usual ``stamp - received`` [s] of the recent accepted stamps (None: unknown)."""
+        return float(np.median(self._lags)) if self._lags else None
+
+    def check(self, stamp: float, stream: str, received: float | None = None) -> Verdict:
+        """Judge ``stamp`` [s] of a message of ``stream``, received at ``received`` [s] on the
+        receiver's clock (None: unknown); ``rebase`` moves the clock to it."""
         clock = self.clock
-        if clock is None or abs(stamp - clock) <= self.max_jump:
+        lag = None if received is None else stamp - received
+        usual = self.lag
+        near = clock is None or abs(stamp - clock) <= self.max_jump
+        in_step = lag is not None and usual is not None and abs(lag - usual) <= self.max_jump
+        if near or in_step:
+            if not near:
+                self.pauses += 1
+                self._recent.clear()  # the clock moves on with the time that passed
             self._recent.append(stamp)
+            if lag is not None:
+                self._lags.append(lag)
             self._pending.clear()
             if stream in self.required:
                 self._active.add(stream)
             return "ok"
-        keep = [(s, n) for s, n in self._pending if abs(s - stamp) <= self.max_jump]
-        self._pending = [*keep, (stamp, stream)]
-        streams = {n for _, n in self._pending}
+        keep = [(s, n, g) for s, n, g in self._pending if abs(s - stamp) <= self.max_jump]
+        self._pending = [*keep, (stamp, stream, lag)]
+        streams = {n for _, n, _ in self._pending}
         if len(self._pending) >= CONFIRM and self._active <= streams:
             self._recent.clear()
-            self._recent.extend(s for s, _ in self._pending)
+            self._recent.extend(s for s, _, _ in self._pending)
+            self._lags.clear()
+            self._lags.extend(g for _, _, g in self._pending if g is not None)
             self._active = streams & set(self.required)
             self._pending.clear()
             return "rebase"

@@ -140,8 +140,12 @@ def _run(args: argparse.Namespace) -> int:
     counts: dict[str, int] = {}
     for p in res.trajectory:
         counts[p.status] = counts.get(p.status, 0) + 1
-    print(f"scans used: {len(res.trajectory)}  status counts: {counts}")
+    print(f"scans used: {len(res.trajectory)} of {res.scans}  status counts: {counts}")
     print(f"dropped: {res.dropped or 'none'}")
+    for note in res.clock_notes:
+        print(f"clock: {note}")
+    verdict = res.verdict
+    print(verdict.text)
     if res.final is not None:
         print(f"final: {res.final.status.value}: {res.final.reason}")
         if res.final.pose is not None and len(res.truth):
@@ -159,6 +163,9 @@ def _run(args: argparse.Namespace) -> int:
     print(f"wrote {tum} ({len(tracked)} tracked poses of {len(res.trajectory)} scans)")
     print(f"wrote {scans_tum} and {scans_csv} (every scan: estimate and status)")
     print(f"wrote {png}")
+    if not verdict.usable:
+        print(f"symloc: {verdict.text}", file=sys.stderr)
+        return 3
     if not tracked:
         why = (
             "no visual map was given (--visual-map), so a symmetric room stays ambiguous"
@@ -195,15 +202,38 @@ def _write_scans_csv(path: Path, trajectory: list[Any]) -> None:
 def _build_map(args: argparse.Namespace) -> int:
     from symloc.grid.map_io import save_map
     from symloc.io.rosbag import BagTopics
+    from symloc.io.tum import write_tum
     from symloc.ros.replay import build_map_from_bag
 
+    options.refuse_overwriting_inputs({"bag": args.bag}, {"--build-map": args.build_map})
     print(f"# symloc replay {args.bag} --build-map {args.build_map}")
     topics = BagTopics(scan=args.scan_topic, odom=args.odom_topic, truth=None)
-    res = build_map_from_bag(args.bag, topics=topics)
-    path = save_map(res.grid, args.build_map)
+    built = build_map_from_bag(args.bag, topics=topics)
+    res = built.slam
+    paired = built.paired
+    print(
+        f"scans paired with odometry: {len(paired.scans)} of {paired.total}"
+        f" (dropped: {paired.dropped or 'none'})"
+    )
+    for note in paired.clock_notes:
+        print(f"clock: {note}")
+    path = save_map(res.grid, args.build_map, extra=res.map_metadata())
+    stem = Path(args.build_map)
+    tum = stem.with_name(stem.name.removesuffix(".yaml") + "_trajectory.tum")
+    write_tum(tum, list(zip(built.stamps.tolist(), res.poses, strict=True)))
     print(
         f"map: {res.grid.width} x {res.grid.height} cells at {res.grid.resolution} m;"
-        f" {len(res.poses)} scans, {len(res.loop_closures)} loop closures"
+        f" {len(res.poses)} scans, {len(res.loop_closures)} loop closures accepted,"
+        f" {len(res.rejected_loops)} rejected; result"
+        f" {'DOUBTFUL' if res.doubtful else 'consistent'}"
     )
-    print(f"wrote {path}")
+    for w in res.warnings:
+        print(f"  warning: {w}")
+    print(f"wrote {path} and {tum} (the SLAM poses of the scans, TUM)")
+    if res.doubtful:
+        print(
+            f"symloc: warning: the map in {path} is doubtful (see the warnings above): look at"
+            " it before localizing on it",
+            file=sys.stderr,
+        )
     return 0

@@ -76,7 +76,7 @@ def register(subparsers: Any) -> None:
     setup.set_defaults(func=_setup)
     conv = sub.add_parser(
         "carmen-to-bag",
-        help="convert a CARMEN laser log to a ROS bag (scan, odom, ground_truth)",
+        help="convert a CARMEN laser log to a ROS bag (scan, odom, ground_truth, initialpose)",
         description="Write the log's scans, odometry and corrected poses as a bag named after the"
         " log inside the output folder: DIR/<log name> (a ROS 2 bag folder) or"
         " DIR/<log name>.bag (ROS 1).",
@@ -88,6 +88,12 @@ def register(subparsers: Any) -> None:
         choices=("ros2", "mcap", "ros1"),
         default="ros2",
         help="ros2 (sqlite3 .db3, default), mcap (ROS 2 MCAP) or ros1 (.bag)",
+    )
+    conv.add_argument(
+        "--no-initial-pose",
+        action="store_true",
+        help="do not write /initialpose (the first corrected pose, nav2's default covariance);"
+        " a replay then localizes globally",
     )
     conv.set_defaults(func=_carmen_to_bag)
     check = sub.add_parser(
@@ -127,7 +133,7 @@ def _carmen_to_bag(args: argparse.Namespace) -> int:
     stem = args.log.name.removesuffix(".gz").removesuffix(".log")
     bag = Path(args.out) / (stem + (".bag" if args.format == "ros1" else ""))
     options.refuse_overwriting_inputs({"log": args.log}, {"--out": bag})
-    counts = carmen_to_bag(args.log, bag, fmt=args.format)
+    counts = carmen_to_bag(args.log, bag, fmt=args.format, initial_pose=not args.no_initial_pose)
     for topic, n in sorted(counts.items()):
         print(f"  {topic}: {n} messages")
     print(f"wrote {bag}")
