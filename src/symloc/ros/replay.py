@@ -156,12 +156,14 @@ def replay_bag(
     params: NodeParams,
     *,
     grid: OccupancyGrid | None = None,
+    map_std_xy: float | None = None,
     topics: BagTopics | None = None,
     factory: LocalizerFactory | None = None,
     warn: Callable[[str], object] | None = None,
     progress: bool = False,
 ) -> ReplayResult:
-    """Replay ``path`` through the node logic; ``grid`` overrides the bag's map topic.
+    """Replay ``path`` through the node logic; ``grid`` overrides the bag's map topic, with
+    ``map_std_xy`` [m] its own error when its file declares one (:meth:`NodeCore.set_map`).
 
     Malformed messages are skipped and counted (``dropped["<topic>: malformed in bag"]``).
     Scans still waiting for their odometry when the bag ends are dropped and counted.
@@ -176,7 +178,7 @@ def replay_bag(
         check_files(params)  # a bad visual map or vocabulary: one clear error, not 0 poses
     core = NodeCore(params, factory=factory, warn=warn)
     if grid is not None:
-        core.set_map(grid)
+        core.set_map(grid, map_std_xy=map_std_xy)
     bag_dropped: Counter[str] = Counter()
     truth: list[list[float]] = []
     trajectory: list[TrajectoryPoint] = []

@@ -84,14 +84,16 @@ def _run(args: argparse.Namespace) -> int:
         changes["seed"] = args.seed
     params = dataclasses.replace(params, **changes)
     grid = None
+    map_std_xy = None
     if args.map is not None:
         try:
-            from symloc.grid.map_io import load_map
+            from symloc.grid.map_io import load_map, read_map_yaml
         except ImportError as err:
             from symloc.errors import ConfigurationError
 
             raise ConfigurationError("--map: map_server file support is missing") from err
         grid = load_map(args.map)
+        map_std_xy = read_map_yaml(args.map).map_std_xy
     out = Path(args.out)
     options.refuse_overwriting_inputs(
         {"bag": args.bag, "--map": args.map, "--params": args.params},
@@ -112,6 +114,7 @@ def _run(args: argparse.Namespace) -> int:
         args.bag,
         params,
         grid=grid,
+        map_std_xy=map_std_xy,
         topics=topics,
         warn=lambda text: print(f"warning: {text}", file=sys.stderr),
         progress=True,
