@@ -282,15 +282,17 @@ def add_room(
     *,
     choices: Sequence[str] = ROOMS,
     help: str = "simulated room",
-    default: str = DEFAULT_ROOM,
+    default: str | None = DEFAULT_ROOM,
+    default_help: str | None = None,
 ) -> None:
-    """``--room NAME``: a simulated room, default ``default`` (``square``)."""
+    """``--room NAME``: a simulated room, default ``default`` (``square``; None: the command
+    decides, and ``default_help`` says what it does)."""
     parser.add_argument(
         "--room",
         choices=tuple(choices),
         default=default,
         metavar="NAME",
-        help=f"{help}: {', '.join(choices)} (default {default})",
+        help=f"{help}: {', '.join(choices)} (default {default_help or default})",
     )
 
 
