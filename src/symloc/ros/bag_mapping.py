@@ -275,9 +275,11 @@ def map_from_bag(
         if progress and image_topic:
             from tqdm import tqdm
 
-            messages = tqdm(
-                messages, total=listing[image_topic][1], desc="images", unit="msg", leave=False
+            truth_names = [tp.truth, "/" + tp.truth.lstrip("/")] if tp.truth else []
+            total = listing[image_topic][1] + next(
+                (listing[t][1] for t in truth_names if t in listing), 0
             )
+            messages = tqdm(messages, total=total, desc="images", unit="msg", leave=False)
         for m in messages:
             if m.kind == "truth":
                 if not truth_buf.add(m.value, max_age=math.inf):
