@@ -226,3 +226,13 @@ def test_offline_pairing_reads_the_laser_mount_and_tf_odometry(tmp_path: Path) -
     np.testing.assert_allclose(got.laser_odometry, compose(got.odometry, mount), atol=1e-12)
     with pytest.raises(DataFormatError, match=r"mount: expected odometry on a nav_msgs/Odometry"):
         pair_scans_offline(path, odom_source="topic")
+    # the same robot with its odometry on /odom: the mount is read all the same
+    topic = tmp_path / "mount_topic"
+    with BagWriter(topic) as w:
+        w.write_transforms([("base_link", "laser", mount)], 0.0, static=True)
+        for i in range(3):
+            w.write_odometry(OdometryReading(np.array([0.1 * i, 0.0, 0.0]), 1.0 + i))
+            w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0 + i))
+    got = pair_scans_offline(topic, odom_source="topic")
+    assert got.source == "topic /odom"
+    np.testing.assert_allclose(got.mount, mount, atol=1e-12)

@@ -168,7 +168,7 @@ def resolve_bag_path(path: str | Path) -> Path:
     raise DataFormatError(f"bag: {p} is neither a ROS 1 .bag file nor a ROS 2 bag folder")
 
 
-def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
+def _pick_topics(connections: Any, topics: BagTopics, bag: Path | None = None) -> dict[str, str]:
     """topic -> kind for the connections to read (named topics first, then by type)."""
     by_topic: dict[str, str] = {}
     for c in connections:
@@ -184,11 +184,13 @@ def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
             if kind == "truth":
                 continue  # optional: only simulated or motion-captured runs have it
             raise DataFormatError(
-                f"bag topic {wanted!r} for {kind} not found; topics: {sorted(by_topic)}"
+                f"bag topic {wanted!r} for {kind} not found{f' in {bag}' if bag else ''};"
+                f" topics: {sorted(by_topic)}"
             )
         if by_topic[name] not in types:
             raise DataFormatError(
-                f"bag topic {name}: expected {' or '.join(types)}, got {by_topic[name]}"
+                f"bag topic {name}{f' in {bag}' if bag else ''}: expected"
+                f" {' or '.join(types)}, got {by_topic[name]}"
             )
         chosen[name] = kind
     for kind, types in _TYPES.items():
@@ -345,7 +347,7 @@ def read_bag(
     bag = resolve_bag_path(path)
     reader = _open_reader(bag)
     try:
-        chosen = _pick_topics(reader.connections, topics or BagTopics())
+        chosen = _pick_topics(reader.connections, topics or BagTopics(), bag)
         if kinds is not None:
             chosen = {t: k for t, k in chosen.items() if k in kinds}
         conns = [c for c in reader.connections if c.topic in chosen]

@@ -352,7 +352,7 @@ def pair_scans_offline(
         raise DataFormatError(f"odom_source: expected one of {ODOM_SOURCES}, got {odom_source!r}")
     wanted = dataclasses.replace(topics or BagTopics(), truth=None)
     dropped: Counter[str] = Counter()
-    kinds = ("scan", "odom") if odom_source == "topic" else ("scan", "odom", "tf", "tf_static")
+    kinds = ("scan", "odom", "tf_static") + (() if odom_source == "topic" else ("tf",))
     messages = list(read_bag(path, topics=wanted, on_error="skip", dropped=dropped, kinds=kinds))
     odom_topics = sorted({m.topic for m in messages if m.kind == "odom"})
     use_tf = odom_source == "tf" or (odom_source == "auto" and not odom_topics)
