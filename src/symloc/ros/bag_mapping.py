@@ -41,11 +41,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
-from symloc.errors import DataFormatError
+from symloc.errors import ConfigurationError, DataFormatError
 from symloc.geometry import compose, inverse
 from symloc.io.rosbag import BagTopics, bag_topics, read_bag
 from symloc.ros.pairing import OdometryBuffer
-from symloc.ros.replay import MIN_PAIRED_SHARE, ScansWithOdometry, pair_scans_offline
+from symloc.ros.replay import (
+    MIN_PAIRED_SHARE,
+    ODOM_SOURCES,
+    ScansWithOdometry,
+    pair_scans_offline,
+)
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 from symloc.vision.keyframes import Keyframe, KeyframeRecorder, KeyframeSettings
 from symloc.vision.orb import OrbExtractor
@@ -97,8 +102,13 @@ class BagMappingSettings:
 
     def __post_init__(self) -> None:
         if isinstance(self.check_every, bool) or int(self.check_every) < 1:
-            raise DataFormatError(
+            raise ConfigurationError(
                 f"BagMappingSettings.check_every: expected an integer >= 1, got {self.check_every}"
+            )
+        if self.odom_source not in ODOM_SOURCES:
+            raise ConfigurationError(
+                f"BagMappingSettings.odom_source: expected one of {ODOM_SOURCES}, got"
+                f" {self.odom_source!r}"
             )
         check_positive(self.transform_tolerance, "BagMappingSettings.transform_tolerance")
 

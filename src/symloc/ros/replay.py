@@ -45,6 +45,7 @@ from symloc.scan import mirror
 __all__ = [
     "MAX_DROPPED_SHARE",
     "MIN_PAIRED_SHARE",
+    "ODOM_SOURCES",
     "BagMap",
     "ReplayResult",
     "ReplayVerdict",
@@ -497,7 +498,7 @@ MIN_PAIRED_SHARE = 0.8
 @dataclass(frozen=True)
 class BagMap:
     """A map built from a bag: ``slam`` the :class:`symloc.slam.slam.SlamResult` (``.grid``,
-    ``.poses`` (N, 3) in the map frame), ``stamps`` (N,) [s] of the scans used, ``paired`` how
+    ``.poses`` (N, 3) the laser's poses in the map frame), ``stamps`` (N,) [s] of the scans used, ``paired`` how
     the scans were paired with odometry."""
 
     slam: Any
@@ -529,6 +530,6 @@ def build_map_from_bag(
             f" {got.dropped or 'none'}); check --odom-topic and that scans and odometry come"
             " from one clock"
         )
-    slam = run_slam(got.scans, got.odometry, slam_params, progress=True, desc="slam (bag)")
+    slam = run_slam(got.scans, got.laser_odometry, slam_params, progress=True, desc="slam (bag)")
     stamps = np.array([s.stamp for s in got.scans], dtype=np.float64)
     return BagMap(slam, stamps, got)
