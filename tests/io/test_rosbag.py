@@ -147,7 +147,7 @@ def test_scans_with_odometry_and_map_from_bag(tmp_path: Path) -> None:
     empty = tmp_path / "empty"
     with BagWriter(empty) as w:
         w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0))
-    with pytest.raises(DataFormatError, match="expected scans with odometry"):
+    with pytest.raises(DataFormatError, match=r"empty: expected odometry, .* has neither"):
         build_map_from_bag(empty)
 
 
@@ -184,3 +184,55 @@ def test_real_carmen_log_through_a_bag(tmp_path: Path) -> None:
     assert scans[100].angle_min == pytest.approx(ref.scans[100].scan.angle_min, abs=1e-6)
     np.testing.assert_allclose(odom[:, :2], ref.odom_poses[:, :2], atol=1e-9)
     np.testing.assert_allclose(truth[:, :2], ref.laser_poses[:, :2], atol=1e-9)
+
+
+def test_tf_kinds_and_the_kinds_filter(tmp_path: Path) -> None:
+    """/tf and /tf_static come out as lists of transforms, found by name only; ``kinds`` reads
+    only the kinds asked for, and an unknown kind is refused by name."""
+    path = tmp_path / "tf"
+    with BagWriter(path) as w:
+        w.write_transforms([("base_link", "laser", (0.2, 0.0, math.pi))], 0.0, static=True)
+        w.write_transforms([("odom", "base_link", (1.0, 2.0, 0.5))], 1.0)
+        w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0))
+    msgs = list(read_bag(path))
+    kinds = [m.kind for m in msgs]
+    assert kinds == ["tf_static", "tf", "scan"]
+    (t,) = msgs[1].value
+    assert (t.parent, t.child, msgs[1].stamp) == ("odom", "base_link", 1.0)
+    np.testing.assert_allclose(t.matrix[:2, 3], [1.0, 2.0])
+    assert [m.kind for m in read_bag(path, kinds=("scan",))] == ["scan"]
+    with pytest.raises(DataFormatError, match=r"kinds: expected some of .* got \['scans'\]"):
+        list(read_bag(path, kinds=("scans",)))
+
+
+def test_offline_pairing_reads_the_laser_mount_and_tf_odometry(tmp_path: Path) -> None:
+    """A laser 0.2 m ahead of the base, turned by 90 degrees (/tf_static): the mount is found
+    and SLAM is given the laser's odometry; odometry from /tf when the bag has no topic."""
+    from symloc.geometry import compose
+    from symloc.ros.replay import pair_scans_offline
+
+    path = tmp_path / "mount"
+    mount = np.array([0.2, 0.0, math.pi / 2])
+    with BagWriter(path) as w:
+        w.write_transforms([("base_link", "laser", mount)], 0.0, static=True)
+        for i in range(4):
+            w.write_transforms([("odom", "base_link", (0.1 * i, 0.0, 0.1 * i))], 1.0 + i)
+            w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0 + i))
+    got = pair_scans_offline(path)
+    assert got.source == "TF odom -> base_link"
+    assert got.laser_frame == "laser"
+    np.testing.assert_allclose(got.mount, mount, atol=1e-12)
+    np.testing.assert_allclose(got.odometry[:, 0], [0.0, 0.1, 0.2, 0.3], atol=1e-12)
+    np.testing.assert_allclose(got.laser_odometry, compose(got.odometry, mount), atol=1e-12)
+    with pytest.raises(DataFormatError, match=r"mount: expected odometry on a nav_msgs/Odometry"):
+        pair_scans_offline(path, odom_source="topic")
+    # the same robot with its odometry on /odom: the mount is read all the same
+    topic = tmp_path / "mount_topic"
+    with BagWriter(topic) as w:
+        w.write_transforms([("base_link", "laser", mount)], 0.0, static=True)
+        for i in range(3):
+            w.write_odometry(OdometryReading(np.array([0.1 * i, 0.0, 0.0]), 1.0 + i))
+            w.write_scan(LaserScan(0.0, 0.1, 0.1, 5.0, np.ones(4), stamp=1.0 + i))
+    got = pair_scans_offline(topic, odom_source="topic")
+    assert got.source == "topic /odom"
+    np.testing.assert_allclose(got.mount, mount, atol=1e-12)

@@ -22,9 +22,7 @@ from symloc.geometry import angle_diff, compose, wrap_angle
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.directions import directions_for
 from symloc.localizer.types import Place, SymmetryJudge
-from symloc.vision.bow import BowVector
-from symloc.vision.keyframes import Keyframe, KeyframeSelector, KeyframeSettings
-from symloc.vision.orb import OrbExtractor, OrbFeatures
+from symloc.vision.keyframes import KeyframeRecorder
 
 from .episode import Body, CenteringRun, ImageFn, ScanFn, go_to_centre
 
@@ -141,55 +139,3 @@ def map_place(
 def known_places(places: Sequence[MappedPlace]) -> list[Place]:
     """The localizer's ``known_places`` from mapped places."""
     return [p.place for p in places]
-
-
-class KeyframeRecorder:
-    """Keyframes all along the mapping trip (not only at symmetric places).
-
-    :meth:`frame` is called at every scan of the trip with the scan's index, the odometry pose
-    and the robot's true pose. The selection rule (:class:`~symloc.vision.keyframes
-    .KeyframeSelector`) runs on the odometry pose (what the robot knows while it drives); an
-    image is captured only when the pose rule fires, or every ``check_every`` scans for the
-    covisibility test. Kept frames wait for their map pose: :meth:`keyframes` gives them the
-    map pose of their scan (SLAM's, after the trip; or any pose source).
-    """
-
-    def __init__(
-        self,
-        capture: Callable[[FloatArray], NDArray[np.uint8]],
-        extractor: OrbExtractor,
-        settings: KeyframeSettings | None = None,
-        *,
-        check_every: int = 5,
-    ) -> None:
-        self.capture = capture
-        self.extractor = extractor
-        self.selector = KeyframeSelector(settings)
-        self.check_every = max(1, int(check_every))
-        self.frames: list[tuple[int, float, OrbFeatures]] = []
-        self.captured = 0
-
-    def frame(self, index: int, odom_pose: FloatArray, true_pose: FloatArray, stamp: float) -> None:
-        """Consider the frame of scan ``index`` (captured at ``true_pose``)."""
-        due = self.selector.pose_due(odom_pose)
-        if not due and index % self.check_every:
-            return
-        feats = self.extractor.extract(self.capture(true_pose))
-        self.captured += 1
-        if self.selector.consider(odom_pose, feats).keep:
-            self.selector.accept(odom_pose, feats)
-            self.frames.append((int(index), float(stamp), feats))
-
-    @property
-    def indices(self) -> list[int]:
-        """Scan index of each kept frame, in order (the bench looks up its true pose)."""
-        return [i for i, _, _ in self.frames]
-
-    def keyframes(
-        self, map_pose: Callable[[int], FloatArray], bow: Callable[[OrbFeatures], BowVector]
-    ) -> list[Keyframe]:
-        """The kept frames as keyframes, with ``map_pose(scan_index)`` and their BoW vectors."""
-        return [
-            Keyframe(np.asarray(map_pose(i), np.float64), f, bow(f), stamp=t)
-            for i, t, f in self.frames
-        ]

@@ -50,9 +50,11 @@ from symloc.sim.lidar import simulate_scan
 from symloc.sim.robot import DiffDriveRobot
 
 __all__ = [
+    "MappingDrive",
     "SimRecording",
     "SimSession",
     "prepare_session",
+    "record_mapping_drive",
     "record_sim_run",
 ]
 
@@ -376,3 +378,132 @@ def _params_doc(params: NodeParams) -> dict[str, Any]:
     for path in NOT_PARAMETERS:
         block["localizer"].pop(path.partition(".")[2], None)
     return {"symloc": {"ros__parameters": block}}
+
+
+@dataclass
+class MappingDrive:
+    """What :func:`record_mapping_drive` wrote.
+
+    ``bag`` the bag; ``truth`` (N, 4) t [s], x [m], y [m], theta [rad] of the robot in the
+    world frame at each scan; ``world_from_odom`` (3,) the odometry frame's origin in the world
+    (the start pose when the odometry starts there); ``grid`` the world rasterised (what the
+    walls are); ``counts`` messages per topic.
+    """
+
+    bag: Path
+    truth: FloatArray
+    world_from_odom: FloatArray
+    grid: Any
+    counts: dict[str, int] = field(default_factory=dict)
+
+
+def record_mapping_drive(
+    out: str | Path,
+    *,
+    room: str = "rectangle",
+    seed: int = 0,
+    laps: float = 1.3,
+    start_waypoint: int = 0,
+    image_every: int = 2,
+    odometry: str = "topic",
+    odom_at_start: bool = True,
+    preset: str = "lds01",
+    scan_period: float = 0.2,
+    fmt: BagFormat = "ros2",
+) -> MappingDrive:
+    """Drive ``laps`` times round a room of the textured lab and record it as a robot would.
+
+    The robot drives along :func:`symloc.bench.exploration.exploration_path` from waypoint
+    ``start_waypoint`` (turning on the spot, then straight), recording ``/scan`` (frame
+    ``laser``, the ``preset`` lidar with its noise) every ``scan_period`` [s], the odometry at
+    every scan (``odometry="topic"``: nav_msgs/Odometry on ``/odom``; ``"tf"``: ``odom ->
+    base_footprint`` on ``/tf`` only), ``/tf_static`` (``base_footprint -> base_link ->
+    laser``, the laser on the base's axis), a camera image on ``/camera/image_raw`` every
+    ``image_every`` scans, and the true pose on ``/ground_truth`` (map frame = world frame).
+    The odometry starts at the true start pose (``odom_at_start``, so a map built from the bag
+    is in world coordinates) or at zero, as on a robot.
+
+    Raises
+    ------
+    ConfigurationError
+        ``out`` exists, an unknown room, preset or odometry source, or a collision on the path.
+    """
+    from symloc.bench.exploration import exploration_path
+    from symloc.bench.scenario import DEFAULT_GV
+    from symloc.geometry import compose, inverse
+    from symloc.lidar_spec import PRESETS
+    from symloc.sim.camera import Camera
+    from symloc.sim.rasterize import world_to_grid
+    from symloc.sim.robot import RobotConfig
+    from symloc.sim.rooms import build_room
+
+    out = Path(out)
+    if out.exists():
+        raise ConfigurationError(f"out: {out} exists already; choose a new path")
+    if odometry not in ("topic", "tf"):
+        raise ConfigurationError(f"odometry: expected 'topic' or 'tf', got {odometry!r}")
+    if preset not in PRESETS:
+        raise ConfigurationError(f"preset: expected one of {sorted(PRESETS)}, got {preset!r}")
+    if int(image_every) < 1:
+        raise ConfigurationError(f"image_every: expected an integer >= 1, got {image_every}")
+    check_positive(scan_period, "scan_period")
+    rng = as_rng(seed)
+    r = build_room(room, DEFAULT_GV.get(room, 2.0), lab=True, textured=True)
+    path = exploration_path(r, margin=0.5)
+    n_wp = path.shape[0]
+    k0 = int(start_waypoint) % n_wp
+    targets = np.array([path[(k0 + k) % n_wp] for k in range(math.ceil(laps * n_wp) + 1)])
+    heading = math.atan2(targets[1, 1] - targets[0, 1], targets[1, 0] - targets[0, 0])
+    start = np.array([targets[0, 0], targets[0, 1], heading])
+    origin = start if odom_at_start else np.zeros(3)
+    robot = DiffDriveRobot(
+        start, RobotConfig(max_v=0.7, max_w=3.0), rng, world=r.world, odom_origin=origin
+    )
+    lidar = PRESETS[preset]
+    camera = Camera()
+    truth: list[list[float]] = []
+    dt = 0.05
+    next_scan = 0.0
+    with BagWriter(out, fmt) as bag:
+        laser = np.zeros(3)
+        bag.write_transforms(
+            [("base_footprint", "base_link", laser), ("base_link", "laser", laser)],
+            0.0,
+            static=True,
+        )
+
+        def record() -> None:
+            nonlocal next_scan
+            while robot.time + 1e-9 >= next_scan:
+                t, pose, odom = robot.time, robot.pose, robot.odometry()
+                n = len(truth)
+                if odometry == "topic":
+                    bag.write_odometry(odom)
+                else:
+                    bag.write_transforms([("odom", "base_footprint", odom.pose)], t)
+                bag.write_scan(simulate_scan(r.world, pose, lidar, rng, stamp=t, frame_id="laser"))
+                if n % int(image_every) == 0:
+                    bag.write_image(camera.render(r.world, pose, rng), t)
+                bag.write_truth(pose, t)
+                truth.append([t, *pose])
+                next_scan += scan_period
+
+        record()
+        for goal in targets[1:]:
+            pose = robot.pose
+            turn = float(
+                math.remainder(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - pose[2], math.tau)
+            )
+            steps = max(1, math.ceil(abs(turn) / (0.8 * dt)))
+            for _ in range(steps):
+                robot.step(0.0, turn / (steps * dt), dt)
+                record()
+            dist = float(np.hypot(*(goal - robot.pose[:2])))
+            steps = max(1, math.ceil(dist / (0.3 * dt)))
+            for _ in range(steps):
+                if not robot.step(dist / (steps * dt), 0.0, dt):
+                    raise ConfigurationError(f"record_mapping_drive: the path collides in {room}")
+                record()
+        counts = dict(bag.counts)
+    world_from_odom = np.asarray(compose(start, inverse(origin)), dtype=np.float64)
+    return MappingDrive(out, np.asarray(truth), world_from_odom, world_to_grid(r.world), counts)

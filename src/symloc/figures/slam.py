@@ -26,11 +26,14 @@ def map_trajectory_figure(
     odometry: np.ndarray | None = None,
     loop_nodes: Sequence[int] = (),
     title: str = "",
+    keyframes: np.ndarray | None = None,
 ) -> Path:
     """Save a PNG of ``grid`` with the SLAM trajectory ``poses`` (N, 3) on top.
 
     ``reference`` and ``odometry`` (N, 3), if given, are drawn too (already in the map frame
-    or aligned by the caller); ``loop_nodes`` marks nodes that received a loop closure.
+    or aligned by the caller); ``loop_nodes`` marks nodes that received a loop closure;
+    ``keyframes`` (K, 3) x [m], y [m], theta [rad]: the visual map's keyframes, drawn as arrows
+    along the camera's heading.
     """
     import matplotlib
 
@@ -58,6 +61,20 @@ def map_trajectory_figure(
     if len(loop_nodes):
         idx = np.unique(np.asarray(loop_nodes, dtype=int))
         ax.plot(poses[idx, 0], poses[idx, 1], ".", color="tab:red", ms=3, label="loop closure")
+    if keyframes is not None and len(keyframes):
+        kf = np.asarray(keyframes, dtype=np.float64).reshape(-1, 3)
+        ax.quiver(
+            kf[:, 0],
+            kf[:, 1],
+            np.cos(kf[:, 2]),
+            np.sin(kf[:, 2]),
+            color="tab:purple",
+            angles="xy",
+            scale_units="xy",
+            scale=3.0,
+            width=0.004,
+            label=f"keyframes ({kf.shape[0]})",
+        )
     known = np.argwhere(grid.data >= 0)
     if known.size:
         c = grid.cell_to_world(np.array([known.min(axis=0), known.max(axis=0)]))

@@ -15,12 +15,17 @@ kind          ROS message type                value
 ``map``       nav_msgs/OccupancyGrid          :class:`symloc.grid.OccupancyGrid`
 ``truth``     nav_msgs/Odometry (map frame)   :class:`symloc.odometry.OdometryReading`
 ``initialpose``  PoseWithCovarianceStamped    ``(pose (3,), covariance (3, 3))``
+``tf``        tf2_msgs/TFMessage (``/tf``)    list of :class:`symloc.msgs.transform.StampedTransform`
+``tf_static`` tf2_msgs/TFMessage              list of :class:`symloc.msgs.transform.StampedTransform`
+              (``/tf_static``)
 ============  ==============================  ============================================
 
 Topics are found by message type unless named in :class:`BagTopics` (the usual name first,
 ``/scan``, ``/odom``, ...); the ground truth is only read from a topic named explicitly or
 called ``ground_truth``, and a topic whose name says it is a reference (``ground_truth``,
-``truth``, ``gt``, ``mocap``) is never taken for the robot's odometry by type.
+``truth``, ``gt``, ``mocap``) is never taken for the robot's odometry by type. Both TF kinds
+share one message type, so they are found by name only (``/tf`` and ``/tf_static``, or the
+names given); a stamp of a TF message is that of its first transform (0 when empty).
 
 Writing (:class:`BagWriter`) produces a ROS 2 bag (sqlite3 or MCAP storage) or a ROS 1 bag
 with the same topics, serialised by a rosbags typestore; the map topic is offered with
@@ -32,7 +37,7 @@ from __future__ import annotations
 import contextlib
 import warnings
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -56,6 +61,7 @@ from symloc.msgs.image import (
 from symloc.msgs.odometry import odometry_from_msg, odometry_to_fields
 from symloc.msgs.pose import pose_with_covariance_from_msg, pose_with_covariance_to_fields
 from symloc.msgs.scan import scan_from_msg, scan_to_fields
+from symloc.msgs.transform import tf_message_fields, transform_fields, transforms_from_msg
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
@@ -78,7 +84,12 @@ _TYPES = {
     "map": ("nav_msgs/msg/OccupancyGrid",),
     "truth": ("nav_msgs/msg/Odometry",),
     "initialpose": ("geometry_msgs/msg/PoseWithCovarianceStamped",),
+    "tf": ("tf2_msgs/msg/TFMessage",),
+    "tf_static": ("tf2_msgs/msg/TFMessage",),
 }
+
+#: Kinds found by their usual name only, never by type (several kinds share the type).
+_BY_NAME_ONLY = {"tf": "/tf", "tf_static": "/tf_static"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,6 +102,8 @@ class BagTopics:
     map: str | None = None
     truth: str | None = "ground_truth"
     initialpose: str | None = None
+    tf: str | None = None
+    tf_static: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,7 +113,8 @@ class BagMessage:
     Attributes
     ----------
     kind : str
-        ``scan``, ``odom``, ``image``, ``map``, ``truth`` or ``initialpose``.
+        ``scan``, ``odom``, ``image``, ``map``, ``truth``, ``initialpose``, ``tf`` or
+        ``tf_static``.
     topic : str
     stamp : float
         The message's header stamp [s].
@@ -154,7 +168,7 @@ def resolve_bag_path(path: str | Path) -> Path:
     raise DataFormatError(f"bag: {p} is neither a ROS 1 .bag file nor a ROS 2 bag folder")
 
 
-def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
+def _pick_topics(connections: Any, topics: BagTopics, bag: Path | None = None) -> dict[str, str]:
     """topic -> kind for the connections to read (named topics first, then by type)."""
     by_topic: dict[str, str] = {}
     for c in connections:
@@ -170,15 +184,23 @@ def _pick_topics(connections: Any, topics: BagTopics) -> dict[str, str]:
             if kind == "truth":
                 continue  # optional: only simulated or motion-captured runs have it
             raise DataFormatError(
-                f"bag topic {wanted!r} for {kind} not found; topics: {sorted(by_topic)}"
+                f"bag topic {wanted!r} for {kind} not found{f' in {bag}' if bag else ''};"
+                f" topics: {sorted(by_topic)}"
             )
         if by_topic[name] not in types:
             raise DataFormatError(
-                f"bag topic {name}: expected {' or '.join(types)}, got {by_topic[name]}"
+                f"bag topic {name}{f' in {bag}' if bag else ''}: expected"
+                f" {' or '.join(types)}, got {by_topic[name]}"
             )
         chosen[name] = kind
     for kind, types in _TYPES.items():
         if getattr(topics, kind) is not None or kind == "truth":
+            continue
+        if kind in _BY_NAME_ONLY:
+            usual = _BY_NAME_ONLY[kind]
+            name = next((n for n in (usual, usual.lstrip("/")) if n in by_topic), None)
+            if name is not None and by_topic[name] in types and name not in chosen:
+                chosen[name] = kind
             continue
         candidates = [
             name
@@ -272,6 +294,9 @@ def _convert(kind: str, msgtype: str, msg: Any, max_pixels: int) -> tuple[float,
         return header_stamp(msg, where), img
     if kind == "map":
         return header_stamp(msg, "OccupancyGrid"), grid_from_msg(msg)
+    if kind in ("tf", "tf_static"):
+        transforms = transforms_from_msg(msg)
+        return (transforms[0].stamp if transforms else 0.0), transforms
     pose_cov = pose_with_covariance_from_msg(msg)
     return header_stamp(msg, "PoseWithCovarianceStamped"), pose_cov
 
@@ -283,6 +308,7 @@ def read_bag(
     on_error: Literal["raise", "skip"] = "raise",
     dropped: Counter[str] | None = None,
     max_image_pixels: int = MAX_IMAGE_PIXELS,
+    kinds: Collection[str] | None = None,
 ) -> Iterator[BagMessage]:
     """Yield the bag's scans, odometry, images, maps, ground truth and initial poses in order.
 
@@ -302,6 +328,9 @@ def read_bag(
         Receives the number of skipped messages per topic.
     max_image_pixels : int
         Images of more pixels are malformed messages (refused before decoding).
+    kinds : collection of str, optional
+        Read only these kinds (their topics are still chosen, and checked, as for all kinds);
+        the others' messages are not even deserialised. Default: every kind.
 
     Raises
     ------
@@ -311,10 +340,16 @@ def read_bag(
     """
     if on_error not in ("raise", "skip"):
         raise DataFormatError(f"on_error: expected 'raise' or 'skip', got {on_error!r}")
+    if kinds is not None and set(kinds) - set(_TYPES):
+        raise DataFormatError(
+            f"kinds: expected some of {sorted(_TYPES)}, got {sorted(set(kinds) - set(_TYPES))}"
+        )
     bag = resolve_bag_path(path)
     reader = _open_reader(bag)
     try:
-        chosen = _pick_topics(reader.connections, topics or BagTopics())
+        chosen = _pick_topics(reader.connections, topics or BagTopics(), bag)
+        if kinds is not None:
+            chosen = {t: k for t, k in chosen.items() if k in kinds}
         conns = [c for c in reader.connections if c.topic in chosen]
         try:
             records = iter(reader.messages(connections=conns))
@@ -384,6 +419,8 @@ class BagWriter:
     map_topic: str = "/map"
     truth_topic: str = "/ground_truth"
     initialpose_topic: str = "/initialpose"
+    tf_topic: str = "/tf"
+    tf_static_topic: str = "/tf_static"
     counts: Counter[str] = field(default_factory=Counter)
     _writer: Any = field(default=None, init=False, repr=False)
     _typestore: Any = field(default=None, init=False, repr=False)
@@ -511,6 +548,22 @@ class BagWriter:
         """A nav_msgs/OccupancyGrid, offered transient-local (latched) like map_server's."""
         fields = grid_to_fields(grid, stamp=stamp)
         self.write_fields(self.map_topic, "nav_msgs/msg/OccupancyGrid", fields, stamp, latched=True)
+
+    def write_transforms(
+        self,
+        transforms: Sequence[tuple[str, str, ArrayLike]],
+        stamp: float,
+        *,
+        static: bool = False,
+    ) -> None:
+        """A tf2_msgs/TFMessage of planar ``(parent, child, parent_from_child (3,))`` transforms
+        on ``/tf`` (or ``/tf_static``, offered transient-local as tf2's static broadcaster)."""
+        fields = tf_message_fields(
+            transform_fields(pose, stamp=stamp, parent=parent, child=child)
+            for parent, child, pose in transforms
+        )
+        topic = self.tf_static_topic if static else self.tf_topic
+        self.write_fields(topic, "tf2_msgs/msg/TFMessage", fields, stamp, latched=static)
 
     def write_initialpose(self, pose: ArrayLike, covariance: ArrayLike, stamp: float) -> None:
         """A geometry_msgs/PoseWithCovarianceStamped (as RViz's 2D Pose Estimate sends)."""

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import DataFormatError
+from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
 from symloc.io.bag_clocks import ClockOffsets, clock_offsets, stream_lags
 from symloc.io.rosbag import BagMessage, BagTopics, bag_topics, read_bag
@@ -38,10 +39,13 @@ from symloc.ros.assemble import check_files
 from symloc.ros.core import LocalizerFactory, NodeCore, Outputs
 from symloc.ros.pairing import OdometryBuffer
 from symloc.ros.params import NodeParams
+from symloc.ros.tf import TransformTree, laser_mount, odometry_from_transform
+from symloc.scan import mirror
 
 __all__ = [
     "MAX_DROPPED_SHARE",
     "MIN_PAIRED_SHARE",
+    "ODOM_SOURCES",
     "BagMap",
     "ReplayResult",
     "ReplayVerdict",
@@ -151,6 +155,10 @@ def replay_verdict(res: ReplayResult) -> ReplayVerdict:
     return ReplayVerdict(True, f"recording usable: {head}")
 
 
+#: The kinds of bag messages a replay feeds the node (TF is read for mapping only).
+_REPLAYED = ("scan", "odom", "image", "map", "truth", "initialpose")
+
+
 def replay_bag(
     path: str | Path,
     params: NodeParams,
@@ -188,7 +196,9 @@ def replay_bag(
     total = None
     if progress:
         total = sum(n for _, n in bag_topics(path).values())
-    messages: Any = read_bag(path, topics=topics, on_error="skip", dropped=bag_dropped)
+    messages: Any = read_bag(
+        path, topics=topics, on_error="skip", dropped=bag_dropped, kinds=_REPLAYED
+    )
     if progress:
         from tqdm import tqdm
 
@@ -272,9 +282,14 @@ def restamped(m: BagMessage, shift: float) -> BagMessage:
 class ScansWithOdometry:
     """A bag's scans paired with the odometry at their stamps, for mapping.
 
-    ``scans`` in time order; ``odometry`` (N, 3) x [m], y [m], theta [rad] at each scan;
+    ``scans`` in time order (mirrored when the laser is mounted upside down); ``odometry``
+    (N, 3) x [m], y [m], theta [rad] of the robot's base in the odometry frame at each scan;
     ``dropped`` messages left out per reason; ``total`` scans in the bag; ``clock_notes``
-    streams re-stamped onto the odometry's clock.
+    streams re-stamped onto the odometry's clock; ``readings`` every odometry reading of the
+    bag (to look up the odometry at other stamps, e.g. images'); ``source`` where the odometry
+    came from (``topic /odom``, ``TF odom -> base_footprint``); ``mount`` (3,)
+    ``base_from_laser`` in the plane (zeros when ``/tf_static`` does not link the laser to the
+    base); ``laser_frame`` the scans' frame.
     """
 
     scans: list[Any]
@@ -282,10 +297,32 @@ class ScansWithOdometry:
     dropped: dict[str, int]
     total: int
     clock_notes: list[str]
+    readings: OdometryBuffer = field(default_factory=OdometryBuffer)
+    source: str = ""
+    mount: FloatArray = field(default_factory=lambda: np.zeros(3))
+    laser_frame: str = ""
+
+    @property
+    def laser_odometry(self) -> FloatArray:
+        """(N, 3) the laser's pose in the odometry frame at each scan (what SLAM takes: its
+        sensor frame is the robot frame): :attr:`odometry` composed with :attr:`mount`."""
+        if not np.any(self.mount):
+            return self.odometry
+        return np.asarray(compose(self.odometry, self.mount), dtype=np.float64).reshape(-1, 3)
+
+
+#: Where a bag's odometry may come from (:func:`pair_scans_offline`).
+ODOM_SOURCES = ("auto", "topic", "tf")
 
 
 def pair_scans_offline(
-    path: str | Path, *, topics: BagTopics | None = None, transform_tolerance: float = 1.0
+    path: str | Path,
+    *,
+    topics: BagTopics | None = None,
+    transform_tolerance: float = 1.0,
+    odom_source: str = "auto",
+    odom_frame: str = "odom",
+    base_frame: str = "",
 ) -> ScansWithOdometry:
     """Every scan of the bag with the odometry pose at its stamp, knowing the whole bag.
 
@@ -294,17 +331,54 @@ def pair_scans_offline(
     at another rate than the scans, late or in bursts). Odometry readings whose stamp is older
     than an earlier reading's are outliers and left out; a scan stamped before the previous
     scan is left out (mapping needs time order); a scan within ``transform_tolerance`` [s]
-    before the first or after the last reading takes that reading, one further away gets none. Streams on another clock than the
-    odometry's are re-stamped first (:mod:`symloc.io.bag_clocks`). Each is counted in
-    ``dropped``.
+    before the first or after the last reading takes that reading, one further away gets none.
+    Streams on another clock than the odometry's are re-stamped first
+    (:mod:`symloc.io.bag_clocks`). Each is counted in ``dropped``.
+
+    The odometry comes from the bag's nav_msgs/Odometry topic (``odom_source="topic"``) or
+    from the ``odom_frame -> base_frame`` transforms on ``/tf`` (``"tf"``; ``base_frame`` ""
+    takes the frame the odometry frame's transforms lead to); ``"auto"`` takes the topic when
+    the bag has one, else TF. When ``/tf_static`` links the scans' frame to the base, the
+    laser's mount is returned (:attr:`ScansWithOdometry.mount`), and the scans of a laser
+    mounted upside down are mirrored.
+
+    Raises
+    ------
+    DataFormatError
+        ``odom_source`` is not one of :data:`ODOM_SOURCES`, the odometry it names is not in
+        the bag (naming the bag, the topic or frames, and what it holds), or the laser's scan
+        plane is tilted.
     """
+    if odom_source not in ODOM_SOURCES:
+        raise DataFormatError(f"odom_source: expected one of {ODOM_SOURCES}, got {odom_source!r}")
     wanted = dataclasses.replace(topics or BagTopics(), truth=None)
     dropped: Counter[str] = Counter()
-    messages = [
-        m
-        for m in read_bag(path, topics=wanted, on_error="skip", dropped=dropped)
-        if m.kind in ("scan", "odom")
-    ]
+    kinds = ("scan", "odom", "tf_static") + (() if odom_source == "topic" else ("tf",))
+    messages = list(read_bag(path, topics=wanted, on_error="skip", dropped=dropped, kinds=kinds))
+    odom_topics = sorted({m.topic for m in messages if m.kind == "odom"})
+    use_tf = odom_source == "tf" or (odom_source == "auto" and not odom_topics)
+    tree = TransformTree()
+    for m in messages:
+        if m.kind == "tf_static":
+            for t in m.value:
+                tree.add(t, static=True)
+    if use_tf and odom_source == "auto" and not any(m.kind == "tf" for m in messages):
+        raise DataFormatError(
+            f"bag {path}: expected odometry, on a nav_msgs/Odometry topic or as {odom_frame} ->"
+            f" base transforms on /tf; the bag has neither (topics: {sorted(bag_topics(path))})"
+        )
+    if use_tf:
+        messages, source = _tf_odometry(path, messages, tree, odom_frame, base_frame)
+    elif not odom_topics:
+        raise DataFormatError(
+            f"bag {path}: expected odometry on a nav_msgs/Odometry topic"
+            f"{f' ({wanted.odom})' if wanted.odom else ''}, found none"
+            f" (topics: {sorted(bag_topics(path))}); record /odom, or /tf with {odom_frame} ->"
+            " base"
+        )
+    else:
+        source = f"topic {odom_topics[0]}"
+    messages = [m for m in messages if m.kind in ("scan", "odom")]
     clocks = clock_offsets(stream_lags(messages), transform_tolerance)
     buf = OdometryBuffer()
     raw_scans: list[Any] = []
@@ -315,6 +389,26 @@ def pair_scans_offline(
                 dropped["odom: stamp went backwards"] += 1
         else:
             raw_scans.append(m.value)
+    laser_frame = raw_scans[0].frame_id if raw_scans else ""
+    mount = np.zeros(3)
+    upside_down = False
+    if use_tf:
+        bases = [source.rpartition("-> ")[2]]
+    else:
+        bases = [base_frame] if base_frame else ["base_footprint", "base_link"]
+    for base in bases:
+        m44 = tree.lookup(base, laser_frame) if laser_frame and laser_frame != base else None
+        if m44 is None:
+            continue
+        lm = laser_mount(m44)
+        if not lm.level:
+            raise DataFormatError(
+                f"bag {path}: the scan plane of {laser_frame} is tilted"
+                f" {math.degrees(lm.tilt):.0f} deg from the floor (/tf_static {base} ->"
+                f" {laser_frame}); a 2D map needs a level laser"
+            )
+        mount, upside_down = lm.pose, lm.upside_down
+        break
     scans: list[Any] = []
     odom: list[FloatArray] = []
     last = -math.inf
@@ -333,7 +427,7 @@ def pair_scans_offline(
             dropped[f"scan: {reading}"] += 1
             continue
         last = scan.stamp
-        scans.append(scan)
+        scans.append(mirror(scan) if upside_down else scan)
         odom.append(np.asarray(reading.pose))
     return ScansWithOdometry(
         scans,
@@ -341,7 +435,50 @@ def pair_scans_offline(
         dict(dropped),
         len(raw_scans),
         list(clocks.notes),
+        readings=buf,
+        source=source,
+        mount=np.asarray(mount, dtype=np.float64),
+        laser_frame=laser_frame,
     )
+
+
+def _tf_odometry(
+    path: str | Path,
+    messages: list[BagMessage],
+    tree: TransformTree,
+    odom_frame: str,
+    base_frame: str,
+) -> tuple[list[BagMessage], str]:
+    """``messages`` with the bag's odometry topic replaced by ``odom_frame -> base_frame``
+    readings from ``/tf`` (kind ``odom``), and where they came from (``TF odom -> base``)."""
+    tf_msgs = [m for m in messages if m.kind == "tf"]
+    children = Counter(t.child for m in tf_msgs for t in m.value if t.parent == odom_frame)
+    if not children:
+        parents = sorted({f"{t.parent} -> {t.child}" for m in tf_msgs for t in m.value})
+        raise DataFormatError(
+            f"bag {path}: expected odometry as {odom_frame} -> base transforms on /tf, found"
+            f" {'no /tf messages' if not tf_msgs else 'only ' + ', '.join(parents[:6])};"
+            " record /odom (nav_msgs/Odometry) or /tf, or name the odometry frame"
+        )
+    base = base_frame or children.most_common(1)[0][0]
+    out: list[BagMessage] = []
+    for m in messages:
+        if m.kind == "odom":
+            continue
+        if m.kind != "tf":
+            out.append(m)
+            continue
+        for t in m.value:
+            tree.add(t, static=False)
+            reading = odometry_from_transform(t, tree, odom_frame=odom_frame, base_frame=base)
+            if reading is not None:
+                out.append(dataclasses.replace(m, kind="odom", stamp=t.stamp, value=reading))
+    if not any(m.kind == "odom" for m in out):
+        raise DataFormatError(
+            f"bag {path}: /tf has {odom_frame} -> {sorted(children)} but none leads to the base"
+            f" frame {base!r} (through /tf_static); name the base frame"
+        )
+    return out, f"TF {odom_frame} -> {base}"
 
 
 def scans_with_odometry(
@@ -361,7 +498,7 @@ MIN_PAIRED_SHARE = 0.8
 @dataclass(frozen=True)
 class BagMap:
     """A map built from a bag: ``slam`` the :class:`symloc.slam.slam.SlamResult` (``.grid``,
-    ``.poses`` (N, 3) in the map frame), ``stamps`` (N,) [s] of the scans used, ``paired`` how
+    ``.poses`` (N, 3) the laser's poses in the map frame), ``stamps`` (N,) [s] of the scans used, ``paired`` how
     the scans were paired with odometry."""
 
     slam: Any
@@ -393,6 +530,6 @@ def build_map_from_bag(
             f" {got.dropped or 'none'}); check --odom-topic and that scans and odometry come"
             " from one clock"
         )
-    slam = run_slam(got.scans, got.odometry, slam_params, progress=True, desc="slam (bag)")
+    slam = run_slam(got.scans, got.laser_odometry, slam_params, progress=True, desc="slam (bag)")
     stamps = np.array([s.stamp for s in got.scans], dtype=np.float64)
     return BagMap(slam, stamps, got)

@@ -18,7 +18,9 @@ the view.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,10 +28,16 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff
 from symloc.vision.bow import BowVector
-from symloc.vision.orb import OrbFeatures
+from symloc.vision.orb import OrbExtractor, OrbFeatures
 from symloc.vision.two_view import ratio_matches
 
-__all__ = ["Keyframe", "KeyframeDecision", "KeyframeSelector", "KeyframeSettings"]
+__all__ = [
+    "Keyframe",
+    "KeyframeDecision",
+    "KeyframeRecorder",
+    "KeyframeSelector",
+    "KeyframeSettings",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -217,3 +225,59 @@ class KeyframeSelector:
         """Make the frame at ``pose`` the reference of the next decisions."""
         self._last_pose = _pose3(pose, "pose")
         self._last_features = features
+
+
+class KeyframeRecorder:
+    """Keyframes all along the mapping trip (not only at symmetric places).
+
+    :meth:`frame` is called at every frame of the trip (each scan of a simulated trip, each
+    camera image of a recording) with its index, the odometry pose and what ``capture`` turns
+    into the image (the robot's true pose for a simulator's renderer, the image itself for a
+    recording). The selection rule (:class:`KeyframeSelector`) runs on the odometry pose (what
+    the robot knows while it drives); an image is captured (and its ORB features extracted)
+    only when the pose rule fires, or every ``check_every`` frames for the covisibility test.
+    Kept frames wait for their map pose: :meth:`keyframes` gives them the map pose of their
+    frame (SLAM's, after the trip; or any pose source).
+    """
+
+    def __init__(
+        self,
+        capture: Callable[[Any], NDArray[np.uint8]],
+        extractor: OrbExtractor,
+        settings: KeyframeSettings | None = None,
+        *,
+        check_every: int = 5,
+    ) -> None:
+        self.capture = capture
+        self.extractor = extractor
+        self.selector = KeyframeSelector(settings)
+        self.check_every = max(1, int(check_every))
+        self.frames: list[tuple[int, float, OrbFeatures]] = []
+        self.captured = 0
+
+    def frame(self, index: int, odom_pose: FloatArray, view: Any, stamp: float) -> None:
+        """Consider frame ``index`` (a scan's, or an image's) at ``odom_pose`` (3,); its image
+        is ``capture(view)``, taken only when the rule may keep it (a simulator renders the
+        image at the true pose ``view``; a recording passes the image itself)."""
+        due = self.selector.pose_due(odom_pose)
+        if not due and index % self.check_every:
+            return
+        feats = self.extractor.extract(self.capture(view))
+        self.captured += 1
+        if self.selector.consider(odom_pose, feats).keep:
+            self.selector.accept(odom_pose, feats)
+            self.frames.append((int(index), float(stamp), feats))
+
+    @property
+    def indices(self) -> list[int]:
+        """Scan index of each kept frame, in order (the bench looks up its true pose)."""
+        return [i for i, _, _ in self.frames]
+
+    def keyframes(
+        self, map_pose: Callable[[int], FloatArray], bow: Callable[[OrbFeatures], BowVector]
+    ) -> list[Keyframe]:
+        """The kept frames as keyframes, with ``map_pose(scan_index)`` and their BoW vectors."""
+        return [
+            Keyframe(np.asarray(map_pose(i), np.float64), f, bow(f), stamp=t)
+            for i, t, f in self.frames
+        ]

@@ -1,4 +1,9 @@
-"""``symloc map build``: build an occupancy grid by laser SLAM and save it for map_server."""
+"""``symloc map build``: build an occupancy grid by laser SLAM and save it for map_server.
+
+Sources: a simulated world (``--world``), a CARMEN log (``--carmen``) or a robot's own ROS bag
+(``--bag``: scans, odometry on a topic or ``/tf``, and camera images when it has them, which
+become the visual map's keyframes; :mod:`symloc.ros.bag_mapping`).
+"""
 
 from __future__ import annotations
 
@@ -22,15 +27,30 @@ def register(subparsers: Any) -> None:
     sub.required = True
     b = sub.add_parser(
         "build",
-        help="SLAM from a simulated exploration run or a CARMEN log; writes map.yaml + map.<write id>.pgm",
+        help="SLAM from a simulated exploration run, a CARMEN log or a ROS bag; writes"
+        " map.yaml + map.<write id>.pgm (and, from a bag with a camera, the visual map)",
         description="Run laser SLAM (correlative scan matching against submaps, GTSAM pose graph "
         "with loop closures) and write the map in map_server format plus a PNG of the map and "
-        "the trajectory.",
+        "the trajectory. From a ROS bag (--bag) with camera images it also writes the visual "
+        "map (keyframes with their SLAM poses) that `symloc replay --visual-map` and the ROS "
+        "node's visual_map parameter take.",
     )
     src = b.add_mutually_exclusive_group(required=True)
     src.add_argument("--world", choices=sorted(SIM_WORLDS), help="simulated world to explore")
     src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
-    options.add_out(b, "map build", what="NAME.yaml, NAME.<write id>.pgm and NAME_trajectory.png")
+    src.add_argument(
+        "--bag",
+        type=Path,
+        metavar="BAG",
+        help="ROS 1 .bag or ROS 2 bag folder with LaserScan, odometry (nav_msgs/Odometry or"
+        " odom -> base on /tf) and optionally camera images",
+    )
+    options.add_out(
+        b,
+        "map build",
+        what="NAME.yaml, NAME.<write id>.pgm and NAME_trajectory.png; from a bag also"
+        " NAME_trajectory.tum and NAME_visual.db",
+    )
     b.add_argument("--name", default="map", help="file stem of the map (default: map)")
     options.add_seed(b)
     b.add_argument(
@@ -62,10 +82,190 @@ def register(subparsers: Any) -> None:
     b.add_argument(
         "--mode", choices=["trinary", "scale", "raw"], default="trinary", help="map_server mode"
     )
+    g = b.add_argument_group("bag (--bag)")
+    g.add_argument("--scan-topic", default=None, help="LaserScan topic (default: the first one)")
+    g.add_argument("--odom-topic", default=None, help="Odometry topic (default: the first one)")
+    g.add_argument(
+        "--image-topic",
+        default=None,
+        help="Image or CompressedImage topic (default: /camera/image_raw if present, else the"
+        " first one)",
+    )
+    g.add_argument(
+        "--truth-topic",
+        default="ground_truth",
+        help="ground-truth Odometry topic, if any (only to print the ATE; default ground_truth)",
+    )
+    g.add_argument(
+        "--odom-source",
+        choices=["auto", "topic", "tf"],
+        default="auto",
+        help="odometry from the Odometry topic or from /tf (auto: the topic if the bag has one)",
+    )
+    g.add_argument("--odom-frame", default="odom", help="odometry frame on /tf (default odom)")
+    g.add_argument(
+        "--base-frame",
+        default="",
+        help="robot base frame on /tf (default: the frame the odometry frame's transforms lead to)",
+    )
+    g.add_argument(
+        "--vocabulary",
+        type=Path,
+        default=None,
+        help="vocabulary for the keyframes' BoW vectors (default: the shipped one; the node"
+        " must be given the same)",
+    )
+    g.add_argument(
+        "--no-visual-map",
+        action="store_true",
+        help="do not record keyframes even if the bag has camera images",
+    )
     b.set_defaults(func=_build)
 
 
+def _check_out(out: Path) -> None:
+    """The output folder can be written (before any work): a folder or a new path."""
+    import os
+
+    from symloc.errors import ConfigurationError
+
+    if out.exists() and not out.is_dir():
+        raise ConfigurationError(f"--out: {out} exists and is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ConfigurationError(f"--out: cannot create the folder {out}: {err}") from err
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigurationError(f"--out: the folder {out} is not writable")
+
+
+def _build_from_bag(args: argparse.Namespace) -> int:
+    """``map build --bag``: the mapping stage from a recording (module docstring)."""
+    import sys
+
+    import numpy as np
+
+    from symloc.bench.slam_metrics import ate
+    from symloc.figures.slam import map_trajectory_figure
+    from symloc.geometry import compose, inverse
+    from symloc.grid.map_io import read_map_yaml
+    from symloc.io.rosbag import BagTopics
+    from symloc.ros.bag_mapping import BagMappingSettings, map_from_bag, save_bag_mapping
+    from symloc.slam.slam import SlamParams
+    from symloc.vision.vocabulary import Vocabulary
+
+    out = Path(args.out)
+    options.refuse_overwriting_inputs(
+        {"--bag": args.bag, "--vocabulary": args.vocabulary},
+        {"--out": out, "--out/NAME.yaml": out / f"{args.name}.yaml"},
+    )
+    _check_out(out)
+    vocab = Vocabulary.load(args.vocabulary) if args.vocabulary is not None else None
+    print(f"# symloc map build --bag {args.bag}, seed {args.seed}")
+    topics = BagTopics(
+        scan=args.scan_topic,
+        odom=args.odom_topic,
+        image=args.image_topic,
+        truth=args.truth_topic or None,
+    )
+    settings = BagMappingSettings(
+        visual_map=not args.no_visual_map,
+        odom_source=args.odom_source,
+        odom_frame=args.odom_frame,
+        base_frame=args.base_frame,
+    )
+    built = map_from_bag(
+        args.bag,
+        topics=topics,
+        slam_params=SlamParams(map_resolution=args.resolution),
+        settings=settings,
+        vocabulary=vocab,
+        progress=True,
+    )
+    files = save_bag_mapping(built, out, args.name, mode=args.mode, vocabulary_file=args.vocabulary)
+    res, paired = built.slam, built.paired
+    print(
+        f"scans: {len(paired.scans)} of {paired.total} paired with odometry from"
+        f" {paired.source} (dropped: {paired.dropped or 'none'})"
+    )
+    if np.any(paired.mount):
+        print(
+            f"laser mount from /tf_static: {paired.laser_frame} at"
+            f" {np.round(paired.mount, 3).tolist()} (x m, y m, yaw rad) on the base"
+        )
+    for note in paired.clock_notes:
+        print(f"clock: {note}")
+    print(
+        f"map: {res.grid.width} x {res.grid.height} cells at {res.grid.resolution} m;"
+        f" {int(res.node_scans.size)} nodes, loop closures accepted {len(res.loop_closures)},"
+        f" rejected {len(res.rejected_loops)}; result {'DOUBTFUL' if res.doubtful else 'consistent'}"
+    )
+    for w in res.warnings:
+        print(f"  warning: {w}")
+    me = res.map_error
+    if me is not None:
+        print(
+            f"map's own error: std {100 * me.std_xy:.1f} cm, p95 {100 * me.p95_xy:.1f} cm over"
+            f" {me.nodes} nodes (symloc_slam.map_error in the YAML; the claim gate reads it)"
+        )
+    else:
+        print("map's own error: not estimated (too few usable scans, or a map too large)")
+    ate_text = ""
+    reference = None
+    ok = np.all(np.isfinite(built.truth), axis=1) if built.truth.size else np.zeros(0, bool)
+    if ok.sum() >= 3:
+        a = ate(built.truth[ok], built.poses[ok])
+        reference = np.asarray(compose(inverse(a.alignment), built.truth[ok]))
+        ate_text = f", ATE {a.rmse:.3f} m"
+        print(
+            f"ATE against {args.truth_topic}: RMSE {a.rmse:.3f} m over {int(ok.sum())} scans"
+            " (after the best rigid alignment)"
+        )
+    else:
+        print(f"ATE: no ground truth ({args.truth_topic or 'no truth topic'} not in the bag)")
+    if not built.image_topic:
+        why = "--no-visual-map" if args.no_visual_map else "the bag has no camera images"
+        print(f"visual map: none ({why}); a symmetric room will stay ambiguous")
+    else:
+        img_dropped = {k: v for k, v in built.dropped.items() if k.startswith("image")}
+        print(
+            f"visual map: {len(built.keyframes)} keyframes from {built.images} images on"
+            f" {built.image_topic} ({built.images_looked_at} looked at"
+            f"{f'; dropped: {img_dropped}' if img_dropped else ''})"
+        )
+    png = map_trajectory_figure(
+        res.grid,
+        built.poses,
+        out / f"{args.name}_trajectory.png",
+        reference=reference,
+        loop_nodes=[i for _, i in res.loop_closures],
+        keyframes=built.keyframe_poses if built.keyframes else None,
+        title=f"{Path(args.bag).name}: {len(built.poses)} scans{ate_text},"
+        f" {len(built.keyframes)} keyframes",
+    )
+    written = [str(files.map_yaml), str(read_map_yaml(files.map_yaml).image)]
+    written += [str(files.trajectory), str(png)]
+    if files.visual_map is not None:
+        written.append(str(files.visual_map))
+    print(f"wrote {', '.join(written)}")
+    if files.visual_map is not None:
+        vocab_arg = f" --vocabulary {args.vocabulary}" if args.vocabulary else ""
+        print(
+            f"next: symloc replay BAG --map {files.map_yaml} --visual-map {files.visual_map}"
+            f"{vocab_arg}"
+        )
+    if res.doubtful:
+        print(
+            f"symloc: warning: the map in {files.map_yaml} is doubtful (see the warnings above):"
+            " look at it before localizing on it",
+            file=sys.stderr,
+        )
+    return 0
+
+
 def _build(args: argparse.Namespace) -> int:
+    if args.bag is not None:
+        return _build_from_bag(args)
     from symloc.bench.slam_runs import run_carmen, run_simulated
     from symloc.errors import ConfigurationError
     from symloc.figures.slam import map_trajectory_figure
