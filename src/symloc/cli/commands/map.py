@@ -31,7 +31,9 @@ def register(subparsers: Any) -> None:
     src.add_argument("--world", choices=sorted(SIM_WORLDS), help="simulated world to explore")
     src.add_argument("--carmen", type=Path, metavar="PATH", help="CARMEN log (.log or .log.gz)")
     options.add_out(b, "map build", what="NAME.yaml, NAME.<write id>.pgm and NAME_trajectory.png")
-    b.add_argument("--name", default="map", help="file stem of the map (default: map)")
+    b.add_argument(
+        "--name", type=options.file_stem, default="map", help="file stem of the map (default: map)"
+    )
     options.add_seed(b)
     b.add_argument(
         "--odometry",
@@ -49,13 +51,13 @@ def register(subparsers: Any) -> None:
     )
     b.add_argument(
         "--laps",
-        type=options.positive_float,
+        type=options.laps,
         default=1.3,
         help="simulation: loops around the room (default 1.3)",
     )
     b.add_argument(
         "--resolution",
-        type=options.positive_float,
+        type=options.map_resolution,
         default=0.05,
         help="map cell size [m] (default 0.05)",
     )
@@ -81,8 +83,7 @@ def _build(args: argparse.Namespace) -> int:
     print(f"# symloc map build: {source}, seed {args.seed}, odometry {odo}")
     if args.world:
         if regime is None:
-            print("error: --odometry log needs a CARMEN log (--carmen)")
-            return 2
+            raise ConfigurationError("--odometry log needs a CARMEN log (--carmen)")
         run = run_simulated(
             args.world,
             odometry=regime,
@@ -93,19 +94,14 @@ def _build(args: argparse.Namespace) -> int:
         reference = run.reference
     else:
         if not args.carmen.is_file():
-            print(f"error: CARMEN log not found: {args.carmen}")
-            return 2
-        try:
-            run = run_carmen(
-                args.carmen,
-                odometry=args.odometry,
-                rng=args.seed,
-                params=params,
-                max_scans=args.max_scans,
-            )
-        except ConfigurationError as err:
-            print(f"error: {err}")
-            return 2
+            raise ConfigurationError(f"--carmen {args.carmen}: not found; expected a CARMEN log")
+        run = run_carmen(
+            args.carmen,
+            odometry=args.odometry,
+            rng=args.seed,
+            params=params,
+            max_scans=args.max_scans,
+        )
         reference = compose(inverse(run.ate.alignment), run.reference)
     s = run.summary()
     out = Path(args.out)
