@@ -191,3 +191,67 @@ def test_maps_on_the_topic_are_capped_before_their_data_is_read() -> None:
     assert core.grid is not None
     assert core.grid.width == 30
     assert math.isclose(core.grid.resolution, 0.05)
+
+
+# ----------------------------------------------------------------------- bags
+
+
+def _bag_with_a_bad_scan(folder: Path, bad: int = 3, scans: int = 20) -> Path:
+    """A ROS 2 (.db3) bag whose scan number ``bad`` carries 16 trailing bytes."""
+    import sqlite3
+
+    from symloc.grid import OccupancyGrid
+    from symloc.io.rosbag import BagWriter
+    from symloc.odometry import OdometryReading
+    from symloc.scan import LaserScan
+
+    path = folder / "bag"
+    d = np.zeros((40, 40), np.int8)
+    d[[0, -1], :] = 100
+    d[:, [0, -1]] = 100
+    with BagWriter(path, "ros2") as w:
+        w.write_map(OccupancyGrid(d, 0.05), 0.0)
+        for i in range(scans):
+            t = 1 + 0.1 * i
+            w.write_odometry(OdometryReading(np.array([0.01 * i, 0, 0]), t))
+            w.write_scan(LaserScan(-math.pi, 2 * math.pi / 90, 0.1, 8, np.full(90, 0.9), stamp=t))
+    db = next(path.glob("*.db3"))
+    with sqlite3.connect(db) as con:
+        (topic,) = con.execute("SELECT id FROM topics WHERE name = '/scan'").fetchone()
+        mid, data = con.execute(
+            "SELECT id, data FROM messages WHERE topic_id = ? ORDER BY timestamp LIMIT 1 OFFSET ?",
+            (topic, bad),
+        ).fetchone()
+        con.execute("UPDATE messages SET data = ? WHERE id = ?", (data + bytes(16), mid))
+    return path
+
+
+def test_an_undecodable_bag_message_is_skipped_and_counted_not_the_rest(tmp_path: Path) -> None:
+    import warnings
+    from collections import Counter
+
+    from symloc.io.rosbag import read_bag
+
+    path = _bag_with_a_bad_scan(tmp_path)
+    dropped: Counter[str] = Counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kinds = Counter(m.kind for m in read_bag(path, on_error="skip", dropped=dropped))
+    assert kinds == Counter({"odom": 20, "scan": 19, "map": 1})
+    assert dropped == Counter({"/scan": 1})
+    assert any("size mismatch" in str(w.message) for w in caught)
+    with pytest.raises(DataFormatError, match="topic /scan at log time"):
+        list(read_bag(path, on_error="raise"))
+
+
+def test_replay_names_a_visual_map_that_is_not_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _bag_with_a_bad_scan(tmp_path)
+    not_a_map = tmp_path / "README.md"
+    not_a_map.write_text("# not a database\n" * 50)
+    code = main(["replay", str(path), "--visual-map", str(not_a_map), "--out", str(tmp_path / "o")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"symloc: error: visual_map: {not_a_map}: not a symloc visual map" in err
+    assert not (tmp_path / "o").exists()
