@@ -232,3 +232,61 @@ def test_the_default_out_folder_is_checked_too(
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert f"argument --out: {options.default_out(' '.join(path))} is an existing file" in err
+
+
+#: Numeric options without an upper bound, and why none is needed: nothing is allocated or run
+#: in proportion to them (or the library checks them against what they index).
+UNBOUNDED_NUMBERS = {
+    "seed": "any integer >= 0 seeds numpy's SeedSequence",
+    "seeds": "world seeds: any integer >= 0",
+    "max_scans": "only truncates a log",
+    "timeout": "wall seconds a peer may run; nothing is allocated for it",
+    "odom_alpha": "a noise level",
+    "amcl_alpha": "a noise level",
+    "global_exponent": "AmclParams checks it in (0, 1]",
+    "step": "an angle",
+    "max_yaw": "an angle",
+    "max_heading": "an angle",
+    "measurement_sigma": "an angle",
+    "chain_sigma": "an angle",
+    "hfov": "an angle (the camera's resolution is fixed)",
+    "loop_every": "larger means fewer loop searches",
+    "loop_resample": "larger means fewer loop searches",
+    "loop_constrained": "larger means fewer loop searches",
+    "stride": "larger means fewer scans judged",
+    "range_sigma": "a tolerance",
+    "range_sigma_relative": "a tolerance",
+    "radius_mm": "a tolerance",
+    "gv": "places add: stored with the place, nothing built from it",
+    "pose": "a pose",
+    "intrinsics": "camera intrinsics (checked by the camera model)",
+    "distortion": "distortion coefficients (checked by the camera model)",
+    "place": "an id looked up in the database",
+    "index": "a scan index looked up in the log",
+    "time": "a simulated time of day",
+    "gain": "an image gain",
+}
+_NUMERIC = {
+    options.positive_int,
+    options.nonnegative_int,
+    options.positive_float,
+    options.nonnegative_float,
+    options.finite_float,
+    options.integer,
+    options._radians,
+    int,
+    float,
+}
+
+
+@pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)
+def test_numeric_options_are_bounded_or_say_why_not(path: tuple[str, ...]) -> None:
+    for action in LEAVES[path]._actions:
+        if isinstance(action.type, options.Bounded):
+            assert action.type.high is not None or action.type.low is not None
+            assert action.type.why
+        elif action.type in _NUMERIC:
+            assert action.dest in UNBOUNDED_NUMBERS, (
+                f"{action.option_strings}: a numeric option needs an upper bound"
+                " (options.bounded) or a reason in UNBOUNDED_NUMBERS"
+            )

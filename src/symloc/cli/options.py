@@ -73,6 +73,7 @@ __all__ = [
     "DEFAULT_ROOM",
     "DEFAULT_SEED",
     "ROOMS",
+    "Bounded",
     "add_angle",
     "add_json",
     "add_lidar",
@@ -181,6 +182,49 @@ def nonnegative_float(text: str) -> float:
     return value
 
 
+class Bounded:
+    """An argparse type: ``kind`` (e.g. :func:`positive_int`) within ``[low, high]``.
+
+    ``why`` says where the bound comes from (memory, time), and is part of the error, e.g.
+    ``expected at most 4,000,000 (about 240 B per particle in an update: 4 M particles need
+    about 1 GB), got 1000000000``. ``unit`` follows the numbers in the message. ``low``,
+    ``high`` and ``kind`` stay readable (the fuzz suite draws values beyond them).
+    """
+
+    def __init__(
+        self,
+        kind: Callable[[str], float],
+        *,
+        low: float | None = None,
+        high: float | None = None,
+        why: str,
+        unit: str = "",
+    ) -> None:
+        self.kind = kind
+        self.low = low
+        self.high = high
+        self.why = why
+        self.unit = unit
+        self.__name__ = f"bounded_{getattr(kind, '__name__', 'value')}"
+
+    @staticmethod
+    def _shown(bound: float) -> str:
+        return f"{int(bound):,}" if float(bound).is_integer() else f"{bound:g}"
+
+    def __call__(self, text: str) -> Any:
+        value = self.kind(text)
+        u = f" {self.unit}" if self.unit else ""
+        if self.high is not None and value > self.high:
+            raise argparse.ArgumentTypeError(
+                f"expected at most {self._shown(self.high)}{u} ({self.why}), got {text}"
+            )
+        if self.low is not None and value < self.low:
+            raise argparse.ArgumentTypeError(
+                f"expected at least {self._shown(self.low)}{u} ({self.why}), got {text}"
+            )
+        return value
+
+
 def bounded(
     kind: Callable[[str], float],
     *,
@@ -188,32 +232,9 @@ def bounded(
     high: float | None = None,
     why: str,
     unit: str = "",
-) -> Callable[[str], Any]:
-    """An argparse type: ``kind`` (e.g. :func:`positive_int`) within ``[low, high]``.
-
-    ``why`` says where the bound comes from (memory, time), and is part of the error, e.g.
-    ``expected at most 4000000 (about 240 B per particle: 4 M particles hold about 1 GB), got
-    1000000000``. ``unit`` follows the numbers in the message.
-    """
-    u = f" {unit}" if unit else ""
-
-    def shown(bound: float) -> str:
-        return f"{int(bound):,}" if float(bound).is_integer() else f"{bound:g}"
-
-    def convert(text: str) -> Any:
-        value = kind(text)
-        if high is not None and value > high:
-            raise argparse.ArgumentTypeError(
-                f"expected at most {shown(high)}{u} ({why}), got {text}"
-            )
-        if low is not None and value < low:
-            raise argparse.ArgumentTypeError(
-                f"expected at least {shown(low)}{u} ({why}), got {text}"
-            )
-        return value
-
-    convert.__name__ = f"bounded_{getattr(kind, '__name__', 'value')}"
-    return convert
+) -> Bounded:
+    """``kind`` within ``[low, high]`` as an argparse type (:class:`Bounded`)."""
+    return Bounded(kind, low=low, high=high, why=why, unit=unit)
 
 
 #: Longest name of one path component (bytes; Linux NAME_MAX).

@@ -1,0 +1,154 @@
+"""Memory across map changes: does RSS return to its level after the node's map is replaced?
+
+    PYTHONPATH=src python3 benchmarks/map_change_memory.py [--rebuilds 150] [--scans 20]
+                                                           [--tracemalloc] [--json out.json]
+
+:class:`symloc.ros.core.NodeCore` with the real localizer (nav2 AMCL defaults) localizes a
+robot circling in an L-shaped room; every ``--scans`` scans (2 s at 10 Hz) a new map arrives on
+the map topic: the same room with a box moved by one cell, so each map is new and the
+localizer is rebuilt on it (issue 31 measured +0.33 MB of RSS per rebuild over 150 rebuilds,
+still rising). Not paced in real time. Prints RSS [MB] every 10 rebuilds, the slope of RSS
+against the rebuild number over the second half (MB per rebuild; ~0 when memory returns to
+its level) and, with ``--tracemalloc``, the Python allocation sites that grew most between the
+middle and the end.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import os
+import sys
+import tracemalloc
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def rss_mb() -> float:
+    """Current resident set size [MB] (Linux /proc)."""
+    with open(f"/proc/{os.getpid()}/statm") as fh:
+        pages = int(fh.read().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def _status(out: Any) -> str:
+    """The localizer status of one scan's outputs (its diagnostic's ``status`` value)."""
+    if out is None:
+        return "none"
+    values = out.status.get("values", []) if isinstance(out.status, dict) else []
+    return next((v["value"] for v in values if v.get("key") == "status"), "?")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--rebuilds", type=int, default=150)
+    ap.add_argument("--scans", type=int, default=20, help="scans between map changes")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--tracemalloc", action="store_true")
+    ap.add_argument("--json", type=Path, default=None)
+    args = ap.parse_args(argv)
+
+    from symloc.msgs import grid_to_fields
+    from symloc.odometry import OdometryReading
+    from symloc.ros.core import NodeCore
+    from symloc.ros.params import NodeParams
+    from symloc.sim.lidar import PRESETS, simulate_scan
+    from symloc.sim.rasterize import world_to_grid
+    from symloc.sim.rooms import build_room
+
+    rng = np.random.default_rng(args.seed)
+    room = build_room("l_shaped", 3.0, lab=False)
+    base = world_to_grid(room.world, 0.05)
+    preset = PRESETS["rplidar_a2"]
+    centre = np.asarray(room.center, float)
+    rate = 10.0
+
+    def truth(t: float) -> np.ndarray:
+        a = 0.2 * t
+        return np.array(
+            [centre[0] + 0.4 * math.cos(a), centre[1] + 0.4 * math.sin(a), a + math.pi / 2]
+        )
+
+    def new_map(k: int) -> Any:
+        d = base.data.copy()
+        free = np.argwhere(d == 0)
+        r, c = free[(k * 7919) % len(free)]
+        d[r : r + 2, c : c + 2] = 100  # a 10 cm box somewhere: a new map each time
+        return type(base)(d, base.resolution, base.origin)
+
+    def map_message(grid: Any, stamp: float) -> Any:
+        """The map as it arrives on the topic (a nav_msgs/OccupancyGrid look-alike)."""
+        from types import SimpleNamespace as NS
+
+        f = grid_to_fields(grid, stamp=stamp)
+        info = f["info"]
+        o = info["origin"]
+        origin = NS(position=NS(**o["position"]), orientation=NS(**o["orientation"]))
+        header = NS(stamp=NS(**f["header"]["stamp"]), frame_id=f["header"]["frame_id"])
+        return NS(
+            header=header,
+            info=NS(
+                width=info["width"],
+                height=info["height"],
+                resolution=info["resolution"],
+                origin=origin,
+            ),
+            data=f["data"],
+        )
+
+    core = NodeCore(NodeParams(laser_frame_id="laser"))
+    core.set_map(base)
+    core.add_odometry(OdometryReading(truth(0.0), 0.0))
+    core.set_initial_pose(truth(0.0), np.diag([0.01, 0.01, 0.01]))
+    statuses: dict[str, int] = {}
+    t = 0.0
+    rows: list[tuple[int, float]] = []
+    snap_mid = None
+    if args.tracemalloc:
+        tracemalloc.start(25)
+    print(f"# map changes: {args.rebuilds} rebuilds, {args.scans} scans between, pid {os.getpid()}")
+    for k in range(args.rebuilds + 1):
+        for _ in range(args.scans):
+            t += 1.0 / rate
+            for j in range(5):
+                tj = t - 1.0 / rate + (j + 1) / (5 * rate)
+                core.add_odometry(OdometryReading(truth(tj), tj))
+            out = core.add_scan(simulate_scan(room.world, truth(t), preset, rng, stamp=t))
+            status = _status(out)
+            statuses[status] = statuses.get(status, 0) + 1
+        if k < args.rebuilds:
+            core.on_map(map_message(new_map(k), t))
+            assert core.map_refused == "", core.map_refused
+        gc.collect()
+        rows.append((k, rss_mb()))
+        if k % 10 == 0:
+            print(f"rebuild {k:4d}  RSS {rows[-1][1]:7.1f} MB", flush=True)
+        if args.tracemalloc and k == args.rebuilds // 2:
+            snap_mid = tracemalloc.take_snapshot()
+    half = [(k, m) for k, m in rows if k >= args.rebuilds // 2]
+    ks = np.array([k for k, _ in half], float)
+    ms = np.array([m for _, m in half])
+    slope = float(np.polyfit(ks, ms, 1)[0]) if len(half) > 2 else float("nan")
+    first = rows[min(10, len(rows) - 1)][1]
+    print(f"scan statuses: {statuses}")
+    print(
+        f"RSS after 10 rebuilds {first:.1f} MB, at the end {rows[-1][1]:.1f} MB;"
+        f" slope over the second half {slope:+.4f} MB per rebuild"
+    )
+    if args.tracemalloc and snap_mid is not None:
+        end = tracemalloc.take_snapshot()
+        for stat in end.compare_to(snap_mid, "traceback")[:8]:
+            print(f"{stat.size_diff / 1024:+9.1f} KiB {stat.count_diff:+7d} blocks")
+            for line in stat.traceback.format()[-6:]:
+                print("    " + line)
+    if args.json is not None:
+        args.json.write_text(json.dumps({"rss_mb": rows, "slope_mb_per_rebuild": slope}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
