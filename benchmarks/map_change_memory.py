@@ -22,6 +22,7 @@ import math
 import os
 import sys
 import tracemalloc
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,12 @@ def rss_mb() -> float:
     with open(f"/proc/{os.getpid()}/statm") as fh:
         pages = int(fh.read().split()[1])
     return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def _object_counts() -> Counter[str]:
+    """Live objects tracked by the garbage collector, by type name."""
+    gc.collect()
+    return Counter(type(o).__name__ for o in gc.get_objects())
 
 
 def _status(out: Any) -> str:
@@ -49,6 +56,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scans", type=int, default=20, help="scans between map changes")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--tracemalloc", action="store_true")
+    ap.add_argument(
+        "--objects", action="store_true", help="print the object types that grew (gc, cheap)"
+    )
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
 
@@ -82,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def map_message(grid: Any, stamp: float) -> Any:
         """The map as it arrives on the topic (a nav_msgs/OccupancyGrid look-alike)."""
-        from types import SimpleNamespace as NS
+        from types import SimpleNamespace as NS  # noqa: N814 - short, read as a message
 
         f = grid_to_fields(grid, stamp=stamp)
         info = f["info"]
@@ -108,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     t = 0.0
     rows: list[tuple[int, float]] = []
     snap_mid = None
+    objects_mid: Counter[str] = Counter()
     if args.tracemalloc:
         tracemalloc.start(25)
     print(f"# map changes: {args.rebuilds} rebuilds, {args.scans} scans between, pid {os.getpid()}")
@@ -129,6 +140,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"rebuild {k:4d}  RSS {rows[-1][1]:7.1f} MB", flush=True)
         if args.tracemalloc and k == args.rebuilds // 2:
             snap_mid = tracemalloc.take_snapshot()
+        if args.objects and k == args.rebuilds // 2:
+            objects_mid = _object_counts()
     half = [(k, m) for k, m in rows if k >= args.rebuilds // 2]
     ks = np.array([k for k, _ in half], float)
     ms = np.array([m for _, m in half])
@@ -145,6 +158,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{stat.size_diff / 1024:+9.1f} KiB {stat.count_diff:+7d} blocks")
             for line in stat.traceback.format()[-6:]:
                 print("    " + line)
+    if args.objects:
+        grew = _object_counts()
+        grew.subtract(objects_mid)
+        print("objects that grew over the second half:", grew.most_common(8))
     if args.json is not None:
         args.json.write_text(json.dumps({"rss_mb": rows, "slope_mb_per_rebuild": slope}))
     return 0
