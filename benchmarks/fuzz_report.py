@@ -100,6 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     escapes: dict[str, Counter[str]] = {}
     kinds: dict[str, Counter[str]] = {}
+    examples: dict[str, list[str]] = {}
     original_guard = fuzz_targets.guard
 
     def guard(
@@ -118,6 +119,9 @@ def main(argv: list[str] | None = None) -> int:
             k["traceback"] += 1
         if outcome.startswith("escape"):
             escapes.setdefault(target, Counter())[outcome[:110]] += 1
+            if fuzz_targets.last_argv[0]:
+                examples.setdefault(outcome[:110], fuzz_targets.last_argv[0])
+            fuzz_targets.last_argv[0] = []
         return outcome
 
     test_fuzz.guard = guard
@@ -169,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         for text, m in escapes.get(target, Counter()).most_common(4):
             print(f"{'':<17}{m:>4} x {text}")
+            if text in examples:
+                print(f"{'':<24}e.g. symloc {' '.join(map(repr, examples[text]))}")
     print(
         f"{'total':<15} {sum(total.values()):>6} inputs: {total['ok']:>6} ok,"
         f" {total['refused']:>6} refused, {bad['traceback']:>4} tracebacks, {bad['hang']:>3}"

@@ -46,7 +46,8 @@ def _status(out: Any) -> str:
     """The localizer status of one scan's outputs (its diagnostic's ``status`` value)."""
     if out is None:
         return "none"
-    values = out.status.get("values", []) if isinstance(out.status, dict) else []
+    entries = out.status.get("status", []) if isinstance(out.status, dict) else []
+    values = entries[0].get("values", []) if entries else []
     return next((v["value"] for v in values if v.get("key") == "status"), "?")
 
 

@@ -34,6 +34,8 @@ from symloc.errors import SymlocError
 TIME_BOUND = float(os.environ.get("SYMLOC_FUZZ_TIME_BOUND", "10"))
 #: Inputs per target and outcome: ``counts[target][outcome]``.
 counts: dict[str, Counter[str]] = {}
+#: The command line being run (``benchmarks/fuzz_report.py`` names it beside an escape).
+last_argv: list[list[str]] = [[]]
 
 
 class Hang(Exception):  # noqa: N818 - it is what happened
@@ -668,13 +670,26 @@ def command_leaves() -> dict[tuple[str, ...], Any]:
     return out
 
 
-GARBAGE_FILES = ("empty", "random.bin", "random.png", "cut.gz", "folder", "missing")
+GARBAGE_FILES = (
+    "empty",
+    "random.bin",
+    "random.png",
+    "cut.gz",
+    "folder",
+    "missing",
+    "fifo",
+    "dev_zero",
+)
 
 
 def make_garbage_files(folder: Path) -> dict[str, Path]:
-    """Files a command may be pointed at: empty, random bytes, a truncated gzip, a folder."""
+    """Files a command may be pointed at: empty, random bytes, a truncated gzip, a folder, a
+    FIFO (a reader that opens it blocks), ``/dev/zero`` (endless, reports 0 bytes)."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = {name: folder / name for name in GARBAGE_FILES}
+    paths["dev_zero"] = Path("/dev/zero")
+    if not paths["fifo"].exists():
+        os.mkfifo(paths["fifo"])
     paths["empty"].write_bytes(b"")
     paths["random.bin"].write_bytes(bytes(range(256)) * 3)
     paths["random.png"].write_bytes(png_header(40000, 40000, b"\x00" * 64))
@@ -700,7 +715,11 @@ def _is_flag(a: Any) -> bool:
 
 
 def _takes_file(a: Any) -> bool:
-    return not a.choices and (a.type is None or a.type is Path)
+    from symloc.cli import options
+
+    return not a.choices and (
+        a.type is None or a.type in (Path, options.output_folder, options.output_file)
+    )
 
 
 @st.composite
@@ -759,6 +778,7 @@ def command_lines(
 def run_command(argv: list[str]) -> None:
     """``symloc ARGV`` in process: a usage error (exit 2), a ``symloc: error`` line (exit 2) or
     another exit code are fine; an exception escaping ``main`` or a traceback is not."""
+    last_argv[0] = list(argv)
     from symloc.cli.main import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -844,6 +864,7 @@ def output_path_cases(
 def run_output_case(argv: list[str], name: str, value: str, leaves: dict[Any, Any]) -> None:
     """``symloc ARGV`` with one bad output: a usage error naming the option and the path (exit
     2) before anything is written; anything else is an escape."""
+    last_argv[0] = list(argv)
     from symloc.cli.main import main
 
     if tuple(argv) in leaves:  # a positional output: the other positionals get a plain file
@@ -936,6 +957,7 @@ def missing_data_cases(draw: st.DrawFn, folder: Path) -> list[str]:
 
 def run_missing_data(argv: list[str]) -> None:
     """``symloc ARGV`` on a data set that is not there: exit code != 0, no traceback."""
+    last_argv[0] = list(argv)
     from symloc.cli.main import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -998,6 +1020,7 @@ def out_of_bounds_cases(
 
 def run_out_of_bounds(argv: list[str], flag: str) -> None:
     """A value beyond a bound: a usage error naming the option and the bound (exit 2)."""
+    last_argv[0] = list(argv)
     from symloc.cli.main import main
 
     err = io.StringIO()

@@ -316,10 +316,10 @@ def test_node_messages_never_escape_and_the_node_recovers() -> None:
 
 
 def test_commands(tmp_path_factory: pytest.TempPathFactory) -> None:
-    from fuzz_targets import GARBAGE_FILES, command_leaves, run_command
+    from fuzz_targets import command_leaves, run_command
 
     folder = tmp_path_factory.mktemp("cli")
-    files = {n: folder / n for n in GARBAGE_FILES}
+    files = make_garbage_files(folder)
 
     @fuzz_settings(EXAMPLES["commands"])
     @given(command_lines(command_leaves(), files))
