@@ -124,6 +124,15 @@ def main(argv: list[str] | None = None) -> int:
             fuzz_targets.last_argv[0] = []
         return outcome
 
+    # the detector itself: an input that allocates 3 GiB must count as "over 2 GB"
+    import numpy as np
+
+    guard("self check", lambda: np.ones(3 * GIB, np.uint8))
+    caught = kinds.pop("self check", Counter())["big"] == 1
+    fuzz_targets.counts.pop("self check", None)
+    escapes.pop("self check", None)
+    examples.clear()
+    print(f"# self check: an input allocating 3 GiB is counted over 2 GB: {caught}")
     test_fuzz.guard = guard
     warnings.simplefilter("ignore")
     t_start = time.perf_counter()

@@ -52,7 +52,10 @@ def carmen_log_paths(
         )
     folder = Path(folder)
     if not folder.is_dir():
-        raise ConfigurationError(f"--data {folder}: not a folder; expected the CARMEN logs' folder")
+        raise ConfigurationError(
+            f"--data {folder}: the CARMEN logs' folder was not found (not a folder); expected"
+            " one with <name>-corrected.log.gz files"
+        )
     paths = {name: carmen_log_file(folder, name) for name in dict.fromkeys(names)}
     missing = [f"{n} ({p.name})" for n, p in paths.items() if not p.is_file()]
     if missing:
