@@ -21,8 +21,10 @@ import json
 import math
 import os
 import sys
+import time
 import tracemalloc
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +36,109 @@ def rss_mb() -> float:
     with open(f"/proc/{os.getpid()}/statm") as fh:
         pages = int(fh.read().split()[1])
     return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+class _CoreFeed:
+    """Messages into NodeCore (the node's logic without ROS)."""
+
+    def __init__(self, core: Any, map_message: Callable[[Any, float], Any]) -> None:
+        self.core = core
+        self._map_message = map_message
+
+    def odometry(self, reading: Any) -> None:
+        self.core.add_odometry(reading)
+
+    def scan(self, scan: Any) -> str:
+        return _status(self.core.add_scan(scan))
+
+    def map(self, grid: Any, stamp: float) -> None:
+        self.core.on_map(self._map_message(grid, stamp))
+
+    def close(self) -> None:
+        pass
+
+
+def _core_feed(base: Any, truth: Callable[[float], Any], map_message: Any) -> _CoreFeed:
+    from symloc.odometry import OdometryReading
+    from symloc.ros.core import NodeCore
+    from symloc.ros.params import NodeParams
+
+    core = NodeCore(NodeParams(laser_frame_id="laser"))
+    core.set_map(base)
+    core.add_odometry(OdometryReading(truth(0.0), 0.0))
+    core.set_initial_pose(truth(0.0), np.diag([0.01, 0.01, 0.01]))
+    return _CoreFeed(core, map_message)
+
+
+class _NodeFeed:
+    """rclpy messages into the lifecycle node's own callbacks (configured and active)."""
+
+    def __init__(self, node: Any, context: Any, grid_to_fields: Any) -> None:
+        from geometry_msgs.msg import PoseWithCovarianceStamped
+        from nav_msgs.msg import OccupancyGrid as GridMsg
+        from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import LaserScan as ScanMsg
+
+        self.node = node
+        self.core = node.core
+        self.context = context
+        self._types = (Odometry, ScanMsg, GridMsg, PoseWithCovarianceStamped)
+        self._grid_to_fields = grid_to_fields
+        self._on_map = node._guard(node.core.on_map)
+
+    def odometry(self, reading: Any) -> None:
+        from symloc.msgs import build_rclpy, odometry_to_fields
+
+        self.node._on_odom_msg(build_rclpy(self._types[0], odometry_to_fields(reading)))
+
+    def scan(self, scan: Any) -> str:
+        from symloc.msgs import build_rclpy, scan_to_fields
+
+        self.node._on_scan(build_rclpy(self._types[1], scan_to_fields(scan)))
+        return _status(getattr(self.core, "last", None))
+
+    def map(self, grid: Any, stamp: float) -> None:
+        from symloc.msgs import build_rclpy
+
+        self._on_map(build_rclpy(self._types[2], self._grid_to_fields(grid, stamp=stamp)))
+
+    def close(self) -> None:
+        import rclpy
+
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+def _node_feed(
+    base: Any, t_base: float, truth: Callable[[float], Any], grid_to_fields: Any
+) -> _NodeFeed:
+    import random
+
+    import rclpy
+    from rclpy.context import Context
+
+    from symloc.msgs import build_rclpy, pose_with_covariance_to_fields
+    from symloc.ros.lifecycle import LocalizationNode
+    from symloc.ros.params import NodeParams
+
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    context = Context()
+    rclpy.init(context=context, domain_id=random.randint(101, 200))
+    params = NodeParams(laser_frame_id="laser", odom_source="topic", laser_pose_source="parameters")
+    node = LocalizationNode(context=context, params=params)
+    assert node.trigger_configure().name == "SUCCESS"
+    assert node.trigger_activate().name == "SUCCESS"
+    feed = _NodeFeed(node, context, grid_to_fields)
+    feed.map(base, t_base)
+    from symloc.odometry import OdometryReading
+
+    feed.odometry(OdometryReading(truth(0.0), t_base))
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+
+    cov = np.diag([0.01, 0.01, 0.01])
+    fields = pose_with_covariance_to_fields(truth(0.0), cov, stamp=t_base)
+    node._on_initialpose(build_rclpy(PoseWithCovarianceStamped, fields))
+    return feed
 
 
 def _object_counts() -> Counter[str]:
@@ -60,13 +165,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--objects", action="store_true", help="print the object types that grew (gc, cheap)"
     )
+    ap.add_argument(
+        "--node",
+        action="store_true",
+        help="drive the ROS 2 lifecycle node in-process (rclpy messages through its callbacks,"
+        " its publishers live; no executor) instead of NodeCore alone",
+    )
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
 
     from symloc.msgs import grid_to_fields
     from symloc.odometry import OdometryReading
-    from symloc.ros.core import NodeCore
-    from symloc.ros.params import NodeParams
     from symloc.sim.lidar import PRESETS, simulate_scan
     from symloc.sim.rasterize import world_to_grid
     from symloc.sim.rooms import build_room
@@ -111,12 +220,14 @@ def main(argv: list[str] | None = None) -> int:
             data=f["data"],
         )
 
-    core = NodeCore(NodeParams(laser_frame_id="laser"))
-    core.set_map(base)
-    core.add_odometry(OdometryReading(truth(0.0), 0.0))
-    core.set_initial_pose(truth(0.0), np.diag([0.01, 0.01, 0.01]))
-    statuses: dict[str, int] = {}
+    t_base = time.time() if args.node else 0.0
+    if args.node:
+        feed = _node_feed(base, t_base, truth, grid_to_fields)
+    else:
+        feed = _core_feed(base, truth, map_message)
+    core = feed.core
     t = 0.0
+    statuses: dict[str, int] = {}
     rows: list[tuple[int, float]] = []
     snap_mid = None
     objects_mid: Counter[str] = Counter()
@@ -128,12 +239,12 @@ def main(argv: list[str] | None = None) -> int:
             t += 1.0 / rate
             for j in range(5):
                 tj = t - 1.0 / rate + (j + 1) / (5 * rate)
-                core.add_odometry(OdometryReading(truth(tj), tj))
-            out = core.add_scan(simulate_scan(room.world, truth(t), preset, rng, stamp=t))
-            status = _status(out)
+                feed.odometry(OdometryReading(truth(tj), t_base + tj))
+            scan = simulate_scan(room.world, truth(t), preset, rng, stamp=t_base + t)
+            status = feed.scan(scan)
             statuses[status] = statuses.get(status, 0) + 1
         if k < args.rebuilds:
-            core.on_map(map_message(new_map(k), t))
+            feed.map(new_map(k), t_base + t)
             assert getattr(core, "map_refused", "") == "", core.map_refused
         gc.collect()
         rows.append((k, rss_mb()))
@@ -163,6 +274,7 @@ def main(argv: list[str] | None = None) -> int:
         grew = _object_counts()
         grew.subtract(objects_mid)
         print("objects that grew over the second half:", grew.most_common(8))
+    feed.close()
     if args.json is not None:
         args.json.write_text(json.dumps({"rss_mb": rows, "slope_mb_per_rebuild": slope}))
     return 0
