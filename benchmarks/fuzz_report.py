@@ -154,6 +154,7 @@ def main(argv: list[str] | None = None) -> int:
             ("output paths", lambda: test_fuzz.test_output_paths(tmp)),
             ("missing data", lambda: test_fuzz.test_missing_data(tmp)),
             ("numeric bounds", test_fuzz.test_numeric_bounds),
+            ("special files", lambda: test_fuzz.test_special_files(tmp)),
         ]
         cwd = os.getcwd()
         os.chdir(root)  # commands that fall back to their default --out write here

@@ -1032,3 +1032,102 @@ def run_out_of_bounds(argv: list[str], flag: str) -> None:
     text = err.getvalue()
     if code != 2 or f"argument {flag}: expected" not in text:
         raise AssertionError(f"exit {code} for {argv}: {text[-300:]}")
+
+
+# ----------------------------------------------------------------------- special files
+
+#: Paths that are not regular files (a reader that opens a FIFO blocks; /dev/zero never ends
+#: and reports 0 bytes; /dev/urandom never ends either), or lead to one.
+SPECIAL = ("fifo", "dev_zero", "dev_urandom", "folder", "link_to_fifo", "missing", "dev_null")
+
+
+def special_path(kind: str, folder: Path) -> Path:
+    """A path of ``kind`` (see :data:`SPECIAL`) in ``folder``."""
+    fifo = folder / "s_fifo"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    link = folder / "s_link"
+    if not link.is_symlink():
+        link.symlink_to(fifo)
+    (folder / "s_folder").mkdir(exist_ok=True)
+    return {
+        "fifo": fifo,
+        "dev_zero": Path("/dev/zero"),
+        "dev_urandom": Path("/dev/urandom"),
+        "dev_null": Path("/dev/null"),
+        "folder": folder / "s_folder",
+        "link_to_fifo": link,
+        "missing": folder / "s_missing",
+    }[kind]
+
+
+def _load(loader: str, path: Path) -> None:
+    if loader == "map":
+        from symloc.grid.map_io import load_map
+
+        load_map(path)
+    elif loader == "world":
+        from symloc.sim.world_file import load_world_file
+
+        load_world_file(path)
+    elif loader == "node params":
+        from symloc.ros.params import NodeParams
+
+        NodeParams.from_yaml(path)
+    elif loader == "nav2 params":
+        from symloc.mcl.params import AmclParams
+
+        AmclParams.from_nav2_yaml(path)
+    elif loader == "vocabulary":
+        from symloc.vision.vocabulary import load_vocabulary
+
+        load_vocabulary(path)
+    elif loader == "photo":
+        from symloc.vision.image_files import read_image
+
+        read_image(path)
+    elif loader == "carmen":
+        from symloc.io.carmen import read_carmen
+
+        read_carmen(path)
+    elif loader == "bag":
+        read_bag_skip(path)
+    elif loader == "visual map":
+        from symloc.vision.visual_map import VisualMap
+
+        VisualMap(path, readonly=True).close()
+
+
+LOADERS = (
+    "map",
+    "world",
+    "node params",
+    "nav2 params",
+    "vocabulary",
+    "photo",
+    "carmen",
+    "bag",
+    "visual map",
+)
+
+
+@st.composite
+def special_file_cases(draw: st.DrawFn, folder: Path) -> tuple[str, Path]:
+    """(loader, path): one library loader given a special file (or a map YAML naming one)."""
+    loader = draw(st.sampled_from(LOADERS))
+    path = special_path(draw(st.sampled_from(SPECIAL)), folder)
+    if loader == "map" and draw(st.booleans()):  # the YAML is fine, its image is special
+        y = folder / "special_map.yaml"
+        y.write_text(
+            f"image: {path}\nresolution: 0.05\norigin: [0, 0, 0]\n"
+            "occupied_thresh: 0.65\nfree_thresh: 0.196\nnegate: 0\n"
+        )
+        path = y
+    return loader, path
+
+
+def load_special(loader: str, path: Path) -> None:
+    """A loader on a special file: a symloc error (or acceptance of /dev/null as empty where
+    that is a valid empty input), quickly: never a hang or an endless read."""
+    last_argv[0] = [loader, str(path)]
+    _load(loader, path)

@@ -60,6 +60,7 @@ EXAMPLES = {
     "output paths": 150,
     "missing data": 120,
     "numeric bounds": 150,
+    "special files": 120,
 }
 #: ``benchmarks/fuzz_report.py --scale K`` runs K times as many inputs per target.
 SCALE = float(os.environ.get("SYMLOC_FUZZ_SCALE", "1"))
@@ -382,6 +383,22 @@ def test_numeric_bounds() -> None:
     @given(out_of_bounds_cases(bounded))
     def run(case: tuple[list[str], str]) -> None:
         _no_escape(guard("numeric bounds", lambda: run_out_of_bounds(*case)))
+
+    run()
+
+
+def test_special_files(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Every file loader of the library given a FIFO, /dev/zero, /dev/urandom, /dev/null, a
+    folder, a link to a FIFO or nothing (also as the image a map YAML names): a symloc error
+    at once, never a blocked open or an endless read."""
+    from fuzz_targets import load_special, special_file_cases
+
+    folder = tmp_path_factory.mktemp("special")
+
+    @fuzz_settings(EXAMPLES["special files"])
+    @given(special_file_cases(folder))
+    def run(case: tuple[str, Path]) -> None:
+        _no_escape(guard("special files", lambda: load_special(*case)))
 
     run()
 
