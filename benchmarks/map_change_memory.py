@@ -161,6 +161,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rebuilds", type=int, default=150)
     ap.add_argument("--scans", type=int, default=20, help="scans between map changes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--resolution", type=float, default=0.05, help="map cell size [m] (0.01: 530 x 530)"
+    )
     ap.add_argument("--tracemalloc", action="store_true")
     ap.add_argument(
         "--objects", action="store_true", help="print the object types that grew (gc, cheap)"
@@ -182,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
 
     rng = np.random.default_rng(args.seed)
     room = build_room("l_shaped", 3.0, lab=False)
-    base = world_to_grid(room.world, 0.05)
+    base = world_to_grid(room.world, args.resolution)
     preset = PRESETS["rplidar_a2"]
     centre = np.asarray(room.center, float)
     rate = 10.0

@@ -143,7 +143,7 @@ def _requested_logs(args: argparse.Namespace) -> dict[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Run every requested world and log; print a table, write JSON and figures."""
-    from symloc.bench.slam_runs import run_carmen, run_simulated
+    from symloc.bench.slam_runs import SIM_WORLDS, run_carmen, run_simulated
     from symloc.figures.slam import map_trajectory_figure, slam_summary_figure
     from symloc.geometry import compose, inverse
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
@@ -156,6 +156,11 @@ def run(args: argparse.Namespace) -> int:
             f"warning: --odometry log needs a log; skipping the simulated worlds"
             f" {' '.join(args.worlds)}",
             file=sys.stderr,
+        )
+    unknown = [w for w in worlds if w not in SIM_WORLDS]
+    if unknown:  # before any world runs
+        raise ConfigurationError(
+            f"--worlds {' '.join(unknown)}: world: expected one of {', '.join(SIM_WORLDS)}"
         )
     logs = _requested_logs(args)
     if not worlds and not logs:
