@@ -82,12 +82,12 @@ def test_shared_options_have_one_name_and_one_default(path: tuple[str, ...]) -> 
         assert seed.default == (demo.DEFAULT_SEED if path == ("demo",) else options.DEFAULT_SEED)
     out = _option(parser, "--out")
     if out is not None:
-        assert out.type is Path
+        assert out.type is options.output_folder
         assert out.metavar == "DIR", "--out is always a folder"
-        assert out.default == options.default_out(" ".join(path))
+        assert Path(out.default) == options.default_out(" ".join(path))
     js = _option(parser, "--json")
     if js is not None:
-        assert js.type is Path
+        assert js.type is options.output_file
         assert js.default is None
     lidar = _option(parser, "--lidar")
     if lidar is not None:
@@ -101,7 +101,7 @@ def test_shared_options_have_one_name_and_one_default(path: tuple[str, ...]) -> 
         assert rooms.default == ["all"]
     trials = _option(parser, "--trials")
     if trials is not None:
-        assert trials.type is options.positive_int
+        assert trials.type is options.count
     for action in parser._actions:
         text = (action.help or "").lower()
         assert "[rad" not in text, f"{action.option_strings}: angles are degrees for people"
@@ -160,3 +160,135 @@ def test_angles_are_degrees_at_the_command_line() -> None:
         assert action is not None
         assert action.default == pytest.approx(math.radians(deg)), f"{path} {flag}"
         assert "degrees" in (action.help or "")
+
+
+#: Destinations of options that name a path the command writes: a folder or one file.
+OUTPUT_FOLDERS = {"out", "keep_build", "peer_build"}
+OUTPUT_FILES = {"json", "png", "build_map", "output"}
+
+
+@pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)
+def test_every_output_path_is_checked_by_the_shared_types(path: tuple[str, ...]) -> None:
+    """Every option that names a written path is typed output_folder / output_file (checked
+    while parsing, before any work), and no other option reads a bare Path under those names."""
+    for action in LEAVES[path]._actions:
+        if action.dest in OUTPUT_FOLDERS:
+            assert action.type is options.output_folder, action.option_strings or action.dest
+        elif action.dest in OUTPUT_FILES:
+            assert action.type is options.output_file, action.option_strings or action.dest
+        if action.type in (options.output_folder, options.output_file):
+            assert action.dest in OUTPUT_FOLDERS | OUTPUT_FILES | {"db"}, action.dest
+
+
+def _out_cases() -> list[tuple[tuple[str, ...], str, str]]:
+    cases = []
+    for path, parser in sorted(LEAVES.items()):
+        for action in parser._actions:
+            if action.type is options.output_folder and action.option_strings:
+                cases.append((path, action.option_strings[-1], "folder"))
+            elif action.type is options.output_file and action.option_strings:
+                cases.append((path, action.option_strings[-1], "file"))
+    return cases
+
+
+@pytest.mark.parametrize(("path", "flag", "kind"), _out_cases(), ids=str)
+@pytest.mark.parametrize("bad", ["wrong_kind", "under_a_file", "special"])
+def test_a_bad_output_path_is_a_usage_error_naming_option_and_path(
+    path: tuple[str, ...],
+    flag: str,
+    kind: str,
+    bad: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    a_folder = tmp_path / "a_folder"
+    a_folder.mkdir()
+    value = {
+        "wrong_kind": str(a_file if kind == "folder" else a_folder),
+        "under_a_file": str(a_file / "below"),
+        "special": "/dev/null",
+    }[bad]
+    with pytest.raises(SystemExit) as exc:
+        main([*path, flag, value])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument {flag}: {value} " in err, err
+    assert "Traceback" not in err
+    assert a_file.read_text() == "x"
+    assert a_folder.is_dir()
+
+
+@pytest.mark.parametrize("path", sorted(p for p in LEAVES if _option(LEAVES[p], "--out")), ids=_ids)
+def test_the_default_out_folder_is_checked_too(
+    path: tuple[str, ...],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    options.default_out(" ".join(path)).write_text("a file where the default folder goes")
+    with pytest.raises(SystemExit) as exc:
+        main(list(path))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --out: {options.default_out(' '.join(path))} is an existing file" in err
+
+
+#: Numeric options without an upper bound, and why none is needed: nothing is allocated or run
+#: in proportion to them (or the library checks them against what they index).
+UNBOUNDED_NUMBERS = {
+    "seed": "any integer >= 0 seeds numpy's SeedSequence",
+    "seeds": "world seeds: any integer >= 0",
+    "max_scans": "only truncates a log",
+    "timeout": "wall seconds a peer may run; nothing is allocated for it",
+    "odom_alpha": "a noise level",
+    "amcl_alpha": "a noise level",
+    "global_exponent": "AmclParams checks it in (0, 1]",
+    "step": "an angle",
+    "max_yaw": "an angle",
+    "max_heading": "an angle",
+    "measurement_sigma": "an angle",
+    "chain_sigma": "an angle",
+    "hfov": "an angle (the camera's resolution is fixed)",
+    "loop_every": "larger means fewer loop searches",
+    "loop_resample": "larger means fewer loop searches",
+    "loop_constrained": "larger means fewer loop searches",
+    "stride": "larger means fewer scans judged",
+    "range_sigma": "a tolerance",
+    "range_sigma_relative": "a tolerance",
+    "radius_mm": "a tolerance",
+    "gv": "places add: stored with the place, nothing built from it",
+    "pose": "a pose",
+    "intrinsics": "camera intrinsics (checked by the camera model)",
+    "distortion": "distortion coefficients (checked by the camera model)",
+    "place": "an id looked up in the database",
+    "index": "a scan index looked up in the log",
+    "time": "a simulated time of day",
+    "gain": "an image gain",
+}
+_NUMERIC = {
+    options.positive_int,
+    options.nonnegative_int,
+    options.positive_float,
+    options.nonnegative_float,
+    options.finite_float,
+    options.integer,
+    options._radians,
+    int,
+    float,
+}
+
+
+@pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)
+def test_numeric_options_are_bounded_or_say_why_not(path: tuple[str, ...]) -> None:
+    for action in LEAVES[path]._actions:
+        if isinstance(action.type, options.Bounded):
+            assert action.type.high is not None or action.type.low is not None
+            assert action.type.why
+        elif action.type in _NUMERIC:
+            assert action.dest in UNBOUNDED_NUMBERS, (
+                f"{action.option_strings}: a numeric option needs an upper bound"
+                " (options.bounded) or a reason in UNBOUNDED_NUMBERS"
+            )

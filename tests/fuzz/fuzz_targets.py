@@ -13,6 +13,7 @@ import contextlib
 import gzip
 import io
 import math
+import os
 import signal
 import sqlite3
 import struct
@@ -28,10 +29,13 @@ from hypothesis import strategies as st
 
 from symloc.errors import SymlocError
 
-#: Seconds one input may take before it counts as a hang.
-TIME_BOUND = 10.0
+#: Seconds one input may take before it counts as a hang (``benchmarks/fuzz_report.py`` sets
+#: ``SYMLOC_FUZZ_TIME_BOUND=60``, the issue's bound).
+TIME_BOUND = float(os.environ.get("SYMLOC_FUZZ_TIME_BOUND", "10"))
 #: Inputs per target and outcome: ``counts[target][outcome]``.
 counts: dict[str, Counter[str]] = {}
+#: The command line being run (``benchmarks/fuzz_report.py`` names it beside an escape).
+last_argv: list[list[str]] = [[]]
 
 
 class Hang(Exception):  # noqa: N818 - it is what happened
@@ -666,13 +670,26 @@ def command_leaves() -> dict[tuple[str, ...], Any]:
     return out
 
 
-GARBAGE_FILES = ("empty", "random.bin", "random.png", "cut.gz", "folder", "missing")
+GARBAGE_FILES = (
+    "empty",
+    "random.bin",
+    "random.png",
+    "cut.gz",
+    "folder",
+    "missing",
+    "fifo",
+    "dev_zero",
+)
 
 
 def make_garbage_files(folder: Path) -> dict[str, Path]:
-    """Files a command may be pointed at: empty, random bytes, a truncated gzip, a folder."""
+    """Files a command may be pointed at: empty, random bytes, a truncated gzip, a folder, a
+    FIFO (a reader that opens it blocks), ``/dev/zero`` (endless, reports 0 bytes)."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = {name: folder / name for name in GARBAGE_FILES}
+    paths["dev_zero"] = Path("/dev/zero")
+    if not paths["fifo"].exists():
+        os.mkfifo(paths["fifo"])
     paths["empty"].write_bytes(b"")
     paths["random.bin"].write_bytes(bytes(range(256)) * 3)
     paths["random.png"].write_bytes(png_header(40000, 40000, b"\x00" * 64))
@@ -698,7 +715,11 @@ def _is_flag(a: Any) -> bool:
 
 
 def _takes_file(a: Any) -> bool:
-    return not a.choices and (a.type is None or a.type is Path)
+    from symloc.cli import options
+
+    return not a.choices and (
+        a.type is None or a.type in (Path, options.output_folder, options.output_file)
+    )
 
 
 @st.composite
@@ -757,6 +778,7 @@ def command_lines(
 def run_command(argv: list[str]) -> None:
     """``symloc ARGV`` in process: a usage error (exit 2), a ``symloc: error`` line (exit 2) or
     another exit code are fine; an exception escaping ``main`` or a traceback is not."""
+    last_argv[0] = list(argv)
     from symloc.cli.main import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -768,3 +790,344 @@ def run_command(argv: list[str]) -> None:
                 raise AssertionError(f"argparse exit code {exc.code}") from None
     if "Traceback" in err.getvalue():
         raise AssertionError("a traceback was printed")
+
+
+# ----------------------------------------------------------------------- output paths
+
+#: Bad values for an output folder / an output file (names of :func:`bad_output_value`).
+BAD_FOLDER_OUTPUTS = ("existing_file", "under_a_file", "dev_null", "fifo", "empty", "nul", "long")
+BAD_FILE_OUTPUTS = (
+    "existing_folder",
+    "under_a_file",
+    "dev_null",
+    "fifo",
+    "empty",
+    "nul",
+    "long",
+    "slash",
+)
+
+
+def output_options(leaves: dict[tuple[str, ...], Any]) -> list[tuple[tuple[str, ...], Any, str]]:
+    """Every (command, action, "folder" | "file") whose action names a path the command
+    writes (typed :func:`symloc.cli.options.output_folder` / ``output_file``)."""
+    from symloc.cli import options
+
+    out = []
+    for path, parser in sorted(leaves.items()):
+        for a in parser._actions:
+            if a.type is options.output_folder:
+                out.append((path, a, "folder"))
+            elif a.type is options.output_file:
+                out.append((path, a, "file"))
+    return out
+
+
+def bad_output_value(kind: str, folder: Path, tail: str) -> str:
+    """A path of the bad ``kind`` inside ``folder`` (created as needed)."""
+    f = folder / "a_file"
+    f.write_text("keep me")
+    d = folder / "a_folder"
+    d.mkdir(exist_ok=True)
+    fifo = folder / "a_fifo"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    return {
+        "existing_file": str(f),
+        "existing_folder": str(d),
+        "under_a_file": str(f / tail / "x"),
+        "dev_null": "/dev/null",
+        "fifo": str(fifo),
+        "empty": "",
+        "nul": str(folder / f"a\x00{tail}"),
+        "long": str(folder / (tail * (300 // max(1, len(tail)) + 1))),
+        "slash": str(d / tail) + "/",
+    }[kind]
+
+
+@st.composite
+def output_path_cases(
+    draw: st.DrawFn, outputs: list[tuple[tuple[str, ...], Any, str]], folder: Path
+) -> tuple[list[str], str, str]:
+    """(argv, the option's name as argparse says it, the bad value): one output of one command
+    given a path of the wrong kind; the other positionals get a plain file."""
+    path, action, kind = draw(st.sampled_from(outputs))
+    bad = draw(st.sampled_from(BAD_FOLDER_OUTPUTS if kind == "folder" else BAD_FILE_OUTPUTS))
+    tail = draw(st.text("abcxyz_-.0123456789", min_size=1, max_size=8))
+    value = bad_output_value(bad, folder, tail)
+    if action.option_strings:
+        flag = draw(st.sampled_from(action.option_strings))
+        return [*path, flag, value], flag, value
+    return list(path), action.dest, value  # a positional: run_output_case places it
+
+
+def run_output_case(argv: list[str], name: str, value: str, leaves: dict[Any, Any]) -> None:
+    """``symloc ARGV`` with one bad output: a usage error naming the option and the path (exit
+    2) before anything is written; anything else is an escape."""
+    last_argv[0] = list(argv)
+    from symloc.cli.main import main
+
+    if tuple(argv) in leaves:  # a positional output: the other positionals get a plain file
+        positionals = [a for a in leaves[tuple(argv)]._actions if not a.option_strings]
+        argv = [*argv, *(value if a.dest == name else __file__ for a in positionals)]
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    text = err.getvalue()
+    if code != 2:
+        raise AssertionError(f"exit {code} for a bad output path: {argv}\n{text[-400:]}")
+    shown = value or repr(value)
+    if f"argument {name}: {shown} " not in text:
+        raise AssertionError(f"the error does not name {name} and {shown!r}: {text[-300:]}")
+    if "Traceback" in text:
+        raise AssertionError("a traceback was printed")
+
+
+# ----------------------------------------------------------------------- missing data sets
+
+#: Kinds of a data argument that holds nothing usable.
+MISSING = ("missing", "empty_folder", "empty_file", "random", "fifo", "dev_zero", "other_logs")
+_LOG_NAMES = ("intel", "aces", "freiburg-079", "fr079", "nope")
+
+
+def missing_value(kind: str, folder: Path) -> str:
+    """A data path of ``kind`` in ``folder``: nothing a command can use."""
+    if kind == "missing":
+        return str(folder / "no" / "such")
+    if kind == "empty_folder":
+        d = folder / "empty_dir"
+        d.mkdir(exist_ok=True)
+        return str(d)
+    if kind == "other_logs":  # a folder of logs with other names, and garbage "logs"
+        d = folder / "other_logs"
+        d.mkdir(exist_ok=True)
+        (d / "csail-corrected.log.gz").write_bytes(b"\x1f\x8b garbage")
+        (d / "README").write_text("not a log")
+        return str(d)
+    if kind == "empty_file":
+        (folder / "empty_file").write_bytes(b"")
+        return str(folder / "empty_file")
+    if kind == "random":
+        (folder / "random.bin").write_bytes(bytes(range(256)) * 5)
+        return str(folder / "random.bin")
+    if kind == "fifo":
+        fifo = folder / "data_fifo"
+        if not fifo.exists():
+            os.mkfifo(fifo)
+        return str(fifo)
+    return "/dev/zero"
+
+
+@st.composite
+def missing_data_cases(draw: st.DrawFn, folder: Path) -> list[str]:
+    """A command that reads a data set, pointed at one that is not there (or holds nothing):
+    it must fail (exit code != 0) quickly and without a traceback, never skip and succeed."""
+    data = missing_value(draw(st.sampled_from(MISSING)), folder)
+    other = missing_value(draw(st.sampled_from(MISSING)), folder)
+    names = draw(st.lists(st.sampled_from(_LOG_NAMES), min_size=1, max_size=3))
+    carmen = [n for n in names if n in ("intel", "aces", "freiburg-079")] or ["intel"]
+    out = str(folder / "out")
+    templates = [
+        ["experiment", "slam", "--worlds", "--logs", *names, "--data", data, "--out", out],
+        ["experiment", "slam", "--worlds", "--data", data, "--out", out],
+        ["experiment", "amcl-carmen", "--logs", *names, "--data", data, "--out", out],
+        ["experiment", "symmetry-carmen", "--logs", *carmen, "--data", data, "--out", out],
+        ["bench", "slam", "--carmen", data, "--logs", *names, "--out", out],
+        ["map", "build", "--carmen", data, "--out", out],
+        ["symmetry", "judge", "--carmen", data, "--index", str(draw(st.integers(-5, 5)))],
+        ["symmetry", "judge", "--bag", data],
+        ["replay", data, "--out", out],
+        ["replay", data, "--map", other, "--out", out],
+        ["places", "list", "--db", data],
+        ["places", "keyframes", "--db", data],
+        ["places", "decide", "--db", data, "--query", other],
+        ["places", "remove", "--db", data, "--place", "1"],
+        ["vocab", "info", data],
+        ["vocab", "train", data, "--out", out],
+        ["ros", "carmen-to-bag", data, "--out", out],
+        ["ros", "check-params", data],
+        ["sim", "render", "--world", data, "--out", out],
+        ["demo", "--world", data, "--out", out],
+    ]
+    return draw(st.sampled_from(templates))
+
+
+def run_missing_data(argv: list[str]) -> None:
+    """``symloc ARGV`` on a data set that is not there: exit code != 0, no traceback."""
+    last_argv[0] = list(argv)
+    from symloc.cli.main import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    text = err.getvalue()
+    if "Traceback" in text:
+        raise AssertionError("a traceback was printed")
+    if code == 0:
+        raise AssertionError(f"silent success on missing data: {argv}\n{out.getvalue()[-300:]}")
+    if code == 2 and "error" not in text:
+        raise AssertionError(f"exit 2 without an error message: {argv}")
+
+
+# ----------------------------------------------------------------------- numeric bounds
+
+
+def bounded_options(leaves: dict[tuple[str, ...], Any]) -> list[tuple[tuple[str, ...], Any]]:
+    """Every (command, action) whose type is a :class:`symloc.cli.options.Bounded`."""
+    from symloc.cli import options
+
+    return [
+        (path, a)
+        for path, parser in sorted(leaves.items())
+        for a in parser._actions
+        if isinstance(a.type, options.Bounded) and a.option_strings
+    ]
+
+
+@st.composite
+def out_of_bounds_cases(
+    draw: st.DrawFn, bounded: list[tuple[tuple[str, ...], Any]]
+) -> tuple[list[str], str]:
+    """(argv, flag): one bounded option given a value beyond its bound (by a hair or by
+    orders of magnitude), the other options left at their defaults."""
+    path, action = draw(st.sampled_from(bounded))
+    t = action.type
+    integral = "int" in t.__name__
+    sides = [s for s, b in (("high", t.high), ("low", t.low)) if b is not None]
+    side = draw(st.sampled_from(sides))
+    if side == "high":
+        factor = draw(st.sampled_from([1.0001, 1.5, 10.0, 1e3, 1e9, 1e100, 1e300]))
+        value: float = t.high * factor + (1 if integral else 0)
+    else:
+        value = t.low * draw(st.sampled_from([0.999, 0.5, 1e-3, 1e-9, 1e-300]))
+        if integral:
+            value = math.floor(t.low) - draw(st.integers(1, 3))
+            if value < 1 and "positive" in t.__name__:
+                value = 0
+    text = str(int(value)) if integral and math.isfinite(value) else repr(value)
+    if integral and draw(st.booleans()) and side == "high":
+        text = str(draw(st.sampled_from([2**31, 2**63, 10**30, int(t.high) + 1])))
+    flag = draw(st.sampled_from(action.option_strings))
+    nargs = action.nargs if isinstance(action.nargs, int) else 1
+    return [*path, flag, *[text] * nargs], flag
+
+
+def run_out_of_bounds(argv: list[str], flag: str) -> None:
+    """A value beyond a bound: a usage error naming the option and the bound (exit 2)."""
+    last_argv[0] = list(argv)
+    from symloc.cli.main import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    text = err.getvalue()
+    if code != 2 or f"argument {flag}: expected" not in text:
+        raise AssertionError(f"exit {code} for {argv}: {text[-300:]}")
+
+
+# ----------------------------------------------------------------------- special files
+
+#: Paths that are not regular files (a reader that opens a FIFO blocks; /dev/zero never ends
+#: and reports 0 bytes; /dev/urandom never ends either), or lead to one.
+SPECIAL = ("fifo", "dev_zero", "dev_urandom", "folder", "link_to_fifo", "missing", "dev_null")
+
+
+def special_path(kind: str, folder: Path) -> Path:
+    """A path of ``kind`` (see :data:`SPECIAL`) in ``folder``."""
+    fifo = folder / "s_fifo"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    link = folder / "s_link"
+    if not link.is_symlink():
+        link.symlink_to(fifo)
+    (folder / "s_folder").mkdir(exist_ok=True)
+    return {
+        "fifo": fifo,
+        "dev_zero": Path("/dev/zero"),
+        "dev_urandom": Path("/dev/urandom"),
+        "dev_null": Path("/dev/null"),
+        "folder": folder / "s_folder",
+        "link_to_fifo": link,
+        "missing": folder / "s_missing",
+    }[kind]
+
+
+def _load(loader: str, path: Path) -> None:
+    if loader == "map":
+        from symloc.grid.map_io import load_map
+
+        load_map(path)
+    elif loader == "world":
+        from symloc.sim.world_file import load_world_file
+
+        load_world_file(path)
+    elif loader == "node params":
+        from symloc.ros.params import NodeParams
+
+        NodeParams.from_yaml(path)
+    elif loader == "nav2 params":
+        from symloc.mcl.params import AmclParams
+
+        AmclParams.from_nav2_yaml(path)
+    elif loader == "vocabulary":
+        from symloc.vision.vocabulary import load_vocabulary
+
+        load_vocabulary(path)
+    elif loader == "photo":
+        from symloc.vision.image_files import read_image
+
+        read_image(path)
+    elif loader == "carmen":
+        from symloc.io.carmen import read_carmen
+
+        read_carmen(path)
+    elif loader == "bag":
+        read_bag_skip(path)
+    elif loader == "visual map":
+        from symloc.vision.visual_map import VisualMap
+
+        VisualMap(path, readonly=True).close()
+
+
+LOADERS = (
+    "map",
+    "world",
+    "node params",
+    "nav2 params",
+    "vocabulary",
+    "photo",
+    "carmen",
+    "bag",
+    "visual map",
+)
+
+
+@st.composite
+def special_file_cases(draw: st.DrawFn, folder: Path) -> tuple[str, Path]:
+    """(loader, path): one library loader given a special file (or a map YAML naming one)."""
+    loader = draw(st.sampled_from(LOADERS))
+    path = special_path(draw(st.sampled_from(SPECIAL)), folder)
+    if loader == "map" and draw(st.booleans()):  # the YAML is fine, its image is special
+        y = folder / "special_map.yaml"
+        y.write_text(
+            f"image: {path}\nresolution: 0.05\norigin: [0, 0, 0]\n"
+            "occupied_thresh: 0.65\nfree_thresh: 0.196\nnegate: 0\n"
+        )
+        path = y
+    return loader, path
+
+
+def load_special(loader: str, path: Path) -> None:
+    """A loader on a special file: a symloc error (or acceptance of /dev/null as empty where
+    that is a valid empty input), quickly: never a hang or an endless read."""
+    last_argv[0] = [loader, str(path)]
+    _load(loader, path)

@@ -57,7 +57,14 @@ EXAMPLES = {
     "node params": 300,
     "node messages": 100,
     "commands": 420,
+    "output paths": 150,
+    "missing data": 120,
+    "numeric bounds": 150,
+    "special files": 120,
 }
+#: ``benchmarks/fuzz_report.py --scale K`` runs K times as many inputs per target.
+SCALE = float(os.environ.get("SYMLOC_FUZZ_SCALE", "1"))
+EXAMPLES = {k: max(1, round(v * SCALE)) for k, v in EXAMPLES.items()}
 NODE_SEQUENCE = 25
 
 
@@ -310,16 +317,88 @@ def test_node_messages_never_escape_and_the_node_recovers() -> None:
 
 
 def test_commands(tmp_path_factory: pytest.TempPathFactory) -> None:
-    from fuzz_targets import GARBAGE_FILES, command_leaves, run_command
+    from fuzz_targets import command_leaves, run_command
 
     folder = tmp_path_factory.mktemp("cli")
-    files = {n: folder / n for n in GARBAGE_FILES}
+    files = make_garbage_files(folder)
 
     @fuzz_settings(EXAMPLES["commands"])
     @given(command_lines(command_leaves(), files))
     def run(argv: list[str]) -> None:
         make_garbage_files(folder)  # fresh garbage for every command (some commands write)
         _no_escape(guard("commands", lambda: run_command(argv), allowed=()))
+
+    run()
+
+
+def test_output_paths(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Every output option of every command, given a path of the wrong kind (a file for a
+    folder, a folder for a file, below a file, /dev/null, a FIFO, empty, NUL, a name over 255
+    bytes): a usage error naming the option and the path, before anything runs."""
+    from fuzz_targets import command_leaves, output_options, output_path_cases, run_output_case
+
+    folder = tmp_path_factory.mktemp("outputs")
+    leaves = command_leaves()
+    outputs = output_options(leaves)
+    assert len(outputs) >= 40, "every command's --out and --json, and the other outputs"
+
+    @fuzz_settings(EXAMPLES["output paths"])
+    @given(output_path_cases(outputs, folder))
+    def run(case: tuple[list[str], str, str]) -> None:
+        argv, name, value = case
+        _no_escape(guard("output paths", lambda: run_output_case(argv, name, value, leaves)))
+        assert (folder / "a_file").read_text() == "keep me"
+
+    run()
+
+
+def test_missing_data(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Commands pointed at data sets that are not there (missing, empty, a FIFO, /dev/zero,
+    logs of other names): a non-zero exit and a message, never "skipping" and exit 0."""
+    from fuzz_targets import missing_data_cases, run_missing_data
+
+    folder = tmp_path_factory.mktemp("nodata")
+
+    @fuzz_settings(EXAMPLES["missing data"])
+    @given(missing_data_cases(folder))
+    def run(argv: list[str]) -> None:
+        _no_escape(guard("missing data", lambda: run_missing_data(argv)))
+
+    run()
+
+
+def test_numeric_bounds() -> None:
+    """Every bounded numeric option beyond its bound: a usage error naming the option."""
+    from fuzz_targets import (
+        bounded_options,
+        command_leaves,
+        out_of_bounds_cases,
+        run_out_of_bounds,
+    )
+
+    bounded = bounded_options(command_leaves())
+    assert len(bounded) >= 40
+
+    @fuzz_settings(EXAMPLES["numeric bounds"])
+    @given(out_of_bounds_cases(bounded))
+    def run(case: tuple[list[str], str]) -> None:
+        _no_escape(guard("numeric bounds", lambda: run_out_of_bounds(*case)))
+
+    run()
+
+
+def test_special_files(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Every file loader of the library given a FIFO, /dev/zero, /dev/urandom, /dev/null, a
+    folder, a link to a FIFO or nothing (also as the image a map YAML names): a symloc error
+    at once, never a blocked open or an endless read."""
+    from fuzz_targets import load_special, special_file_cases
+
+    folder = tmp_path_factory.mktemp("special")
+
+    @fuzz_settings(EXAMPLES["special files"])
+    @given(special_file_cases(folder))
+    def run(case: tuple[str, Path]) -> None:
+        _no_escape(guard("special files", lambda: load_special(*case)))
 
     run()
 

@@ -214,3 +214,33 @@ def test_real_181_beam_scans_fit_each_other_best_with_the_read_geometry() -> Non
 
     assert scans[0].scan.angle_increment == pytest.approx(math.pi / (n - 1))
     assert spread(math.pi / (n - 1)) < spread(math.pi / n) - 0.001
+
+
+def test_a_gz_of_blank_lines_is_refused_at_once(tmp_path: Path) -> None:
+    """A 200 KB .gz that expands to 200 MiB of newlines (issue 31: 82-92 s before its error)
+    is refused after MAX_LINES_WITHOUT_DATA lines, naming them."""
+    import time
+
+    from symloc.io.carmen import MAX_LINES_WITHOUT_DATA
+
+    path = tmp_path / "blank.log.gz"
+    with gzip.open(path, "wb", compresslevel=9) as fh:
+        fh.write(b"FLASER 3 1 2 3 0 0 0 0 0 0 1 h 1\n")
+        for _ in range(200):
+            fh.write(b"\n" * (1 << 20))
+    assert path.stat().st_size < 300_000
+    t0 = time.perf_counter()
+    with pytest.raises(DataFormatError) as exc:
+        read_carmen(path)
+    assert time.perf_counter() - t0 < 5.0
+    text = str(exc.value)
+    assert str(path) in text
+    assert f"lines 2-{MAX_LINES_WITHOUT_DATA + 2}: " in text
+    assert "blank or comment lines in a row" in text
+
+
+def test_line_numbers_count_the_blank_lines(tmp_path: Path) -> None:
+    path = tmp_path / "gaps.log"
+    path.write_text("# header\n\n\n   \nODOM 1 2\n")
+    with pytest.raises(DataFormatError, match="line 5: ODOM: expected 10 fields"):
+        read_carmen(path)

@@ -214,5 +214,7 @@ def test_map_build_bag_errors_name_the_bag(
 
     afile = tmp_path / "afile"
     afile.write_text("x")
-    assert main(["map", "build", "--bag", str(no_odom), "--out", str(afile)]) == 2
-    assert "--out: " in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # a usage error, found while parsing
+        main(["map", "build", "--bag", str(no_odom), "--out", str(afile)])
+    assert exc.value.code == 2
+    assert "argument --out: " in capsys.readouterr().err

@@ -29,7 +29,8 @@ def test_map_build_world_writes_map_server_files(tmp_path: Path, capsys) -> None
 def test_map_build_missing_log(tmp_path: Path, capsys) -> None:
     code = main(["map", "build", "--carmen", str(tmp_path / "none.log"), "--out", str(tmp_path)])
     assert code == 2
-    assert "CARMEN log not found" in capsys.readouterr().out
+    err = capsys.readouterr().err
+    assert f"symloc: error: --carmen {tmp_path / 'none.log'}: not found" in err
 
 
 def test_experiment_slam_rejects_unknown_world(tmp_path: Path, capsys) -> None:

@@ -134,7 +134,10 @@ def test_experiment_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
         run_symmetry_carmen(tmp_path, ["mit"])
     code = main(["experiment", "symmetry-carmen", "--data", str(tmp_path / "none")])
     assert code == 2
-    assert "CARMEN logs not found" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert (
+        f"symloc: error: --data {tmp_path / 'none'}: the CARMEN logs' folder was not found" in err
+    )
 
 
 def _shared_carmen() -> Path:

@@ -584,7 +584,10 @@ def _map_with_slam(
         )
         scen.keyframe_slam_poses = np.array([kf.pose for kf in kfs], np.float64).reshape(-1, 3)
         scen.keyframe_true_poses = np.asarray(
-            _compose(scen.map_from_world, np.array([truths[i] for i in recorder.indices])),
+            _compose(
+                scen.map_from_world,
+                np.array([truths[i] for i in recorder.indices], np.float64).reshape(-1, 3),
+            ),
             dtype=np.float64,
         ).reshape(-1, 3)
         if align is not None and kfs:

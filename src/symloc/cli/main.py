@@ -58,6 +58,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SymlocError as err:
         print(f"symloc: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        # the file system refused something the checks before the work could not foresee (a
+        # disk that filled up, a read-only mount, a path removed meanwhile): said, not a traceback
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"symloc: error: {where}{err.strerror or err}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("symloc: interrupted", file=sys.stderr)
         return 130

@@ -12,6 +12,7 @@ option          meaning
 ``--out DIR``   the folder the command writes into (created), default ``symloc-<command>``
                 (e.g. ``symloc-demo``, ``symloc-experiment-table1``); never a file or prefix
 ``--json PATH`` also write the results as standard JSON (``null``, never ``NaN``)
+                (a file: never an existing folder)
 ``--lidar``     a simulated lidar preset (``lds01``, ``paper_15m``, ``rplidar_a2``), default
                 ``rplidar_a2`` (the paper's RPLIDAR A2); sweeps take several or ``all``
 ``--room``      a simulated room (:data:`ROOMS`), default ``square``
@@ -24,8 +25,15 @@ directions of a place are numbered **1..M** for people (:func:`direction_text`),
 the library; a circle's symmetry order prints as ``inf`` (:func:`order_text`).
 
 Validation lives in the ``argparse`` types below (:func:`nonnegative_int`,
-:func:`positive_int`, :func:`positive_float`, :func:`finite_float`): a bad value is a usage
-error naming the option, exit code 2, never a traceback.
+:func:`positive_int`, :func:`positive_float`, :func:`finite_float`, and :func:`bounded` for an
+upper bound): a bad value is a usage error naming the option, exit code 2, never a traceback.
+
+Every path a command writes is declared with :func:`output_folder` or :func:`output_file` as
+its type (``--out``, ``--json``, ``--png``, ``--build-map``, ...): the path is checked while the
+arguments are parsed, so an existing file where a folder is expected, a folder where a file is
+expected, a special file, or a parent that is a file or cannot be written is a usage error
+naming the option and the path (exit code 2) before any work starts. The default ``--out``
+folder is checked as well (argparse converts string defaults).
 
 A command adopts the vocabulary by calling, in its ``register``::
 
@@ -50,11 +58,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from collections.abc import Mapping, Sequence
+import os
+import stat
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from symloc.lidar_spec import PRESETS
+from symloc.mcl.params import MAX_PARTICLES, PARTICLE_MEMORY
 from symloc.symmetry.order import SymmetryOrder
 
 __all__ = [
@@ -62,6 +73,7 @@ __all__ = [
     "DEFAULT_ROOM",
     "DEFAULT_SEED",
     "ROOMS",
+    "Bounded",
     "add_angle",
     "add_json",
     "add_lidar",
@@ -71,13 +83,19 @@ __all__ = [
     "add_rooms",
     "add_seed",
     "add_trials",
+    "bounded",
     "default_out",
     "direction_text",
+    "file_stem",
     "finite_float",
+    "integer",
     "json_safe",
     "lidar_names",
     "nonnegative_int",
     "order_text",
+    "output_file",
+    "output_folder",
+    "output_problem",
     "positive_float",
     "positive_int",
     "refuse_overwriting_inputs",
@@ -114,6 +132,11 @@ def _int(text: str, what: str) -> int:
         return int(text)
     except ValueError as err:
         raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from err
+
+
+def integer(text: str) -> int:
+    """Any integer (argparse type)."""
+    return _int(text, "an integer")
 
 
 def nonnegative_int(text: str) -> int:
@@ -159,9 +182,253 @@ def nonnegative_float(text: str) -> float:
     return value
 
 
+class Bounded:
+    """An argparse type: ``kind`` (e.g. :func:`positive_int`) within ``[low, high]``.
+
+    ``why`` says where the bound comes from (memory, time), and is part of the error, e.g.
+    ``expected at most 4,000,000 (about 240 B per particle in an update: 4 M particles need
+    about 1 GB), got 1000000000``. ``unit`` follows the numbers in the message. ``low``,
+    ``high`` and ``kind`` stay readable (the fuzz suite draws values beyond them).
+    """
+
+    def __init__(
+        self,
+        kind: Callable[[str], float],
+        *,
+        low: float | None = None,
+        high: float | None = None,
+        why: str,
+        unit: str = "",
+    ) -> None:
+        self.kind = kind
+        self.low = low
+        self.high = high
+        self.why = why
+        self.unit = unit
+        self.__name__ = f"bounded_{getattr(kind, '__name__', 'value')}"
+
+    @staticmethod
+    def _shown(bound: float) -> str:
+        return f"{int(bound):,}" if float(bound).is_integer() else f"{bound:g}"
+
+    def __call__(self, text: str) -> Any:
+        value = self.kind(text)
+        u = f" {self.unit}" if self.unit else ""
+        if self.high is not None and value > self.high:
+            raise argparse.ArgumentTypeError(
+                f"expected at most {self._shown(self.high)}{u} ({self.why}), got {text}"
+            )
+        if self.low is not None and value < self.low:
+            raise argparse.ArgumentTypeError(
+                f"expected at least {self._shown(self.low)}{u} ({self.why}), got {text}"
+            )
+        return value
+
+
+def bounded(
+    kind: Callable[[str], float],
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    why: str,
+    unit: str = "",
+) -> Bounded:
+    """``kind`` within ``[low, high]`` as an argparse type (:class:`Bounded`)."""
+    return Bounded(kind, low=low, high=high, why=why, unit=unit)
+
+
+#: Longest name of one path component (bytes; Linux NAME_MAX).
+NAME_MAX = 255
+
+_SPECIAL = {
+    stat.S_IFIFO: "a FIFO",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFSOCK: "a socket",
+}
+
+
+def _kind_of(mode: int) -> str:
+    return _SPECIAL.get(stat.S_IFMT(mode), "not a regular file")
+
+
+def _writable(folder: Path) -> bool:
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def output_problem(path: Path | str, *, folder: bool) -> str | None:
+    """Why ``path`` cannot be written as an output, or None if it can.
+
+    ``folder``: the output is a folder the command creates (if missing) and writes files into;
+    otherwise it is one file, written by replacing it atomically (so its folder must be
+    writable). A missing path is fine when its nearest existing ancestor is a folder this user
+    can write into (missing folders are created). The file system is only inspected.
+    """
+    text = os.fspath(path)
+    if not text:
+        return "is an empty path; expected " + ("a folder" if folder else "a file name")
+    if "\x00" in text:
+        return "contains a NUL character"
+    p = Path(text)
+    for part in p.parts:
+        if len(os.fsencode(part)) > NAME_MAX:
+            return f"has a name ({part[:24]!r}...) longer than {NAME_MAX} bytes"
+    if not folder and (text.endswith(os.sep) or p.name in ("", ".", "..")):
+        return "names a folder; expected a file name"
+    try:
+        st = p.stat()
+    except (FileNotFoundError, NotADirectoryError):
+        st = None
+    except OSError as err:
+        return f"cannot be inspected ({err.strerror})"
+    if st is not None:
+        if folder:
+            if not stat.S_ISDIR(st.st_mode):
+                kind = "an existing file" if stat.S_ISREG(st.st_mode) else _kind_of(st.st_mode)
+                return f"is {kind}; expected a folder (created if missing)"
+            if not _writable(p):
+                return "is a folder this user cannot write into"
+            return None
+        if stat.S_ISDIR(st.st_mode):
+            return "is an existing folder; expected a file name"
+        if not stat.S_ISREG(st.st_mode):
+            return f"is {_kind_of(st.st_mode)}; expected a regular file (or a new name)"
+        if not _writable(p.parent):
+            return f"cannot be replaced: its folder {p.parent} is not writable"
+        return None
+    ancestor = p.parent
+    while True:
+        try:
+            st = ancestor.stat()
+            break
+        except (FileNotFoundError, NotADirectoryError):
+            if ancestor == ancestor.parent:
+                return "has no existing ancestor folder"
+            ancestor = ancestor.parent
+        except OSError as err:
+            return f"cannot be inspected at {ancestor} ({err.strerror})"
+    if not stat.S_ISDIR(st.st_mode):
+        return f"cannot be created: {ancestor} is a file, not a folder"
+    if not _writable(ancestor):
+        return f"cannot be created: the folder {ancestor} is not writable"
+    return None
+
+
+def output_folder(text: str) -> Path:
+    """An output folder (argparse type): created if missing, never an existing file; see
+    :func:`output_problem`."""
+    problem = output_problem(text, folder=True)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text or repr(text)} {problem}")
+    return Path(text)
+
+
+def output_file(text: str) -> Path:
+    """An output file (argparse type): a new name or a regular file to replace, never a
+    folder or a special file, in a folder that can be written or created; see
+    :func:`output_problem`."""
+    problem = output_problem(text, folder=False)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text or repr(text)} {problem}")
+    return Path(text)
+
+
+def file_stem(text: str) -> str:
+    """A plain file name without folders (argparse type): ``--name`` of a written file."""
+    if not text or text in (".", "..") or "/" in text or "\x00" in text:
+        raise argparse.ArgumentTypeError(
+            f"expected a plain file name (no '/', not empty, not . or ..), got {text!r}"
+        )
+    if len(os.fsencode(text)) > NAME_MAX - 32:  # room for suffixes and temporary names
+        raise argparse.ArgumentTypeError(
+            f"expected a name of at most {NAME_MAX - 32} bytes, got {len(os.fsencode(text))}"
+        )
+    return text
+
+
+# Upper bounds of numeric options, each with where it comes from (said in the error).
+
+#: Items of a counted option (trials, worlds, positions, photos, starts, ...).
+MAX_COUNT = 10_000
+COUNT_MEMORY = "each keeps its record, up to about 100 KB with its trajectory, in memory until the summary: 10,000 hold about 1 GB"
+#: Largest G-V distance (centre to vertex) of a simulated room [m].
+MAX_GV = 100.0
+GV_MEMORY = (
+    "the room and its lab are rasterised at 5 cm: 100 m is about 4,000 x 4,000 cells per grid;"
+    " 3,000 m took 0.7 GB and 75 s"
+)
+#: Longest simulated run [s].
+MAX_SIM_SECONDS = 3600.0
+SIM_MEMORY = "the run keeps every scan and pose at 10 Hz: one simulated hour is 36,000 scans"
+#: Most worker processes.
+MAX_WORKERS = 64
+WORKER_MEMORY = "each worker is a process of about 300 MB"
+#: Most furniture items in a simulated room (as world files).
+MAX_ITEMS = 200
+ITEM_MEMORY = "as in world files: every item is raycast for every beam"
+
+
 def _radians(text: str) -> float:
     """Degrees at the command line -> radians for the library (argparse type)."""
     return math.radians(finite_float(text))
+
+
+#: A count of items (argparse type): an integer in [1, :data:`MAX_COUNT`].
+count = bounded(positive_int, high=MAX_COUNT, why=COUNT_MEMORY)
+#: Particles of a filter (argparse type): an integer in [1, 4,000,000].
+particles = bounded(positive_int, high=MAX_PARTICLES, why=PARTICLE_MEMORY)
+#: A simulated room's G-V distance [m] (argparse type): (0, 100].
+gv_distance = bounded(positive_float, high=MAX_GV, why=GV_MEMORY, unit="m")
+#: Simulated seconds (argparse type): (0, 3600].
+sim_seconds = bounded(positive_float, high=MAX_SIM_SECONDS, why=SIM_MEMORY, unit="s")
+#: Worker processes (argparse type): [1, 64].
+workers = bounded(positive_int, high=MAX_WORKERS, why=WORKER_MEMORY)
+#: Furniture items (argparse type): [0, 200].
+items = bounded(nonnegative_int, high=MAX_ITEMS, why=ITEM_MEMORY)
+#: A simulated room's side [m] (argparse type): (0, 100].
+room_side = bounded(positive_float, high=MAX_GV, why=GV_MEMORY, unit="m")
+#: Directions (images) of a place (argparse type): [1, 360].
+directions = bounded(
+    positive_int, high=360, why="one rendered image of about 1 MB and its features per direction"
+)
+#: Symmetry order of a place (argparse type): [1, 256] (the simulator's largest order).
+symmetry_order = bounded(positive_int, high=256, why="the largest order symloc judges")
+#: A camera's horizontal field of view [deg] (argparse type): (0, 179].
+field_of_view = bounded(positive_float, high=179.0, why="a pinhole camera sees less than 180 deg")
+#: Loops of a simulated mapping run (argparse type): (0, 100].
+laps = bounded(
+    positive_float,
+    high=100.0,
+    why="SLAM keeps every scan of the run: 100 laps of a room are about 100,000 scans",
+)
+#: Map cell size [m] (argparse type): [0.01, 1].
+map_resolution = bounded(
+    positive_float,
+    low=0.01,
+    high=1.0,
+    why="1 cm cells put 10^8 cells in a 100 m map, over 1 GB in SLAM's grids; cells over 1 m"
+    " hold no room",
+    unit="m",
+)
+#: Worlds in one gallery figure (argparse type): [1, 256].
+gallery_count = bounded(
+    positive_int, high=256, why="every world is a panel of one figure held in memory"
+)
+#: Branching factor of a vocabulary (argparse type): [2, 256].
+vocabulary_k = bounded(
+    positive_int,
+    low=2,
+    high=256,
+    why="k-means++ keeps a distance per descriptor per seed at every node",
+)
+#: Depth levels of a vocabulary (argparse type): [1, 10] (DBoW2's).
+vocabulary_levels = bounded(positive_int, high=10, why="DBoW2's deepest tree")
+#: ORB features per training image (argparse type): [1, 100,000].
+orb_features = bounded(
+    positive_int,
+    high=100_000,
+    why="every image's 32-byte descriptors are clustered together: 100,000 per image",
+)
 
 
 # ----------------------------------------------------------------------- shared options
@@ -216,8 +483,8 @@ def add_out(parser: argparse._ActionsContainer, command: str, *, what: str = "")
     extra = f": {what}" if what else ""
     parser.add_argument(
         "--out",
-        type=Path,
-        default=default,
+        type=output_folder,
+        default=str(default),  # a string, so that argparse checks it with the type
         metavar="DIR",
         help=f"output folder, created if needed (default {default}){extra}",
     )
@@ -227,7 +494,7 @@ def add_json(parser: argparse._ActionsContainer) -> None:
     """``--json PATH``: also write the results as standard JSON."""
     parser.add_argument(
         "--json",
-        type=Path,
+        type=output_file,
         default=None,
         metavar="PATH",
         help="also write the results here as JSON (standard: null for missing values)",
@@ -331,10 +598,10 @@ def add_trials(parser: argparse._ActionsContainer, *, default: int, what: str = 
     """``--trials N``: an integer >= 1; ``what`` says what is counted."""
     parser.add_argument(
         "--trials",
-        type=positive_int,
+        type=count,
         default=default,
         metavar="N",
-        help=f"{what}, an integer >= 1 (default {default})",
+        help=f"{what}, an integer in [1, {MAX_COUNT}] (default {default})",
     )
 
 

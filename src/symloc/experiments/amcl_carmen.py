@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
-from symloc.bench.shared_data import find_carmen_dir
+from symloc.bench.shared_data import carmen_log_paths, find_carmen_dir
 from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.files.atomic import atomic_path
@@ -460,11 +460,9 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--logs", nargs="+", default=list(LOG_NAMES), help="log names")
     parser.add_argument("--data", type=Path, default=None, help="folder with the CARMEN logs")
     parser.add_argument(
-        "--starts", type=options.positive_int, default=20, help="global-localization starts"
+        "--starts", type=options.count, default=20, help="global-localization starts"
     )
-    parser.add_argument(
-        "--window", type=options.positive_int, default=100, help="scans per global start"
-    )
+    parser.add_argument("--window", type=options.count, default=100, help="scans per global start")
     parser.add_argument(
         "--odom-alpha",
         type=options.nonnegative_float,
@@ -478,10 +476,10 @@ def register(subparsers: Any) -> None:
         help="nav2 laser_model_type (default likelihood_field_prob)",
     )
     parser.add_argument(
-        "--tracking-particles", type=options.positive_int, default=2000, help="max_particles"
+        "--tracking-particles", type=options.particles, default=2000, help="max_particles"
     )
     parser.add_argument(
-        "--global-particles", type=options.positive_int, default=20000, help="max_particles"
+        "--global-particles", type=options.particles, default=20000, help="max_particles"
     )
     parser.add_argument(
         "--global-exponent",
@@ -498,10 +496,8 @@ def run(args: argparse.Namespace) -> int:
     from symloc.io.carmen import read_carmen
     from symloc.mcl import AmclParams
 
-    folder = args.data or find_carmen_dir()
-    if folder is None:
-        print("CARMEN logs not found: set SYMLOC_SHARED_DATA or pass --data")
-        return 2
+    paths = carmen_log_paths(args.logs, args.data)
+    folder = next(iter(paths.values())).parent
     a = args.odom_alpha
     alphas = (a, a, a, a)
     base = AmclParams(
@@ -548,7 +544,7 @@ def run(args: argparse.Namespace) -> int:
         idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
         rng_track = np.random.default_rng([args.seed, idx, 0])
         rng_global = np.random.default_rng([args.seed, idx, 1])
-        path = folder / f"{name}-corrected.log.gz"
+        path = paths[name]
         log = read_carmen(path)
         grid = build_map(log, cache=args.out / f"amcl_carmen_map_{name}.npz")
         truth = log.laser_poses.copy()

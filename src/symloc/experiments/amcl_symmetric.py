@@ -308,18 +308,16 @@ def register(subparsers: Any) -> None:
     add_common_arguments(parser, "amcl-symmetric")
     options.add_trials(parser, default=200, what="trials per room")
     options.add_rooms(parser, rooms=DEFAULT_ROOMS, choices=ROOM_NAMES)
+    parser.add_argument("--gv", type=options.gv_distance, default=2.5, help="room G-V distance [m]")
     parser.add_argument(
-        "--gv", type=options.positive_float, default=2.5, help="room G-V distance [m]"
-    )
-    parser.add_argument(
-        "--duration", type=options.positive_float, default=45.0, help="path length [s] at 0.3 m/s"
+        "--duration", type=options.sim_seconds, default=45.0, help="path length [s] at 0.3 m/s"
     )
     options.add_lidar(parser, help="simulated lidar (the paper's Figure 8: paper_15m)")
     parser.add_argument(
-        "--max-particles", type=options.positive_int, default=2000, help="nav2 max_particles"
+        "--max-particles", type=options.particles, default=2000, help="nav2 max_particles"
     )
     parser.add_argument(
-        "--min-particles", type=options.positive_int, default=500, help="nav2 min_particles"
+        "--min-particles", type=options.particles, default=500, help="nav2 min_particles"
     )
     parser.add_argument(
         "--params", default=None, metavar="YAML", help="nav2 params file (amcl block) to use"

@@ -20,7 +20,7 @@ def register(subparsers: Any) -> None:
     )
     add_common_arguments(parser, "keyframes")
     parser.add_argument(
-        "--m", type=options.positive_int, default=4, help="images per place (default 4)"
+        "--m", type=options.directions, default=4, help="images per place (default 4)"
     )
     options.add_angle(parser, "--step-deg", default=5.0, help="keyframe step", dest="step")
     parser.set_defaults(func=run)

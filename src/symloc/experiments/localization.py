@@ -45,7 +45,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--amcl-duration",
-        type=options.positive_float,
+        type=options.sim_seconds,
         default=45.0,
         help="plain AMCL drive time [s] (default 45, as amcl-symmetric)",
     )

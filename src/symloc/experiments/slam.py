@@ -26,11 +26,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from symloc.bench.shared_data import CARMEN_LOGS, find_carmen_dir
+from symloc.bench.shared_data import CARMEN_LOGS, carmen_log_paths
 from symloc.cli import options
+from symloc.errors import ConfigurationError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
-__all__ = ["CARMEN_LOGS", "find_carmen_dir", "register", "run"]
+__all__ = ["CARMEN_LOGS", "DEFAULT_LOGS", "register", "run"]
+
+#: Logs run when ``--logs`` is not given (if the data is on this machine).
+DEFAULT_LOGS = ("intel", "aces")
 
 
 def register(subparsers: Any) -> None:
@@ -47,8 +51,9 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--logs",
         nargs="*",
-        default=["intel", "aces"],
-        help="CARMEN logs (intel aces freiburg-079; freiburg-079 is long)",
+        default=None,
+        help="CARMEN logs (intel aces freiburg-079; freiburg-079 is long); default intel aces"
+        " when the logs are found (else skipped with a warning); logs named here must exist",
     )
     parser.add_argument("--data", type=Path, default=None, help="folder with the CARMEN logs")
     parser.add_argument(
@@ -60,9 +65,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--max-scans", type=options.positive_int, default=None, help="use only the first N scans"
     )
-    parser.add_argument(
-        "--laps", type=options.positive_float, default=1.3, help="loops of the simulated run"
-    )
+    parser.add_argument("--laps", type=options.laps, default=1.3, help="loops of the simulated run")
     parser.add_argument(
         "--loop-every",
         type=options.positive_int,
@@ -123,15 +126,48 @@ def _world_index(world: str, k: int) -> int:
     return names.index(world) if world in names else k
 
 
+def _requested_logs(args: argparse.Namespace) -> dict[str, Path]:
+    """The CARMEN logs to run: those named with ``--logs`` must all exist (else a
+    ConfigurationError before any work); the default ones are skipped, with a warning, when the
+    data is not on this machine."""
+    if args.logs is not None:
+        return carmen_log_paths(args.logs, args.data) if args.logs else {}
+    try:
+        return carmen_log_paths(DEFAULT_LOGS, args.data)
+    except ConfigurationError as err:
+        if args.data is not None:
+            raise
+        print(f"warning: skipping the default logs: {err}", file=sys.stderr)
+        return {}
+
+
 def run(args: argparse.Namespace) -> int:
     """Run every requested world and log; print a table, write JSON and figures."""
-    from symloc.bench.slam_runs import run_carmen, run_simulated
+    from symloc.bench.slam_runs import SIM_WORLDS, run_carmen, run_simulated
     from symloc.figures.slam import map_trajectory_figure, slam_summary_figure
     from symloc.geometry import compose, inverse
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
     from symloc.slam.slam import SlamParams
 
     regime = ODOMETRY_REGIMES.get(args.odometry)
+    worlds = list(args.worlds) if regime is not None else []
+    if regime is None and args.worlds:
+        print(
+            f"warning: --odometry log needs a log; skipping the simulated worlds"
+            f" {' '.join(args.worlds)}",
+            file=sys.stderr,
+        )
+    unknown = [w for w in worlds if w not in SIM_WORLDS]
+    if unknown:  # before any world runs
+        raise ConfigurationError(
+            f"--worlds {' '.join(unknown)}: world: expected one of {', '.join(SIM_WORLDS)}"
+        )
+    logs = _requested_logs(args)
+    if not worlds and not logs:
+        raise ConfigurationError(
+            "nothing to run: no simulated world (--worlds; --odometry log needs a log) and no"
+            " CARMEN log (--logs)"
+        )
     params = SlamParams()
     if args.loop_every is not None:
         params = dataclasses.replace(params, loop_every=args.loop_every)
@@ -145,8 +181,8 @@ def run(args: argparse.Namespace) -> int:
         "slam",
         {
             "seed": args.seed,
-            "worlds": args.worlds,
-            "logs": args.logs,
+            "worlds": worlds,
+            "logs": list(logs),
             "odometry": regime.describe() if regime is not None else "the log's own",
             "max_scans": args.max_scans,
             "laps": args.laps,
@@ -158,10 +194,8 @@ def run(args: argparse.Namespace) -> int:
     )
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
-    for k, world in enumerate(args.worlds):
-        if regime is None:
-            print(f"{world}: --odometry log needs a log; skipping the simulated world")
-            continue
+    for k, world in enumerate(worlds):
+        assert regime is not None
         r = run_simulated(
             world,
             odometry=regime,
@@ -183,35 +217,29 @@ def run(args: argparse.Namespace) -> int:
             loop_nodes=[i for _, i in r.result.loop_closures],
             title=f"{world}: ATE {s['ate_rmse_m']:.3f} m",
         )
-    if args.logs:
-        folder = args.data or find_carmen_dir()
-        if folder is None:
-            print("CARMEN logs not found: set SYMLOC_SHARED_DATA or pass --data; skipping them")
-        else:
-            for k, name in enumerate(args.logs):
-                path = Path(folder) / f"{name}-corrected.log.gz"
-                r = run_carmen(
-                    path,
-                    odometry=args.odometry,
-                    rng=args.seed + 100 + (CARMEN_LOGS.index(name) if name in CARMEN_LOGS else k),
-                    max_scans=args.max_scans,
-                    params=params,
-                )
-                s = r.summary()
-                rows.append(s)
-                print(_row(s))
-                _print_warnings(s)
-                sys.stdout.flush()
-                # the reference in the SLAM map frame (inverse of the ATE alignment)
-                aligned_ref = compose(inverse(r.ate.alignment), r.reference)
-                map_trajectory_figure(
-                    r.result.grid,
-                    r.result.poses,
-                    out / f"slam_{name}.png",
-                    reference=aligned_ref,
-                    loop_nodes=[i for _, i in r.result.loop_closures],
-                    title=f"{name}: ATE {s['ate_rmse_m']:.3f} m, {s['loop_closures']} loops",
-                )
+    for k, (name, path) in enumerate(logs.items()):
+        r = run_carmen(
+            path,
+            odometry=args.odometry,
+            rng=args.seed + 100 + (CARMEN_LOGS.index(name) if name in CARMEN_LOGS else k),
+            max_scans=args.max_scans,
+            params=params,
+        )
+        s = r.summary()
+        rows.append(s)
+        print(_row(s))
+        _print_warnings(s)
+        sys.stdout.flush()
+        # the reference in the SLAM map frame (inverse of the ATE alignment)
+        aligned_ref = compose(inverse(r.ate.alignment), r.reference)
+        map_trajectory_figure(
+            r.result.grid,
+            r.result.poses,
+            out / f"slam_{name}.png",
+            reference=aligned_ref,
+            loop_nodes=[i for _, i in r.result.loop_closures],
+            title=f"{name}: ATE {s['ate_rmse_m']:.3f} m, {s['loop_closures']} loops",
+        )
     if rows:
         fig = slam_summary_figure(rows, out / "slam_summary.png")
         print(f"wrote {fig}")

@@ -35,9 +35,9 @@ import numpy as np
 from tqdm import tqdm
 
 from symloc._checks import as_rng
-from symloc.bench.shared_data import CARMEN_LOGS, find_carmen_dir
+from symloc.bench.shared_data import CARMEN_LOGS, carmen_log_paths, find_carmen_dir
 from symloc.cli import options
-from symloc.errors import ConfigurationError, SymlocError
+from symloc.errors import ConfigurationError
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 
 __all__ = [
@@ -275,16 +275,9 @@ def _figures(
 
 
 def _run(args: argparse.Namespace) -> int:
-    data = args.data if args.data is not None else find_carmen_dir()
-    if data is None or not Path(data).is_dir():
-        print(
-            "error: CARMEN logs not found: pass --data DIR or set SYMLOC_SHARED_DATA",
-            file=sys.stderr,
-        )
-        return 2
+    data = next(iter(carmen_log_paths(args.logs, args.data).values())).parent
     if args.stride < 1 or args.examples < 0 or not (args.range_sigma > 0):
-        print("error: --stride must be >= 1, --examples >= 0, --range-sigma > 0", file=sys.stderr)
-        return 2
+        raise ConfigurationError("--stride must be >= 1, --examples >= 0, --range-sigma > 0")
     print_config(
         "symmetry-carmen",
         {
@@ -297,13 +290,9 @@ def _run(args: argparse.Namespace) -> int:
             "examples per log": args.examples,
         },
     )
-    try:
-        result = run_symmetry_carmen(
-            Path(data), args.logs, range_sigma=args.range_sigma, stride=args.stride
-        )
-    except SymlocError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+    result = run_symmetry_carmen(
+        Path(data), args.logs, range_sigma=args.range_sigma, stride=args.stride
+    )
     kinds = ("polygon", "circle", "rectangle", "hallway", "asymmetric", "unknown")
     head = " ".join(f"{k:>10}" for k in kinds)
     print(f"\n{'log':<13} {'mode':<8} {'judged':>7} {head} {'symmetric':>10}")
@@ -375,7 +364,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--examples",
-        type=options.positive_int,
+        type=options.count,
         default=6,
         help="symmetric scans per log in the figure",
     )

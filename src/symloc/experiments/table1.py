@@ -445,7 +445,7 @@ def register(subparsers: Any) -> None:
     add_common_arguments(parser, "table1")
     parser.add_argument(
         "--positions",
-        type=options.positive_int,
+        type=options.count,
         default=50,
         help="robot positions per room, an integer >= 1 (paper: 50)",
     )
@@ -454,7 +454,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--fp-per-room",
-        type=options.positive_int,
+        type=options.count,
         default=12,
         help=f"scans per asymmetric room ({len(FP_ROOMS)} rooms; default 12 -> 204 scans)",
     )

@@ -22,12 +22,12 @@ def register(subparsers: Any) -> None:
     add_common_arguments(parser, "table2")
     parser.add_argument(
         "--positions",
-        type=options.positive_int,
+        type=options.count,
         default=50,
         help="start positions, an integer >= 1 (default 50)",
     )
     parser.add_argument(
-        "--side", type=options.positive_float, default=3.0, help="square side [m] (paper: 3)"
+        "--side", type=options.room_side, default=3.0, help="square side [m] (paper: 3)"
     )
     options.add_lidars(parser, help="simulated lidars (the README's table: rplidar_a2 lds01)")
     parser.set_defaults(func=run)

@@ -28,7 +28,7 @@ def register(subparsers: Any) -> None:
     add_common_arguments(parser, "table3")
     options.add_trials(parser, default=50, what="trials per direction")
     parser.add_argument(
-        "--side", type=options.positive_float, default=3.0, help="square side [m] (paper: 3)"
+        "--side", type=options.room_side, default=3.0, help="square side [m] (paper: 3)"
     )
     parser.add_argument(
         "--radius-mm", type=options.positive_float, default=15.0, help="position spread [mm]"

@@ -273,22 +273,50 @@ def _parse_odom(tokens: list[str], lineno: int) -> CarmenOdometry:
 
 #: Longest line read [characters] (a FLASER line of 100 000 readings is about 700 kB).
 MAX_LINE = 1 << 20
+#: Most blank or comment lines in a row (a log's header comments are a few dozen lines): more
+#: is not a log but padding, e.g. a small .gz that expands to hundreds of MiB of newlines,
+#: refused at once instead of after a minute of reading nothing.
+MAX_LINES_WITHOUT_DATA = 100_000
+#: Most text read from one log [characters]: the largest public CARMEN logs are a few hundred
+#: MB uncompressed.
+MAX_LOG_CHARACTERS = 4 << 30
 
 
-def _open_text(path: Path) -> Iterator[str]:
-    """The log's lines, each at most :data:`MAX_LINE` long; a truncated or corrupt gzip, or a
-    longer line, raises DataFormatError naming the file and the line."""
+def _open_text(path: Path) -> Iterator[tuple[int, str]]:
+    """The log's lines that are not blank or comments, with their 1-based numbers, each at most
+    :data:`MAX_LINE` long; a truncated or corrupt gzip, a longer line, more than
+    :data:`MAX_LINES_WITHOUT_DATA` blank or comment lines in a row or more than
+    :data:`MAX_LOG_CHARACTERS` of text raise DataFormatError naming the file and the line."""
     with path.open("rb") as probe:
         magic = probe.read(2)
     opener = gzip.open if magic == b"\x1f\x8b" else open
     n = 0
+    total = 0
+    idle = 0  # blank or comment lines in a row
     try:
         with opener(path, "rt", encoding="ascii", errors="replace") as fh:
             while line := fh.readline(MAX_LINE + 1):
                 n += 1
                 if len(line) > MAX_LINE:
                     raise DataFormatError(f"{path}: line {n}: longer than {MAX_LINE:,} characters")
-                yield line
+                total += len(line)
+                if total > MAX_LOG_CHARACTERS:
+                    raise DataFormatError(
+                        f"{path}: line {n}: more than {MAX_LOG_CHARACTERS:,} characters of text;"
+                        " expected a CARMEN log (a few hundred MB at most)"
+                    )
+                stripped = line.lstrip()
+                if not stripped or stripped.startswith("#"):
+                    idle += 1
+                    if idle > MAX_LINES_WITHOUT_DATA:
+                        raise DataFormatError(
+                            f"{path}: lines {n - idle + 1}-{n}: {idle:,} blank or comment lines"
+                            f" in a row (at most {MAX_LINES_WITHOUT_DATA:,}); expected CARMEN"
+                            " messages (padding or a compression bomb?)"
+                        )
+                    continue
+                idle = 0
+                yield n, line
     except (OSError, EOFError, zlib.error) as err:
         raise DataFormatError(
             f"{path}: line {n + 1}: cannot read on ({type(err).__name__}: {err});"
@@ -331,7 +359,7 @@ def iter_carmen(
     if not (math.isfinite(range_max) and range_max > 0):
         raise DataFormatError(f"range_max: expected > 0 m, got {range_max}")
     seen: dict[str, str] = {}
-    for lineno, raw in enumerate(_open_text(p), start=1):
+    for lineno, raw in _open_text(p):
         tokens = raw.split()
         if not tokens or tokens[0].startswith("#"):
             continue

@@ -26,7 +26,14 @@ from typing import Any
 from symloc.errors import ConfigurationError
 from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 
-__all__ = ["LASER_MODELS", "MOTION_MODELS", "AmclParams"]
+__all__ = ["LASER_MODELS", "MAX_PARTICLES", "MOTION_MODELS", "PARTICLE_MEMORY", "AmclParams"]
+
+#: Most particles a filter may hold: a global update peaks at about 240 bytes per particle
+#: (measured at 1 M particles: poses, weights, resampling copies, clusters), so 4 M particles
+#: need about 1 GB. nav2's default is 2,000; symloc's global searches use up to 20,000.
+MAX_PARTICLES = 4_000_000
+#: Why :data:`MAX_PARTICLES` (said in every error that refuses more).
+PARTICLE_MEMORY = "about 240 B per particle in an update: 4 M particles need about 1 GB"
 
 #: Accepted ``laser_model_type`` values (nav2 names).
 LASER_MODELS = ("likelihood_field", "likelihood_field_prob", "beam")
@@ -174,6 +181,11 @@ class AmclParams:
         need(self.max_beams >= 2, "max_beams", "an integer >= 2")
         need(self.min_particles >= 1, "min_particles", "an integer >= 1")
         need(self.max_particles >= self.min_particles, "max_particles", ">= min_particles")
+        need(
+            self.max_particles <= MAX_PARTICLES,
+            "max_particles",
+            f"at most {MAX_PARTICLES:,} ({PARTICLE_MEMORY})",
+        )
         need(0.0 < self.pf_err < 1.0, "pf_err", "a value in (0, 1)")
         need(0.5 < self.pf_z < 1.0, "pf_z", "a probability in (0.5, 1)")
         need(0.0 <= self.recovery_alpha_slow <= 1.0, "recovery_alpha_slow", "a value in [0, 1]")

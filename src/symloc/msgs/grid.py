@@ -12,6 +12,7 @@ import numpy as np
 
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.grid import OccupancyGrid
+from symloc.grid.map_io import MAX_MAP_PIXELS
 from symloc.msgs.fields import field, finite_field, numeric_array
 from symloc.msgs.header import header_fields
 from symloc.msgs.pose import pose_fields, pose_from_msg
@@ -21,13 +22,18 @@ __all__ = ["grid_from_msg", "grid_to_fields"]
 _WHERE = "OccupancyGrid"
 
 
-def grid_from_msg(msg: Any) -> OccupancyGrid:
+def grid_from_msg(msg: Any, *, max_cells: int = MAX_MAP_PIXELS) -> OccupancyGrid:
     """Convert a nav_msgs/OccupancyGrid to an :class:`OccupancyGrid`.
+
+    ``max_cells`` caps ``width x height`` before the data is touched, as map files are capped
+    (:data:`symloc.grid.map_io.MAX_MAP_PIXELS`, 64 Mi cells, by default): the localizer built
+    on a map holds several arrays of its size.
 
     Raises
     ------
     DataFormatError
-        Missing fields, a size that does not match ``len(data)``, values outside -1..100.
+        Missing fields, a size that does not match ``len(data)``, values outside -1..100, more
+        cells than ``max_cells``.
     """
     try:
         width = int(field(msg, "info.width", _WHERE))
@@ -36,6 +42,12 @@ def grid_from_msg(msg: Any) -> OccupancyGrid:
         raise DataFormatError(f"{_WHERE}.info.width/height: expected integers") from err
     if width <= 0 or height <= 0:
         raise DataFormatError(f"{_WHERE}.info: expected width, height > 0, got {width}x{height}")
+    if width * height > max_cells:
+        raise DataFormatError(
+            f"{_WHERE}.info: {width} x {height} = {width * height:,} cells; at most"
+            f" {max_cells:,} are accepted (max_map_cells, as map files: the localizer holds"
+            " several arrays of the map's size)"
+        )
     res = finite_field(msg, "info.resolution", _WHERE)
     if res <= 0:
         raise DataFormatError(f"{_WHERE}.info.resolution: expected > 0 m/cell, got {res}")

@@ -273,7 +273,7 @@ class NodeCore:
         self.received["map"] += 1
         try:
             frame = header_frame(msg, "OccupancyGrid")
-            grid = grid_from_msg(msg)
+            grid = grid_from_msg(msg, max_cells=self.params.max_map_cells)
         except SymlocError as err:
             self.drop("map: malformed", str(err))
             return

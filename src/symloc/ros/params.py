@@ -45,6 +45,8 @@ from typing import Any
 from symloc.camera_model import check_dist_coeffs
 from symloc.errors import ConfigurationError
 from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
+from symloc.grid.map_io import MAX_MAP_PIXELS
+from symloc.image_header import MAX_PHOTO_PIXELS as MAX_IMAGE_PIXELS
 from symloc.localizer import LocalizerConfig
 from symloc.localizer.claim import ClaimConfig
 from symloc.localizer.settings import LocalizerSettings
@@ -273,7 +275,10 @@ class NodeParams:
         no motion across it).
     max_image_pixels : int
         Camera images of more pixels are refused before decoding (compressed ones by the size
-        their header declares).
+        their header declares); at most 50,000,000 (3 bytes per decoded pixel).
+    max_map_cells : int
+        Maps on the map topic of more cells (``width x height``) are refused before their data
+        is read, as map files are (default and largest 64 Mi cells, 8,192 x 8,192).
     seed : int
         Seed of the filter's random numbers (nav2's ``random_seed`` >= 0 sets it).
     amcl : AmclParams
@@ -335,6 +340,7 @@ class NodeParams:
     max_stamp_jump: float = 5.0
     max_odom_speed: float = 10.0
     max_image_pixels: int = 5_000_000
+    max_map_cells: int = MAX_MAP_PIXELS
     seed: int = 0
     amcl: AmclParams = field(default_factory=AmclParams)
     confidence: ConfidenceConfig = field(default_factory=ConfidenceConfig)
@@ -452,8 +458,22 @@ class NodeParams:
                 raise ConfigurationError(f"{name}: expected a number > 0 {unit}, got {v!r}")
             object.__setattr__(self, name, float(v))
         px = self.max_image_pixels
-        if isinstance(px, bool) or not isinstance(px, int) or px < 1:
-            raise ConfigurationError(f"max_image_pixels: expected an integer >= 1, got {px!r}")
+        if isinstance(px, bool) or not isinstance(px, int) or not 1 <= px <= MAX_IMAGE_PIXELS:
+            raise ConfigurationError(
+                f"max_image_pixels: expected an integer in [1, {MAX_IMAGE_PIXELS:,}] (a decoded"
+                f" image holds 3 bytes per pixel), got {px!r}"
+            )
+        cells = self.max_map_cells
+        if (
+            isinstance(cells, bool)
+            or not isinstance(cells, int)
+            or not 1 <= cells <= MAX_MAP_PIXELS
+        ):
+            raise ConfigurationError(
+                f"max_map_cells: expected an integer in [1, {MAX_MAP_PIXELS:,}] (the map file"
+                " cap: the localizer holds several arrays of the map's size), got"
+                f" {cells!r}"
+            )
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigurationError(f"seed: expected an integer >= 0, got {self.seed!r}")
         for name, cls in SETTINGS_BLOCKS.items():

@@ -22,7 +22,7 @@ def add_sweep_arguments(parser: argparse.ArgumentParser, command: str = "bench")
     folder (``"bench localization"`` -> ``symloc-bench-localization``)."""
     parser.add_argument(
         "--workers",
-        type=options.positive_int,
+        type=options.workers,
         default=default_workers(),
         help=f"worker processes (default: all cores, here {default_workers()})",
     )

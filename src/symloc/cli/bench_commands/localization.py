@@ -48,7 +48,10 @@ def register(subparsers: Any) -> None:
         help="world files (YAML, see docs/world_files.md) instead of --families",
     )
     parser.add_argument(
-        "--worlds", type=int, default=3, help="worlds (mapping runs) per family (default 3)"
+        "--worlds",
+        type=options.count,
+        default=3,
+        help="worlds (mapping runs) per family (default 3)",
     )
     parser.add_argument(
         "--split",
@@ -58,7 +61,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--seeds",
-        type=int,
+        type=options.nonnegative_int,
         nargs="+",
         default=None,
         help="explicit world seeds (overrides --split)",
@@ -94,10 +97,16 @@ def register(subparsers: Any) -> None:
         help="sensor regime of the robot (symloc.sim.regimes; default ideal)",
     )
     parser.add_argument(
-        "--claim-timeout", type=float, default=60.0, help="seconds to make a first claim (60)"
+        "--claim-timeout",
+        type=options.sim_seconds,
+        default=60.0,
+        help="seconds to make a first claim (60)",
     )
     parser.add_argument(
-        "--track-time", type=float, default=20.0, help="seconds driven after the first claim (20)"
+        "--track-time",
+        type=options.sim_seconds,
+        default=20.0,
+        help="seconds driven after the first claim (20)",
     )
     add_sweep_arguments(parser, "bench localization")
     parser.set_defaults(func=run)

@@ -69,7 +69,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument(
         "--peer-build",
-        type=Path,
+        type=options.output_folder,
         default=None,
         metavar="DIR",
         help="build folder of the peer (default ~/.cache/symloc/peers/...)",
@@ -83,20 +83,35 @@ def register(subparsers: Any) -> None:
 
 
 def _logs(args: argparse.Namespace) -> list[Path]:
+    """The logs to run, checked before any work: a ConfigurationError when none is found or
+    one named with ``--logs`` is missing."""
     from symloc.bench.shared_data import find_carmen_dir
+    from symloc.bench.slam_bench import log_name
+    from symloc.errors import ConfigurationError
 
     src = args.carmen if args.carmen is not None else find_carmen_dir()
     if src is None:
-        return []
+        raise ConfigurationError(
+            "the CARMEN logs were not found: pass --carmen DIR (or set SYMLOC_SHARED_DATA)"
+        )
     src = Path(src)
     if src.is_file():
         found = [src]
-    else:
+    elif src.is_dir():
         found = sorted(p for p in src.iterdir() if p.name.endswith((".log", ".log.gz")))
+    else:
+        raise ConfigurationError(f"--carmen {src}: not found; expected a CARMEN log or a folder")
     if args.logs:
-        from symloc.bench.slam_bench import log_name
-
+        names = {log_name(p) for p in found}
+        missing = [n for n in dict.fromkeys(args.logs) if n not in names]
+        if missing:
+            raise ConfigurationError(
+                f"--logs: not found in {src}: {', '.join(missing)}"
+                f" (found: {', '.join(sorted(names)) or 'none'})"
+            )
         found = [p for p in found if log_name(p) in set(args.logs)]
+    if not found:
+        raise ConfigurationError(f"--carmen {src}: no *.log or *.log.gz file there")
     return found
 
 
@@ -113,12 +128,6 @@ def run(args: argparse.Namespace) -> int:
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
 
     logs = _logs(args)
-    if not logs:
-        print(
-            "no CARMEN logs found: pass --carmen DIR (or set SYMLOC_SHARED_DATA); "
-            + (f"none named {args.logs}" if args.logs else "")
-        )
-        return 2
     peers: list[tuple[str, str]] = []
     peer_notes: list[str] = []
     for name in args.peers:

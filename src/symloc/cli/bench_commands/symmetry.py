@@ -8,6 +8,7 @@ import sys
 import time
 from typing import Any
 
+from symloc.cli import options
 from symloc.cli.bench_commands._common import add_sweep_arguments, write_json
 
 __all__ = ["register", "run"]
@@ -32,10 +33,20 @@ def register(subparsers: Any) -> None:
         help=f"generator families (default all: {', '.join(FAMILIES)}) or built-in rooms",
     )
     parser.add_argument("--world", nargs="+", default=None, metavar="FILE", help="world files")
-    parser.add_argument("--worlds", type=int, default=10, help="worlds per family (default 10)")
+    parser.add_argument(
+        "--worlds", type=options.count, default=10, help="worlds per family (default 10)"
+    )
     parser.add_argument("--split", choices=("dev", "test"), default="dev", help="world seeds")
-    parser.add_argument("--seeds", type=int, nargs="+", default=None, help="explicit world seeds")
-    parser.add_argument("--poses", type=int, default=20, help="scans judged per world (20)")
+    parser.add_argument(
+        "--seeds",
+        type=options.nonnegative_int,
+        nargs="+",
+        default=None,
+        help="explicit world seeds",
+    )
+    parser.add_argument(
+        "--poses", type=options.count, default=20, help="scans judged per world (20)"
+    )
     parser.add_argument(
         "--lidar", choices=sorted(PRESETS), default="rplidar_a2", help="lidar (rplidar_a2)"
     )

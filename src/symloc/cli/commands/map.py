@@ -51,7 +51,9 @@ def register(subparsers: Any) -> None:
         what="NAME.yaml, NAME.<write id>.pgm and NAME_trajectory.png; from a bag also"
         " NAME_trajectory.tum and NAME_visual.db",
     )
-    b.add_argument("--name", default="map", help="file stem of the map (default: map)")
+    b.add_argument(
+        "--name", type=options.file_stem, default="map", help="file stem of the map (default: map)"
+    )
     options.add_seed(b)
     b.add_argument(
         "--odometry",
@@ -69,13 +71,13 @@ def register(subparsers: Any) -> None:
     )
     b.add_argument(
         "--laps",
-        type=options.positive_float,
+        type=options.laps,
         default=1.3,
         help="simulation: loops around the room (default 1.3)",
     )
     b.add_argument(
         "--resolution",
-        type=options.positive_float,
+        type=options.map_resolution,
         default=0.05,
         help="map cell size [m] (default 0.05)",
     )
@@ -123,22 +125,6 @@ def register(subparsers: Any) -> None:
     b.set_defaults(func=_build)
 
 
-def _check_out(out: Path) -> None:
-    """The output folder can be written (before any work): a folder or a new path."""
-    import os
-
-    from symloc.errors import ConfigurationError
-
-    if out.exists() and not out.is_dir():
-        raise ConfigurationError(f"--out: {out} exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ConfigurationError(f"--out: cannot create the folder {out}: {err}") from err
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise ConfigurationError(f"--out: the folder {out} is not writable")
-
-
 def _build_from_bag(args: argparse.Namespace) -> int:
     """``map build --bag``: the mapping stage from a recording (module docstring)."""
     import sys
@@ -159,7 +145,7 @@ def _build_from_bag(args: argparse.Namespace) -> int:
         {"--bag": args.bag, "--vocabulary": args.vocabulary},
         {"--out": out, "--out/NAME.yaml": out / f"{args.name}.yaml"},
     )
-    _check_out(out)
+    out.mkdir(parents=True, exist_ok=True)  # checked while parsing (options.output_folder)
     vocab = Vocabulary.load(args.vocabulary) if args.vocabulary is not None else None
     print(f"# symloc map build --bag {args.bag}, seed {args.seed}")
     topics = BagTopics(
@@ -281,8 +267,7 @@ def _build(args: argparse.Namespace) -> int:
     print(f"# symloc map build: {source}, seed {args.seed}, odometry {odo}")
     if args.world:
         if regime is None:
-            print("error: --odometry log needs a CARMEN log (--carmen)")
-            return 2
+            raise ConfigurationError("--odometry log needs a CARMEN log (--carmen)")
         run = run_simulated(
             args.world,
             odometry=regime,
@@ -293,19 +278,14 @@ def _build(args: argparse.Namespace) -> int:
         reference = run.reference
     else:
         if not args.carmen.is_file():
-            print(f"error: CARMEN log not found: {args.carmen}")
-            return 2
-        try:
-            run = run_carmen(
-                args.carmen,
-                odometry=args.odometry,
-                rng=args.seed,
-                params=params,
-                max_scans=args.max_scans,
-            )
-        except ConfigurationError as err:
-            print(f"error: {err}")
-            return 2
+            raise ConfigurationError(f"--carmen {args.carmen}: not found; expected a CARMEN log")
+        run = run_carmen(
+            args.carmen,
+            odometry=args.odometry,
+            rng=args.seed,
+            params=params,
+            max_scans=args.max_scans,
+        )
         reference = compose(inverse(run.ate.alignment), run.reference)
     s = run.summary()
     out = Path(args.out)

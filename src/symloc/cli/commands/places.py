@@ -30,7 +30,9 @@ def register(subparsers: Any) -> None:
         description="Photo j (j = 1..M) looks along heading - (j - 1) * 360/M degrees (clockwise"
         " order, as the paper stores them). Creates the database when it does not exist.",
     )
-    a.add_argument("--db", type=Path, required=True, help="visual map database (SQLite)")
+    a.add_argument(
+        "--db", type=options.output_file, required=True, help="visual map database (SQLite)"
+    )
     a.add_argument(
         "--images",
         type=Path,
@@ -41,7 +43,7 @@ def register(subparsers: Any) -> None:
     )
     a.add_argument("--kind", default="polygon", help="room kind (square, polygon, circle, ...)")
     a.add_argument(
-        "--order", type=options.positive_int, required=True, help="symmetry order of the room"
+        "--order", type=options.symmetry_order, required=True, help="symmetry order of the room"
     )
     a.add_argument("--gv", type=options.nonnegative_float, required=True, help="G-V distance [m]")
     a.add_argument(
@@ -257,7 +259,7 @@ def _add_camera(parser: argparse.ArgumentParser) -> None:
     """The camera of a command: ``--hfov`` or ``--intrinsics``, one of them."""
     cam = parser.add_mutually_exclusive_group(required=True)
     cam.add_argument(
-        "--hfov", type=options.positive_float, help="horizontal field of view [degrees]"
+        "--hfov", type=options.field_of_view, help="horizontal field of view [degrees]"
     )
     cam.add_argument(
         "--intrinsics",

@@ -46,7 +46,7 @@ def register(subparsers: Any) -> None:
     options.add_seed(p, overrides="the --params file's seed, else 0")
     p.add_argument(
         "--build-map",
-        type=Path,
+        type=options.output_file,
         default=None,
         metavar="MAP.yaml",
         help="instead of localizing, build the occupancy grid from the bag's scans and odometry"

@@ -71,7 +71,10 @@ def register(subparsers: Any) -> None:
         help="build only these (default: all three)",
     )
     setup.add_argument(
-        "--keep-build", type=Path, default=None, help="build in this folder and keep it (logs)"
+        "--keep-build",
+        type=options.output_folder,
+        default=None,
+        help="build in this folder and keep it (logs)",
     )
     setup.set_defaults(func=_setup)
     conv = sub.add_parser(
@@ -172,13 +175,13 @@ def add_sim_record_parser(sim_subparsers: Any) -> None:
     rec.add_argument("--compressed", action="store_true", help="images as CompressedImage (PNG)")
     rec.add_argument(
         "--max-time",
-        type=options.positive_float,
+        type=options.sim_seconds,
         default=60.0,
         help="simulated seconds at most (default 60)",
     )
     rec.add_argument(
         "--particles",
-        type=options.positive_int,
+        type=options.particles,
         default=2000,
         help="AMCL max_particles (default 2000)",
     )

@@ -46,7 +46,7 @@ def register(subparsers: Any) -> None:
     )
     r.add_argument(
         "--gv",
-        type=options.positive_float,
+        type=options.gv_distance,
         default=1.5 * math.sqrt(2),
         help="G-V distance, centre to vertex [m] (default: the paper's 3 m x 3 m square)",
     )
@@ -62,10 +62,8 @@ def register(subparsers: Any) -> None:
     r.add_argument("--no-lab", action="store_true", help="no lab around the room (tall walls)")
     r.add_argument("--plain", action="store_true", help="untextured walls (no photographs)")
     r.add_argument("--door", action="store_true", help="a 0.8 m door gap in the bottom wall")
-    r.add_argument("--furniture", type=options.nonnegative_int, default=0, help="number of boxes")
-    r.add_argument(
-        "--tables", type=options.nonnegative_int, default=0, help="number of round tables"
-    )
+    r.add_argument("--furniture", type=options.items, default=0, help="number of boxes")
+    r.add_argument("--tables", type=options.items, default=0, help="number of round tables")
     options.add_angle(
         r, "--hfov", default=65.0, help="camera horizontal field of view", dest="hfov"
     )
@@ -108,7 +106,7 @@ def _add_world_parser(sub: Any) -> None:
         "--no-perturb", dest="perturb", action="store_false", help="the bare family room"
     )
     w.add_argument(
-        "--gv", type=options.positive_float, default=3.0, help="G-V distance [m] for --room"
+        "--gv", type=options.gv_distance, default=3.0, help="G-V distance [m] for --room"
     )
     w.add_argument("--no-lab", action="store_true", help="--room: tall walls, no lab")
     options.add_out(w, "sim world", what="<world name>.yaml (also printed)")
@@ -126,7 +124,7 @@ def _add_gallery_parser(sub: Any) -> None:
     )
     options.add_out(g, "sim gallery", what="worlds_gallery.png")
     g.add_argument(
-        "--count", type=options.positive_int, default=16, help="number of worlds (default 16)"
+        "--count", type=options.gallery_count, default=16, help="number of worlds (default 16)"
     )
     g.add_argument(
         "--families",

@@ -54,14 +54,15 @@ def register(subparsers: Any) -> None:
     options.add_room(j, choices=_judge_rooms(), help="without --carmen or --bag: simulated room")
     j.add_argument(
         "--index",
-        type=options.nonnegative_int,
+        type=options.integer,
         default=0,
-        help="scan index in the log / topic, from 0 (default 0)",
+        help="scan index in the log / topic, from 0 (default 0); in a CARMEN log a negative"
+        " index counts from the end (-1: the last scan)",
     )
     j.add_argument("--topic", default=None, help="bag: LaserScan topic (default: the first)")
     j.add_argument(
         "--gv",
-        type=options.positive_float,
+        type=options.gv_distance,
         default=None,
         help=f"room: G-V distance [m] (default {DEFAULT_GV:.3f}, a 3 m x 3 m square)",
     )
@@ -77,7 +78,7 @@ def register(subparsers: Any) -> None:
     j.add_argument("--door", action="store_true", help="room: open a door in the first wall")
     j.add_argument(
         "--furniture",
-        type=options.nonnegative_int,
+        type=options.items,
         default=0,
         help="room: number of boxes inside",
     )
@@ -103,8 +104,12 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="judge scans under 360 degrees for a hallway (the unseen part is assumed)",
     )
-    j.add_argument("--png", type=Path, default=None, metavar="PATH", help="save a figure")
-    j.add_argument("--json", type=Path, default=None, metavar="PATH", help="save the report")
+    j.add_argument(
+        "--png", type=options.output_file, default=None, metavar="PATH", help="save a figure"
+    )
+    j.add_argument(
+        "--json", type=options.output_file, default=None, metavar="PATH", help="save the report"
+    )
     j.set_defaults(func=_judge)
 
 

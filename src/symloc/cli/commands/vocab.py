@@ -34,16 +34,18 @@ def register(subparsers: Any) -> None:
     )
     t.add_argument("folder", type=Path, help="folder of training images")
     t.add_argument(
-        "--k", type=options.positive_int, default=10, help="branching factor (default 10)"
+        "--k", type=options.vocabulary_k, default=10, help="branching factor (default 10)"
     )
-    t.add_argument("--L", type=options.positive_int, default=5, help="depth levels (default 5)")
+    t.add_argument(
+        "--L", type=options.vocabulary_levels, default=5, help="depth levels (default 5)"
+    )
     t.add_argument(
         "--weighting", choices=_WEIGHTINGS, default="tf-idf", help="word weights (tf-idf)"
     )
     t.add_argument("--scoring", choices=_SCORINGS, default="l1", help="BoW scoring (l1)")
     t.add_argument(
         "--features",
-        type=options.positive_int,
+        type=options.orb_features,
         default=1000,
         help="ORB features per image (default 1000)",
     )
@@ -65,7 +67,7 @@ def register(subparsers: Any) -> None:
         "else symloc's binary format. The input format is detected from its content.",
     )
     c.add_argument("input", type=Path, help="vocabulary file to read")
-    c.add_argument("output", type=Path, help="file to write (.txt: DBoW2 text)")
+    c.add_argument("output", type=options.output_file, help="file to write (.txt: DBoW2 text)")
     c.add_argument("--compress", action="store_true", help="zlib-compress the binary output")
     c.set_defaults(func=_convert)
 
