@@ -37,6 +37,7 @@ to be confident (and every few updates while it stays ambiguous).
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +51,14 @@ from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import endpoint_flat_indices
 
-__all__ = ["RivalReport", "find_rival", "match_scores", "padded_field"]
+__all__ = [
+    "RivalReport",
+    "coarse_lattice",
+    "find_rival",
+    "match_scores",
+    "padded_field",
+    "rival_search_steps",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -218,6 +226,8 @@ def find_rival(
 ) -> RivalReport:
     """Search the whole map for a pose that explains ``points`` as well as ``estimate``.
 
+    Runs :func:`rival_search_steps` to the end in one call (same parameters).
+
     Parameters
     ----------
     field : DistanceField
@@ -245,11 +255,77 @@ def find_rival(
     -------
     RivalReport
     """
+    steps = rival_search_steps(
+        field,
+        points,
+        estimate,
+        tol=tol,
+        step=step,
+        angle_step=angle_step,
+        min_distance=min_distance,
+        min_angle=min_angle,
+        margin=margin,
+        max_points=max_points,
+        max_refine=max_refine,
+        max_candidates=max_candidates,
+    )
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            report: RivalReport = done.value
+            return report
+
+
+def coarse_lattice(grid: OccupancyGrid, stride: int) -> FloatArray:
+    """Centres ``(P, 2)`` [m] of the free cells on a lattice of ``stride`` cells (the rival
+    search's coarse positions), computed once per map and kept with its
+    :class:`~symloc.grid.fields.MapFields`."""
+
+    def compute(g: OccupancyGrid) -> FloatArray:
+        free = g.free_mask
+        rows, cols = np.nonzero(free[stride // 2 :: stride, stride // 2 :: stride])
+        cells = np.column_stack([rows * stride + stride // 2, cols * stride + stride // 2])
+        xy: FloatArray = g.cell_to_world(cells)
+        xy.setflags(write=False)
+        return xy
+
+    return MapFields.of(grid).derived(f"rival_search.coarse_lattice/{stride}", compute)
+
+
+def rival_search_steps(
+    field: DistanceField,
+    points: ArrayLike,
+    estimate: ArrayLike,
+    *,
+    tol: float,
+    step: float = 0.3,
+    angle_step: float = math.radians(6.0),
+    min_distance: float = 1.0,
+    min_angle: float = math.radians(30.0),
+    margin: float = 0.1,
+    max_points: int = 80,
+    max_refine: int = 3000,
+    max_candidates: int = 40000,
+    chunk_pairs: int = 1 << 22,
+) -> Generator[int, None, RivalReport]:
+    """:func:`find_rival` in slices: a generator that yields the work of each slice and returns
+    the :class:`RivalReport` (``StopIteration.value``).
+
+    Each ``next()`` scores at most about ``chunk_pairs`` pose-point pairs (one block of
+    lattice poses, or of one branch-and-bound level's children) and yields that number, so a
+    caller can spread one search over several scans with a bounded cost per scan
+    (:class:`symloc.mcl.rival_schedule.RivalSearchRun`). The slices are the same scores in the
+    same order as one call: the report is identical however the work is spread. Parameters as
+    :func:`find_rival`; ``chunk_pairs`` (>= 1) is the size of a slice.
+    """
     for name, v in (("tol", tol), ("step", step), ("angle_step", angle_step)):
         if not (math.isfinite(v) and v > 0.0):
             raise ConfigurationError(f"{name}: expected a finite value > 0, got {v!r}")
     if not (0.0 <= margin < 1.0):
         raise ConfigurationError(f"margin: expected a value in [0, 1), got {margin!r}")
+    if chunk_pairs < 1:
+        raise ConfigurationError(f"chunk_pairs: expected an integer >= 1, got {chunk_pairs!r}")
     est = np.asarray(estimate, dtype=np.float64)
     if est.shape != (3,) or not np.all(np.isfinite(est)):
         raise ConfigurationError(f"estimate: expected finite shape (3,), got {est}")
@@ -262,16 +338,14 @@ def find_rival(
     m = pts.shape[0]
     grid = field.grid
     res = grid.resolution
+    block = max(1, chunk_pairs // m)  # poses per slice
     # Estimate: refined over one coarse cell, like the candidates.
     _, est_sc = _refine(field, est[None], pts, tol, step / 2.0, angle_step / 2.0)
     est_score = float(est_sc[0])
     threshold = est_score - margin
     # Coarse lattice over the free cells.
     stride = max(1, round(step / res))
-    free = grid.free_mask
-    rows, cols = np.nonzero(free[stride // 2 :: stride, stride // 2 :: stride])
-    cells = np.column_stack([rows * stride + stride // 2, cols * stride + stride // 2])
-    xy = grid.cell_to_world(cells)
+    xy = coarse_lattice(grid, stride)
     n_h = max(1, math.ceil(2.0 * math.pi / angle_step))
     heads = -math.pi + (np.arange(n_h) + 0.5) * (2.0 * math.pi / n_h)
     da = 2.0 * math.pi / n_h
@@ -280,12 +354,15 @@ def find_rival(
     cand_p: list[FloatArray] = []
     cand_s: list[FloatArray] = []
     for h in heads:
-        poses = np.column_stack([xy, np.full(xy.shape[0], h)])
-        sc = match_scores(field, poses, pts, loose, at_least=threshold)
-        keep = sc >= threshold
-        if keep.any():
-            cand_p.append(poses[keep])
-            cand_s.append(sc[keep])
+        for s0 in range(0, xy.shape[0], block):
+            part = xy[s0 : s0 + block]
+            poses = np.column_stack([part, np.full(part.shape[0], h)])
+            sc = match_scores(field, poses, pts, loose, at_least=threshold)
+            keep = sc >= threshold
+            if keep.any():
+                cand_p.append(poses[keep])
+                cand_s.append(sc[keep])
+            yield part.shape[0] * m
     if not cand_p:
         return RivalReport(False, est_score, 0.0, None, 0, m)
     cp = np.concatenate(cand_p)
@@ -309,7 +386,12 @@ def find_rival(
         offs = np.column_stack([gx.ravel(), gy.ravel(), ga.ravel()])
         kids = (cp[:, None, :] + offs[None, :, :]).reshape(-1, 3)
         bound = tol + math.sqrt(2.0) * h_xy + rng_pts * h_a + res
-        sc = match_scores(field, kids, pts, bound, at_least=threshold)
+        sc = np.empty(kids.shape[0])
+        for s0 in range(0, kids.shape[0], block):
+            sc[s0 : s0 + block] = match_scores(
+                field, kids[s0 : s0 + block], pts, bound, at_least=threshold
+            )
+            yield min(block, kids.shape[0] - s0) * m
         keep = (sc >= threshold) & _far(kids, est, min_distance - h_xy, min_angle - h_a)
         cp, cs = kids[keep], sc[keep]
         if cp.shape[0] == 0:
