@@ -184,7 +184,7 @@ class ConfidenceConfig:
     evidence_updates: int = 10
     rival_recheck: int = 5
     rival_max_points: int = 100
-    rival_grace: int = 2
+    rival_grace: int = 5
     rival_period: int = 300
     rival_budget: int = 64_000_000
 
@@ -511,7 +511,7 @@ def assess(
 
     def fail(reason: str, *, breaks: bool = False) -> Confidence:
         doubts = prev_doubts + 1
-        broken = breaks or doubts > cfg.rival_grace
+        broken = breaks or doubts == cfg.rival_grace + 1  # once per run of failures
         return Confidence(
             False,
             reason,
@@ -526,7 +526,7 @@ def assess(
             od,
             prev_proven >= 0 and not broken,
             track=track + 1 if broken else track,
-            doubts=0 if broken else doubts,
+            doubts=doubts,
             proven=-1 if broken or prev_proven < 0 else prev_proven + 1,
         )
 

@@ -155,9 +155,14 @@ def match_scores(
     pre = int(np.count_nonzero(sure))
     look = ~sure
     inv_res = 1.0 / field.grid.resolution
-    bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * inv_res, dtype=np.float32)
-    by = np.ascontiguousarray(r[look] * np.sin(a[look]) * inv_res, dtype=np.float32)
-    tt = np.ascontiguousarray(tt_all[look])
+    # Points in a low-discrepancy order (the count does not depend on it): neighbouring
+    # points of one scan tend to pass or fail together, spread ones let a pose that cannot
+    # reach ``at_least`` miss early and be given up.
+    order = np.flatnonzero(look)
+    order = order[np.argsort((np.arange(order.size) * 0.6180339887498949) % 1.0, kind="stable")]
+    bx = np.ascontiguousarray(r[order] * np.cos(a[order]) * inv_res, dtype=np.float32)
+    by = np.ascontiguousarray(r[order] * np.sin(a[order]) * inv_res, dtype=np.float32)
+    tt = np.ascontiguousarray(tt_all[order])
     need = 0
     if at_least is not None and at_least > 0.0:
         # the smallest count c with c / m >= at_least, as the float comparison decides it
