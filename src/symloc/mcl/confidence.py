@@ -348,8 +348,10 @@ def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
     c = np.asarray(covariance, dtype=np.float64)
     if c.shape != (3, 3) or not np.all(np.isfinite(c)):
         raise ConfigurationError(f"covariance: expected a finite (3, 3) array, got {c.shape}")
-    ev = np.linalg.eigvalsh(0.5 * (c[:2, :2] + c[:2, :2].T))
-    return math.sqrt(max(float(ev.max()), 0.0)), math.sqrt(max(float(c[2, 2]), 0.0))
+    # the larger eigenvalue of the symmetric 2 x 2 block, in closed form
+    a, d, b = float(c[0, 0]), float(c[1, 1]), 0.5 * (float(c[0, 1]) + float(c[1, 0]))
+    top = 0.5 * (a + d) + math.hypot(0.5 * (a - d), b)
+    return math.sqrt(max(top, 0.0)), math.sqrt(max(float(c[2, 2]), 0.0))
 
 
 def scan_consistency(
