@@ -39,10 +39,16 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    explains the evidence within ``rival_margin`` = 0.05 of the estimate's score (fraction of
    points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
    ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
-   more evidence (then 10, 20, ...: a symmetric room stays ambiguous, and each search costs
-   up to about a second on a building-sized map). Uniqueness must be proven: if the search's bound leaves more candidate
-   places than it can check, the place counts as ambiguous. Once the place is unique, the
-   verdict holds for the rest of the streak.
+   more evidence (then 10, 20, ...: a symmetric room stays ambiguous). Uniqueness must be
+   proven: if the search's bound leaves more candidate places than it can check, the place
+   counts as ambiguous. Once the place is unique, the verdict holds for as long as the filter
+   follows it (its ``track``): it is searched again only when the estimate jumps to another
+   place (farther than ``rival_min_distance`` or turned more than ``rival_min_angle`` from
+   the odometry's prediction), the heaviest cluster loses its share (a new cluster), more
+   than ``rival_grace`` = 5 updates in a row fail checks 1-3 (a doubt), or every
+   ``rival_period`` = 300 updates. A search scores at most ``rival_budget`` pose-point pairs
+   per update (its cost grows with the map's free area; on a large map it takes a few
+   updates, and the verdict waits for it): the cost per scan is bounded.
 
 In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
 checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the
@@ -57,7 +63,8 @@ The verdict is judged *after* the filter update, not inside it (beluga's ``amcl_
 estimates after the update): :meth:`symloc.mcl.Amcl.update` only moves, weighs, resamples and
 clusters the particles (bounded cost); a :class:`ConfidenceJudge` bound to the filter then
 judges each of its results, keeps the hysteresis and the streak's evidence, and runs the rival
-search when it is due (up to about a second). Call the judge on *every* result of
+search when it is due, ``rival_budget`` pose-point pairs per update (a bounded cost per
+scan, whatever the map's size). Call the judge on *every* result of
 :meth:`~symloc.mcl.Amcl.update` (also those that integrated no scan: they keep the verdict),
 or the hysteresis counts differently. For hand-fed results use :func:`assess` with
 :func:`scan_consistency` (and :func:`~symloc.mcl.rival_search.find_rival`).
@@ -747,8 +754,9 @@ class ConfidenceJudge:
         Returns
         -------
         Confidence
-            Also :attr:`verdict` until the next call. When checks 1-4 pass and a rival search
-            is due, it runs here (up to about a second on a building-sized map).
+            Also :attr:`verdict` until the next call. When a rival search is due, it advances
+            here by at most ``rival_budget`` pose-point pairs (a search of a large map ends a
+            few updates later; it is dropped if the track breaks first).
         """
         self._sync()
         amcl, cfg = self.amcl, self.config
@@ -790,7 +798,7 @@ class ConfidenceJudge:
                 conf = dataclasses.replace(
                     conf,
                     reason=f"rival search under way ({run.calls} updates,"
-                    f" {run.pairs / 1e6:.0f} M pose-point pairs so far)",
+                    f" {run.pairs:,} pose-point pairs so far)",
                 )
         self._verdict = conf
         return conf

@@ -412,9 +412,9 @@ def count_within_py(
 
     End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); ``pre`` counts
     points known to pass everywhere, ``total`` is the number of points in all, so the value is
-    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` each pose stops early once it
-    cannot reach ``need`` points any more (more than ``pre + B - need`` points missed): its
-    value is then below ``need / total`` but not exact (exact for every pose that reaches it).
+    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a block of poses stops early
+    once none of them can reach ``need`` points any more: their values are then below ``need
+    / total`` but not exact (exact for every pose that reaches it).
     """
     one = np.float32(1.0)
     zero = np.float32(0.0)
@@ -427,68 +427,6 @@ def count_within_py(
     yb = np.empty(_CBLOCK, dtype=np.float32)
     cnt = np.empty(_CBLOCK, dtype=np.int64)
     cell = np.empty(_CBLOCK, dtype=np.uint32)
-    if need > 0:
-        # Blocks of poses as below, but each pose leaves its block at its own first hopeless
-        # miss: the block goes on with the poses still alive (a pose far from any match stops
-        # after a few points instead of waiting for the best pose of its block).
-        may_miss = pre + nb - need
-        alive = np.empty(_CBLOCK, dtype=np.int64)
-        last_th = math.nan
-        last_c = zero
-        last_s = zero
-        for b0 in range(start, stop, _CBLOCK):
-            m = min(_CBLOCK, stop - b0)
-            for k in range(m):
-                th = poses[b0 + k, 2]
-                px = np.float32(poses[b0 + k, 0] * inv_res)
-                py = np.float32(poses[b0 + k, 1] * inv_res)
-                if th != last_th:  # a lattice shares its heading: its cosine once
-                    last_th = th
-                    last_c = np.float32(math.cos(th))
-                    last_s = np.float32(math.sin(th))
-                ck = last_c
-                sk = last_s
-                if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(ck)):
-                    px = np.float32(-1e30)
-                    py = np.float32(-1e30)
-                    ck = zero
-                    sk = zero
-                cb[k] = ck
-                sb[k] = sk
-                xb[k] = px
-                yb[k] = py
-                cnt[k] = 0
-                alive[k] = k
-            n_alive = m
-            j0 = 0
-            while j0 < nb and n_alive > 0:
-                j1 = min(j0 + 8, nb)
-                for j in range(j0, j1):
-                    bxj = bx[j]
-                    byj = by[j]
-                    tj = tol[j]
-                    for q in range(n_alive):
-                        k = alive[q]
-                        x = cb[k] * bxj - sb[k] * byj
-                        x = x + xb[k]
-                        y = sb[k] * bxj + cb[k] * byj
-                        y = y + yb[k]
-                        x = min(max(x + one, zero), xmax)
-                        y = min(max(y + one, zero), ymax)
-                        if table[np.uint32(np.int32(y) * np.int32(width) + np.int32(x))] <= tj:
-                            cnt[k] += 1
-                # the poses that can still reach need points stay
-                kept = 0
-                for q in range(n_alive):
-                    k = alive[q]
-                    if j1 - cnt[k] <= may_miss:
-                        alive[kept] = k
-                        kept += 1
-                n_alive = kept
-                j0 = j1
-            for k in range(m):
-                out[b0 + k] = (cnt[k] + pre) / total
-        return
     for b0 in range(start, stop, _CBLOCK):
         m = min(_CBLOCK, stop - b0)
         for k in range(m):

@@ -29,9 +29,18 @@ The map is searched through :func:`padded_field`: its grid with a border of unkn
 so that end points that fall just off the map (a map whose walls touch its edge) still read
 their true distance to the nearest wall and the bound holds.
 
+Before the coarse lattice, positions that no heading can make reach the threshold are left
+out (:func:`_may_reach`: a position farther from every obstacle than the points that must pass
+reach); the candidates are the same.
+
 Cost: (free area / step^2) x (2 pi / angle_step) x M look-ups, e.g. 500 m^2 at 0.3 m, 6 deg
-and 80 points = 27 M look-ups, about a second; the caller runs it only when the filter is about
-to be confident (and every few updates while it stays ambiguous).
+and 80 points = 27 M look-ups, a tenth of a second to a second; it grows with the map's free
+area. :func:`rival_search_steps` yields after each block of poses so that a caller can spread
+one search over several scans with a bounded cost per scan
+(:class:`symloc.mcl.rival_schedule.RivalSearchRun`), and
+:class:`symloc.mcl.confidence.ConfidenceJudge` runs it only when it can change the verdict
+(a new track: a jump, a new cluster, a sustained doubt; every ``rival_period`` updates; and
+while a place stays ambiguous, with a back-off).
 """
 
 from __future__ import annotations
@@ -155,20 +164,10 @@ def match_scores(
     pre = int(np.count_nonzero(sure))
     look = ~sure
     inv_res = 1.0 / field.grid.resolution
-    # Points in a low-discrepancy order (the count does not depend on it): neighbouring
-    # points of one scan tend to pass or fail together, spread ones let a pose that cannot
-    # reach ``at_least`` miss early and be given up.
-    order = np.flatnonzero(look)
-    order = order[np.argsort((np.arange(order.size) * 0.6180339887498949) % 1.0, kind="stable")]
-    bx = np.ascontiguousarray(r[order] * np.cos(a[order]) * inv_res, dtype=np.float32)
-    by = np.ascontiguousarray(r[order] * np.sin(a[order]) * inv_res, dtype=np.float32)
-    tt = np.ascontiguousarray(tt_all[order])
-    need = 0
-    if at_least is not None and at_least > 0.0:
-        # the smallest count c with c / m >= at_least, as the float comparison decides it
-        need = max(0, min(m + 1, math.ceil(at_least * m) - 1))
-        while need <= m and need / m < at_least:
-            need += 1
+    bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * inv_res, dtype=np.float32)
+    by = np.ascontiguousarray(r[look] * np.sin(a[look]) * inv_res, dtype=np.float32)
+    tt = np.ascontiguousarray(tt_all[look])
+    need = 0 if at_least is None else needed_count(at_least, m)
 
     def run(start: int, stop: int) -> None:
         kernels.count_within(
@@ -176,6 +175,44 @@ def match_scores(
         )
 
     kernels.split_over_threads(pz.shape[0], pz.shape[0] * max(1, bx.size), run)
+    return out
+
+
+def needed_count(at_least: float, m: int) -> int:
+    """The smallest count ``c`` of ``m`` points with ``c / m >= at_least`` as the float
+    comparison decides it (``m + 1``: none; 0: any)."""
+    if at_least <= 0.0:
+        return 0
+    need = max(0, min(m + 1, math.ceil(at_least * m) - 1))
+    while need <= m and need / m < at_least:
+        need += 1
+    return need
+
+
+def _may_reach(
+    field: DistanceField, xy: FloatArray, reach: FloatArray, at_least: float
+) -> NDArray[np.bool_]:
+    """Which lattice positions ``(P, 2)`` may score ``at_least`` at some heading.
+
+    A point at range ``r`` that passes with tolerance ``t`` has an obstacle within ``r + t``
+    of the position (plus a cell for the end point's and the position's cells), whatever
+    the heading; so a position whose own distance to the nearest obstacle exceeds the
+    ``need``-th largest of these ``reach [m] (M,)`` cannot have ``need`` points pass at any
+    heading, and its lattice scores would all fall below ``at_least``. Leaving it out leaves
+    the candidates as they are (a robot in the middle of a hall far from every wall, with
+    walls close in its scan, is not there).
+    """
+    m = reach.size
+    need = needed_count(at_least, m)
+    if need == 0 or xy.shape[0] == 0:
+        return np.ones(xy.shape[0], dtype=np.bool_)
+    if need > m:
+        return np.zeros(xy.shape[0], dtype=np.bool_)
+    res = field.grid.resolution
+    limit = float(np.sort(reach)[m - need]) + res
+    if limit >= field.max_dist:  # every position reads at most the clip: nothing to exclude
+        return np.ones(xy.shape[0], dtype=np.bool_)
+    out: NDArray[np.bool_] = field.lookup(xy) <= limit
     return out
 
 
@@ -356,6 +393,7 @@ def rival_search_steps(
     da = 2.0 * math.pi / n_h
     rng_pts = np.hypot(pts[:, 0], pts[:, 1])
     loose = tol + stride * res / math.sqrt(2.0) + rng_pts * da / 2.0 + res
+    xy = xy[_may_reach(field, xy, rng_pts + loose, threshold)]
     cand_p: list[FloatArray] = []
     cand_s: list[FloatArray] = []
     for h in heads:
