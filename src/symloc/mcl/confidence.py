@@ -46,7 +46,7 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    place (farther than ``rival_min_distance`` or turned more than ``rival_min_angle`` from
    the odometry's prediction), the heaviest cluster loses its share (a new cluster), more
    than ``rival_grace`` = 5 updates in a row fail checks 1-3 (a doubt), or every
-   ``rival_period`` = 300 updates. A search scores at most ``rival_budget`` pose-point pairs
+   ``rival_period`` = 1000 updates. A search scores at most ``rival_budget`` pose-point pairs
    per update (its cost grows with the map's free area; on a large map it takes a few
    updates, and the verdict waits for it): the cost per scan is bounded.
 
@@ -192,7 +192,7 @@ class ConfidenceConfig:
     rival_recheck: int = 5
     rival_max_points: int = 100
     rival_grace: int = 5
-    rival_period: int = 300
+    rival_period: int = 1000
     rival_budget: int = 64_000_000
 
     def __post_init__(self) -> None:
