@@ -175,3 +175,33 @@ def test_a_place_proven_unique_is_not_searched_again_while_followed() -> None:
             break
     assert judge.n_rival_searches == 1, judge.n_rival_searches
     assert confident[-1]
+
+
+def _offices(n: int = 3) -> OccupancyGrid:
+    """``n x n`` identical 3 m offices with a box each: many places look alike."""
+    side = 60
+    d = np.full((n * side + 2, n * side + 2), 100, np.int8)
+    for i in range(n):
+        for j in range(n):
+            r0, c0 = 1 + i * side, 1 + j * side
+            d[r0 + 1 : r0 + side - 1, c0 + 1 : c0 + side - 1] = 0
+            d[r0 + 10 : r0 + 18, c0 + 35 : c0 + 50] = 100
+    return OccupancyGrid(d, 0.05)
+
+
+def test_a_search_stops_once_too_many_places_look_alike() -> None:
+    grid = _offices()
+    field = rs.padded_field(grid, 2.0)
+    est = np.array([1.2, 1.0, 0.2])
+    pts = _evidence(grid, est, 6)
+    full = find_rival(field, pts, est, tol=0.1, max_candidates=10**9)
+    early = find_rival(field, pts, est, tol=0.1, max_candidates=300)
+    assert full.ambiguous  # 8 other offices
+    assert early.ambiguous  # the same verdict ...
+    assert 300 < early.n_candidates < full.n_candidates  # ... from part of the lattice
+    # its rival is the best-bounded candidate: a bound at least the threshold
+    assert early.rival_pose is not None
+    assert early.rival_score >= early.estimate_score - 0.1
+    far = np.hypot(*(early.rival_pose[:2] - est[:2])) > 0.7
+    turned = abs(np.angle(np.exp(1j * (early.rival_pose[2] - est[2])))) > np.radians(24.0)
+    assert far or turned  # beyond the lattice-relaxed distance or angle of a rival

@@ -818,12 +818,16 @@ class ConfidenceJudge:
         result = self.amcl.update(odom, scan, laser_pose=laser_pose)
         return result, self(result, odom, scan, laser_pose=laser_pose)
 
+    def _evidence_points(self, estimate: FloatArray) -> FloatArray:
+        """The scans of the current streak chained into the estimate's frame, ``(M, 2)`` [m]."""
+        pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
+        return np.concatenate(pts) if pts else np.zeros((0, 2))
+
     def _rival_steps(self, estimate: FloatArray) -> Generator[int, None, RivalReport]:
         """The rival search on the scans of the current streak, chained into the estimate's
         frame, as slices of at most ``rival_budget`` pose-point pairs."""
         cfg = self.config
-        pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
-        points = np.concatenate(pts) if pts else np.zeros((0, 2))
+        points = self._evidence_points(estimate)
         field = self.amcl.fields.grown(self.consistency_field.max_dist)
         return rival_search_steps(
             field,

@@ -86,12 +86,14 @@ class RivalReport:
     estimate_score : float
         Best fine score near the estimate (0..1).
     rival_score : float
-        Best fine score of a rival (0 when none; the coarse upper bound when there were
-        more than ``max_refine`` candidates).
+        Best fine score of a rival (0 when none; the best upper bound when there were too
+        many candidates to prove uniqueness: more than ``max_candidates`` at a level or
+        ``max_refine`` at the end).
     rival_pose : ndarray of shape (3,) or None
         That rival's pose (map frame).
     n_candidates : int
-        Coarse lattice poses whose upper bound reached the threshold.
+        Coarse lattice poses whose upper bound reached the threshold (counted until there
+        were too many to prove uniqueness: then at least that many).
     n_points : int
         Evidence points used.
     """
@@ -214,6 +216,13 @@ def _may_reach(
         return np.ones(xy.shape[0], dtype=np.bool_)
     out: NDArray[np.bool_] = field.lookup(xy) <= limit
     return out
+
+
+def _unproven(cp: FloatArray, cs: FloatArray, est_score: float, n_cand: int, m: int) -> RivalReport:
+    """The ambiguous report when too many candidates ``cp (C, 3)`` (upper bounds ``cs (C,)``)
+    are left to prove uniqueness: the best-bounded one as the rival."""
+    j = int(cs.argmax())
+    return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
 
 
 def _far(
@@ -385,6 +394,7 @@ def rival_search_steps(
     _, est_sc = _refine(field, est[None], pts, tol, step / 2.0, angle_step / 2.0)
     est_score = float(est_sc[0])
     threshold = est_score - margin
+
     # Coarse lattice over the free cells.
     stride = max(1, round(step / res))
     xy = coarse_lattice(grid, stride)
@@ -394,8 +404,15 @@ def rival_search_steps(
     rng_pts = np.hypot(pts[:, 0], pts[:, 1])
     loose = tol + stride * res / math.sqrt(2.0) + rng_pts * da / 2.0 + res
     xy = xy[_may_reach(field, xy, rng_pts + loose, threshold)]
+    # The first check after the lattice is against max_candidates (max_refine when the
+    # lattice cells are already about one map cell wide): once more candidates than that have
+    # passed, the answer is "ambiguous" whatever the rest of the lattice holds, so the lattice
+    # stops there (the same verdict, much sooner on a map with many look-alike places).
+    h_xy, h_a = stride * res / 2.0, da / 2.0
+    too_many = max_candidates if h_xy > res else max_refine
     cand_p: list[FloatArray] = []
     cand_s: list[FloatArray] = []
+    n_cand = 0
     for h in heads:
         for s0 in range(0, xy.shape[0], block):
             part = xy[s0 : s0 + block]
@@ -403,26 +420,25 @@ def rival_search_steps(
             sc = match_scores(field, poses, pts, loose, at_least=threshold)
             keep = sc >= threshold
             if keep.any():
-                cand_p.append(poses[keep])
-                cand_s.append(sc[keep])
+                kp, ks = poses[keep], sc[keep]
+                far = _far(kp, est, min_distance - stride * res, min_angle - da)
+                cand_p.append(kp[far])
+                cand_s.append(ks[far])
+                n_cand += int(np.count_nonzero(far))
             yield part.shape[0] * m
-    if not cand_p:
+            if n_cand > too_many:
+                cp, cs = np.concatenate(cand_p), np.concatenate(cand_s)
+                return _unproven(cp, cs, est_score, n_cand, m)
+    if n_cand == 0:
         return RivalReport(False, est_score, 0.0, None, 0, m)
     cp = np.concatenate(cand_p)
     cs = np.concatenate(cand_s)
-    far = _far(cp, est, min_distance - stride * res, min_angle - da)
-    cp, cs = cp[far], cs[far]
-    n_cand = int(cp.shape[0])
-    if n_cand == 0:
-        return RivalReport(False, est_score, 0.0, None, 0, m)
     # Branch and bound: split each surviving lattice cell into 3 x 3 x 3 children with a
     # three times tighter bound, until the cells are about one map cell wide.
-    h_xy, h_a = stride * res / 2.0, da / 2.0
     while h_xy > res:
         if cp.shape[0] > max_candidates:
             # Too many places the bound cannot exclude: uniqueness is not proven.
-            j = int(cs.argmax())
-            return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+            return _unproven(cp, cs, est_score, n_cand, m)
         h_xy, h_a = h_xy / 3.0, h_a / 3.0
         o = np.array([-2.0, 0.0, 2.0])
         gx, gy, ga = np.meshgrid(o * h_xy, o * h_xy, o * h_a, indexing="ij")
@@ -440,8 +456,7 @@ def rival_search_steps(
         if cp.shape[0] == 0:
             return RivalReport(False, est_score, 0.0, None, n_cand, m)
     if cp.shape[0] > max_refine:
-        j = int(cs.argmax())
-        return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+        return _unproven(cp, cs, est_score, n_cand, m)
     bp, bs = _refine(field, cp, pts, tol, h_xy, h_a)
     ok = _far(bp, est, min_distance, min_angle)
     if not ok.any():
