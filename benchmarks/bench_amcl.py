@@ -217,15 +217,26 @@ def vm_hwm_mib(field: str = "VmHWM") -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def worker(path: Path, seed: int) -> int:
-    """symloc over a problem file, printing what a peer prints (see the module docstring)."""
+def worker(path: Path, seed: int, *, judge: bool = True) -> int:
+    """symloc over a problem file, printing what a peer prints (see the module docstring).
+
+    With ``judge`` each filter result is also judged by a
+    :class:`~symloc.mcl.confidence.ConfidenceJudge` (the confidence verdict with its rival
+    search, what the localizer, the node and ``symloc experiment amcl-carmen`` run per scan);
+    without it only the filter runs, as the peer does.
+    """
+    from symloc.mcl.confidence import ConfidenceJudge
+
     base = vm_hwm_mib("VmRSS")  # the interpreter and the libraries, before any work
     t0 = time.process_time()
     pr = read_problem(path)
     t_read = time.process_time() - t0
     t0 = time.process_time()
     amcl = Amcl(pr.grid, pr.params, np.random.default_rng(seed))
+    judge_of = ConfidenceJudge(amcl) if judge else None
     t_map = time.process_time() - t0
+    t_judge = 0.0
+    n_confident = 0
     if pr.init_global:
         amcl.initialize_global()
     else:
@@ -237,6 +248,10 @@ def worker(path: Path, seed: int) -> int:
         t1 = time.process_time()
         res = amcl.update(OdometryReading(od), scan)
         t_upd += time.process_time() - t1
+        if judge_of is not None:
+            t1 = time.process_time()
+            n_confident += int(judge_of(res, OdometryReading(od), scan).confident)
+            t_judge += time.process_time() - t1
         n_upd += int(res.updated)
         e = res.estimate
         lines.append(
@@ -247,6 +262,8 @@ def worker(path: Path, seed: int) -> int:
     print(
         f"# updates {n_upd} map_cpu {t_map:.6f} update_cpu {t_upd:.6f} total_cpu {total:.6f}"
         f" read_cpu {t_read:.6f} vmhwm_mib {vm_hwm_mib():.1f} base_mib {base:.1f}"
+        f" judge_cpu {t_judge:.6f} rival_searches"
+        f" {0 if judge_of is None else judge_of.n_rival_searches} confident {n_confident}"
     )
     return 0
 
@@ -288,7 +305,7 @@ def run_timed(cmd: list[str]) -> RunResult:
     return r
 
 
-def symloc_cmd(problem: Path, seed: int) -> list[str]:
+def symloc_cmd(problem: Path, seed: int, *, judge: bool = True) -> list[str]:
     return [
         sys.executable,
         str(Path(__file__).resolve()),
@@ -296,6 +313,7 @@ def symloc_cmd(problem: Path, seed: int) -> list[str]:
         str(problem),
         "--seed",
         str(seed),
+        *([] if judge else ["--no-judge"]),
     ]
 
 
@@ -384,7 +402,7 @@ def update_bench(args: argparse.Namespace, tmp: Path) -> None:
         for rnd in range(args.rounds):
             for name, cmd in sides:
                 c = (
-                    symloc_cmd(prob, args.seed + rnd)
+                    symloc_cmd(prob, args.seed + rnd, judge=False)
                     if cmd is None
                     else peer_cmd(cmd, prob, args.seed + rnd)
                 )
@@ -568,15 +586,19 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
         write_problem(prob, pr)
         res: dict[str, list[tuple[float, float, float, float, float]]] = {s: [] for s, _ in sides}
         loads = []
+        judged: tuple[list[float], list[float]] = ([], [])
         for rnd in range(args.rounds):
             for side, cmd in sides:
                 c = (
-                    symloc_cmd(prob, args.seed + rnd)
+                    symloc_cmd(prob, args.seed + rnd, judge=args.judge)
                     if cmd is None
                     else peer_cmd(cmd, prob, args.seed + rnd)
                 )
                 r = run_timed(c)
                 loads.append(os.getloadavg()[0])
+                if cmd is None:
+                    judged[0].append(r.summary.get("judge_cpu", 0.0))
+                    judged[1].append(r.summary.get("rival_searches", 0.0))
                 est = carried(r, pr.odom)
                 err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
                 res[side].append(
@@ -597,6 +619,12 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
             print(
                 f"{name:>10} {cells:>11} {side:>7} | {cpu:7.2f} {peak:8.1f} {err:7.3f} {p95:6.3f}"
                 f" {nu:7.0f} | {rc} {re_} | {np.median(loads):.2f}"
+                + (
+                    f" | judge {np.median(judged[0]):.2f} s, {np.median(judged[1]):.0f} rival"
+                    " searches"
+                    if side == "symloc" and args.judge
+                    else ""
+                )
             )
         if name == "large" and args.global_particles:
             g = Problem(
@@ -611,7 +639,11 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
             gp = tmp / "global_large.bin"
             write_problem(gp, g)
             for side, cmd in sides:
-                c = symloc_cmd(gp, args.seed) if cmd is None else peer_cmd(cmd, gp, args.seed)
+                c = (
+                    symloc_cmd(gp, args.seed, judge=args.judge)
+                    if cmd is None
+                    else peer_cmd(cmd, gp, args.seed)
+                )
                 r = run_timed(c)
                 print(
                     f"# global localization on the large map, {args.global_particles} particles,"
@@ -633,10 +665,17 @@ def main() -> int:
     ap.add_argument("--large", action="store_true", help="also the generated 5,200^2 map")
     ap.add_argument("--global-particles", type=int, default=20000)
     ap.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "symloc-bench-amcl"))
+    ap.add_argument(
+        "--no-judge",
+        dest="judge",
+        action="store_false",
+        help="end to end: symloc's filter alone, without the confidence verdict and its rival"
+        " search (by default each update is also judged, as the localizer and the node do)",
+    )
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
-        return worker(Path(args.worker), args.seed)
+        return worker(Path(args.worker), args.seed, judge=args.judge)
     if args.logs is None:  # every log in the folder
         folder = Path(args.carmen) if args.carmen else Path(".")
         args.logs = sorted(p.name.split("-corrected")[0] for p in folder.glob("*-corrected.log.gz"))

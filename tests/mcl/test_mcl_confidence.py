@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import SimpleNamespace
 
@@ -19,6 +20,7 @@ from symloc.hypothesis import Hypothesis
 from symloc.mcl import (
     Amcl,
     AmclParams,
+    Confidence,
     ConfidenceConfig,
     ConfidenceJudge,
     RivalReport,
@@ -175,7 +177,7 @@ def test_a_jump_against_the_odometry_restarts_the_count():
 
 
 def test_rival_check_gates_confidence():
-    cfg = ConfidenceConfig(rival_recheck=2)
+    cfg = ConfidenceConfig(rival_recheck=2, rival_grace=0)  # one failed update is a doubt
     prev = None
     for _ in range(2):
         prev = assess(_result(), GOOD, cfg, previous=prev)
@@ -211,6 +213,85 @@ def test_rival_check_gates_confidence():
     assert not c7.unique
     assert not c7.locally_confident
     assert not c8.unique
+
+
+def _prove(cfg: ConfidenceConfig) -> Confidence:
+    """Three passing updates, the third with a search that found no rival: a place proven
+    unique."""
+    prev = None
+    for _ in range(2):
+        prev = assess(_result(), GOOD, cfg, previous=prev)
+    uniq = RivalReport(False, 0.98, 0.5, None, 3, 80)
+    c = assess(_result(), GOOD, cfg, previous=prev, rival=uniq)
+    assert c.confident
+    assert c.unique
+    assert c.proven == 0
+    return c
+
+
+BAD_SCAN = ScanConsistency(0.1, 150, 0.4, True)
+
+
+def test_place_proven_unique_is_followed_through_a_short_doubt():
+    # a person walks past: rival_grace failed updates, the estimate still moves as the odometry
+    # says: no new search, confident again once the hysteresis is rebuilt
+    cfg = ConfidenceConfig(rival_grace=2)
+    c = _prove(cfg)
+    for _ in range(2):
+        c = assess(_result(), BAD_SCAN, cfg, previous=c)
+        assert not c.confident
+        assert c.unique
+    track = c.track
+    for k in range(3):
+        c = assess(_result(), GOOD, cfg, previous=c)
+        assert not c.rival_due
+        assert c.confident == (k == 2)
+    assert c.track == track
+    assert c.rival_searches == 0  # none in this streak: the proof was carried
+
+
+def test_a_longer_doubt_needs_a_new_proof():
+    cfg = ConfidenceConfig(rival_grace=2)
+    c = _prove(cfg)
+    for _ in range(3):
+        c = assess(_result(), BAD_SCAN, cfg, previous=c)
+    assert not c.unique
+    assert c.track == 1
+    for _ in range(3):
+        c = assess(_result(), GOOD, cfg, previous=c)
+    assert c.rival_due
+    assert not c.confident
+
+
+def test_a_new_cluster_or_a_jump_needs_a_new_proof():
+    cfg = ConfidenceConfig(rival_grace=5)
+    c = _prove(cfg)
+    split = assess(_result(shares=(0.6, 0.4)), GOOD, cfg, previous=c)
+    assert not split.unique
+    assert split.track == c.track + 1
+    # a jump: the estimate 2 m from where the odometry moved it
+    c = _prove(cfg)
+    c = dataclasses.replace(c, odom=np.zeros(3))
+    jumped = assess(_result(estimate=(2.0, 0.0, 0.0)), BAD_SCAN, cfg, previous=c, odom=np.zeros(3))
+    assert not jumped.unique
+    assert jumped.track == c.track + 1
+
+
+def test_a_followed_place_is_searched_again_every_period():
+    cfg = ConfidenceConfig(rival_period=4)
+    c = _prove(cfg)
+    for _ in range(3):
+        c = assess(_result(), GOOD, cfg, previous=c)
+        assert c.confident
+        assert not c.rival_due
+    c = assess(_result(), GOOD, cfg, previous=c)
+    assert c.confident  # still confident while the search runs
+    assert c.rival_due
+    amb = RivalReport(True, 0.98, 0.97, np.array([9.0, 9.0, 0.0]), 10, 80)
+    prev = c
+    c = assess(_result(), GOOD, cfg, previous=prev, rival=amb)
+    assert not c.confident
+    assert not c.unique
 
 
 @settings(max_examples=40, deadline=None)

@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from skimage.morphology import skeletonize
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
@@ -248,7 +247,14 @@ _CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=np.uint8)
 
 
 def _skeleton(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """:func:`skimage.morphology.skeletonize` of ``mask``, run only on its bounding box."""
+    """:func:`skimage.morphology.skeletonize` of ``mask``, run only on its bounding box.
+
+    scikit-image is imported here, on the first surface field, not with the module: it takes
+    a third of a second to import, and a process that only tracks (the filter, the
+    confidence verdict) never computes a surface field.
+    """
+    from skimage.morphology import skeletonize  # lazy: a heavy import few processes need
+
     rows = np.flatnonzero(mask.any(axis=1))
     cols = np.flatnonzero(mask.any(axis=0))
     r0, r1 = max(0, int(rows[0]) - 1), min(mask.shape[0], int(rows[-1]) + 2)

@@ -39,10 +39,16 @@ hold (each threshold is a field of :class:`ConfidenceConfig`):
    explains the evidence within ``rival_margin`` = 0.05 of the estimate's score (fraction of
    points within ``rival_tolerance_sigmas * sigma_hit`` = 0.2 m of an obstacle), the place is
    ambiguous: not confident, checked again after ``rival_recheck`` = 5 more updates with
-   more evidence (then 10, 20, ...: a symmetric room stays ambiguous, and each search costs
-   up to about a second on a building-sized map). Uniqueness must be proven: if the search's bound leaves more candidate
-   places than it can check, the place counts as ambiguous. Once the place is unique, the
-   verdict holds for the rest of the streak.
+   more evidence (then 10, 20, ...: a symmetric room stays ambiguous). Uniqueness must be
+   proven: if the search's bound leaves more candidate places than it can check, the place
+   counts as ambiguous. Once the place is unique, the verdict holds for as long as the filter
+   follows it (its ``track``): it is searched again only when the estimate jumps to another
+   place (farther than ``rival_min_distance`` or turned more than ``rival_min_angle`` from
+   the odometry's prediction), the heaviest cluster loses its share (a new cluster), more
+   than ``rival_grace`` = 5 updates in a row fail checks 1-3 (a doubt), or every
+   ``rival_period`` = 1000 updates. A search scores at most ``rival_budget`` pose-point pairs
+   per update (its cost grows with the map's free area; on a large map it takes a few
+   updates, and the verdict waits for it): the cost per scan is bounded.
 
 In a truly symmetric room a symmetric copy of the true pose matches the scans perfectly:
 checks 1-4 pass on it (the other copies' particles die out), and only check 5 sees that the
@@ -57,7 +63,8 @@ The verdict is judged *after* the filter update, not inside it (beluga's ``amcl_
 estimates after the update): :meth:`symloc.mcl.Amcl.update` only moves, weighs, resamples and
 clusters the particles (bounded cost); a :class:`ConfidenceJudge` bound to the filter then
 judges each of its results, keeps the hysteresis and the streak's evidence, and runs the rival
-search when it is due (up to about a second). Call the judge on *every* result of
+search when it is due, ``rival_budget`` pose-point pairs per update (a bounded cost per
+scan, whatever the map's size). Call the judge on *every* result of
 :meth:`~symloc.mcl.Amcl.update` (also those that integrated no scan: they keep the verdict),
 or the hysteresis counts differently. For hand-fed results use :func:`assess` with
 :func:`scan_consistency` (and :func:`~symloc.mcl.rival_search.find_rival`).
@@ -65,7 +72,9 @@ or the hysteresis counts differently. For hand-fed results use :func:`assess` wi
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Generator
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
@@ -76,7 +85,8 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose, relative, transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
-from symloc.mcl.rival_search import RivalReport, find_rival
+from symloc.mcl.rival_schedule import RivalSearchRun
+from symloc.mcl.rival_search import RivalReport, rival_search_steps
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
@@ -95,7 +105,16 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-_INT_FIELDS = ("min_beams", "hold_updates", "evidence_updates", "rival_recheck", "rival_max_points")
+_INT_FIELDS = (
+    "min_beams",
+    "hold_updates",
+    "evidence_updates",
+    "rival_recheck",
+    "rival_max_points",
+    "rival_grace",
+    "rival_period",
+    "rival_budget",
+)
 
 
 @dataclass(frozen=True)
@@ -141,6 +160,18 @@ class ConfidenceConfig:
         doubled after each further one in the same streak.
     rival_max_points : int
         Evidence points (>= 10) the rival search uses (evenly sub-sampled).
+    rival_grace : int
+        Failed updates in a row (>= 0) during which a place proven unique is still followed:
+        the estimate moves as the odometry says and the heaviest cluster keeps its share, but
+        check 2 or 3 fails (a person in front of the laser, a wall a cell off the map). One
+        more is a doubt, and the place must be proven again.
+    rival_period : int
+        Scan-integrating updates (>= 1) after which a place followed since it was proven
+        unique is searched again anyway (the verdict stays confident meanwhile).
+    rival_budget : int
+        Pose-point pairs (>= 1) the rival search scores per filter update: a search of a
+        large map is spread over several updates (bounded cost per scan), and the verdict
+        waits for it.
     """
 
     min_weight_share: float = 0.9
@@ -160,6 +191,9 @@ class ConfidenceConfig:
     evidence_updates: int = 10
     rival_recheck: int = 5
     rival_max_points: int = 100
+    rival_grace: int = 5
+    rival_period: int = 1000
+    rival_budget: int = 64_000_000
 
     def __post_init__(self) -> None:
         def need(ok: bool, name: str, what: str) -> None:
@@ -206,6 +240,9 @@ class ConfidenceConfig:
         need(self.evidence_updates >= 1, "evidence_updates", "an integer >= 1")
         need(self.rival_recheck >= 1, "rival_recheck", "an integer >= 1")
         need(self.rival_max_points >= 10, "rival_max_points", "an integer >= 10")
+        need(self.rival_grace >= 0, "rival_grace", "an integer >= 0")
+        need(self.rival_period >= 1, "rival_period", "an integer >= 1")
+        need(self.rival_budget >= 1, "rival_budget", "an integer >= 1")
 
 
 @dataclass(frozen=True, slots=True)
@@ -263,7 +300,8 @@ class Confidence:
     odom : ndarray of shape (3,) or None
         The odometry pose at that update (for the jump check of the next one).
     unique : bool
-        Check 5 found no rival place during the current streak (or is switched off).
+        Check 5 found no rival place on the current track (or is switched off): the place
+        was proven unique and the filter has followed it since.
     rival_due : bool
         Checks 1-4 pass but the place has not been shown unique, and a rival search is due
         now: the caller should run it and assess again with its report.
@@ -277,6 +315,16 @@ class Confidence:
         Checks 1-4 hold (the filter tracks a pose that fits the map, sustained) whatever
         check 5 says: the verdict for a caller that resolves place ambiguity itself (the
         localizer, after vision picked the symmetric copy), and what a nav2 user could get.
+    track : int
+        Breaks of the filter's track since the judgement started: it grows when the estimate
+        jumps away from the odometry's prediction, the heaviest cluster loses its share (a new
+        cluster) or more than ``rival_grace`` updates in a row fail (a doubt). A place proven
+        unique holds while the track is the same.
+    doubts : int
+        Failed scan-integrating updates in a row on the current track.
+    proven : int
+        Scan-integrating updates since the place was proven unique on this track (-1: not
+        proven on it).
     """
 
     confident: bool
@@ -296,6 +344,9 @@ class Confidence:
     rival: RivalReport | None = None
     locally_confident: bool = False
     rival_searches: int = 0
+    track: int = 0
+    doubts: int = 0
+    proven: int = -1
 
 
 def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
@@ -304,8 +355,10 @@ def hypothesis_std(covariance: ArrayLike) -> tuple[float, float]:
     c = np.asarray(covariance, dtype=np.float64)
     if c.shape != (3, 3) or not np.all(np.isfinite(c)):
         raise ConfigurationError(f"covariance: expected a finite (3, 3) array, got {c.shape}")
-    ev = np.linalg.eigvalsh(0.5 * (c[:2, :2] + c[:2, :2].T))
-    return math.sqrt(max(float(ev.max()), 0.0)), math.sqrt(max(float(c[2, 2]), 0.0))
+    # the larger eigenvalue of the symmetric 2 x 2 block, in closed form
+    a, d, b = float(c[0, 0]), float(c[1, 1]), 0.5 * (float(c[0, 1]) + float(c[1, 0]))
+    top = 0.5 * (a + d) + math.hypot(0.5 * (a - d), b)
+    return math.sqrt(max(top, 0.0)), math.sqrt(max(float(c[2, 2]), 0.0))
 
 
 def scan_consistency(
@@ -442,45 +495,89 @@ def assess(
             previous.rival,
             previous.locally_confident,
             previous.rival_searches,
+            previous.track,
+            previous.doubts,
+            previous.proven,
         )
 
-    def fail(reason: str) -> Confidence:
-        return Confidence(False, reason, False, 0, share, sxy, sth, frac, nb, est, od)
-
-    if no_scan:
-        return fail("no scan integrated since initialisation")
-    if share < cfg.min_weight_share:
-        return fail(
-            f"no dominant hypothesis: heaviest holds {share:.2f} < {cfg.min_weight_share:.2f}"
-        )
-    if sxy > cfg.max_xy_std or sth > cfg.max_theta_std:
-        return fail(
-            f"hypothesis too wide: std {sxy:.3f} m / {math.degrees(sth):.1f} deg (limits"
-            f" {cfg.max_xy_std:.3f} m / {math.degrees(cfg.max_theta_std):.1f} deg)"
-        )
-    if consistency is None:
-        return fail("scan consistency not measured")
-    if not consistency.pose_free:
-        return fail("the estimate is not in a free cell of the map")
-    if nb < cfg.min_beams:
-        return fail(f"too few valid beams for the scan check ({nb} < {cfg.min_beams})")
-    if frac < cfg.min_scan_consistency:
-        return fail(
-            f"scan disagrees with the map: {frac:.2f} of beams within"
-            f" {consistency.tolerance:.2f} m of an obstacle (< {cfg.min_scan_consistency:.2f})"
-        )
+    # The track: does this update follow the place of the previous one? A jump from the
+    # odometry's prediction to another place (farther than rival_min_distance or turned more
+    # than rival_min_angle: what the rival search calls another place) or a new cluster
+    # breaks it at once; failed checks (a smaller jump among them) after rival_grace updates
+    # in a row (a doubt).
+    jump: tuple[float, float] | None = None
+    elsewhere = False
     if previous is not None and previous.odom is not None and od is not None:
         pred = compose(previous.estimate, relative(previous.odom, od))
         jxy = float(np.hypot(*(est[:2] - pred[:2])))
         jth = abs(float(wrap_angle(est[2] - pred[2])))
         if jxy > cfg.max_jump_xy or jth > cfg.max_jump_theta:
-            return fail(
-                f"estimate jumped {jxy:.2f} m / {math.degrees(jth):.1f} deg from the"
-                " odometry prediction"
-            )
+            jump = (jxy, jth)
+        elsewhere = jxy > cfg.rival_min_distance or jth > cfg.rival_min_angle
+    track = 0 if previous is None else previous.track
+    prev_proven = -1 if previous is None else previous.proven
+    prev_doubts = 0 if previous is None else previous.doubts
+
+    def fail(reason: str, *, breaks: bool = False) -> Confidence:
+        doubts = prev_doubts + 1
+        broken = breaks or doubts == cfg.rival_grace + 1  # once per run of failures
+        return Confidence(
+            False,
+            reason,
+            False,
+            0,
+            share,
+            sxy,
+            sth,
+            frac,
+            nb,
+            est,
+            od,
+            prev_proven >= 0 and not broken,
+            track=track + 1 if broken else track,
+            doubts=doubts,
+            proven=-1 if broken or prev_proven < 0 else prev_proven + 1,
+        )
+
+    if no_scan:
+        return fail("no scan integrated since initialisation", breaks=True)
+    if share < cfg.min_weight_share:
+        return fail(
+            f"no dominant hypothesis: heaviest holds {share:.2f} < {cfg.min_weight_share:.2f}",
+            breaks=True,
+        )
+    if sxy > cfg.max_xy_std or sth > cfg.max_theta_std:
+        return fail(
+            f"hypothesis too wide: std {sxy:.3f} m / {math.degrees(sth):.1f} deg (limits"
+            f" {cfg.max_xy_std:.3f} m / {math.degrees(cfg.max_theta_std):.1f} deg)",
+            breaks=elsewhere,
+        )
+    if consistency is None:
+        return fail("scan consistency not measured", breaks=elsewhere)
+    if not consistency.pose_free:
+        return fail("the estimate is not in a free cell of the map", breaks=elsewhere)
+    if nb < cfg.min_beams:
+        return fail(
+            f"too few valid beams for the scan check ({nb} < {cfg.min_beams})", breaks=elsewhere
+        )
+    if frac < cfg.min_scan_consistency:
+        return fail(
+            f"scan disagrees with the map: {frac:.2f} of beams within"
+            f" {consistency.tolerance:.2f} m of an obstacle (< {cfg.min_scan_consistency:.2f})",
+            breaks=elsewhere,
+        )
+    if jump is not None:
+        # reported after checks 1-3; a jump to another place breaks the track whatever
+        # they say
+        return fail(
+            f"estimate jumped {jump[0]:.2f} m / {math.degrees(jump[1]):.1f} deg from the"
+            " odometry prediction",
+            breaks=elsewhere,
+        )
     same = previous is not None and previous.checks_pass
     streak = 1 + (previous.streak if same else 0)  # type: ignore[union-attr]
-    unique = not cfg.rival_check or (same and previous.unique)  # type: ignore[union-attr]
+    proven = prev_proven + 1 if prev_proven >= 0 else -1
+    unique = not cfg.rival_check or proven >= 0
     rival_streak = previous.rival_streak if same else 0  # type: ignore[union-attr]
     last_rival = previous.rival if same else None  # type: ignore[union-attr]
     n_searches = previous.rival_searches if same else 0  # type: ignore[union-attr]
@@ -508,12 +605,13 @@ def assess(
             kw.get("rival", last_rival),
             streak >= cfg.hold_updates,
             n_searches + (1 if "rival" in kw else 0),
+            track,
+            0,
+            kw.get("proven", proven),
         )
 
     if streak < cfg.hold_updates:
         return ok(False, f"checks pass for {streak} of {cfg.hold_updates} updates")
-    if unique:
-        return ok(True, f"confident: {summary}")
     if rival is not None:
         if not rival.ambiguous:
             return ok(
@@ -523,6 +621,7 @@ def assess(
                 unique=True,
                 rival_streak=streak,
                 rival=rival,
+                proven=0,
             )
         where = (
             ""
@@ -534,9 +633,15 @@ def assess(
             False,
             f"ambiguous place: a rival pose{where} explains the scans"
             f" {rival.rival_score:.2f} vs {rival.estimate_score:.2f}",
+            unique=not cfg.rival_check,
             rival_streak=streak,
             rival=rival,
+            proven=-1,
         )
+    if unique:
+        # proven on this track; searched again every rival_period updates (still confident)
+        again = cfg.rival_check and proven >= cfg.rival_period
+        return ok(True, f"confident: {summary}", rival_due=again)
     # Back off: wait rival_recheck, then 2x, 4x ... updates (a symmetric room stays ambiguous).
     wait = cfg.rival_recheck * 2 ** max(n_searches - 1, 0)
     due = rival_streak == 0 or streak - rival_streak >= wait
@@ -571,7 +676,10 @@ class ConfidenceJudge:
     amcl : Amcl
     config : ConfidenceConfig
     n_rival_searches : int
-        Rival searches run since the judge was made (over every streak and initialisation).
+        Rival searches completed since the judge was made (over every streak and
+        initialisation).
+    n_rival_dropped : int
+        Searches dropped unfinished because the track broke before they ended.
     consistency_field : DistanceField
         The map's distance field the scan check reads: the filter's likelihood field when its
         ``laser_likelihood_max_dist`` exceeds the check's tolerance ``consistency_sigmas *
@@ -595,12 +703,21 @@ class ConfidenceJudge:
         self._verdict: Confidence | None = None
         self._evidence: list[tuple[FloatArray, FloatArray]] = []
         self._init_seen = amcl.counters.n_initializations
+        self._run: RivalSearchRun | None = None
+        self.n_rival_dropped = 0
 
     def reset(self) -> None:
-        """Forget the verdict and the streak's evidence (the filter was re-initialised)."""
+        """Forget the verdict, the streak's evidence and a search under way (the filter was
+        re-initialised)."""
         self._verdict = None
         self._evidence = []
         self._init_seen = self.amcl.counters.n_initializations
+        self._run = None
+
+    @property
+    def search(self) -> RivalSearchRun | None:
+        """The rival search under way (spread over updates by ``rival_budget``), if any."""
+        return self._run
 
     def _sync(self) -> None:
         if self._init_seen != self.amcl.counters.n_initializations:
@@ -637,8 +754,9 @@ class ConfidenceJudge:
         Returns
         -------
         Confidence
-            Also :attr:`verdict` until the next call. When checks 1-4 pass and a rival search
-            is due, it runs here (up to about a second on a building-sized map).
+            Also :attr:`verdict` until the next call. When a rival search is due, it advances
+            here by at most ``rival_budget`` pose-point pairs (a search of a large map ends a
+            few updates later; it is dropped if the track breaks first).
         """
         self._sync()
         amcl, cfg = self.amcl, self.config
@@ -663,10 +781,25 @@ class ConfidenceJudge:
             elif cons.points is not None:
                 self._evidence.append((conf.estimate, cons.points))
                 del self._evidence[: -cfg.evidence_updates]
+        run = self._run
+        if run is not None and run.track != conf.track:
+            # the place the search was about is no longer followed: its answer is moot
+            self._run = run = None
+            self.n_rival_dropped += 1
         if conf.rival_due:
-            rival = self._rival_search(conf.estimate)
-            conf = assess(result, cons, cfg, previous=self._verdict, odom=pose, rival=rival)
-            self.n_rival_searches += 1
+            if run is None:
+                self._run = run = RivalSearchRun(self._rival_steps(conf.estimate), track=conf.track)
+            rival = run.advance(cfg.rival_budget)
+            if rival is not None:
+                self._run = None
+                conf = assess(result, cons, cfg, previous=self._verdict, odom=pose, rival=rival)
+                self.n_rival_searches += 1
+            elif not conf.confident:
+                conf = dataclasses.replace(
+                    conf,
+                    reason=f"rival search under way ({run.calls} updates,"
+                    f" {run.pairs:,} pose-point pairs so far)",
+                )
         self._verdict = conf
         return conf
 
@@ -685,13 +818,18 @@ class ConfidenceJudge:
         result = self.amcl.update(odom, scan, laser_pose=laser_pose)
         return result, self(result, odom, scan, laser_pose=laser_pose)
 
-    def _rival_search(self, estimate: FloatArray) -> RivalReport:
-        """Check 5 on the scans of the current streak, chained into the estimate's frame."""
-        cfg = self.config
+    def _evidence_points(self, estimate: FloatArray) -> FloatArray:
+        """The scans of the current streak chained into the estimate's frame, ``(M, 2)`` [m]."""
         pts = [transform_points(relative(estimate, est_k), p_k) for est_k, p_k in self._evidence]
-        points = np.concatenate(pts) if pts else np.zeros((0, 2))
+        return np.concatenate(pts) if pts else np.zeros((0, 2))
+
+    def _rival_steps(self, estimate: FloatArray) -> Generator[int, None, RivalReport]:
+        """The rival search on the scans of the current streak, chained into the estimate's
+        frame, as slices of at most ``rival_budget`` pose-point pairs."""
+        cfg = self.config
+        points = self._evidence_points(estimate)
         field = self.amcl.fields.grown(self.consistency_field.max_dist)
-        return find_rival(
+        return rival_search_steps(
             field,
             points,
             estimate,
@@ -700,4 +838,5 @@ class ConfidenceJudge:
             min_angle=cfg.rival_min_angle,
             margin=cfg.rival_margin,
             max_points=cfg.rival_max_points,
+            chunk_pairs=min(cfg.rival_budget, 1 << 22),
         )

@@ -29,14 +29,24 @@ The map is searched through :func:`padded_field`: its grid with a border of unkn
 so that end points that fall just off the map (a map whose walls touch its edge) still read
 their true distance to the nearest wall and the bound holds.
 
+Before the coarse lattice, positions that no heading can make reach the threshold are left
+out (:func:`_may_reach`: a position farther from every obstacle than the points that must pass
+reach); the candidates are the same.
+
 Cost: (free area / step^2) x (2 pi / angle_step) x M look-ups, e.g. 500 m^2 at 0.3 m, 6 deg
-and 80 points = 27 M look-ups, about a second; the caller runs it only when the filter is about
-to be confident (and every few updates while it stays ambiguous).
+and 80 points = 27 M look-ups, a tenth of a second to a second; it grows with the map's free
+area. :func:`rival_search_steps` yields after each block of poses so that a caller can spread
+one search over several scans with a bounded cost per scan
+(:class:`symloc.mcl.rival_schedule.RivalSearchRun`), and
+:class:`symloc.mcl.confidence.ConfidenceJudge` runs it only when it can change the verdict
+(a new track: a jump, a new cluster, a sustained doubt; every ``rival_period`` updates; and
+while a place stays ambiguous, with a back-off).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +60,14 @@ from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl import kernels
 from symloc.mcl.likelihood_field import endpoint_flat_indices
 
-__all__ = ["RivalReport", "find_rival", "match_scores", "padded_field"]
+__all__ = [
+    "RivalReport",
+    "coarse_lattice",
+    "find_rival",
+    "match_scores",
+    "padded_field",
+    "rival_search_steps",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -69,12 +86,14 @@ class RivalReport:
     estimate_score : float
         Best fine score near the estimate (0..1).
     rival_score : float
-        Best fine score of a rival (0 when none; the coarse upper bound when there were
-        more than ``max_refine`` candidates).
+        Best fine score of a rival (0 when none; the best upper bound when there were too
+        many candidates to prove uniqueness: more than ``max_candidates`` at a level or
+        ``max_refine`` at the end).
     rival_pose : ndarray of shape (3,) or None
         That rival's pose (map frame).
     n_candidates : int
-        Coarse lattice poses whose upper bound reached the threshold.
+        Coarse lattice poses whose upper bound reached the threshold (counted until there
+        were too many to prove uniqueness: then at least that many).
     n_points : int
         Evidence points used.
     """
@@ -150,12 +169,7 @@ def match_scores(
     bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * inv_res, dtype=np.float32)
     by = np.ascontiguousarray(r[look] * np.sin(a[look]) * inv_res, dtype=np.float32)
     tt = np.ascontiguousarray(tt_all[look])
-    need = 0
-    if at_least is not None and at_least > 0.0:
-        # the smallest count c with c / m >= at_least, as the float comparison decides it
-        need = max(0, min(m + 1, math.ceil(at_least * m) - 1))
-        while need <= m and need / m < at_least:
-            need += 1
+    need = 0 if at_least is None else needed_count(at_least, m)
 
     def run(start: int, stop: int) -> None:
         kernels.count_within(
@@ -164,6 +178,51 @@ def match_scores(
 
     kernels.split_over_threads(pz.shape[0], pz.shape[0] * max(1, bx.size), run)
     return out
+
+
+def needed_count(at_least: float, m: int) -> int:
+    """The smallest count ``c`` of ``m`` points with ``c / m >= at_least`` as the float
+    comparison decides it (``m + 1``: none; 0: any)."""
+    if at_least <= 0.0:
+        return 0
+    need = max(0, min(m + 1, math.ceil(at_least * m) - 1))
+    while need <= m and need / m < at_least:
+        need += 1
+    return need
+
+
+def _may_reach(
+    field: DistanceField, xy: FloatArray, reach: FloatArray, at_least: float
+) -> NDArray[np.bool_]:
+    """Which lattice positions ``(P, 2)`` may score ``at_least`` at some heading.
+
+    A point at range ``r`` that passes with tolerance ``t`` has an obstacle within ``r + t``
+    of the position (plus a cell for the end point's and the position's cells), whatever
+    the heading; so a position whose own distance to the nearest obstacle exceeds the
+    ``need``-th largest of these ``reach [m] (M,)`` cannot have ``need`` points pass at any
+    heading, and its lattice scores would all fall below ``at_least``. Leaving it out leaves
+    the candidates as they are (a robot in the middle of a hall far from every wall, with
+    walls close in its scan, is not there).
+    """
+    m = reach.size
+    need = needed_count(at_least, m)
+    if need == 0 or xy.shape[0] == 0:
+        return np.ones(xy.shape[0], dtype=np.bool_)
+    if need > m:
+        return np.zeros(xy.shape[0], dtype=np.bool_)
+    res = field.grid.resolution
+    limit = float(np.sort(reach)[m - need]) + res
+    if limit >= field.max_dist:  # every position reads at most the clip: nothing to exclude
+        return np.ones(xy.shape[0], dtype=np.bool_)
+    out: NDArray[np.bool_] = field.lookup(xy) <= limit
+    return out
+
+
+def _unproven(cp: FloatArray, cs: FloatArray, est_score: float, n_cand: int, m: int) -> RivalReport:
+    """The ambiguous report when too many candidates ``cp (C, 3)`` (upper bounds ``cs (C,)``)
+    are left to prove uniqueness: the best-bounded one as the rival."""
+    j = int(cs.argmax())
+    return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
 
 
 def _far(
@@ -218,6 +277,8 @@ def find_rival(
 ) -> RivalReport:
     """Search the whole map for a pose that explains ``points`` as well as ``estimate``.
 
+    Runs :func:`rival_search_steps` to the end in one call (same parameters).
+
     Parameters
     ----------
     field : DistanceField
@@ -245,11 +306,77 @@ def find_rival(
     -------
     RivalReport
     """
+    steps = rival_search_steps(
+        field,
+        points,
+        estimate,
+        tol=tol,
+        step=step,
+        angle_step=angle_step,
+        min_distance=min_distance,
+        min_angle=min_angle,
+        margin=margin,
+        max_points=max_points,
+        max_refine=max_refine,
+        max_candidates=max_candidates,
+    )
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            report: RivalReport = done.value
+            return report
+
+
+def coarse_lattice(grid: OccupancyGrid, stride: int) -> FloatArray:
+    """Centres ``(P, 2)`` [m] of the free cells on a lattice of ``stride`` cells (the rival
+    search's coarse positions), computed once per map and kept with its
+    :class:`~symloc.grid.fields.MapFields`."""
+
+    def compute(g: OccupancyGrid) -> FloatArray:
+        free = g.free_mask
+        rows, cols = np.nonzero(free[stride // 2 :: stride, stride // 2 :: stride])
+        cells = np.column_stack([rows * stride + stride // 2, cols * stride + stride // 2])
+        xy: FloatArray = g.cell_to_world(cells)
+        xy.setflags(write=False)
+        return xy
+
+    return MapFields.of(grid).derived(f"rival_search.coarse_lattice/{stride}", compute)
+
+
+def rival_search_steps(
+    field: DistanceField,
+    points: ArrayLike,
+    estimate: ArrayLike,
+    *,
+    tol: float,
+    step: float = 0.3,
+    angle_step: float = math.radians(6.0),
+    min_distance: float = 1.0,
+    min_angle: float = math.radians(30.0),
+    margin: float = 0.1,
+    max_points: int = 80,
+    max_refine: int = 3000,
+    max_candidates: int = 40000,
+    chunk_pairs: int = 1 << 22,
+) -> Generator[int, None, RivalReport]:
+    """:func:`find_rival` in slices: a generator that yields the work of each slice and returns
+    the :class:`RivalReport` (``StopIteration.value``).
+
+    Each ``next()`` scores at most about ``chunk_pairs`` pose-point pairs (one block of
+    lattice poses, or of one branch-and-bound level's children) and yields that number, so a
+    caller can spread one search over several scans with a bounded cost per scan
+    (:class:`symloc.mcl.rival_schedule.RivalSearchRun`). The slices are the same scores in the
+    same order as one call: the report is identical however the work is spread. Parameters as
+    :func:`find_rival`; ``chunk_pairs`` (>= 1) is the size of a slice.
+    """
     for name, v in (("tol", tol), ("step", step), ("angle_step", angle_step)):
         if not (math.isfinite(v) and v > 0.0):
             raise ConfigurationError(f"{name}: expected a finite value > 0, got {v!r}")
     if not (0.0 <= margin < 1.0):
         raise ConfigurationError(f"margin: expected a value in [0, 1), got {margin!r}")
+    if chunk_pairs < 1:
+        raise ConfigurationError(f"chunk_pairs: expected an integer >= 1, got {chunk_pairs!r}")
     est = np.asarray(estimate, dtype=np.float64)
     if est.shape != (3,) or not np.all(np.isfinite(est)):
         raise ConfigurationError(f"estimate: expected finite shape (3,), got {est}")
@@ -262,61 +389,74 @@ def find_rival(
     m = pts.shape[0]
     grid = field.grid
     res = grid.resolution
+    block = max(1, chunk_pairs // m)  # poses per slice
     # Estimate: refined over one coarse cell, like the candidates.
     _, est_sc = _refine(field, est[None], pts, tol, step / 2.0, angle_step / 2.0)
     est_score = float(est_sc[0])
     threshold = est_score - margin
+
     # Coarse lattice over the free cells.
     stride = max(1, round(step / res))
-    free = grid.free_mask
-    rows, cols = np.nonzero(free[stride // 2 :: stride, stride // 2 :: stride])
-    cells = np.column_stack([rows * stride + stride // 2, cols * stride + stride // 2])
-    xy = grid.cell_to_world(cells)
+    xy = coarse_lattice(grid, stride)
     n_h = max(1, math.ceil(2.0 * math.pi / angle_step))
     heads = -math.pi + (np.arange(n_h) + 0.5) * (2.0 * math.pi / n_h)
     da = 2.0 * math.pi / n_h
     rng_pts = np.hypot(pts[:, 0], pts[:, 1])
     loose = tol + stride * res / math.sqrt(2.0) + rng_pts * da / 2.0 + res
+    xy = xy[_may_reach(field, xy, rng_pts + loose, threshold)]
+    # The first check after the lattice is against max_candidates (max_refine when the
+    # lattice cells are already about one map cell wide): once more candidates than that have
+    # passed, the answer is "ambiguous" whatever the rest of the lattice holds, so the lattice
+    # stops there (the same verdict, much sooner on a map with many look-alike places).
+    h_xy, h_a = stride * res / 2.0, da / 2.0
+    too_many = max_candidates if h_xy > res else max_refine
     cand_p: list[FloatArray] = []
     cand_s: list[FloatArray] = []
+    n_cand = 0
     for h in heads:
-        poses = np.column_stack([xy, np.full(xy.shape[0], h)])
-        sc = match_scores(field, poses, pts, loose, at_least=threshold)
-        keep = sc >= threshold
-        if keep.any():
-            cand_p.append(poses[keep])
-            cand_s.append(sc[keep])
-    if not cand_p:
+        for s0 in range(0, xy.shape[0], block):
+            part = xy[s0 : s0 + block]
+            poses = np.column_stack([part, np.full(part.shape[0], h)])
+            sc = match_scores(field, poses, pts, loose, at_least=threshold)
+            keep = sc >= threshold
+            if keep.any():
+                kp, ks = poses[keep], sc[keep]
+                far = _far(kp, est, min_distance - stride * res, min_angle - da)
+                cand_p.append(kp[far])
+                cand_s.append(ks[far])
+                n_cand += int(np.count_nonzero(far))
+            yield part.shape[0] * m
+            if n_cand > too_many:
+                cp, cs = np.concatenate(cand_p), np.concatenate(cand_s)
+                return _unproven(cp, cs, est_score, n_cand, m)
+    if n_cand == 0:
         return RivalReport(False, est_score, 0.0, None, 0, m)
     cp = np.concatenate(cand_p)
     cs = np.concatenate(cand_s)
-    far = _far(cp, est, min_distance - stride * res, min_angle - da)
-    cp, cs = cp[far], cs[far]
-    n_cand = int(cp.shape[0])
-    if n_cand == 0:
-        return RivalReport(False, est_score, 0.0, None, 0, m)
     # Branch and bound: split each surviving lattice cell into 3 x 3 x 3 children with a
     # three times tighter bound, until the cells are about one map cell wide.
-    h_xy, h_a = stride * res / 2.0, da / 2.0
     while h_xy > res:
         if cp.shape[0] > max_candidates:
             # Too many places the bound cannot exclude: uniqueness is not proven.
-            j = int(cs.argmax())
-            return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+            return _unproven(cp, cs, est_score, n_cand, m)
         h_xy, h_a = h_xy / 3.0, h_a / 3.0
         o = np.array([-2.0, 0.0, 2.0])
         gx, gy, ga = np.meshgrid(o * h_xy, o * h_xy, o * h_a, indexing="ij")
         offs = np.column_stack([gx.ravel(), gy.ravel(), ga.ravel()])
         kids = (cp[:, None, :] + offs[None, :, :]).reshape(-1, 3)
         bound = tol + math.sqrt(2.0) * h_xy + rng_pts * h_a + res
-        sc = match_scores(field, kids, pts, bound, at_least=threshold)
+        sc = np.empty(kids.shape[0])
+        for s0 in range(0, kids.shape[0], block):
+            sc[s0 : s0 + block] = match_scores(
+                field, kids[s0 : s0 + block], pts, bound, at_least=threshold
+            )
+            yield min(block, kids.shape[0] - s0) * m
         keep = (sc >= threshold) & _far(kids, est, min_distance - h_xy, min_angle - h_a)
         cp, cs = kids[keep], sc[keep]
         if cp.shape[0] == 0:
             return RivalReport(False, est_score, 0.0, None, n_cand, m)
     if cp.shape[0] > max_refine:
-        j = int(cs.argmax())
-        return RivalReport(True, est_score, float(cs[j]), cp[j].copy(), n_cand, m)
+        return _unproven(cp, cs, est_score, n_cand, m)
     bp, bs = _refine(field, cp, pts, tol, h_xy, h_a)
     ok = _far(bp, est, min_distance, min_angle)
     if not ok.any():

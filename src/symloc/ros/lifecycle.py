@@ -56,6 +56,7 @@ from symloc.errors import ConfigurationError, SymlocError
 from symloc.files.atomic import atomic_write_text
 from symloc.geometry import wrap_angle
 from symloc.grid.map_io import load_map, read_map_yaml
+from symloc.mcl.warmup import warm_up
 from symloc.msgs.build import build_rclpy
 from symloc.msgs.header import header_fields, header_frame, header_stamp
 from symloc.msgs.pose import pose_fields, pose_with_covariance_from_msg
@@ -325,6 +326,9 @@ class LocalizationNode(LifecycleNode):
                 return Failed
         if not params.always_reset_initial_pose and self._last_pose is not None:
             self._pending_pose = (self._last_pose[0], self._last_pose[1])
+        # the compiled kernels' first calls (a compile on a fresh install, a cache load
+        # after) happen here, while the node is inactive, not at its first scan
+        warm_up(params.amcl)
         missing = [
             name
             for name, cls in (
