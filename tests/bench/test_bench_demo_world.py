@@ -31,7 +31,7 @@ def test_demo_untextured_runs_without_keyframes(
 ) -> None:
     """Plain lab walls: the mapping trip records no keyframe (nothing for ORB to see); the demo
     says what happened instead of an IndexError (found by the command-line fuzz)."""
-    assert main(["demo", "--untextured", "--out", str(tmp_path)]) == 0
+    assert main(["demo", "--room", "square", "--untextured", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "untextured lab" in out
     assert "symloc: verdict" in out
