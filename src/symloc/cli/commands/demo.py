@@ -72,9 +72,16 @@ def run(args: argparse.Namespace) -> int:
 
         world = Path(str(files("symloc") / "data" / "worlds" / f"{DEFAULT_WORLD}.yaml"))
     if world is not None:
+        import dataclasses
+
         from symloc.sim.world_file import load_world_file
 
-        room = load_world_file(world).build()
+        spec = load_world_file(world)
+        if args.untextured:  # plain walls whatever the file's lab says
+            spec = dataclasses.replace(
+                spec, lab=dataclasses.replace(spec.lab, textured=False, textures=())
+            )
+        room = spec.build()
     print(
         f"# symloc demo: {'world ' + str(world) if world else 'room ' + args.room}, "
         f"seed {args.seed}, {'untextured' if args.untextured else 'textured'} lab, "
