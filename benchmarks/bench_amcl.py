@@ -23,7 +23,8 @@ Two benchmarks, each driving symloc and (optionally) a peer on *identical input*
 The peer is any program that reads the problem file and prints, per record, ``updated x y
 theta n_particles`` and a last line ``# ...`` (the format is below): the C++ ROS 1 amcl core
 (ros-planning/navigation, noetic-devel, ``amcl/src/amcl``) with a small driver is what the
-README's table used; the driver and its build are not part of symloc. ``--peer CMD`` is the
+README's table used: the driver and its build script are in ``benchmarks/peers/amcl_core``
+(``build.sh NAVIGATION/amcl OUT_DIR``; the core itself is fetched, not shipped). ``--peer CMD`` is the
 stock core, ``--peer-fair CMD`` the same core with an O(N log N) resampler (binary search in
 the cumulative weights instead of its linear scan). Without a peer only symloc's figures are
 printed. Runs alternate symloc, peer, fair peer; each figure is the median over ``--rounds``
