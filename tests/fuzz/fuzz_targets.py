@@ -775,6 +775,18 @@ def command_lines(
     return argv
 
 
+def _exit_and_output(main: Callable[[list[str]], int], argv: list[str]) -> tuple[Any, str, str]:
+    """``main(argv)`` with its output captured: its exit code (returned, or argparse's
+    ``SystemExit`` code) and what it wrote to standard output and standard error."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code: Any = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    return code, out.getvalue(), err.getvalue()
+
+
 def run_command(argv: list[str]) -> None:
     """``symloc ARGV`` in process: a usage error (exit 2), a ``symloc: error`` line (exit 2) or
     another exit code are fine; an exception escaping ``main`` or a traceback is not."""
@@ -870,13 +882,7 @@ def run_output_case(argv: list[str], name: str, value: str, leaves: dict[Any, An
     if tuple(argv) in leaves:  # a positional output: the other positionals get a plain file
         positionals = [a for a in leaves[tuple(argv)]._actions if not a.option_strings]
         argv = [*argv, *(value if a.dest == name else __file__ for a in positionals)]
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(argv)
-        except SystemExit as exc:
-            code = exc.code
-    text = err.getvalue()
+    code, _, text = _exit_and_output(main, argv)
     if code != 2:
         raise AssertionError(f"exit {code} for a bad output path: {argv}\n{text[-400:]}")
     shown = value or repr(value)
@@ -960,17 +966,11 @@ def run_missing_data(argv: list[str]) -> None:
     last_argv[0] = list(argv)
     from symloc.cli.main import main
 
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(argv)
-        except SystemExit as exc:
-            code = exc.code
-    text = err.getvalue()
+    code, stdout, text = _exit_and_output(main, argv)
     if "Traceback" in text:
         raise AssertionError("a traceback was printed")
     if code == 0:
-        raise AssertionError(f"silent success on missing data: {argv}\n{out.getvalue()[-300:]}")
+        raise AssertionError(f"silent success on missing data: {argv}\n{stdout[-300:]}")
     if code == 2 and "error" not in text:
         raise AssertionError(f"exit 2 without an error message: {argv}")
 
@@ -1023,13 +1023,7 @@ def run_out_of_bounds(argv: list[str], flag: str) -> None:
     last_argv[0] = list(argv)
     from symloc.cli.main import main
 
-    err = io.StringIO()
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
-        try:
-            code = main(argv)
-        except SystemExit as exc:
-            code = exc.code
-    text = err.getvalue()
+    code, _, text = _exit_and_output(main, argv)
     if code != 2 or f"argument {flag}: expected" not in text:
         raise AssertionError(f"exit {code} for {argv}: {text[-300:]}")
 
