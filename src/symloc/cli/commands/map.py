@@ -186,16 +186,7 @@ def _build_from_bag(args: argparse.Namespace) -> int:
         f" {int(res.node_scans.size)} nodes, loop closures accepted {len(res.loop_closures)},"
         f" rejected {len(res.rejected_loops)}; result {'DOUBTFUL' if res.doubtful else 'consistent'}"
     )
-    for w in res.warnings:
-        print(f"  warning: {w}")
-    me = res.map_error
-    if me is not None:
-        print(
-            f"map's own error: std {100 * me.std_xy:.1f} cm, p95 {100 * me.p95_xy:.1f} cm over"
-            f" {me.nodes} nodes (symloc_slam.map_error in the YAML; the claim gate reads it)"
-        )
-    else:
-        print("map's own error: not estimated (too few usable scans, or a map too large)")
+    _print_doubts(res)
     ate_text = ""
     reference = None
     ok = np.all(np.isfinite(built.truth), axis=1) if built.truth.size else np.zeros(0, bool)
@@ -318,16 +309,21 @@ def _build(args: argparse.Namespace) -> int:
         f"loop closures accepted {len(res.loop_closures)}, rejected {len(res.rejected_loops)};"
         f" result {'DOUBTFUL' if res.doubtful else 'consistent'}"
     )
+    _print_doubts(res)
+    print(f"wrote {yaml_path}, {read_map_yaml(yaml_path).image}, {png}")
+    return 0
+
+
+def _print_doubts(res: Any) -> None:
+    """What may be wrong with a SLAM result: its warnings and the map's own error."""
     for w in res.warnings:
         print(f"  warning: {w}")
     me = res.map_error
-    if me is not None:
-        print(
-            f"map's own error (its node scans aligned again to it): std {100 * me.std_xy:.1f} cm,"
-            f" p95 {100 * me.p95_xy:.1f} cm over {me.nodes} nodes; in the YAML as"
-            " symloc_slam.map_error (the localizer's claim gate reads it)"
-        )
-    else:
+    if me is None:
         print("map's own error: not estimated (too few usable scans, or a map too large)")
-    print(f"wrote {yaml_path}, {read_map_yaml(yaml_path).image}, {png}")
-    return 0
+        return
+    print(
+        f"map's own error: std {100 * me.std_xy:.1f} cm, p95 {100 * me.p95_xy:.1f} cm over"
+        f" {me.nodes} nodes, its node scans aligned again to it (symloc_slam.map_error in the"
+        " YAML; the claim gate reads it)"
+    )
