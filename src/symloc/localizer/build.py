@@ -12,9 +12,7 @@ what ``symloc ros node`` runs when both are given the same settings.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-import math
 
 import numpy as np
 
@@ -123,12 +121,12 @@ def build_localizer(
 
 
 def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig:
-    """``claim`` with its map error raised to ``map_std_xy`` [m] when that is larger."""
-    if map_std_xy is None or not math.isfinite(map_std_xy) or map_std_xy <= claim.map_std_xy:
-        return claim
-    logger.info(
-        "claim gate: the map's own error %.3f m (std) replaces the default %.3f m",
-        map_std_xy,
-        claim.map_std_xy,
-    )
-    return dataclasses.replace(claim, map_std_xy=float(map_std_xy))
+    """``claim`` with its map error raised to ``map_std_xy`` [m] when that is larger, logged."""
+    raised = claim.with_map_error(map_std_xy)
+    if raised is not claim:
+        logger.info(
+            "claim gate: the map's own error %.3f m (std) replaces the default %.3f m",
+            raised.map_std_xy,
+            claim.map_std_xy,
+        )
+    return raised

@@ -47,6 +47,7 @@ set on its dev split.
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
 from collections.abc import Callable
@@ -165,6 +166,14 @@ class ClaimConfig:
             v = getattr(self, name)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
                 raise ConfigurationError(f"ClaimConfig.{name}: expected an integer >= 1, got {v!r}")
+
+    def with_map_error(self, map_std_xy: float | None) -> ClaimConfig:
+        """This configuration with ``map_std_xy`` raised to a map's own error [m] (std) when
+        that is larger (None, NaN or smaller: unchanged): the one rule for a map that declares
+        its error (:mod:`symloc.slam.map_error`)."""
+        if map_std_xy is None or not math.isfinite(map_std_xy) or map_std_xy <= self.map_std_xy:
+            return self
+        return dataclasses.replace(self, map_std_xy=float(map_std_xy))
 
     @property
     def max_std_xy(self) -> float:

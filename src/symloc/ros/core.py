@@ -336,11 +336,9 @@ class NodeCore:
         """The parameters the localizer is built with: the laser pose is the mount's, and the
         claim gate's map error at least the map's own (:meth:`set_map`)."""
         params = self.params
-        std = self._map_std_xy
-        if std is not None and std > params.claim.map_std_xy:
-            params = dataclasses.replace(
-                params, claim=dataclasses.replace(params.claim, map_std_xy=std)
-            )
+        claim = params.claim.with_map_error(self._map_std_xy)
+        if claim is not params.claim:
+            params = dataclasses.replace(params, claim=claim)
         if self.mount is None:
             return params
         return dataclasses.replace(params, laser_pose=tuple(float(v) for v in self.mount.pose))
