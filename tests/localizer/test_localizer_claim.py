@@ -251,3 +251,44 @@ def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_n
         robot.step(0.1, 0.3, 0.1)
     assert published == []
     assert any("rotated cop" in line or "symmetric" in line for line in loc.log)
+
+
+def test_the_map_scale_error_grows_with_the_distance_from_the_centre(l_room) -> None:
+    _, grid = l_room
+    field = surface_distance_field(grid)
+    centre = np.array([0.5, -0.5])
+    cfg = ClaimConfig(map_std_xy=0.02, map_scale_std=0.01)
+    gate = ClaimGate(field, ALPHAS, cfg, scale_centre=centre)
+    at_centre = gate.map_error(np.array([0.5, -0.5, 0.3]))
+    far = gate.map_error(np.array([5.5, -0.5, 0.3]))  # 5 m along +x from the centre
+    assert np.allclose(at_centre, np.diag([0.02**2, 0.02**2, math.radians(0.25) ** 2]))
+    assert far[0, 0] == pytest.approx(0.02**2 + 0.05**2)  # along the radius: 1 % of 5 m
+    assert far[1, 1] == pytest.approx(0.02**2)  # across it: the map's own error alone
+    assert np.array_equal(
+        ClaimGate(field, ALPHAS, ClaimConfig(map_std_xy=0.02)).map_error(
+            np.array([5.5, -0.5, 0.0])
+        )[:2, :2],
+        np.diag([0.02**2, 0.02**2]),
+    )  # off by default
+    with pytest.raises(ConfigurationError, match="map_scale_std"):
+        ClaimConfig(map_scale_std=0.7)
+
+
+def test_a_scaled_map_withholds_claims_far_from_its_centre() -> None:
+    room = hallway(12.0, 3.0)  # both ends in range: the scan pins the pose everywhere
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    centre = np.asarray(room.center, dtype=np.float64)
+    cfg = ClaimConfig(map_std_xy=0.01, map_scale_std=0.0075)
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS, cfg, scale_centre=centre)
+    near = np.array([centre[0] + 1.0, centre[1] + 0.1, 0.05])
+    far = np.array([centre[0] + 5.0, centre[1] + 0.1, 0.05])  # 0.75 % of 5 m: 3.75 cm std
+    cov = np.diag([0.02**2, 0.02**2, 0.01**2])
+    for pose, ok in ((near, True), (far, False)):
+        scan = simulate_scan(room.world, pose, RPLIDAR_A2, 0)
+        claim = gate.confirm(pose, cov, scan)
+        assert claim.ok is ok, claim.reason
+    # without the scale term the far pose would be claimed: the map is trusted as exact
+    plain = ClaimGate(
+        surface_distance_field(grid), ALPHAS, ClaimConfig(map_std_xy=0.01), scale_centre=centre
+    )
+    assert plain.confirm(far, cov, simulate_scan(room.world, far, RPLIDAR_A2, 0)).ok

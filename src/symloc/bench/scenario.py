@@ -551,6 +551,14 @@ def _map_with_slam(
     slam = run_slam(scans, np.array(odoms), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
+    # a map built with this lidar is a scaled copy of the room by the unit's range scale
+    # error, which SLAM cannot see: the claim gate is told its data-sheet spread
+    # (ClaimConfig.map_scale_std), as a user sets it for their lidar
+    scale_std = scen.hardware.regime.lidar_faults.range_scale_std if scen.hardware else 0.0
+    scen.settings = dataclasses.replace(
+        scen.settings,
+        claim=dataclasses.replace(scen.settings.claim, map_scale_std=scale_std),
+    )
     if slam.map_error is not None:
         scen.map_std_xy = slam.map_error.std_xy
         scen.notes.append(

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+from numpy.typing import NDArray
 
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import MapFields
@@ -34,8 +35,9 @@ from symloc.mcl.amcl import Amcl
 from symloc.mcl.global_search import GlobalSearch
 from symloc.symmetry import judge_symmetry
 
-__all__ = ["build_localizer", "grid_symmetries"]
+__all__ = ["build_localizer", "free_centroid", "grid_symmetries"]
 
+FloatArray = NDArray[np.float64]
 logger = logging.getLogger(__name__)
 
 
@@ -111,13 +113,31 @@ def build_localizer(
         known_places=known,
         map_symmetries=grid_symmetries(grid),
         claim_gate=ClaimGate(
-            fields.surface(), config=_with_map_error(settings.claim, map_std_xy), laser_pose=laser
+            fields.surface(),
+            config=_with_map_error(settings.claim, map_std_xy),
+            laser_pose=laser,
+            scale_centre=free_centroid(grid),
         ),
         laser_pose=laser,
         proposer=proposer,
         keyframes=keyframes if decide else None,
         grid=grid,
     )
+
+
+def free_centroid(grid: OccupancyGrid) -> FloatArray:
+    """The mean [m] (2,) of the free cells' centres of ``grid`` (map frame): the middle of the
+    mapped area, where a map that is a scaled copy of the room is right (the claim gate's
+    ``scale_centre``); the grid's centre when no cell is free. Strided on a large grid (its
+    mean, not its cells, is wanted)."""
+    free = grid.free_mask
+    step = max(1, int(np.sqrt(free.size / 1_000_000)))
+    rows, cols = np.nonzero(free[::step, ::step])
+    if rows.size == 0:
+        middle = [[0.5 * (grid.height - 1), 0.5 * (grid.width - 1)]]
+        return np.asarray(grid.cell_to_world(middle)[0], dtype=np.float64)
+    mean = np.array([[rows.mean() * step, cols.mean() * step]])
+    return np.asarray(grid.cell_to_world(mean)[0], dtype=np.float64)
 
 
 def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig:

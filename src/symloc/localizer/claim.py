@@ -39,7 +39,8 @@ filter relocalizes globally (the robot was carried away). An operator's initial 
 symmetric copies, so while the filter stays on it no copy check is needed.
 
 The published covariance is the match's plus the map's own error (``map_std_xy`` /
-``map_std_theta``), floored at ``floor_xy`` / ``floor_theta`` (map resolution and scan noise
+``map_std_theta``, and the scale error ``map_scale_std`` growing with the distance from the
+map's centre), floored at ``floor_xy`` / ``floor_theta`` (map resolution and scan noise
 bound what any single scan can know). Its honesty (the share of
 errors inside the published 95 % ellipse) is measured on the bench and the defaults here were
 set on its dev split.
@@ -103,6 +104,14 @@ class ClaimConfig:
         error on the bench's dev worlds, realistic sensors; 2-13 cm at its 95th percentile);
         without this term the published covariance covered 31 % of the errors at its 95 %
         ellipse on the dev split (mean NEES 13.6 for 3 dof).
+    map_scale_std : float
+        The map's scale error (std, a fraction: 0.01 is 1 %), 0 to leave it out. A lidar whose
+        ranges read a little long or short builds, by laser SLAM, a map that is a scaled copy
+        of the room (every scan agrees with it: no laser SLAM observes the scale), so a pose
+        right on the map is off by this fraction of its distance from the map's centre
+        (:class:`ClaimGate`'s ``scale_centre``), along that direction. Set it from the lidar's
+        data sheet (its systematic range error as a fraction of the range: accuracy beyond
+        precision), for maps built with that lidar.
     floor_xy, floor_theta : float
         Smallest published position std [m] and heading std [rad].
     min_carried_xy, min_carried_theta : float
@@ -129,8 +138,9 @@ class ClaimConfig:
     min_inlier_fraction: float = 0.4
     min_claim_fit: float = 0.6
     max_pull: float = 16.27
-    map_std_xy: float = 0.02
+    map_std_xy: float = 0.01
     map_std_theta: float = math.radians(0.25)
+    map_scale_std: float = 0.0
     floor_xy: float = 0.01
     floor_theta: float = math.radians(0.3)
     min_carried_xy: float = 0.02
@@ -156,6 +166,11 @@ class ClaimConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigurationError(f"ClaimConfig.{name}: expected a value > 0, got {v!r}")
+        v = self.map_scale_std
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 <= v < 0.5):
+            raise ConfigurationError(
+                f"ClaimConfig.map_scale_std: expected a fraction in [0, 0.5), got {v!r}"
+            )
         if not 0.0 <= self.min_inlier_fraction <= self.min_claim_fit <= 1.0:
             raise ConfigurationError(
                 "ClaimConfig.min_inlier_fraction, min_claim_fit: expected 0 <= "
@@ -269,6 +284,10 @@ class ClaimGate:
     match_config : ScanMatchConfig, optional
     laser_pose : (3,) array
         The laser in the robot frame (``base_from_laser``).
+    scale_centre : (2,) array, optional
+        Where the map's scale error vanishes [m] (map frame; ``config.map_scale_std``): the
+        middle of the mapped area, where a map aligned to the room as a whole fits it best.
+        Default the map frame's origin.
     """
 
     def __init__(
@@ -279,8 +298,14 @@ class ClaimGate:
         match_config: ScanMatchConfig | None = None,
         *,
         laser_pose: FloatArray | tuple[float, float, float] = (0.0, 0.0, 0.0),
+        scale_centre: FloatArray | tuple[float, float] = (0.0, 0.0),
     ) -> None:
         self.field = field
+        self.scale_centre = np.asarray(scale_centre, dtype=np.float64).reshape(2)
+        if not np.all(np.isfinite(self.scale_centre)):
+            raise ConfigurationError(
+                f"ClaimGate.scale_centre: expected 2 finite values [m], got {scale_centre!r}"
+            )
         self.config = config if config is not None else ClaimConfig()
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
@@ -591,11 +616,21 @@ class ClaimGate:
         match = match_scan_to_map(self.field, pts, cand, self.match_config, prior=(cand, cov))
         return self._judge(cand, cov, match)
 
+    def map_error(self, pose: FloatArray) -> FloatArray:
+        """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction and
+        ``map_std_theta``, plus the scale error ``map_scale_std`` times the distance from
+        :attr:`scale_centre`, along that direction."""
+        cfg = self.config
+        out = np.diag([cfg.map_std_xy**2, cfg.map_std_xy**2, cfg.map_std_theta**2])
+        if cfg.map_scale_std > 0.0:
+            r = np.asarray(pose[:2], dtype=np.float64) - self.scale_centre
+            out[:2, :2] += cfg.map_scale_std**2 * np.outer(r, r)
+        return out
+
     def _judge(self, prior: FloatArray, prior_cov: FloatArray, match: ScanMatch) -> Claim:
         cfg = self.config
         pose = match.pose
-        map_error = np.diag([cfg.map_std_xy**2, cfg.map_std_xy**2, cfg.map_std_theta**2])
-        cov = _floored(match.covariance + map_error, cfg.floor_xy, cfg.floor_theta)
+        cov = _floored(match.covariance + self.map_error(pose), cfg.floor_xy, cfg.floor_theta)
         e = pose - prior
         e[2] = float(wrap_angle(e[2]))
         pull = float(e @ np.linalg.solve(prior_cov, e))

@@ -17,9 +17,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    hypotheses predict keyframes, at least ``decide_turn`` from every heading already
    imaged), the laser proposes again and an image is requested; the hypotheses, carried by
    odometry to the moment of the image, are verified against the visual map's keyframes
-   (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin: the
-   laser sets the pose from it (:meth:`ClaimGate.confirm`), AMCL is reseeded there, and the
-   pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
+   (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin, or
+   several that are one pose (:mod:`~symloc.localizer.verified_together`: neighbouring
+   samples of a round room's family, which the laser sets within the tolerance of each other
+   from the camera's heading): the laser sets the pose from it (:meth:`ClaimGate.confirm`),
+   AMCL is reseeded there, and the pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
    way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
    no image is taken.
    **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
@@ -71,6 +73,7 @@ from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .laser_watch import LaserWatch, WatchVerdict
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
 from .types import Estimate, Hypothesis, KeyframeStore, Request, RequestKind, Status
+from .verified_together import one_pose_verified
 from .view_planning import plan_turn
 
 __all__ = ["DecideHere", "DecideRouter", "Hypotheses", "propose"]
@@ -603,10 +606,16 @@ class DecideHere:
                 )
             self.rest_after = cfg.axis_recheck
             return enter_axis(ctx, inp, self.classes[vote.winner], self.odom0, vote.reason)
-        if answer.index is None or answer.pose is None:
+        cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
+        index, pose_or_none, verdict = answer.index, answer.pose, answer.reason
+        if index is None and ctx.gate is not None and isinstance(inp.scan, LaserScan):
+            together = one_pose_verified(ctx.gate, inp.scan, carried, answer, cov)
+            if together is not None:
+                index, pose_or_none, verdict = together.index, together.pose, together.reason
+        if index is None or pose_or_none is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
         counts.verified += 1
-        pose = np.asarray(answer.pose, dtype=np.float64)
+        pose = np.asarray(pose_or_none, dtype=np.float64)
         if self.back is not None and abs(float(angle_diff(pose[2], self.back.heading))) > (
             0.5 * math.pi
         ):
@@ -615,28 +624,27 @@ class DecideHere:
             return self._look_elsewhere(
                 ctx,
                 inp,
-                f"image {self.views}: hypothesis {answer.index + 1} verified, but it faces "
+                f"image {self.views}: hypothesis {index + 1} verified, but it faces "
                 "against the axis decided before: neither is trusted",
             )
-        cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
         gate = ctx.gate
         claim = None
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
             if claim.verdict is Verdict.WITHHELD and claim.pose is not None:
-                what = f"hypothesis {answer.index + 1} of {len(carried)} verified by the camera"
+                what = f"hypothesis {index + 1} of {len(carried)} verified by the camera"
                 return self._await_precision(ctx, inp, claim, what)
             if claim.verdict is not Verdict.CLAIM:
                 counts.rejected += 1
                 return self._look_elsewhere(
                     ctx,
                     inp,
-                    f"image {self.views}: hypothesis {answer.index + 1} verified, but the laser "
+                    f"image {self.views}: hypothesis {index + 1} verified, but the laser "
                     f"did not confirm it ({claim.reason})",
                 )
         reason = (
-            f"decided here: hypothesis {answer.index + 1} of {len(carried)} verified by the "
-            f"camera ({answer.reason}); pose set by the laser"
+            f"decided here: hypothesis {index + 1} of {len(carried)} verified by the "
+            f"camera ({verdict}); pose set by the laser"
         )
         if claim is not None:
             return self._claimed(ctx, inp, claim, reason)

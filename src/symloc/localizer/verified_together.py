@@ -1,0 +1,132 @@
+"""Several hypotheses verified by one image that are one pose.
+
+The laser's hypotheses in a room with a continuous symmetry (a round room, a rounded end) are
+samples of one family: the same scan fits every rotation about the centre, and the global
+search lists them some 20 degrees apart. Neighbouring samples then see the same keyframes, so
+one image can verify two or three of them, each with the heading the camera measures
+(:attr:`~symloc.localizer.types.HypothesisVerdict.heading_offset`). Verification alone names
+no single one (:func:`~symloc.localizer.vision_store.single_verified` needs exactly one), yet
+the camera has decided: they all carry the same measured heading, and a heading picks one
+member of the family.
+
+:func:`one_pose_verified` lets the laser set each verified hypothesis from the camera's
+heading (:meth:`~symloc.localizer.claim.ClaimGate.confirm`, the heading known to
+``decide_theta_std``) and accepts them as one pose only when every pose the laser sets lies
+within the claim tolerance of the best-fitting one. Hypotheses of different symmetric copies
+(a square's quarter turns) measure headings a quarter turn apart and never agree, so this
+never merges what the camera told apart. The margin over the other hypotheses is the one
+:func:`~symloc.localizer.vision_store.single_verified` asks of a single verified hypothesis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from symloc.geometry import wrap_angle
+from symloc.scan import LaserScan
+
+from .claim import ClaimGate, Verdict
+from .types import HypothesisVerdict, Verification
+
+__all__ = ["OnePose", "one_pose_verified"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class OnePose:
+    """Verified hypotheses that are one pose: ``index`` the one with the most inliers (its
+    ``pose`` (3,) with the camera's heading, before the laser sets it), ``members`` every
+    verified hypothesis (0-based, as given), ``spread`` the largest distance [m] and turn [rad]
+    between the poses the laser set from them, and ``reason`` in words."""
+
+    index: int
+    pose: FloatArray
+    members: tuple[int, ...]
+    spread: tuple[float, float]
+    reason: str
+
+
+def one_pose_verified(
+    gate: ClaimGate,
+    scan: LaserScan,
+    poses: FloatArray,
+    answer: Verification,
+    prior_cov: FloatArray,
+) -> OnePose | None:
+    """The one pose that several verified hypotheses of ``poses`` (K, 3) stand for, or None.
+
+    ``answer`` is the store's verification of ``poses`` against one image (its ``checks``,
+    ``margin`` and ``heading_tolerance`` are needed; without them: None). ``prior_cov``
+    (3, 3) is how well a verified hypothesis with the camera's heading is known before the
+    laser sets it. None also when fewer than two were verified, when the laser withdraws any
+    of them, when the poses it sets lie further apart than the claim tolerance, or when a
+    hypothesis outside the group fits with more than ``1 / margin`` of the group's best
+    inliers (a rival: at the group's heading, or measuring another heading).
+    """
+    checks = answer.checks
+    tolerance = answer.heading_tolerance
+    if len(checks) != poses.shape[0] or not math.isfinite(answer.margin):
+        return None
+    if not math.isfinite(tolerance):
+        return None
+    members = [i for i, c in enumerate(checks) if c.verified and math.isfinite(c.heading_offset)]
+    if len(members) < 2 or any(c.verified for i, c in enumerate(checks) if i not in members):
+        return None
+    corrected = np.array([_with_heading(poses[i], checks[i]) for i in members])
+    set_by_laser = []
+    for pose in corrected:
+        claim = gate.confirm(pose, prior_cov, scan)
+        if claim.verdict is Verdict.WITHDRAWN or claim.pose is None:
+            return None
+        set_by_laser.append(claim.pose)
+    laser = np.array(set_by_laser)
+    best = int(np.argmax([checks[i].inliers for i in members]))
+    far = float(np.max(np.hypot(*(laser[:, :2] - laser[best, :2]).T)))
+    turn = float(np.max(np.abs(wrap_angle(laser[:, 2] - laser[best, 2]))))
+    cfg = gate.config
+    if far > cfg.tolerance_position or turn > cfg.tolerance_heading:
+        return None
+    heading = float(corrected[best, 2])
+    rivals = [
+        c.inliers
+        for j, c in enumerate(checks)
+        if j not in members and _rival(c, float(poses[j, 2]), heading, tolerance)
+    ]
+    top = checks[members[best]].inliers
+    rival = max(rivals, default=0)
+    if top < answer.margin * rival:
+        return None
+    names = ", ".join(str(i + 1) for i in members)
+    return OnePose(
+        index=members[best],
+        pose=corrected[best],
+        members=tuple(members),
+        spread=(far, turn),
+        reason=(
+            f"hypotheses {names} verified and the laser sets them within "
+            f"{100 * far:.0f} cm / {math.degrees(turn):.1f} deg of each other: one pose "
+            f"({top} inliers against at most {rival} for a rival)"
+        ),
+    )
+
+
+def _with_heading(pose: FloatArray, check: HypothesisVerdict) -> FloatArray:
+    out = np.asarray(pose, dtype=np.float64).copy()
+    out[2] = float(wrap_angle(out[2] + check.heading_offset))
+    return out
+
+
+def _rival(check: HypothesisVerdict, theta: float, heading: float, tolerance: float) -> bool:
+    """As :func:`~symloc.localizer.vision_store.single_verified` counts rivals: a hypothesis
+    at ``theta`` [rad] within ``tolerance`` of the group's ``heading`` (the camera does not
+    measure position), or one whose fit measures another heading."""
+    if abs(float(wrap_angle(theta - heading))) <= tolerance:
+        return True
+    if not math.isfinite(check.heading_offset):
+        return True
+    return abs(float(wrap_angle(theta + check.heading_offset - heading))) > tolerance

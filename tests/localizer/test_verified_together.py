@@ -1,0 +1,111 @@
+"""Several hypotheses verified by one image that are one pose (a round room's family)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from symloc.geometry import wrap_angle
+from symloc.grid.fields import surface_distance_field
+from symloc.localizer.claim import ClaimGate
+from symloc.localizer.types import HypothesisVerdict, Verification
+from symloc.localizer.verified_together import one_pose_verified
+from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+from symloc.sim.rasterize import world_to_grid
+from symloc.sim.rooms import circular_room, regular_polygon_room
+
+ALPHAS = (0.05, 0.05, 0.05, 0.05)
+PRIOR = np.diag([0.15**2, 0.15**2, math.radians(1.0) ** 2])
+TOL = math.radians(15.0)
+
+
+def _family(centre: np.ndarray, truth: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """``truth`` (3,) rotated about ``centre`` (2,) by each of ``turns`` (K,) [rad]."""
+    rel = truth[:2] - centre
+    c, s = np.cos(turns), np.sin(turns)
+    xy = centre + np.stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]], axis=1)
+    return np.column_stack([xy, wrap_angle(truth[2] + turns)])
+
+
+def _answer(poses: np.ndarray, camera_heading: float, verified: set[int], inliers: dict[int, int]):
+    """A store's verification of ``poses``: the ``verified`` ones measure ``camera_heading``."""
+    checks = []
+    for i in range(poses.shape[0]):
+        if i in verified:
+            off = float(wrap_angle(camera_heading - poses[i, 2]))
+            checks.append(HypothesisVerdict("verified", inliers[i], off))
+        elif i in inliers:
+            checks.append(HypothesisVerdict("contradicted", inliers[i], math.nan))
+        else:
+            checks.append(HypothesisVerdict("contradicted", 0, math.nan))
+    return Verification(
+        None, None, "several verified", checks=tuple(checks), margin=2.0, heading_tolerance=TOL
+    )
+
+
+@pytest.fixture(scope="module")
+def round_room():
+    room = circular_room(3.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    return room, ClaimGate(surface_distance_field(grid), ALPHAS)
+
+
+def test_neighbouring_samples_of_a_round_room_are_one_pose(round_room) -> None:
+    room, gate = round_room
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] + 1.2, centre[1] + 0.5, 2.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 0)
+    # the global search's samples 22.5 deg apart; the truth lies 8 deg past sample 0
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5 - 8.0))
+    answer = _answer(poses, truth[2] + math.radians(0.4), {0, 1}, {0: 80, 1: 60, 5: 12})
+    one = one_pose_verified(gate, scan, poses, answer, PRIOR)
+    assert one is not None
+    assert one.index == 0
+    assert one.members == (0, 1)
+    claim = gate.confirm(one.pose, PRIOR, scan)
+    assert math.hypot(*(claim.pose[:2] - truth[:2])) < 0.03
+    assert abs(float(wrap_angle(claim.pose[2] - truth[2]))) < math.radians(1.0)
+    assert "one pose" in one.reason
+
+
+def test_a_rival_measuring_another_heading_keeps_them_apart(round_room) -> None:
+    room, gate = round_room
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] - 0.8, centre[1] + 1.0, -1.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 1)
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5 - 5.0))
+    answer = _answer(poses, truth[2], {0, 1}, {0: 50, 1: 40, 8: 30})
+    # hypothesis 9 (half a turn away) has a fit measuring its own heading: a rival within 2x
+    checks = list(answer.checks)
+    checks[8] = HypothesisVerdict("contradicted", 30, 0.0)
+    answer = Verification(None, None, "", checks=tuple(checks), margin=2.0, heading_tolerance=TOL)
+    assert one_pose_verified(gate, scan, poses, answer, PRIOR) is None
+
+
+def test_symmetric_copies_measuring_different_headings_are_not_merged() -> None:
+    room = regular_polygon_room(4, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] + 0.6, centre[1] - 0.4, 0.3])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 2)
+    poses = _family(centre, truth, np.radians([0.0, 90.0, 180.0, 270.0]))
+    # each copy verified against its own keyframes, each measuring its own heading
+    checks = tuple(HypothesisVerdict("verified", 40, math.radians(0.5)) for _ in range(4))
+    answer = Verification(None, None, "", checks=checks, margin=2.0, heading_tolerance=TOL)
+    assert one_pose_verified(gate, scan, poses, answer, PRIOR) is None
+
+
+def test_one_verified_or_no_margin_settings_is_not_this_case(round_room) -> None:
+    room, gate = round_room
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] + 1.0, centre[1], 0.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 3)
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5))
+    single = _answer(poses, truth[2], {0}, {0: 80})
+    assert one_pose_verified(gate, scan, poses, single, PRIOR) is None
+    pair = _answer(poses, truth[2], {0, 1}, {0: 80, 1: 70})
+    unknown = Verification(None, None, "", checks=pair.checks)
+    assert one_pose_verified(gate, scan, poses, unknown, PRIOR) is None
