@@ -35,6 +35,7 @@ from symloc.vision.bow import (
     score_many,
 )
 from symloc.vision.hkmeans import as_u64, hierarchical_kmeans
+from symloc.vision.tree_descent import descend
 from symloc.vision.vocabulary_io import (
     VocabularyArrays,
     read_dbow2_text,
@@ -253,25 +254,8 @@ class Vocabulary:
         nid_level = self.L - int(levelsup)
         if self.n_nodes == 1 or n == 0:
             return np.full(n, -1, np.int32), np.zeros(n), nid
-        row_of, kid_ids, kid_desc64, kid_penalty = self._descent_index()
-        q64 = as_u64(desc)
-        active = np.arange(n)
-        qa = q64
-        level = 0
-        while active.size:
-            level += 1
-            rows = row_of[cur[active]]
-            x = np.bitwise_count(kid_desc64[rows] ^ qa[:, None, :])
-            dist = (x[..., 0] + x[..., 1] + x[..., 2] + x[..., 3]).astype(np.int32)
-            dist += kid_penalty[rows]
-            best = kid_ids[rows, dist.argmin(axis=1)]
-            cur[active] = best
-            if level <= nid_level:
-                nid[active] = best
-            keep = self.child_count[best] > 0
-            if not keep.all():
-                active = active[keep]
-                qa = qa[keep]
+        row_of, kid_ids, kid_desc64, _penalty = self._descent_index()
+        descend(as_u64(desc), row_of, kid_ids, kid_desc64, self.child_count, nid_level, cur, nid)
         word_ids = self.word_of_node[cur]
         return word_ids, self.weights[cur], nid
 
