@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
+from symloc.features.split_kernels import split_cuts
 
 __all__ = ["LineSet", "contour_gaps", "contour_runs", "fit_line_tls", "split_and_merge"]
 
@@ -387,94 +388,6 @@ def _pair_excess(
     return out_all
 
 
-def _split(
-    p: FloatArray, tol: FloatArray, first_cut: int | None, mom: _Moments | None = None
-) -> list[int]:
-    """Split at the farthest point from the chord, recursively; returns sorted cut indices.
-
-    A segment is kept whole when its TLS line holds every interior point within tolerance;
-    otherwise it is cut at the interior point farthest from its chord. (Testing the chord
-    itself, as the textbook does, over-splits: a chord between two noisy end points is tilted
-    by their noise.) All segments of one recursion level are processed together.
-    """
-    if mom is None:
-        mom = _Moments(p)
-    m = p.shape[0]
-    cuts = [0, m - 1]
-    if first_cut is not None and 0 < first_cut < m - 1:
-        cuts.append(first_cut)
-        seg_i = np.array([0, first_cut], dtype=np.intp)
-        seg_j = np.array([first_cut, m - 1], dtype=np.intp)
-    else:
-        seg_i = np.array([0], dtype=np.intp)
-        seg_j = np.array([m - 1], dtype=np.intp)
-    cs = mom.cs
-    # contiguous coordinate columns: gathering from them is much cheaper than from rows of p
-    px = np.ascontiguousarray(p[:, 0])
-    py = np.ascontiguousarray(p[:, 1])
-    new_cuts = []
-    while seg_i.size:
-        keep = seg_j - seg_i >= 2
-        if not keep.all():
-            seg_i, seg_j = seg_i[keep], seg_j[keep]
-            if seg_i.size == 0:
-                break
-        n_in = seg_j - seg_i - 1
-        ends = n_in.cumsum()
-        first = ends - n_in
-        idx = np.arange(int(ends[-1])) - (first - seg_i - 1).repeat(n_in)
-        xi = px[idx]
-        yi = py[idx]
-        ti = tol[idx]
-        # the segment's own line decides whether it is one wall (interior points: the moment
-        # sums of [seg_i + 1, seg_j) never wrap)
-        nx, ny, off = _normals_offsets(cs[:, seg_j] - cs[:, seg_i + 1])
-        res = np.abs(xi * nx.repeat(n_in) + yi * ny.repeat(n_in) - off.repeat(n_in)) / ti
-        bent = np.maximum.reduceat(res, first) > 1.0
-        if not bent.all():
-            if not bent.any():
-                break
-            # only the bent segments are cut: keep their points
-            sel = bent.repeat(n_in)
-            idx, xi, yi, ti = idx[sel], xi[sel], yi[sel], ti[sel]
-            seg_i, seg_j, n_in = seg_i[bent], seg_j[bent], n_in[bent]
-            ends = n_in.cumsum()
-            first = ends - n_in
-        # cut at the interior point farthest from the chord
-        ax, ay = px[seg_i], py[seg_i]
-        dx, dy = px[seg_j] - ax, py[seg_j] - ay
-        length = np.hypot(dx, dy)
-        qx = xi - ax.repeat(n_in)
-        qy = yi - ay.repeat(n_in)
-        cross = np.abs(dx.repeat(n_in) * qy - dy.repeat(n_in) * qx)
-        safe = length > 1e-12
-        if safe.all():
-            dist = cross / length.repeat(n_in)
-        else:
-            dist = np.where(
-                safe.repeat(n_in),
-                cross / np.where(safe, length, 1.0).repeat(n_in),
-                np.hypot(qx, qy),
-            )
-        ratio = dist / ti
-        best = np.maximum.reduceat(ratio, first)
-        split = best > 1.0
-        if not split.any():
-            break
-        # first index of each segment's maximum
-        cand = np.where(ratio == best.repeat(n_in), np.arange(idx.size), idx.size)
-        arg = np.minimum.reduceat(cand, first)
-        k = idx[arg[split]]
-        new_cuts.append(k)
-        seg_i, seg_j = (
-            np.concatenate((seg_i[split], k)),
-            np.concatenate((k, seg_j[split])),
-        )
-    if new_cuts:
-        cuts.extend(np.concatenate(new_cuts).tolist())
-    return sorted(cuts)
-
-
 def _reroll(
     p: FloatArray, tol: FloatArray, st: IntArray, sp: IntArray, first: int
 ) -> tuple[FloatArray, FloatArray, IntArray, IntArray, int]:
@@ -720,7 +633,9 @@ def split_and_merge(
         d0 = p - p[0]
         first_cut = int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
     mom = _Moments(p)
-    cuts = _split(p, tol, first_cut, mom)
+    cuts = split_cuts(
+        mom.px, mom.py, np.ascontiguousarray(tol), mom.cs, -1 if first_cut is None else first_cut
+    )
 
     # pieces [cuts[t], cuts[t+1]) ; the last piece takes the final point
     bounds = np.asarray(cuts, dtype=np.intp)
