@@ -33,7 +33,7 @@ def test_after_the_warm_up_a_first_scan_compiles_nothing() -> None:
     assert warmed["symloc.mcl.kernels.endpoint_table_sum"] >= 1
     assert warmed["symloc.mcl.kernels.count_within"] >= 1
     assert warmed["symloc.mcl.kernels.move_diff"] >= 1
-    assert warmed["symloc.features.split_kernels.split_cuts"] >= 1
+    assert warmed["symloc.features.split_kernels.segment"] >= 1
     # a node's first scans on another map, with thousands of particles (several threads)
     grid = asymmetric_room()
     amcl = Amcl(grid, params, np.random.default_rng(1))

@@ -83,7 +83,7 @@ def warm_up(params: AmclParams | None = None) -> float:
     find_rival(fields.grown(2.0), pts, pose, tol=0.2)
     match_scan_to_map(fields.surface(1.0), pts, pose)
     GlobalSearch(fields).search(scan)
-    # the symmetry judgement's line extraction (its compiled split), on the scan's points
+    # the symmetry judgement's line extraction (its compiled segmentation), on the scan's points
     sp = scan.to_points()
     split_and_merge(sp.points, np.full(sp.points.shape[0], 0.02), closed=True)
     spent = time.perf_counter() - t0
