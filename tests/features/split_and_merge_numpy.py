@@ -3,7 +3,8 @@
 ``_normals_offsets``, ``_split``, ``_pair_excess``, ``_reroll``, ``_absorbable``,
 ``_absorb_short``, ``_refine_boundaries`` and the body of ``split_and_merge`` as they were in
 ``symloc.features.split_and_merge`` at main bad82ae, verbatim; :func:`split_and_merge_numpy`
-ends with the module's own ``_line_set`` (the final fits, unchanged). The kernels of
+starts with the module's own ``_closed_start`` and ends with its ``_line_set`` (the roll
+and the final fits, unchanged). The kernels of
 :mod:`symloc.features.split_kernels` must give the same lines, bit for bit.
 """
 
@@ -12,7 +13,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from symloc.features.split_and_merge import LineSet, _line_set, _Moments, _rolled
+from symloc.features.split_and_merge import (
+    LineSet,
+    _closed_start,
+    _line_set,
+    _Moments,
+    _rolled,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -378,17 +385,7 @@ def split_and_merge_numpy(
     p = np.asarray(points, dtype=np.float64)
     m = p.shape[0]
     tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (m,))
-    roll = 0
-    first_cut: int | None = None
-    if closed and m >= 4:
-        # start at the point farthest from the sensor (from inside a convex room, next to a
-        # corner, so the contour's ends rarely need joining), and cut first at the point
-        # farthest from it
-        roll = int((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]).argmax())
-        p = _rolled(p, roll)
-        tol = _rolled(tol, roll)
-        d0 = p - p[0]
-        first_cut = int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
+    p, tol, roll, first_cut = _closed_start(p, tol, closed=closed)
     mom = _Moments(p)
     cuts = _split(p, tol, first_cut, mom)
 

@@ -9,6 +9,7 @@ random polylines and on degenerate inputs.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -24,37 +25,37 @@ from symloc.symmetry import SymmetryConfig
 def _cuts(p: np.ndarray, tol: np.ndarray, first_cut: int | None, *, py: bool = False) -> list[int]:
     mom = _Moments(p)
     fn = split_cuts_py if py else split_cuts
-    out = fn(
-        mom.px, mom.py, np.ascontiguousarray(tol), mom.cs, -1 if first_cut is None else first_cut
-    )
+    out = fn(np.stack([mom.px, mom.py, tol]), mom.cs, -1 if first_cut is None else first_cut)
     assert out.dtype == np.int64
     return [int(v) for v in out]
 
 
-def _first_cut(p: np.ndarray) -> int:
-    d0 = p - p[0]
-    return int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
+def _seeded_runs(
+    room_name: str, seed: int
+) -> Iterator[tuple[np.ndarray, np.ndarray, SymmetryConfig, np.random.Generator]]:
+    """Points, tolerances [m], the scanner's config and the rng of seeded scans of a room by
+    three scanners (a G-V of 5 m, 2 m for the 3.5 m LDS-01), 6 positions each."""
+    for r_i, preset in enumerate((PAPER_15M, RPLIDAR_A2, LDS01)):
+        gv = 2.0 if preset is LDS01 else 5.0
+        room = build_room(room_name, gv, lab=False, furniture=r_i, rng=r_i)
+        rng = np.random.default_rng(seed + r_i)
+        cfg = SymmetryConfig.from_lidar(preset)
+        for pos in room.positions_inside(6):
+            pose = np.r_[pos, rng.uniform(-math.pi, math.pi)]
+            sp = simulate_scan(room.world, pose, preset, rng).to_points()
+            if sp.points.shape[0] >= 4:
+                tol = np.asarray(cfg.point_tolerance(sp.ranges), dtype=np.float64)
+                yield sp.points, tol, cfg, rng
 
 
 @pytest.mark.parametrize("room_name", ["hexagon", "square", "circle", "l_shaped", "triangle"])
 def test_cuts_on_seeded_scans_equal_the_numpy_split(room_name: str) -> None:
     n_scans = 0
-    for r_i, preset in enumerate((PAPER_15M, RPLIDAR_A2, LDS01)):
-        gv = 2.0 if preset is LDS01 else 5.0
-        room = build_room(room_name, gv, lab=False, furniture=r_i, rng=r_i)
-        rng = np.random.default_rng(r_i)
-        cfg = SymmetryConfig.from_lidar(preset)
-        for pos in room.positions_inside(6):
-            pose = np.r_[pos, rng.uniform(-math.pi, math.pi)]
-            sp = simulate_scan(room.world, pose, preset, rng).to_points()
-            p = sp.points
-            if p.shape[0] < 4:
-                continue
-            tol = np.asarray(cfg.point_tolerance(sp.ranges), dtype=np.float64)
-            fc = _first_cut(p)
-            for first in (fc, None):
-                assert _cuts(p, tol, first) == _split(p, tol, first, _Moments(p))
-            n_scans += 1
+    for p, tol, _cfg, _rng in _seeded_runs(room_name, 0):
+        d0 = p - p[0]
+        for first in (int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax()), None):
+            assert _cuts(p, tol, first) == _split(p, tol, first, _Moments(p))
+        n_scans += 1
     assert n_scans >= 10
 
 
@@ -118,30 +119,17 @@ def _same_lines(a: LineSet, b: LineSet) -> None:
 @pytest.mark.parametrize("room_name", ["hexagon", "square", "circle", "l_shaped", "hallway"])
 def test_lines_on_seeded_scans_equal_the_numpy_split_and_merge(room_name: str) -> None:
     """Closed contours (whole scans) and open runs (scans cut into pieces)."""
-    for r_i, preset in enumerate((PAPER_15M, RPLIDAR_A2, LDS01)):
-        gv = 2.0 if preset is LDS01 else 5.0
-        room = build_room(room_name, gv, lab=False, furniture=r_i, rng=r_i)
-        rng = np.random.default_rng(10 + r_i)
-        cfg = SymmetryConfig.from_lidar(preset)
-        for pos in room.positions_inside(6):
-            pose = np.r_[pos, rng.uniform(-math.pi, math.pi)]
-            sp = simulate_scan(room.world, pose, preset, rng).to_points()
-            p = sp.points
-            if p.shape[0] < 4:
-                continue
-            tol = np.asarray(cfg.point_tolerance(sp.ranges), dtype=np.float64)
-            tol_before = tol.copy()
-            for closed in (True, False):
-                _same_lines(
-                    split_and_merge(p, tol, closed=closed, min_points=cfg.min_line_points),
-                    split_and_merge_numpy(p, tol, closed=closed, min_points=cfg.min_line_points),
-                )
-            assert tol.tobytes() == tol_before.tobytes()  # the caller's array is not rolled
-            k = int(rng.integers(2, p.shape[0] - 1))
-            for run in (slice(0, k), slice(k, None)):
-                _same_lines(
-                    split_and_merge(p[run], tol[run]), split_and_merge_numpy(p[run], tol[run])
-                )
+    for p, tol, cfg, rng in _seeded_runs(room_name, 10):
+        tol_before = tol.copy()
+        for closed in (True, False):
+            _same_lines(
+                split_and_merge(p, tol, closed=closed, min_points=cfg.min_line_points),
+                split_and_merge_numpy(p, tol, closed=closed, min_points=cfg.min_line_points),
+            )
+        assert tol.tobytes() == tol_before.tobytes()  # the caller's array is not rolled
+        k = int(rng.integers(2, p.shape[0] - 1))
+        for run in (slice(0, k), slice(k, None)):
+            _same_lines(split_and_merge(p[run], tol[run]), split_and_merge_numpy(p[run], tol[run]))
 
 
 def test_lines_on_random_contours_equal_the_numpy_split_and_merge() -> None:
@@ -175,11 +163,10 @@ def test_segment_matches_its_python_definition() -> None:
     t = np.linspace(0.0, 2.0 * math.pi, 90, endpoint=False)
     r = 3.0 / np.maximum(np.abs(np.cos(t)), np.abs(np.sin(t)))  # a square around the sensor
     p = np.c_[r * np.cos(t), r * np.sin(t)] + rng.normal(0.0, 0.005, (90, 2))
-    tol = np.full(90, 0.03)
     outs = []
     for fn in (segment, segment_py):
-        px, py, tl = p[:, 0].copy(), p[:, 1].copy(), tol.copy()
-        st, sp, shift = fn(px, py, tl, 40, True, 32)
-        outs.append((st.tolist(), sp.tolist(), int(shift), px.tobytes()))
+        pts = np.stack([p[:, 0], p[:, 1], np.full(90, 0.03)])
+        pieces, shift = fn(pts, 40, True, 32)
+        outs.append((pieces.tolist(), int(shift), pts.tobytes()))
     assert outs[0] == outs[1]
-    assert len(outs[0][0]) == 4
+    assert len(outs[0][0][0]) == 4

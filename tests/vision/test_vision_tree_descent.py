@@ -19,8 +19,6 @@ from symloc.vision.bow import (
     FeatureVector,
     Scoring,
     Weighting,
-    normalization_of,
-    normalize_values,
 )
 from symloc.vision.hkmeans import as_u64
 from symloc.vision.tree_descent import descend, descend_py, popcount64, warm_up
@@ -63,24 +61,9 @@ def _quantize_numpy(
 def _transform_numpy(
     voc: Vocabulary, descriptors: np.ndarray, levelsup: int = 0
 ) -> tuple[BowVector, FeatureVector]:
-    """``Vocabulary.transform`` as it was before the kernel."""
-    words, w, nid = _quantize_numpy(voc, descriptors, levelsup)
-    keep = w > 0
-    kw = words[keep]
-    uniq, inv = np.unique(kw, return_inverse=True)
-    if voc.weighting in (Weighting.TF, Weighting.TF_IDF):
-        values = np.bincount(inv, weights=w[keep], minlength=uniq.size).astype(np.float64)
-    else:
-        first = np.zeros(uniq.size, np.int64)
-        first[inv[::-1]] = np.arange(kw.size)[::-1]
-        values = w[keep][first] if uniq.size else np.zeros(0)
-    norm = normalization_of(voc.scoring)
-    if norm is None:
-        if voc.weighting in (Weighting.TF, Weighting.TF_IDF) and uniq.size:
-            values = values / float(uniq.size)
-    else:
-        values = normalize_values(values, norm)
-    return BowVector(uniq.astype(np.int32), values), FeatureVector.from_assignment(nid, keep)
+    """``Vocabulary.transform`` as it was before the kernel: the NumPy descent, then the
+    (unchanged) assembly of the BoW vector and direct index."""
+    return voc._bow_and_direct(*_quantize_numpy(voc, descriptors, levelsup))
 
 
 def _tree(

@@ -315,6 +315,22 @@ class _Moments:
         return _tls_from_moments(s[0], s[1], s[2], s[3], s[4], s[5])
 
 
+def _closed_start(
+    p: FloatArray, tol: FloatArray, *, closed: bool
+) -> tuple[FloatArray, FloatArray, int, int | None]:
+    """Where the split starts on a closed contour: the points and tolerances rolled to start
+    at the point farthest from the sensor (from inside a convex room, next to a corner, so the
+    contour's ends rarely need joining), the roll, and the first cut, at the point farthest
+    from it. An open run (or fewer than 4 points) is returned as it is, with no first cut."""
+    if not closed or p.shape[0] < 4:
+        return p, tol, 0, None
+    roll = int((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]).argmax())
+    p = _rolled(p, roll)
+    tol = _rolled(tol, roll)
+    d0 = p - p[0]
+    return p, tol, roll, int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
+
+
 def _line_set(
     p: FloatArray,
     tol: FloatArray,
@@ -416,29 +432,17 @@ def split_and_merge(
     if min_points < 1:
         raise ConfigurationError(f"min_points: expected >= 1, got {min_points}")
 
-    roll = 0
-    first_cut: int | None = None
-    if closed and m >= 4:
-        # start at the point farthest from the sensor (from inside a convex room, next to a
-        # corner, so the contour's ends rarely need joining), and cut first at the point
-        # farthest from it
-        roll = int((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]).argmax())
-        p = _rolled(p, roll)
-        tol = _rolled(tol, roll)
-        d0 = p - p[0]
-        first_cut = int((d0[:, 0] ** 2 + d0[:, 1] ** 2).argmax())
+    p, tol, roll, first_cut = _closed_start(p, tol, closed=closed)
     # the segmentation (split, boundary refinement, merge, absorption of short pieces) is
-    # integer decisions: one compiled kernel takes them, rolling its copies of the points
-    px = np.ascontiguousarray(p[:, 0])
-    py = np.ascontiguousarray(p[:, 1])
-    st, sp, shift = segment(
-        px,
-        py,
-        np.array(tol, dtype=np.float64),  # a copy: the kernel rolls it
-        -1 if first_cut is None else first_cut,
-        closed,
-        max(2 * min_points, 32),
+    # integer decisions: one compiled kernel takes them, rolling its copy of the points
+    pts = np.empty((3, m))
+    pts[0] = p[:, 0]
+    pts[1] = p[:, 1]
+    pts[2] = tol
+    pieces, shift = segment(
+        pts, -1 if first_cut is None else first_cut, closed, max(2 * min_points, 32)
     )
+    st, sp = pieces[0], pieces[1]
     roll = (roll + shift) % m
     p = _rolled(p, shift)
     tol = _rolled(tol, shift)

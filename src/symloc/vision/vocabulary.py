@@ -278,7 +278,14 @@ class Vocabulary:
         direct : FeatureVector
             Node -> indices of the features that passed through it.
         """
-        words, w, nid = self.quantize(descriptors, levelsup)
+        return self._bow_and_direct(*self.quantize(descriptors, levelsup))
+
+    def _bow_and_direct(
+        self, words: NDArray[np.int32], w: NDArray[np.float64], nid: NDArray[np.int32]
+    ) -> tuple[BowVector, FeatureVector]:
+        """The BoW vector and direct index of quantised features (:meth:`quantize`'s output,
+        ``(N,)`` each): stop words (weight 0) dropped, weights summed (TF, TF-IDF) or taken
+        once (IDF, binary) per word, then normalised as :attr:`scoring` requires."""
         keep = w > 0
         kw = words[keep]
         uniq, inv = np.unique(kw, return_inverse=True)
