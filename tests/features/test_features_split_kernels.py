@@ -170,3 +170,26 @@ def test_segment_matches_its_python_definition() -> None:
         outs.append((pieces.tolist(), int(shift), pts.tobytes()))
     assert outs[0] == outs[1]
     assert len(outs[0][0][0]) == 4
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_pieces_with_non_finite_points_equal_the_numpy_split_and_merge() -> None:
+    """NaN and infinite coordinates (no scan gives them, a caller might): the same pieces,
+    NaN comparisons and first-NaN argmins included."""
+    rng = np.random.default_rng(0)
+    for i in range(300):
+        m = int(rng.integers(2, 80))
+        p = rng.normal(0.0, 3.0, (m, 2))
+        if i % 3 == 0:
+            p[rng.integers(0, m)] = np.nan
+        if i % 5 == 0:
+            p[rng.integers(0, m)] = np.inf
+        tol = rng.uniform(0.01, 0.2, size=(m,))
+        for closed in (True, False):
+            a = split_and_merge(p, tol, closed=closed)
+            b = split_and_merge_numpy(p, tol, closed=closed)
+            assert (a.starts.tolist(), a.stops.tolist(), a.roll) == (
+                b.starts.tolist(),
+                b.stops.tolist(),
+                b.roll,
+            )

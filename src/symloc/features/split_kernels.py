@@ -333,7 +333,7 @@ def _refine_py(
                 c = ct
             if not (lo <= j - w <= hi):
                 c = math.inf
-            if j == 0 or c < best:
+            if j == 0 or c < best or (c != c and best == best):  # np.argmin: first NaN wins
                 best = c
                 arg = j
         new_b[t] = b + (arg - w)
