@@ -19,9 +19,18 @@ from symloc.vision.bow import (
     FeatureVector,
     Scoring,
     Weighting,
+    normalization_of,
+    normalize_values,
 )
 from symloc.vision.hkmeans import as_u64
-from symloc.vision.tree_descent import descend, descend_py, popcount64, warm_up
+from symloc.vision.tree_descent import (
+    bow_parts,
+    bow_parts_py,
+    descend,
+    descend_py,
+    popcount64,
+    warm_up,
+)
 from symloc.vision.vocabulary import Vocabulary
 
 
@@ -61,9 +70,24 @@ def _quantize_numpy(
 def _transform_numpy(
     voc: Vocabulary, descriptors: np.ndarray, levelsup: int = 0
 ) -> tuple[BowVector, FeatureVector]:
-    """``Vocabulary.transform`` as it was before the kernel: the NumPy descent, then the
-    (unchanged) assembly of the BoW vector and direct index."""
-    return voc._bow_and_direct(*_quantize_numpy(voc, descriptors, levelsup))
+    """``Vocabulary.transform`` as it was before the kernels."""
+    words, w, nid = _quantize_numpy(voc, descriptors, levelsup)
+    keep = w > 0
+    kw = words[keep]
+    uniq, inv = np.unique(kw, return_inverse=True)
+    if voc.weighting in (Weighting.TF, Weighting.TF_IDF):
+        values = np.bincount(inv, weights=w[keep], minlength=uniq.size).astype(np.float64)
+    else:
+        first = np.zeros(uniq.size, np.int64)
+        first[inv[::-1]] = np.arange(kw.size)[::-1]
+        values = w[keep][first] if uniq.size else np.zeros(0)
+    norm = normalization_of(voc.scoring)
+    if norm is None:
+        if voc.weighting in (Weighting.TF, Weighting.TF_IDF) and uniq.size:
+            values = values / float(uniq.size)
+    else:
+        values = normalize_values(values, norm)
+    return BowVector(uniq.astype(np.int32), values), FeatureVector.from_assignment(nid, keep)
 
 
 def _tree(
@@ -103,9 +127,14 @@ def _assert_same(voc: Vocabulary, d: np.ndarray, levelsup: int) -> None:
     bow, fv = voc.transform(d, levelsup)
     assert np.array_equal(bow.words, ref_bow.words)
     assert bow.values.tobytes() == ref_bow.values.tobytes()  # bit for bit
-    assert np.array_equal(fv.nodes, ref_fv.nodes)
-    assert np.array_equal(fv.indptr, ref_fv.indptr)
-    assert np.array_equal(fv.indices, ref_fv.indices)
+    for a, b in (
+        (bow.words, ref_bow.words),
+        (fv.nodes, ref_fv.nodes),
+        (fv.indptr, ref_fv.indptr),
+        (fv.indices, ref_fv.indices),
+    ):
+        assert a.dtype == b.dtype
+        assert np.array_equal(a, b)
 
 
 @pytest.mark.parametrize("ragged", [False, True])
@@ -146,6 +175,20 @@ def test_kernel_matches_its_python_definition() -> None:
         outs.append((cur, nid))
     assert np.array_equal(outs[0][0], outs[1][0])
     assert np.array_equal(outs[0][1], outs[1][1])
+
+
+def test_bow_parts_kernel_matches_its_python_definition() -> None:
+    rng = np.random.default_rng(4)
+    for n in (0, 1, 50):
+        words = rng.integers(0, 12, n).astype(np.int32)
+        w = np.where(rng.random(n) < 0.2, 0.0, rng.uniform(0.1, 2.0, n))
+        nid = rng.integers(0, 5, n).astype(np.int32)
+        for sum_weights in (True, False):
+            got: tuple[np.ndarray, ...] = bow_parts(words, w, nid, sum_weights)
+            want: tuple[np.ndarray, ...] = bow_parts_py(words, w, nid, sum_weights)
+            for a, b in zip(got, want, strict=True):
+                assert a.dtype == b.dtype
+                assert a.tobytes() == b.tobytes()
 
 
 def test_popcount64_and_warm_up() -> None:

@@ -1,4 +1,5 @@
-"""Compiled descent of binary descriptors through a vocabulary tree (numba, cached on disk).
+"""Compiled parts of the BoW transform: the descent of binary descriptors through a vocabulary
+tree, and the assembly of the BoW vector and direct index (numba, cached on disk).
 
 DBoW2's ``TemplatedVocabulary::transform`` sends each feature from the root to a leaf, at each
 level to the child whose descriptor is nearest in Hamming distance (the first such child on a
@@ -6,6 +7,10 @@ tie). :func:`descend` does that for all features of an image in one compiled loo
 and level, ``k`` distances of four 64-bit XOR + popcount each, with no NumPy call per level.
 The machine code is cached beside this file (``cache=True``) like :mod:`symloc.mcl.kernels`;
 :func:`warm_up` compiles or loads it before a first image.
+
+:func:`bow_parts` then groups the features by word (summing or taking the first weight) and by
+direct-index node, in one pass each over the sorted ``key * N + feature`` (a stable order),
+instead of ``np.unique``, ``np.bincount`` and a stable argsort per image.
 
 :func:`descend_py` is the same loop in plain Python (the definition the kernel is compiled
 from, with ``int.bit_count`` for the popcount); the tests check the kernel against it and
@@ -25,7 +30,7 @@ from numba import types
 from numba.core.extending import intrinsic, overload
 from numpy.typing import NDArray
 
-__all__ = ["descend", "descend_py", "popcount64", "warm_up"]
+__all__ = ["bow_parts", "bow_parts_py", "descend", "descend_py", "popcount64", "warm_up"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -128,8 +133,96 @@ descend = cast(
 )
 
 
+def bow_parts_py(
+    words: NDArray[np.int32], w: NDArray[np.float64], nid: NDArray[np.int32], sum_weights: bool
+) -> tuple[
+    NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.int64], NDArray[np.int32]
+]:
+    """The BoW vector (before normalisation) and the direct index of quantised features.
+
+    Features with weight 0 (stop words) are left out, as DBoW2 does.
+
+    Parameters
+    ----------
+    words : ndarray of shape (N,), int32
+        Word of each feature.
+    w : ndarray of shape (N,), float64
+        Its weight.
+    nid : ndarray of shape (N,), int32
+        Its direct-index node.
+    sum_weights : bool
+        True: a word's value is the sum of its features' weights in feature order (TF,
+        TF-IDF; as ``np.bincount``); False: the weight of its first feature (IDF, binary).
+
+    Returns
+    -------
+    words : ndarray of shape (W,), int32
+        The distinct words, increasing.
+    values : ndarray of shape (W,), float64
+    nodes : ndarray of shape (D,), int32
+        The distinct direct-index nodes, increasing.
+    indptr : ndarray of shape (D + 1,), int64
+    indices : ndarray of shape (n,), int32
+        The kept features grouped by node, increasing within a node.
+    """
+    n = words.shape[0]
+    idx = np.empty(n, np.int32)
+    k = 0
+    for i in range(n):
+        if w[i] > 0:
+            idx[k] = i
+            k += 1
+    idx = idx[:k]
+    # stable sorts as sorts of unique keys (key * n + feature): feature order within a key
+    keys = np.empty(k, np.int64)
+    for j in range(k):
+        keys[j] = np.int64(words[idx[j]]) * n + idx[j]
+    keys.sort()
+    uniq = np.empty(k, np.int32)
+    values = np.empty(k, np.float64)
+    g = -1
+    for j in range(k):
+        word = keys[j] // n
+        wt = w[keys[j] - word * n]
+        if g < 0 or word != uniq[g]:
+            g += 1
+            uniq[g] = word
+            values[g] = 0.0 + wt if sum_weights else wt
+        elif sum_weights:
+            values[g] += wt
+    for j in range(k):
+        keys[j] = np.int64(nid[idx[j]]) * n + idx[j]
+    keys.sort()
+    nodes = np.empty(k, np.int32)
+    indptr = np.empty(k + 1, np.int64)
+    indices = np.empty(k, np.int32)
+    d = 0
+    for pos in range(k):
+        node = keys[pos] // n
+        indices[pos] = keys[pos] - node * n
+        if d == 0 or node != nodes[d - 1]:
+            nodes[d] = node
+            indptr[d] = pos
+            d += 1
+    indptr[d] = k
+    return (
+        uniq[: g + 1].copy(),
+        values[: g + 1].copy(),
+        nodes[:d].copy(),
+        indptr[: d + 1].copy(),
+        indices,
+    )
+
+
+bow_parts = cast(
+    Callable[..., Any],
+    numba.njit(cache=True, nogil=True, error_model="numpy")(bow_parts_py),
+)
+
+
 def warm_up() -> float:
-    """Compile (or load from the cache) :func:`descend` on a two-level toy tree.
+    """Compile (or load from the cache) :func:`descend` and :func:`bow_parts` on a two-level
+    toy tree.
 
     Returns
     -------
@@ -146,6 +239,7 @@ def warm_up() -> float:
     cur = np.empty(2, np.int32)
     nid = np.empty(2, np.int32)
     descend(q64, row_of, kid_ids, kid_desc64, child_count, 1, cur, nid)
+    bow_parts(cur - 1, np.ones(2), nid, True)
     spent = time.perf_counter() - t0
     _LOG.info("vocabulary descent kernel ready in %.2f s", spent)
     return spent

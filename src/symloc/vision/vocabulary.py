@@ -35,7 +35,7 @@ from symloc.vision.bow import (
     score_many,
 )
 from symloc.vision.hkmeans import as_u64, hierarchical_kmeans
-from symloc.vision.tree_descent import descend
+from symloc.vision.tree_descent import bow_parts, descend
 from symloc.vision.vocabulary_io import (
     VocabularyArrays,
     read_dbow2_text,
@@ -286,22 +286,15 @@ class Vocabulary:
         """The BoW vector and direct index of quantised features (:meth:`quantize`'s output,
         ``(N,)`` each): stop words (weight 0) dropped, weights summed (TF, TF-IDF) or taken
         once (IDF, binary) per word, then normalised as :attr:`scoring` requires."""
-        keep = w > 0
-        kw = words[keep]
-        uniq, inv = np.unique(kw, return_inverse=True)
-        if self.weighting in (Weighting.TF, Weighting.TF_IDF):
-            values = np.bincount(inv, weights=w[keep], minlength=uniq.size).astype(np.float64)
-        else:
-            first = np.zeros(uniq.size, np.int64)
-            first[inv[::-1]] = np.arange(kw.size)[::-1]
-            values = w[keep][first] if uniq.size else np.zeros(0)
+        sum_weights = self.weighting in (Weighting.TF, Weighting.TF_IDF)
+        uniq, values, nodes, indptr, indices = bow_parts(words, w, nid, sum_weights)
         norm = normalization_of(self.scoring)
         if norm is None:
-            if self.weighting in (Weighting.TF, Weighting.TF_IDF) and uniq.size:
+            if sum_weights and uniq.size:
                 values = values / float(uniq.size)
         else:
             values = normalize_values(values, norm)
-        return BowVector(uniq.astype(np.int32), values), FeatureVector.from_assignment(nid, keep)
+        return BowVector(uniq, values), FeatureVector(nodes, indptr, indices)
 
     def bow(self, descriptors: ArrayLike) -> BowVector:
         """Only the BoW vector of :meth:`transform`."""
