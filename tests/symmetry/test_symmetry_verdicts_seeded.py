@@ -104,6 +104,7 @@ def test_verdicts_on_seeded_scans_are_unchanged() -> None:
 if __name__ == "__main__":
     if "--write" in sys.argv:
         FIXTURE.parent.mkdir(exist_ok=True)
-        FIXTURE.write_text(json.dumps(verdicts(), indent=0, sort_keys=True) + "\n")
+        rows = [f"{json.dumps(k)}: {json.dumps(v, sort_keys=True)}" for k, v in verdicts().items()]
+        FIXTURE.write_text("{\n" + ",\n".join(sorted(rows)) + "\n}\n")  # a scan per line
     else:
         json.dump(verdicts(), sys.stdout, indent=0, sort_keys=True)

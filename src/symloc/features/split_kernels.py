@@ -9,7 +9,8 @@ most of the cost. The kernels here take the same decisions in one compiled loop:
 - :func:`segment`: the whole segmentation -- that split, the refinement of the boundaries,
   the merge of adjacent pieces, the absorption of short pieces -- as the NumPy functions
   ``_refine_boundaries``, ``_pair_excess`` and ``_absorb_short`` did it, on the points of
-  one run rolled in place as they rolled them.
+  one run rolled in place as they rolled them. Those NumPy functions are kept, as they were,
+  in ``tests/features/split_and_merge_numpy.py``: the tests compare the two.
 
 Each kernel repeats the NumPy expression it replaces operation for operation (the same
 moment differences, the same ``0.5 * atan2`` line angle, the same order of products and
