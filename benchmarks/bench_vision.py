@@ -13,13 +13,19 @@ vocabulary (76,384 words, trained like DBoW3's); the database is a :class:`Visua
 first query), "query from features" adds the transform. Loads use the native binary format.
 Medians over many repeats, ms.
 
-Run: ``python benchmarks/bench_vision.py [--repeats R]``
+With ``--dbow3 CMD`` (the driver of ``benchmarks/peers/dbow3``, built from DBoW3's source), the
+transform is also measured against DBoW3 in the same run, on the same vocabularies and the
+descriptors of 12 of the photos, and the BoW vectors of the two are compared.
+
+Run: ``python benchmarks/bench_vision.py [--repeats R] [--clock wall|cpu] [--dbow3 CMD]``
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import shlex
+import subprocess
 import tempfile
 import time
 from collections.abc import Callable
@@ -59,13 +65,19 @@ PHOTOS = (
 )
 
 
+#: The clock of every figure: ``time.perf_counter`` (wall, default) or ``time.process_time``
+#: (this process's CPU time, which waiting for a core on a loaded machine does not inflate).
+CLOCK: Callable[[], float] = time.perf_counter
+
+
 def median_ms(fn: Callable[[], object], repeats: int) -> float:
+    """Median time [ms] of ``fn()`` over ``repeats`` calls after one warm-up call (:data:`CLOCK`)."""
     fn()
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(CLOCK() - t0)
     return 1000.0 * float(np.median(times))
 
 
@@ -107,9 +119,9 @@ def orb_breakdown(ext: OrbExtractor, imgs: list[np.ndarray], repeats: int) -> No
         for th in times:
             cv2.setNumThreads(th)
             for g in greys:
-                t0 = time.perf_counter()
+                t0 = CLOCK()
                 ext._orb.detectAndCompute(g, None)
-                times[th].append(1000.0 * (time.perf_counter() - t0))
+                times[th].append(1000.0 * (CLOCK() - t0))
     cv2.setNumThreads(default_threads)
     for th, t in times.items():
         row(f"  OpenCV detectAndCompute, {th} thread(s)", float(np.median(t)), DBOW3_MS["orb"])
@@ -131,6 +143,57 @@ def orb_breakdown(ext: OrbExtractor, imgs: list[np.ndarray], repeats: int) -> No
     row("  OpenCV detectAndCompute, fastest run", fastest, DBOW3_MS["orb"])
 
 
+def same_run_rows(
+    cmd: str, voc: Vocabulary, label: str, images: list[np.ndarray], repeats: int
+) -> None:
+    """DBoW3 and symloc transforming the same descriptors with the same vocabulary.
+
+    The vocabulary goes to DBoW3 as a DBoW2 text file (DBoW3 keeps its weights as float),
+    the descriptors ``(N, 32)`` of each image as a binary file; ``cmd`` is the driver built by
+    ``benchmarks/peers/dbow3/build.sh``. Both sides: median CPU time [ms] of one transform over
+    ``repeats`` transforms of each image. Also checks that the BoW vectors agree: the same
+    words, values equal to 1e-6 (relative, the float weights).
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        voc_txt = Path(tmp) / "voc.txt"  # DBoW3 reads a text vocabulary by its .txt name
+        voc.save_dbow2_text(voc_txt)
+        desc_bin = Path(tmp) / "desc.bin"
+        with desc_bin.open("wb") as fh:
+            fh.write(np.int32(len(images)).tobytes())
+            for d in images:
+                fh.write(np.int32(d.shape[0]).tobytes())
+                fh.write(np.ascontiguousarray(d, np.uint8).tobytes())
+        out_txt = Path(tmp) / "bow.txt"
+        res = subprocess.run(
+            [*shlex.split(cmd), str(voc_txt), str(desc_bin), str(repeats), str(out_txt)],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        figures = dict(line.split() for line in res.stdout.splitlines() if line.strip())
+        peer_ms = float(figures["transform_ms"])
+        agree = 0
+        for d, line in zip(images, out_txt.read_text().splitlines(), strict=True):
+            pairs = [item.split(":") for item in line.split()]
+            words = np.array([int(w) for w, _ in pairs], np.int32)
+            values = np.array([float(v) for _, v in pairs])
+            bow = voc.bow(d)
+            agree += bool(
+                np.array_equal(bow.words, words)
+                and np.allclose(bow.values, values, rtol=1e-6, atol=0.0)
+            )
+    times = []
+    for d in images:  # as the driver: one warm-up, then the timed transforms
+        voc.transform(d)
+        for _ in range(repeats):
+            t0 = CLOCK()
+            voc.transform(d)
+            times.append(CLOCK() - t0)
+    ours = 1000.0 * float(np.median(times))
+    row(f"transform, {label}, DBoW3 same run", ours, peer_ms)
+    print(f"  ({len(images)} images; BoW vectors agreeing with DBoW3's: {agree}/{len(images)})")
+
+
 def row(name: str, ours: float, ref: float | None) -> None:
     if ref is None:
         print(f"{name:<46}{ours:>10.3f}{'':>10}{'':>9}")
@@ -141,7 +204,22 @@ def row(name: str, ours: float, ref: float | None) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=50)
+    ap.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="wall: time.perf_counter; cpu: time.process_time (this process's CPU time)",
+    )
+    ap.add_argument(
+        "--dbow3",
+        metavar="CMD",
+        help="DBoW3 driver (benchmarks/peers/dbow3/build.sh): time its transform in this run",
+    )
     args = ap.parse_args()
+    global CLOCK
+    CLOCK = time.process_time if args.clock == "cpu" else time.perf_counter
+    if args.dbow3 and args.clock != "cpu":
+        ap.error("--dbow3: the driver measures CPU time; add --clock cpu")
     rng = np.random.default_rng(0)
     r = args.repeats
     ext = OrbExtractor()
@@ -149,7 +227,10 @@ def main() -> int:
     import os
 
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
-    print(f"# bench_vision: repeats {r}, seed 0, cv2 {cv2.__version__}, numpy {np.__version__}")
+    print(
+        f"# bench_vision: repeats {r}, seed 0, clock {args.clock}, cv2 {cv2.__version__},"
+        f" numpy {np.__version__}"
+    )
     print(f"# machine load average (1, 5, 15 min): {load} on {os.cpu_count()} cores")
     print(f"{'':<46}{'symloc':>10}{'DBoW3':>10}{'ratio':>9}")
     print(f"{'(ms, median)':<46}")
@@ -177,21 +258,21 @@ def main() -> int:
     voc5 = full_tree(10, 5, rng)
     voc3 = full_tree(10, 3, rng)
     shipped = default_vocabulary()
-    row(
-        "transform 500 features, k=10 L=5 (100k words)",
-        median_ms(lambda: voc5.transform(d500), r),
-        DBOW3_MS["transform_L5"],
+    vocs = (
+        ("k=10 L=5 (100k words)", voc5, DBOW3_MS["transform_L5"]),
+        ("k=10 L=3 (1k words)", voc3, DBOW3_MS["transform_L3"]),
+        (f"shipped k=10 L=5 ({shipped.n_words} words)", shipped, DBOW3_MS["transform_L5"]),
     )
-    row(
-        "transform 500 features, k=10 L=3 (1k words)",
-        median_ms(lambda: voc3.transform(d500), r),
-        DBOW3_MS["transform_L3"],
-    )
-    row(
-        f"transform 500 features, shipped k=10 L=5 ({shipped.n_words} words)",
-        median_ms(lambda: shipped.transform(d500), r),
-        DBOW3_MS["transform_L5"],
-    )
+    for label, voc, stored in vocs:
+        row(
+            f"transform 500 features, {label}",
+            median_ms(lambda v=voc: v.transform(d500), r),
+            stored,
+        )
+    if args.dbow3:
+        images = [f.descriptors for f in feats[:12]]
+        for label, voc, _stored in vocs:
+            same_run_rows(args.dbow3, voc, label, images, r)
 
     with tempfile.TemporaryDirectory() as tmp:
         vm = VisualMap(Path(tmp) / "map.db")

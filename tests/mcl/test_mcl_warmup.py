@@ -6,17 +6,19 @@ import numba
 import numpy as np
 from mcl_fixtures import asymmetric_room, synthetic_scan
 
+from symloc.features import split_kernels
 from symloc.geometry import compose
 from symloc.grid.fields import MapFields
 from symloc.mcl import Amcl, AmclParams, ConfidenceJudge, global_search, kernels
 from symloc.mcl.warmup import warm_up
 from symloc.odometry import OdometryReading
+from symloc.symmetry import judge_symmetry
 
 
 def _signatures() -> dict[str, int]:
     """Compiled signatures of every numba kernel of the filter and the global search."""
     out = {}
-    for mod in (kernels, global_search):
+    for mod in (kernels, global_search, split_kernels):
         for name, obj in vars(mod).items():
             if isinstance(obj, numba.core.registry.CPUDispatcher):
                 out[f"{mod.__name__}.{name}"] = len(obj.signatures)
@@ -31,6 +33,7 @@ def test_after_the_warm_up_a_first_scan_compiles_nothing() -> None:
     assert warmed["symloc.mcl.kernels.endpoint_table_sum"] >= 1
     assert warmed["symloc.mcl.kernels.count_within"] >= 1
     assert warmed["symloc.mcl.kernels.move_diff"] >= 1
+    assert warmed["symloc.features.split_kernels.segment"] >= 1
     # a node's first scans on another map, with thousands of particles (several threads)
     grid = asymmetric_room()
     amcl = Amcl(grid, params, np.random.default_rng(1))
@@ -43,5 +46,6 @@ def test_after_the_warm_up_a_first_scan_compiles_nothing() -> None:
         step = np.array([0.3, 0.0, 0.0]) if i % 2 == 0 else np.array([0.0, 0.0, 0.3])
         true, odom = compose(true, step), compose(odom, step)
     global_search.GlobalSearch(MapFields.of(grid)).search(synthetic_scan(grid, true, rng))
+    judge_symmetry(synthetic_scan(grid, true, rng))
     assert res.updated
     assert _signatures() == warmed  # nothing compiled anew

@@ -8,8 +8,8 @@ for a node the first call is its first scan: the robot waits for its first pose.
 functions the per-scan path uses (so each kernel is compiled for the argument types it will
 see): the motion model, the likelihood-field sensor models, resampling and clustering
 (:class:`~symloc.mcl.amcl.Amcl`), the confidence verdict with its rival search, scan-to-map
-alignment, and the global search. A caller that configures before it runs (the ROS node's
-``on_configure``) calls it there.
+alignment, the global search, and the symmetry judgement's split-and-merge. A caller that
+configures before it runs (the ROS node's ``on_configure``) calls it there.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
+from symloc.features.split_and_merge import split_and_merge
 from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.amcl import Amcl
@@ -82,6 +83,9 @@ def warm_up(params: AmclParams | None = None) -> float:
     find_rival(fields.grown(2.0), pts, pose, tol=0.2)
     match_scan_to_map(fields.surface(1.0), pts, pose)
     GlobalSearch(fields).search(scan)
+    # the symmetry judgement's line extraction (its compiled segmentation), on the scan's points
+    sp = scan.to_points()
+    split_and_merge(sp.points, np.full(sp.points.shape[0], 0.02), closed=True)
     spent = time.perf_counter() - t0
     _LOG.info("compiled kernels warmed up in %.2f s", spent)
     return spent

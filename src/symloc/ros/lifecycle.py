@@ -71,6 +71,7 @@ from symloc.ros.nav2_params import (
 )
 from symloc.ros.params import NodeParams
 from symloc.ros.tf import transforms_from_msg
+from symloc.vision.tree_descent import warm_up as warm_up_descent
 
 __all__ = ["DEFAULT_NODE_NAME", "LocalizationNode", "load_saved_pose", "save_pose"]
 
@@ -329,6 +330,7 @@ class LocalizationNode(LifecycleNode):
         # the compiled kernels' first calls (a compile on a fresh install, a cache load
         # after) happen here, while the node is inactive, not at its first scan
         warm_up(params.amcl)
+        warm_up_descent()  # the BoW transform's kernel, before the first camera image
         missing = [
             name
             for name, cls in (

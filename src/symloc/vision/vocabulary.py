@@ -35,6 +35,7 @@ from symloc.vision.bow import (
     score_many,
 )
 from symloc.vision.hkmeans import as_u64, hierarchical_kmeans
+from symloc.vision.tree_descent import bow_parts, descend
 from symloc.vision.vocabulary_io import (
     VocabularyArrays,
     read_dbow2_text,
@@ -253,25 +254,8 @@ class Vocabulary:
         nid_level = self.L - int(levelsup)
         if self.n_nodes == 1 or n == 0:
             return np.full(n, -1, np.int32), np.zeros(n), nid
-        row_of, kid_ids, kid_desc64, kid_penalty = self._descent_index()
-        q64 = as_u64(desc)
-        active = np.arange(n)
-        qa = q64
-        level = 0
-        while active.size:
-            level += 1
-            rows = row_of[cur[active]]
-            x = np.bitwise_count(kid_desc64[rows] ^ qa[:, None, :])
-            dist = (x[..., 0] + x[..., 1] + x[..., 2] + x[..., 3]).astype(np.int32)
-            dist += kid_penalty[rows]
-            best = kid_ids[rows, dist.argmin(axis=1)]
-            cur[active] = best
-            if level <= nid_level:
-                nid[active] = best
-            keep = self.child_count[best] > 0
-            if not keep.all():
-                active = active[keep]
-                qa = qa[keep]
+        row_of, kid_ids, kid_desc64, _penalty = self._descent_index()
+        descend(as_u64(desc), row_of, kid_ids, kid_desc64, self.child_count, nid_level, cur, nid)
         word_ids = self.word_of_node[cur]
         return word_ids, self.weights[cur], nid
 
@@ -294,23 +278,23 @@ class Vocabulary:
         direct : FeatureVector
             Node -> indices of the features that passed through it.
         """
-        words, w, nid = self.quantize(descriptors, levelsup)
-        keep = w > 0
-        kw = words[keep]
-        uniq, inv = np.unique(kw, return_inverse=True)
-        if self.weighting in (Weighting.TF, Weighting.TF_IDF):
-            values = np.bincount(inv, weights=w[keep], minlength=uniq.size).astype(np.float64)
-        else:
-            first = np.zeros(uniq.size, np.int64)
-            first[inv[::-1]] = np.arange(kw.size)[::-1]
-            values = w[keep][first] if uniq.size else np.zeros(0)
+        return self._bow_and_direct(*self.quantize(descriptors, levelsup))
+
+    def _bow_and_direct(
+        self, words: NDArray[np.int32], w: NDArray[np.float64], nid: NDArray[np.int32]
+    ) -> tuple[BowVector, FeatureVector]:
+        """The BoW vector and direct index of quantised features (:meth:`quantize`'s output,
+        ``(N,)`` each): stop words (weight 0) dropped, weights summed (TF, TF-IDF) or taken
+        once (IDF, binary) per word, then normalised as :attr:`scoring` requires."""
+        sum_weights = self.weighting in (Weighting.TF, Weighting.TF_IDF)
+        uniq, values, nodes, indptr, indices = bow_parts(words, w, nid, sum_weights)
         norm = normalization_of(self.scoring)
         if norm is None:
-            if self.weighting in (Weighting.TF, Weighting.TF_IDF) and uniq.size:
+            if sum_weights and uniq.size:
                 values = values / float(uniq.size)
         else:
             values = normalize_values(values, norm)
-        return BowVector(uniq.astype(np.int32), values), FeatureVector.from_assignment(nid, keep)
+        return BowVector(uniq, values), FeatureVector(nodes, indptr, indices)
 
     def bow(self, descriptors: ArrayLike) -> BowVector:
         """Only the BoW vector of :meth:`transform`."""
