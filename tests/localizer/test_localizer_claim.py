@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -106,6 +107,75 @@ def test_a_suspension_ends_with_the_chain_it_waits_for(l_room) -> None:
     gate.forget_chain()
     again = gate.step(result, np.zeros(3), scan, tracker, notes.append)
     assert again.standing is Standing.FIRST, again.reason
+
+
+class _Relocalizing(_Tracker):
+    """Counts global relocalizations too."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.relocalized = 0
+
+    def initialize_global(self) -> None:
+        self.relocalized += 1
+
+
+def _tracking_gate(room, grid, truth):  # type: ignore[no-untyped-def]
+    """A gate with a confirmed chain at ``truth`` (the localizer published it)."""
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    result = TrackerResult(estimate=truth, covariance=COV, hypotheses=())
+    gate.observe(result, np.zeros(3))
+    first = gate.step(
+        result, np.zeros(3), simulate_scan(room.world, truth, RPLIDAR_A2, 1), _Tracker(), print
+    )
+    assert first.standing is Standing.FIRST
+    gate.confirmed(first.claim, np.zeros(3))
+    return gate, result
+
+
+def test_a_scan_that_contradicts_the_pose_wholesale_relocalizes_within_gross_after(
+    l_room,
+) -> None:
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    gate, result = _tracking_gate(room, grid, truth)
+    tracker, notes = _Relocalizing(), []
+    away = np.array([1.2, 1.4, -2.0])  # carried off to the other arm of the L
+    standings = [
+        gate.step(
+            result,
+            np.zeros(3),
+            simulate_scan(room.world, away, RPLIDAR_A2, 10 + i),
+            tracker,
+            notes.append,
+        )
+        for i in range(1 + gate.config.gross_after)
+    ]
+    assert [r.standing for r in standings[:-1]] == [Standing.HOLD] * gate.config.gross_after
+    assert standings[-1].standing is Standing.RELOCALIZE, standings[-1].reason
+    assert "in a row" in standings[-1].reason
+    assert tracker.relocalized == 1
+
+
+def test_a_partly_hidden_scan_waits_for_patience(l_room) -> None:
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    gate, result = _tracking_gate(room, grid, truth)
+    tracker = _Relocalizing()
+    away = simulate_scan(room.world, np.array([1.2, 1.4, -2.0]), RPLIDAR_A2, 20)
+    assert gate.step(result, np.zeros(3), away, tracker, print).standing is Standing.HOLD
+    # back where it was, but someone stands in front of the lidar: 60 % of the beams end on
+    # them, 40 % fit (more than gross_fit, less than a claim needs)
+    for i in range(3 * gate.config.gross_after):
+        scan = simulate_scan(room.world, truth, RPLIDAR_A2, 30 + i)
+        hidden = np.arange(scan.ranges.size) < int(0.6 * scan.ranges.size)
+        scan = dataclasses.replace(scan, ranges=np.where(hidden, 0.3, scan.ranges))
+        ruling = gate.step(result, np.zeros(3), scan, tracker, print)
+        assert ruling.standing is Standing.HOLD, ruling.reason
+    assert tracker.relocalized == 0
+    clear = simulate_scan(room.world, truth, RPLIDAR_A2, 99)
+    standings = [gate.step(result, np.zeros(3), clear, tracker, print).standing for _ in range(2)]
+    assert standings == [Standing.HOLD, Standing.PUBLISH]  # resumed after resume_after scans
 
 
 def test_anchor_reports_a_jump_of_the_filter(l_room) -> None:

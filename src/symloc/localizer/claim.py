@@ -23,7 +23,10 @@ scan goes through :meth:`ClaimGate.check`:
    uncertainty allows (squared Mahalanobis distance above ``max_pull``): a kidnapping, an
    odometry error, a wrong filter estimate. The localizer then forces a filter update, and
    after ``patience`` such scans since the first (not necessarily in a row: a scan that fits
-   once does not restart the count) it relocalizes from scratch.
+   once does not restart the count) it relocalizes from scratch; sooner, after
+   ``gross_after`` scans in a row at which at most ``gross_fit`` of the beams fit anywhere
+   near the carried pose (no passer-by hides three quarters of a room: the robot is
+   elsewhere).
 4. **Gate**: the pose is published only while its published covariance puts it inside the
    tolerance with a margin of ``gate_sigmas`` standard deviations in position and heading
    (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans, and
@@ -128,6 +131,11 @@ class ClaimConfig:
         the pose up and relocalizes (counted since the suspension, not necessarily in a row).
     resume_after : int
         Consecutive scans at which that carried pose must be confirmed again to resume.
+    gross_fit, gross_after : float, int
+        While claims are suspended, ``gross_after`` scans in a row at which the scan aligned
+        from the carried pose fits with at most ``gross_fit`` of its beams give the pose up at
+        once, without waiting for ``patience`` (a kidnapping: the scan contradicts the pose
+        wholesale; a person or a moved chair hides a part of it). ``gross_after`` 0: off.
     odometry_alphas : (4,) floats
         Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
         grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
@@ -153,6 +161,8 @@ class ClaimConfig:
     patience: int = 30
     odometry_alphas: tuple[float, float, float, float] = (0.0025, 0.0004, 0.0025, 0.0004)
     resume_after: int = 2
+    gross_fit: float = 0.25
+    gross_after: int = 5
     min_beams: int = 20
 
     def __post_init__(self) -> None:
@@ -181,6 +191,15 @@ class ClaimConfig:
                 "ClaimConfig.min_inlier_fraction, min_claim_fit: expected 0 <= "
                 f"min_inlier_fraction <= min_claim_fit <= 1, got {self.min_inlier_fraction!r}"
                 f" and {self.min_claim_fit!r}"
+            )
+        if not (isinstance(self.gross_fit, (int, float)) and 0.0 <= self.gross_fit < 1.0):
+            raise ConfigurationError(
+                f"ClaimConfig.gross_fit: expected a share in [0, 1), got {self.gross_fit!r}"
+            )
+        g = self.gross_after
+        if not isinstance(g, int) or isinstance(g, bool) or g < 0:
+            raise ConfigurationError(
+                f"ClaimConfig.gross_after: expected an integer >= 0, got {g!r}"
             )
         for name in ("patience", "resume_after", "min_beams"):
             v = getattr(self, name)
@@ -325,6 +344,7 @@ class ClaimGate:
         self._suspended = False
         self._patience = Streak(self.config.patience)
         self._resume = Streak(self.config.resume_after)
+        self._gross = Streak(max(1, self.config.gross_after))
 
     def reset(self) -> None:
         """Forget the anchor and the last confirmed pose (the pose is no longer believed)."""
@@ -374,6 +394,7 @@ class ClaimGate:
         self._suspended = False
         self._patience.reset()
         self._resume.reset()
+        self._gross.reset()
 
     def start_at_operator_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         """The operator gave ``pose`` (3,) with ``covariance`` (3, 3) (RViz's 2D Pose
@@ -443,6 +464,7 @@ class ClaimGate:
         self._suspended = True
         self._patience.reset()
         self._resume.reset()
+        self._gross.reset()
         note(f"claims suspended: {why}")
         tracker.force_update()
 
@@ -471,14 +493,23 @@ class ClaimGate:
             self.confirmed(claim, odom)
             return Ruling(Standing.PUBLISH, claim, claim.reason)
         self._resume.miss()
-        if self._patience.hit():
+        cfg = self.config
+        fit = claim.match.inlier_fraction if claim.match is not None else math.nan
+        gross = cfg.gross_after > 0 and fit <= cfg.gross_fit and self._gross.hit()
+        if not fit <= cfg.gross_fit:
+            self._gross.miss()
+        if gross or self._patience.hit():
             tracker.initialize_global()
             self.reset()
             self.restart()
             why = (
-                f"the tracked pose has not fitted the scan for {self.config.patience} scans "
-                "(kidnapped?): global relocalization, the pose must be earned again"
-            )
+                f"the scan has contradicted the tracked pose for {cfg.gross_after} scans in a "
+                f"row ({100 * fit:.0f} % of beams fit near it, at most {100 * cfg.gross_fit:.0f} "
+                "%: kidnapped)"
+                if gross
+                else f"the tracked pose has not fitted the scan for {cfg.patience} scans "
+                "(kidnapped?)"
+            ) + ": global relocalization, the pose must be earned again"
             return Ruling(Standing.RELOCALIZE, claim, why)
         tracker.force_update()
         return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}")
