@@ -49,3 +49,35 @@ def test_map_build_writes_how_the_map_was_made_into_its_yaml(tmp_path: Path) -> 
     assert isinstance(meta["doubtful"], bool)
     assert meta["doubtful"] == bool(meta["warnings"])
     load_map(tmp_path / "map.yaml")  # map readers ignore the extra key
+
+
+def test_map_build_prints_the_ate_without_timestamps_and_explains_doubtful(
+    tmp_path: Path, capsys, monkeypatch
+) -> None:
+    """A log without usable timestamps still gets its ATE printed (the speed says why it is
+    missing), and a doubtful result says what that means and what to do."""
+    import dataclasses
+
+    import symloc.bench.slam_runs as slam_runs
+
+    real = slam_runs.run_simulated
+
+    def no_clock_and_doubtful(*args, **kwargs):  # type: ignore[no-untyped-def]
+        run = real(*args, **kwargs)
+        summary = run.summary()
+        summary["realtime_factor_cpu"] = float("nan")
+        doubtful = dataclasses.replace(run.result, warnings=["no loop closure accepted"])
+        out = dataclasses.replace(run, result=doubtful)
+        monkeypatch.setattr(type(out), "summary", lambda self: summary)
+        return out
+
+    monkeypatch.setattr(slam_runs, "run_simulated", no_clock_and_doubtful)
+    code = main(["map", "build", "--world", "square", "--laps", "1.1", "--out", str(tmp_path)])
+    assert code == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.startswith("scans "))
+    assert "ATE RMSE" in line
+    assert "speed: no usable timestamps" in line
+    assert "result DOUBTFUL" in out
+    assert "DOUBTFUL: SLAM saw signs" in out
+    assert "What to do" in out

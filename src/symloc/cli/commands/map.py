@@ -292,12 +292,12 @@ def _build(args: argparse.Namespace) -> int:
         loop_nodes=[i for _, i in run.result.loop_closures],
         title=f"{run.name}: ATE {s['ate_rmse_m']:.3f} m, {s['loop_closures']} loop closures",
     )
+    speed = s["realtime_factor_cpu"]
     print(
         f"scans {s['scans']}  ATE RMSE {s['ate_rmse_m']:.3f} m (odometry {s['ate_odometry_rmse_m']:.3f} m)"
         f"  RPE {s['rpe_trans_rmse_m']:.3f} m / {s['rpe_rot_rmse_deg']:.2f} deg"
-        f"  loop closures {s['loop_closures']}  speed x{s['realtime_factor_cpu']:.1f} (CPU)"
-        if s["realtime_factor_cpu"] == s["realtime_factor_cpu"]
-        else f"  loop closures {s['loop_closures']}  speed: no usable timestamps"
+        f"  loop closures {s['loop_closures']}  "
+        + (f"speed x{speed:.1f} (CPU)" if speed == speed else "speed: no usable timestamps")
     )
     if "map_agreement" in s:
         print(
@@ -314,10 +314,25 @@ def _build(args: argparse.Namespace) -> int:
     return 0
 
 
+#: What a doubtful SLAM result means and what to do about it (printed after its warnings).
+DOUBTFUL_HELP = (
+    "  DOUBTFUL: SLAM saw signs that the map may be wrong somewhere (the warnings above:\n"
+    "    scans that left a direction unconstrained or matched too poorly, matches the\n"
+    "    odometry disagreed with, loop closures missing or rejected). What to do: look at\n"
+    "    the trajectory figure (walls drawn twice or bent show where); record that part again\n"
+    "    more slowly, returning to where you started so that the loop can close; check the\n"
+    "    odometry source and the laser mount. The claim gate withholds poses by the map's own\n"
+    "    error (below), which sees walls that disagree with the scans, not a drift all of\n"
+    "    them share."
+)
+
+
 def _print_doubts(res: Any) -> None:
     """What may be wrong with a SLAM result: its warnings and the map's own error."""
     for w in res.warnings:
         print(f"  warning: {w}")
+    if res.doubtful:
+        print(DOUBTFUL_HELP)
     me = res.map_error
     if me is None:
         print("map's own error: not estimated (too few usable scans, or a map too large)")
