@@ -62,6 +62,8 @@ RIDGE = 0.8
 #: (CPU, one core): 12-150 ms on the dev SLAM maps (median 38 ms), 60 ms for the 40 m
 #: hallway with its lab, 0.5 s for a 60 m x 60 m grid of offices (25,000 occupied cells).
 MAX_FFT_CELLS = 1 << 18
+#: Bytes of shifted windows :func:`_window_counts` gathers at once (bounds its memory).
+WINDOW_BYTES = 1 << 24
 #: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
 #: exactly around each).
 PEAKS = 12
@@ -274,14 +276,22 @@ def _count_near_blocks(
 
 def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
     """How many ``cells`` (N, 2) (x, y) land on ``hits`` (H, W) when shifted by each (dx, dy)
-    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx]."""
+    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx].
+
+    The windows are gathered :data:`WINDOW_BYTES` at a time (N x size^2 bytes at once was
+    gigabytes on a map of millions of occupied cells); the counts are whole numbers, so the
+    sum in parts is the same sum."""
     h, w = hits.shape
     padded = np.zeros((h + 2 * size, w + 2 * size), dtype=np.uint8)
     padded[size : size + h, size : size + w] = hits
     at = cells + size
     ok = (at[:, 0] >= 0) & (at[:, 0] <= w + size) & (at[:, 1] >= 0) & (at[:, 1] <= h + size)
+    rows, cols = at[ok, 1], at[ok, 0]
     windows = sliding_window_view(padded, (size, size))
-    out: FloatArray = windows[at[ok, 1], at[ok, 0]].sum(axis=0, dtype=np.float64)
+    out: FloatArray = np.zeros((size, size))
+    step = max(1, WINDOW_BYTES // (size * size))
+    for i in range(0, rows.size, step):
+        out += windows[rows[i : i + step], cols[i : i + step]].sum(axis=0, dtype=np.float64)
     return out
 
 
