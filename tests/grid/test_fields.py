@@ -96,7 +96,7 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
-    calls: dict[str, int] = {"distance": 0, "surface": 0, "edt": 0}
+    calls: dict[str, int] = {"distance": 0, "surface": 0, "edt": 0, "obstacle": 0}
 
     def counted(name, fn):
         def wrapper(*a, **k):
@@ -115,6 +115,9 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
     )
     monkeypatch.setattr(
         fields_mod, "distance_transform_edt", counted("edt", distance_transform_edt)
+    )
+    monkeypatch.setattr(
+        fields_mod, "_obstacle_distance", counted("obstacle", fields_mod._obstacle_distance)
     )
 
     grid = asymmetric_room()
@@ -158,7 +161,9 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
         "obstacle_distance": 1,
         "blocked_distance": 1,
     }
-    assert calls == {"distance": 2, "surface": 1, "edt": 2}  # distance: the map and the grown
+    # distance: the map and the grown; scipy's EDT: the beam model's (the obstacle distance
+    # goes through OpenCV)
+    assert calls == {"distance": 2, "surface": 1, "edt": 1, "obstacle": 1}
     assert amcl.field is beam.field is tracker.judge.consistency_field is judge.consistency_field
     assert scorer._dist is f.obstacle_distance()
     assert gate.field is f.surface()
@@ -196,3 +201,30 @@ def test_the_map_symmetries_are_computed_once_per_map_and_kept_with_its_fields()
     MapFields.of(g).clear()
     assert grid_symmetries(g) is not first  # cleared with the fields
     assert MapFields.of(g).n_computed["map_symmetries"] == 2
+
+
+def test_the_lean_obstacle_distance_equals_scipys_value_for_value():
+    rng = np.random.default_rng(7)
+    for share, res, shape in (
+        (0.002, 0.05, (300, 411)),
+        (0.1, 0.013, (97, 64)),
+        (0.5, 1.0, (5, 9)),
+    ):
+        occ = rng.random(shape) < share
+        assert _same(fields_mod._obstacle_distance(occ, res), distance_transform_edt(~occ) * res)
+    # no obstacle, and one cell farther than OpenCV's float32 keeps exact: scipy's path
+    for occ in (np.zeros((4, 6), bool), np.zeros((2100, 3), bool)):
+        occ[0, 0] = occ.shape[0] > 4
+        assert _same(fields_mod._obstacle_distance(occ, 0.05), distance_transform_edt(~occ) * 0.05)
+
+
+def test_the_integral_image_counts_the_free_cells_above_and_left():
+    from symloc.grid.precomputation import _integral_image
+
+    free = np.random.default_rng(3).random((600, 37)) < 0.7  # more rows than one band
+    got = _integral_image(free)
+    assert got.dtype == np.int32
+    assert got.shape == (601, 38)
+    assert not got[0].any()
+    assert not got[:, 0].any()
+    assert np.array_equal(got[1:, 1:], free.cumsum(axis=0).cumsum(axis=1))

@@ -112,7 +112,27 @@ def build_precomputation_grids(
         np.maximum(cur[:-s, :], prev[s:, :], out=cur[:-s, :])
         np.maximum(cur[:, :-s], cur[:, s:].copy(), out=cur[:, :-s])
     levels.setflags(write=False)
-    integral = np.zeros((h + 1, w + 1), dtype=np.int32)
-    np.cumsum(np.cumsum(np.asarray(free, dtype=np.int32), axis=0), axis=1, out=integral[1:, 1:])
+    integral = _integral_image(np.asarray(free, dtype=bool))
     integral.setflags(write=False)
     return PrecomputationGrids(levels, integral, int(depth), pad, float(tolerance), h, w)
+
+
+#: Rows of the integral image summed at a time (bounds the temporaries).
+_INTEGRAL_ROWS = 256
+
+
+def _integral_image(free: NDArray[np.bool_]) -> NDArray[np.int32]:
+    """``(H + 1, W + 1)`` int32: entry ``[r, c]`` counts the ``free`` cells above and left of
+    ``(r, c)`` (row and column 0 are zero).
+
+    Summed in place, a band of rows at a time: ``np.cumsum`` of an int32 array makes int64
+    temporaries of the whole map (16 bytes per cell with the int32 input); here the peak is
+    the result's 4 bytes per cell. At most 2^31 - 1 cells (the map file cap is 2^26)."""
+    h, w = free.shape
+    integral = np.zeros((h + 1, w + 1), dtype=np.int32)
+    for a in range(0, h, _INTEGRAL_ROWS):
+        band = integral[1 + a : 1 + a + _INTEGRAL_ROWS, 1:]
+        np.cumsum(free[a : a + _INTEGRAL_ROWS], axis=1, dtype=np.int32, out=band)
+        np.cumsum(band, axis=0, dtype=np.int32, out=band)
+        band += integral[a, 1:]  # the count of every row above the band
+    return integral
