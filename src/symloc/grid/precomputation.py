@@ -75,23 +75,23 @@ class PrecomputationGrids:
 
 
 def build_precomputation_grids(
-    obstacle_distance: NDArray[np.float64],
+    near: NDArray[np.bool_],
     occupied: NDArray[np.bool_],
     free: NDArray[np.bool_],
     tolerance: float,
     depth: int,
 ) -> PrecomputationGrids:
-    """The pyramid of a map from its unclipped obstacle distance [m] ``(H, W)``.
+    """The pyramid of a map from its cells near an obstacle ``(H, W)``.
 
     Parameters
     ----------
-    obstacle_distance : array of shape (H, W)
-        Distance [m] of each cell centre to the nearest occupied cell centre
-        (:meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
+    near : array of shape (H, W), bool
+        The cells whose centre lies within ``tolerance`` of an occupied cell's centre
+        (:meth:`~symloc.grid.fields.MapFields.near_obstacle`).
     occupied, free : array of shape (H, W), bool
         The map's occupied and free cells (a map with no occupied cell hits nothing).
     tolerance : float
-        Hit tolerance [m] (>= 0).
+        Hit tolerance [m] (>= 0) ``near`` was made with (kept on the result).
     depth : int
         Levels above level 0, in ``[0, MAX_DEPTH]``.
     """
@@ -99,12 +99,12 @@ def build_precomputation_grids(
         raise ConfigurationError(f"depth: expected an integer, got {depth!r}")
     if not 0 <= depth <= MAX_DEPTH:
         raise ConfigurationError(f"depth: expected an integer in [0, {MAX_DEPTH}], got {depth}")
-    dist = np.asarray(obstacle_distance)
-    h, w = dist.shape
+    near = np.asarray(near, dtype=bool)
+    h, w = near.shape
     pad = 1 << int(depth)
     levels = np.zeros((depth + 1, h + 2 * pad, w + 2 * pad), dtype=np.uint8)
     if np.any(occupied):
-        levels[0, pad : pad + h, pad : pad + w] = dist <= tolerance
+        levels[0, pad : pad + h, pad : pad + w] = near
     for d in range(1, depth + 1):
         s = 1 << (d - 1)
         prev, cur = levels[d - 1], levels[d]

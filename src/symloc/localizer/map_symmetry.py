@@ -128,8 +128,8 @@ def map_symmetries(
     Parameters
     ----------
     grid : OccupancyGrid or MapFields
-        The map, or its shared fields (the distance to the nearest occupied cell is read from
-        :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
+        The map, or its shared fields (the cells near an occupied cell are read from
+        :meth:`~symloc.grid.fields.MapFields.near_obstacle`).
     orders : tuple of int
         Orders k (>= 2) to test (rotation by ``2 pi / k``).
     tolerance : float
@@ -161,7 +161,7 @@ def map_symmetries(
     if int(np.count_nonzero(grid.occupied_mask)) < 10:
         return []
     margin = math.ceil(tolerance / grid.resolution) + 1
-    cells = _Cells.of(grid, fields.obstacle_distance() <= tolerance, margin)
+    cells = _Cells.of(grid, fields.near_obstacle(tolerance), margin)
     out: list[MapSymmetry] = []
     for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
         found = _order_symmetries(grid, cells, k, tolerance, least, min_overlap)

@@ -442,8 +442,8 @@ def branch_and_bound_py(
     dc: NDArray[np.int32],
     integral: NDArray[np.int32],
     box: IntArray,
-    dist: FloatArray,
-    dist_cap: float,
+    dist_k: NDArray[np.uint16],
+    dist_of_k: FloatArray,
     min_score: float,
     margin: float,
     roots_k: IntArray,
@@ -474,8 +474,9 @@ def branch_and_bound_py(
     """
     depth = levels.shape[0] - 1
     m = dr.shape[1]
-    h_map = dist.shape[0]
-    w_map = dist.shape[1]
+    h_map = dist_k.shape[0]
+    w_map = dist_k.shape[1]
+    dist_cap = dist_of_k[-1]
     cap = hk.shape[0]
     n_roots = roots_k.shape[0]
     size = 3 * depth + 2
@@ -529,7 +530,7 @@ def branch_and_bound_py(
                     cc = c + dck[j]
                     v = dist_cap
                     if 0 <= rr < h_map and 0 <= cc < w_map:
-                        v = min(dist[rr, cc], dist_cap)
+                        v = dist_of_k[dist_k[rr, cc]]
                     s += v
                 if nh == cap:  # drop what the risen threshold excludes
                     w = 0
@@ -608,6 +609,26 @@ branch_and_bound = _jit(branch_and_bound_py)
 
 
 # --------------------------------------------------------------------------- the search
+def _clipped_distance(
+    fields: MapFields, cap: float
+) -> tuple[NDArray[np.unsignedinteger], FloatArray]:
+    """The distance [m] of each cell to the nearest occupied cell, clipped at ``cap`` [m]:
+    ``(codes, table)`` with ``codes`` ``(H, W)`` (uint16) indexing ``table`` (float64), whose
+    last entry is ``cap``; ``table[codes]`` equals ``min(obstacle_distance, cap)`` value for
+    value.
+
+    From :meth:`~symloc.grid.fields.MapFields.obstacle_squared_cells` (2 bytes per cell)
+    when ``cap`` is within its reach; else (a hit tolerance of over 127 cells, or a map
+    without an occupied cell) from the distinct values of the float64 field."""
+    if cap < fields.obstacle_reach() and fields.grid.occupied_mask.any():
+        k, metres = fields.obstacle_squared_cells()
+        return k, np.minimum(metres, cap)
+    values, codes = np.unique(np.minimum(fields.obstacle_distance(), cap), return_inverse=True)
+    table = np.append(values, cap)
+    dtype = np.uint16 if table.size <= 1 << 16 else np.uint32
+    return codes.reshape(fields.grid.data.shape).astype(dtype), table
+
+
 @dataclass(frozen=True, slots=True)
 class _Lattice:
     points: FloatArray  # (M, 2) robot frame, sub-sampled
@@ -643,7 +664,9 @@ class GlobalSearch:
         self.pyramid: PrecomputationGrids = self.fields.precomputation_grids(
             cfg.hit_tolerance, cfg.depth
         )
-        self.distance = self.fields.obstacle_distance()
+        # the end points' distance, clipped at dist_cap: 2 bytes per cell and a table
+        self.dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
+        self.dist_k, self.dist_of_k = _clipped_distance(self.fields, self.dist_cap)
 
     # ----------------------------------------------------------------- inputs
     def scan_points(self, scan: LaserScan, laser_pose: ArrayLike | None = None) -> FloatArray:
@@ -779,7 +802,6 @@ class GlobalSearch:
         bl = np.asarray(blocks, dtype=np.int64).reshape(-1, 2)
         n_b = bl.shape[0]
         need0 = need_py(0, m, cfg.min_score, cfg.score_margin)
-        dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
         parts: dict[int, tuple[IntArray, IntArray, IntArray, IntArray, IntArray, FloatArray, str]]
         parts = {}
         shared = np.zeros(1, dtype=np.int64)  # the best count of any thread so far
@@ -816,8 +838,8 @@ class GlobalSearch:
                 rk, rr, rc, rb = rk[order], rr[order], rc[order], rb[order]
             while not reason and i < rk.size:
                 i = branch_and_bound(
-                    pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.distance,
-                    dist_cap, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
+                    pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.dist_k,
+                    self.dist_of_k, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
                     state, shared, hk, hr, hc, hn, hd,
                 )  # fmt: skip
                 if state[3] == 1:
@@ -863,7 +885,7 @@ class GlobalSearch:
         level0 = self.pyramid.levels[0]
         pad = self.pyramid.pad
         h2, w2 = level0.shape
-        cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
+        cap = self.dist_cap
         counts = np.zeros((lat.headings.size, rows.size), dtype=np.int64)
         fits = np.zeros((lat.headings.size, rows.size))
         for k in range(lat.headings.size):
@@ -873,8 +895,8 @@ class GlobalSearch:
             v = level0[np.where(inside, ri + pad, 0), np.where(inside, ci + pad, 0)]
             counts[k] = np.where(inside, v, 0).sum(axis=1)
             on_map = (ri >= 0) & (ri < self.grid.height) & (ci >= 0) & (ci < self.grid.width)
-            dv = self.distance[np.where(on_map, ri, 0), np.where(on_map, ci, 0)]
-            fits[k] = np.where(on_map, np.minimum(dv, cap), cap).sum(axis=1) / m
+            dv = self.dist_of_k[self.dist_k[np.where(on_map, ri, 0), np.where(on_map, ci, 0)]]
+            fits[k] = np.where(on_map, dv, cap).sum(axis=1) / m
         best = int(counts.max()) if counts.size else 0
         need0 = need_py(0, m, cfg.min_score, cfg.score_margin)
         if best < need0:
