@@ -8,10 +8,11 @@ at a scan's end points for the corner translation of a block of ``2^d x 2^d`` tr
 bounds the number of hits of every translation in the block: the bound that lets the search
 prune a block without missing any pose in it.
 
-All levels share one layout, ``(depth + 1, H + 2P, W + 2P)`` uint8 with ``P = 2^depth``, map
-cell ``(r, c)`` at index ``(r + P, c + P)``; the border is zero at level 0, so an end point off
-the map hits nothing and an index outside the array reads 0 at every level. Memory: ``depth +
-1`` bytes per padded cell (8 at Cartographer's default depth 7). Built once per map and
+All levels share one array, ``bits`` ``(H + 2P, W + 2P)`` with ``P = 2^depth``: level ``d`` is
+bit ``d`` of each entry, map cell ``(r, c)`` at index ``(r + P, c + P)``; the border is zero at
+level 0, so an end point off the map hits nothing and an index outside the array reads 0 at
+every level. Memory: 1 byte per padded cell up to depth 7 (Cartographer's default; a level
+per byte was 8), 2 beyond. Built once per map and
 tolerance through :meth:`symloc.grid.fields.MapFields.precomputation_grids`, with the integral
 image of the free cells (where a robot may stand) that tells a block with no free cell apart.
 """
@@ -37,9 +38,9 @@ class PrecomputationGrids:
 
     Attributes
     ----------
-    levels : ndarray of shape (depth + 1, H + 2 pad, W + 2 pad), uint8
-        Level ``d`` at index ``(r + pad, c + pad)``: 1 if any cell of ``[r, r + 2^d) x [c, c +
-        2^d)`` is a hit (read-only).
+    bits : ndarray of shape (H + 2 pad, W + 2 pad), uint8 (uint16 for depth > 7)
+        Bit ``d`` at index ``(r + pad, c + pad)`` (level ``d``): 1 if any cell of ``[r, r +
+        2^d) x [c, c + 2^d)`` is a hit (read-only); :meth:`level` unpacks one level.
     free_integral : ndarray of shape (H + 1, W + 1), int32
         ``free_integral[r, c]`` = free cells in rows ``< r`` and columns ``< c`` (read-only).
     depth : int
@@ -51,7 +52,7 @@ class PrecomputationGrids:
         The map's shape.
     """
 
-    levels: NDArray[np.uint8]
+    bits: NDArray[np.unsignedinteger]
     free_integral: NDArray[np.int32]
     depth: int
     pad: int
@@ -62,7 +63,14 @@ class PrecomputationGrids:
     @property
     def nbytes(self) -> int:
         """Memory held [bytes]."""
-        return int(self.levels.nbytes + self.free_integral.nbytes)
+        return int(self.bits.nbytes + self.free_integral.nbytes)
+
+    def level(self, d: int) -> NDArray[np.uint8]:
+        """Level ``d`` (0 .. depth) as its own ``(H + 2 pad, W + 2 pad)`` uint8 array of 0 and 1
+        (a new array: for tests and figures, the search reads :attr:`bits`)."""
+        if not 0 <= d <= self.depth:
+            raise ConfigurationError(f"d: expected a level in [0, {self.depth}], got {d}")
+        return ((self.bits >> d) & 1).astype(np.uint8)
 
     def free_count(self, r0: int, r1: int, c0: int, c1: int) -> int:
         """Free cells in rows ``[r0, r1)`` and columns ``[c0, c1)`` (clipped to the map)."""
@@ -102,19 +110,23 @@ def build_precomputation_grids(
     near = np.asarray(near, dtype=bool)
     h, w = near.shape
     pad = 1 << int(depth)
-    levels = np.zeros((depth + 1, h + 2 * pad, w + 2 * pad), dtype=np.uint8)
+    dtype = np.uint8 if depth < 8 else np.uint16
+    bits = np.zeros((h + 2 * pad, w + 2 * pad), dtype=dtype)
+    cur = np.zeros_like(bits)  # one level at a time
     if np.any(occupied):
-        levels[0, pad : pad + h, pad : pad + w] = near
+        cur[pad : pad + h, pad : pad + w] = near
+    bits |= cur
     for d in range(1, depth + 1):
         s = 1 << (d - 1)
-        prev, cur = levels[d - 1], levels[d]
-        cur[...] = prev
-        np.maximum(cur[:-s, :], prev[s:, :], out=cur[:-s, :])
-        np.maximum(cur[:, :-s], cur[:, s:].copy(), out=cur[:, :-s])
-    levels.setflags(write=False)
+        # (ufuncs read overlapping operands as if copied first: each step sees the level below)
+        np.maximum(cur[:-s, :], cur[s:, :], out=cur[:-s, :])
+        np.maximum(cur[:, :-s], cur[:, s:], out=cur[:, :-s])
+        bits |= cur << dtype(d)
+    del cur
+    bits.setflags(write=False)
     integral = _integral_image(np.asarray(free, dtype=bool))
     integral.setflags(write=False)
-    return PrecomputationGrids(levels, integral, int(depth), pad, float(tolerance), h, w)
+    return PrecomputationGrids(bits, integral, int(depth), pad, float(tolerance), h, w)
 
 
 #: Rows of the integral image summed at a time (bounds the temporaries).

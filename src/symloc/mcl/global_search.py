@@ -373,22 +373,24 @@ _need = _jit(need_py)
 
 
 def block_count_py(
-    level: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    bit: int,
     pad: int,
     drk: NDArray[np.int32],
     dck: NDArray[np.int32],
     r: int,
     c: int,
 ) -> int:
-    """Sum of ``level`` at the end points ``(r + drk[j], c + dck[j])`` (index shifted by
-    ``pad``; outside the array reads 0): the bound of the block whose corner is ``(r, c)``."""
-    h2, w2 = level.shape
+    """Sum of level ``bit`` of the pyramid ``bits`` at the end points ``(r + drk[j], c +
+    dck[j])`` (index shifted by ``pad``; outside the array reads 0): the bound of the block
+    whose corner is ``(r, c)``."""
+    h2, w2 = bits.shape
     s = 0
     for j in range(drk.shape[0]):
         i = r + drk[j] + pad
         q = c + dck[j] + pad
         if 0 <= i < h2 and 0 <= q < w2:
-            s += level[i, q]
+            s += (bits[i, q] >> bit) & 1
     return s
 
 
@@ -417,7 +419,8 @@ _free_in = _jit(free_in_py)
 
 
 def root_bounds_py(
-    level: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    bit: int,
     pad: int,
     dr: NDArray[np.int32],
     dc: NDArray[np.int32],
@@ -429,14 +432,15 @@ def root_bounds_py(
     """``out[i]``: the bound of root ``i`` (heading ``rk[i]``, corner ``(rr[i], rc[i])``)."""
     for i in range(rk.shape[0]):
         k = rk[i]
-        out[i] = _block_count(level, pad, dr[k], dc[k], rr[i], rc[i])
+        out[i] = _block_count(bits, bit, pad, dr[k], dc[k], rr[i], rc[i])
 
 
 root_bounds = _jit(root_bounds_py)
 
 
 def branch_and_bound_py(
-    levels: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    depth: int,
     pad: int,
     dr: NDArray[np.int32],
     dc: NDArray[np.int32],
@@ -472,7 +476,6 @@ def branch_and_bound_py(
     every node and raised here, it only ever lifts the threshold to one that some pose of the
     lattice reaches (a stale read prunes less, never wrongly).
     """
-    depth = levels.shape[0] - 1
     m = dr.shape[1]
     h_map = dist_k.shape[0]
     w_map = dist_k.shape[1]
@@ -576,7 +579,7 @@ def branch_and_bound_py(
                     state[2] = nh
                     state[3] = 1
                     return i
-                cb = _block_count(levels[d - 1], pad, drk, dck, cr, cq)
+                cb = _block_count(bits, d - 1, pad, drk, dck, cr, cq)
                 nodes += 1
                 if cb >= need:
                     # insertion sort, ascending by bound
@@ -826,7 +829,7 @@ class GlobalSearch:
             chunk = max(1, _CHUNK_NODES)
             for q in range(0, rk.size, chunk):
                 sl = slice(q, q + chunk)
-                root_bounds(pyr.levels[depth], s, lat.dr, lat.dc, rk[sl], rr[sl], rc[sl], rb[sl])
+                root_bounds(pyr.bits, depth, s, lat.dr, lat.dc, rk[sl], rr[sl], rc[sl], rb[sl])
                 if q + chunk < rk.size and time.perf_counter() - t0 > cfg.max_seconds:
                     reason = f"time budget: max_seconds={cfg.max_seconds:g} s passed"
                     break
@@ -838,7 +841,7 @@ class GlobalSearch:
                 rk, rr, rc, rb = rk[order], rr[order], rc[order], rb[order]
             while not reason and i < rk.size:
                 i = branch_and_bound(
-                    pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.dist_k,
+                    pyr.bits, depth, s, lat.dr, lat.dc, pyr.free_integral, box, self.dist_k,
                     self.dist_of_k, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
                     state, shared, hk, hr, hc, hn, hd,
                 )  # fmt: skip
@@ -882,9 +885,9 @@ class GlobalSearch:
             box[0] : box[1], box[2] : box[3]
         ]
         rows, cols = np.nonzero(free)
-        level0 = self.pyramid.levels[0]
+        bits = self.pyramid.bits
         pad = self.pyramid.pad
-        h2, w2 = level0.shape
+        h2, w2 = bits.shape
         cap = self.dist_cap
         counts = np.zeros((lat.headings.size, rows.size), dtype=np.int64)
         fits = np.zeros((lat.headings.size, rows.size))
@@ -892,7 +895,7 @@ class GlobalSearch:
             ri = rows[:, None] + lat.dr[k][None, :]
             ci = cols[:, None] + lat.dc[k][None, :]
             inside = (ri + pad >= 0) & (ri + pad < h2) & (ci + pad >= 0) & (ci + pad < w2)
-            v = level0[np.where(inside, ri + pad, 0), np.where(inside, ci + pad, 0)]
+            v = bits[np.where(inside, ri + pad, 0), np.where(inside, ci + pad, 0)] & 1
             counts[k] = np.where(inside, v, 0).sum(axis=1)
             on_map = (ri >= 0) & (ri < self.grid.height) & (ci >= 0) & (ci < self.grid.width)
             dv = self.dist_of_k[self.dist_k[np.where(on_map, ri, 0), np.where(on_map, ci, 0)]]
