@@ -69,6 +69,8 @@ WINDOW_BYTES = 1 << 24
 DIRECT_WINDOW_WORK = 1 << 30
 #: Side [cells] of the tiles the FFT correlation of :func:`_window_counts_fft` works on.
 FFT_TILE = 1024
+#: Occupied cells turned at a time by :func:`_overlap` (its float64 temporaries: 16 MiB each).
+OVERLAP_CHUNK = 1 << 20
 #: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
 #: exactly around each).
 PEAKS = 12
@@ -190,7 +192,11 @@ def _order_symmetries(
     """The centres (world [m]) about which turning by ``2 pi / k`` reaches an overlap of
     ``least``, best first; partial below ``whole``."""
     rot = _rotation(k)
-    turned = np.floor(cells.xy @ rot.T + 0.5).astype(np.intp)
+    turned_f = cells.xy @ rot.T  # rounded in place: one float64 temporary, not three
+    turned_f += 0.5
+    np.floor(turned_f, out=turned_f)
+    turned = turned_f.astype(np.intp)
+    del turned_f
     need = math.ceil(least * cells.xy.shape[0] - 1e-9)
     # moving the centre by d [m] moves every turned cell by 2 sin(pi / k) d
     sep = 2.0 * math.sin(math.pi / k) * SEPARATION / grid.resolution
@@ -284,16 +290,22 @@ def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
     in [0, size)^2: ``(size, size)`` counts indexed [dy, dx].
 
     The windows are gathered :data:`WINDOW_BYTES` at a time (N x size^2 bytes at once was
-    gigabytes on a map of millions of occupied cells); the counts are whole numbers, so the
-    sum in parts is the same sum."""
+    gigabytes on a map of millions of occupied cells), or correlated by FFT
+    (:func:`_window_counts_fft`) when that is over :data:`DIRECT_WINDOW_WORK` reads; the
+    counts are whole numbers, so the sum in parts is the same sum."""
     h, w = hits.shape
+    x, y = cells[:, 0], cells[:, 1]
+    ok = (x >= -size) & (x <= w) & (y >= -size) & (y <= h)  # the window lies in the padding
+    # (row, column) of each window's corner in the map padded by ``size`` on every side
+    rows = y[ok].astype(np.int32)
+    rows += size
+    cols = x[ok].astype(np.int32)
+    cols += size
+    del ok
+    if rows.size * size * size > DIRECT_WINDOW_WORK:
+        return _window_counts_fft(hits, rows, cols, size)
     padded = np.zeros((h + 2 * size, w + 2 * size), dtype=np.uint8)
     padded[size : size + h, size : size + w] = hits
-    at = cells + size
-    ok = (at[:, 0] >= 0) & (at[:, 0] <= w + size) & (at[:, 1] >= 0) & (at[:, 1] <= h + size)
-    rows, cols = at[ok, 1], at[ok, 0]
-    if rows.size * size * size > DIRECT_WINDOW_WORK:
-        return _window_counts_fft(padded, rows, cols, size)
     windows = sliding_window_view(padded, (size, size))
     out: FloatArray = np.zeros((size, size))
     step = max(1, WINDOW_BYTES // (size * size))
@@ -303,11 +315,11 @@ def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
 
 
 def _window_counts_fft(
-    padded: NDArray[np.uint8], rows: IntArray, cols: IntArray, size: int
+    hits: BoolArray, rows: NDArray[np.int32], cols: NDArray[np.int32], size: int
 ) -> FloatArray:
     """:func:`_window_counts` by FFT, tile by tile: ``(size, size)`` counts indexed [dy, dx]
-    of ``padded[rows + dy, cols + dx]`` summed over the cells (each window inside
-    ``padded``).
+    of ``padded[rows + dy, cols + dx]`` summed over the cells, ``padded`` being ``hits``
+    (H, W) with ``size`` cells of zeros on every side (each window inside it).
 
     The cells are binned into tiles of :data:`FFT_TILE` x :data:`FFT_TILE`; per tile, the
     correlation of its cell counts with the hits under it (the tile grown by ``size``) is one
@@ -315,18 +327,28 @@ def _window_counts_fft(
     whole numbers below 2^31, rounded to them (float64 FFT error is orders below 1/2). For
     millions of cells and windows of hundreds of cells (an 8,192 x 8,192 office map) this is
     seconds where gathering each cell's window was hours."""
+    h, w = hits.shape
     t = FFT_TILE
     side = next_fast_len(t + size, real=True)
     out: FloatArray = np.zeros((size, size))
-    tile = (rows // t) * (padded.shape[1] // t + 1) + cols // t
+    tile = rows // t
+    tile *= (w + 2 * size) // t + 1
+    tile += cols // t
     order = np.argsort(tile, kind="stable")
     starts = np.flatnonzero(np.diff(tile[order], prepend=-1))
+    del tile
     for a, b in zip(starts, [*starts[1:], order.size], strict=True):
         sel = order[a:b]
         r0, c0 = (int(rows[sel[0]]) // t) * t, (int(cols[sel[0]]) // t) * t
         cells = np.zeros((t, t))
         np.add.at(cells, (rows[sel] - r0, cols[sel] - c0), 1.0)
-        under = padded[r0 : r0 + t + size, c0 : c0 + t + size].astype(np.float64)
+        # the padded map's [r0, r0 + t + size) x [c0, c0 + t + size), read from ``hits``
+        under = np.zeros((t + size, t + size))
+        hr, hc = r0 - size, c0 - size  # where ``under`` starts in ``hits``
+        a0, a1 = max(hr, 0), min(hr + t + size, h)
+        b0, b1 = max(hc, 0), min(hc + t + size, w)
+        if a1 > a0 and b1 > b0:
+            under[a0 - hr : a1 - hr, b0 - hc : b1 - hc] = hits[a0:a1, b0:b1]
         spec = np.conj(rfft2(cells, s=(side, side))) * rfft2(under, s=(side, side))
         out += irfft2(spec, s=(side, side))[:size, :size]
     return np.rint(out)
@@ -405,13 +427,16 @@ def _free_at(grid: OccupancyGrid, centre: FloatArray) -> bool:
 def _overlap(grid: OccupancyGrid, cells: _Cells, k: int, centre: FloatArray) -> float:
     """Share of occupied cells that land on the hits when turned by ``2 pi / k`` about
     ``centre`` (2,) [m]."""
-    landed = np.asarray(grid.world_to_cell(centre + (cells.world - centre) @ _rotation(k).T))
-    landed = landed - cells.offset[::-1]
+    rot = _rotation(k).T
     h, w = cells.hits.shape
-    inside = (landed[:, 0] >= 0) & (landed[:, 0] < h) & (landed[:, 1] >= 0) & (landed[:, 1] < w)
-    on = np.zeros(landed.shape[0], dtype=bool)
-    on[inside] = cells.hits[landed[inside, 0], landed[inside, 1]]
-    return float(on.mean())
+    n_on = 0
+    for a in range(0, cells.world.shape[0], OVERLAP_CHUNK):  # bounded temporaries
+        part = cells.world[a : a + OVERLAP_CHUNK]
+        landed = np.asarray(grid.world_to_cell(centre + (part - centre) @ rot))
+        landed = landed - cells.offset[::-1]
+        inside = (landed[:, 0] >= 0) & (landed[:, 0] < h) & (landed[:, 1] >= 0) & (landed[:, 1] < w)
+        n_on += int(np.count_nonzero(cells.hits[landed[inside, 0], landed[inside, 1]]))
+    return n_on / cells.world.shape[0] if cells.world.shape[0] else float("nan")
 
 
 def _polish(
