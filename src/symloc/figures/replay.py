@@ -21,7 +21,7 @@ _COLOURS = {
 
 
 #: Largest side [cells] of the map image drawn; a larger map is drawn in blocks of cells.
-MAX_IMAGE_SIDE = 2048
+MAX_IMAGE_SIDE = 1024
 
 
 def _map_image(data: np.ndarray, max_side: int = MAX_IMAGE_SIDE) -> np.ndarray:
@@ -29,8 +29,8 @@ def _map_image(data: np.ndarray, max_side: int = MAX_IMAGE_SIDE) -> np.ndarray:
     0..100): 1 free, 0 occupied, 0.75 unknown. A grid with a side over ``max_side`` cells is
     reduced to blocks of k x k cells (k the smallest that fits; the last row and column of
     blocks may be narrower), each as dark as its darkest cell so that thin walls stay drawn:
-    the figure is about 700 pixels wide, and the full grid as float64 with matplotlib's RGBA
-    copies was gigabytes for a map of 8,192 x 8,192 cells."""
+    the map's axes are about 750 pixels wide, and the full grid as float64 with matplotlib's
+    RGBA copies was gigabytes for a map of 8,192 x 8,192 cells."""
     level = np.where(data < 0, np.int8(25), data)  # unknown as 25 % occupied: grey 0.75
     k = -(-max(level.shape) // max_side)
     if k > 1:

@@ -64,8 +64,10 @@ evaluated ``max_nodes`` nodes (roots included; the roots alone are counted befor
 when ``max_seconds`` of wall time have passed (checked every ``_CHUNK_NODES`` nodes), or when
 more than ``max_hits`` lattice poses lie within the margin (a long featureless corridor). So a
 huge map never blocks its caller: the work is at most ``max_nodes x max_points`` look-ups.
-Memory per map: ``depth + 1`` bytes per (padded) cell for the pyramid and 4 for the integral
-image, shared through :class:`~symloc.grid.fields.MapFields`.
+Memory per map: 1 byte per (padded) cell for the pyramid (its levels are the bits of one
+array; 2 beyond depth 7), 4 for the integral image and 2 for the clipped distance of the end
+points (:meth:`~symloc.grid.fields.MapFields.obstacle_squared_cells`), shared through
+:class:`~symloc.grid.fields.MapFields`.
 
 The compiled loops (numba, cached on disk, as :mod:`symloc.mcl.kernels`) are written as plain
 Python (``*_py``); the tests run both against the NumPy exhaustive search.
