@@ -6,12 +6,25 @@ resident memory and its resident memory before the work [MiB] (VmHWM / VmRSS: no
 parent's).
 
 Run: ``python benchmarks/bench_fields.py [--rows 6000 --cols 5000] [--seed S]``
+
+``--replay DIR`` measures ``symloc replay`` instead (issue 31: a legal 8,192 x 8,192 map, the
+map-file cap, peaked at 3.2 GB): the office map is saved in DIR as ``map.yaml`` with a ROS 2
+bag of ``--scans`` scans ray-cast in it (a robot turning on the spot in one office; no
+initial pose, so the node localizes globally), and ``symloc replay DIR/bag --map DIR/map.yaml --out DIR/out`` runs in a child
+process; printed: its peak resident memory (``ru_maxrss`` of the child), its wall time, and
+the SHA-256 of ``replay_scans.csv`` and ``replay_scans.tum`` (the same numbers before and after
+a memory change = the same results). ``--rows``/``--cols`` default to 8192 there.
+
+    python benchmarks/bench_fields.py --replay /tmp/big [--rows 8192 --cols 8192] [--scans 20]
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
+import math
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -60,13 +73,74 @@ def one(which: str, rows: int, cols: int, seed: int) -> None:
     )
 
 
+def cast_scan(grid: OccupancyGrid, pose: np.ndarray, beams: int, max_range: float) -> np.ndarray:
+    """Ranges [m] of ``beams`` beams over 360 deg from ``pose`` (x [m], y [m], theta [rad]),
+    marched in steps of half a cell to the first occupied cell; ``max_range`` where none."""
+    res = grid.resolution
+    steps = np.arange(0.0, max_range, res / 2)
+    angles = pose[2] - math.pi + np.arange(beams) * (2 * math.pi / beams)
+    x = pose[0] + np.cos(angles)[:, None] * steps - grid.origin[0]
+    y = pose[1] + np.sin(angles)[:, None] * steps - grid.origin[1]
+    col = np.clip((x / res).astype(int), 0, grid.data.shape[1] - 1)
+    row = np.clip((y / res).astype(int), 0, grid.data.shape[0] - 1)
+    hit = grid.data[row, col] >= 50
+    first = np.where(hit.any(axis=1), hit.argmax(axis=1), len(steps) - 1)
+    return np.where(hit.any(axis=1), steps[first], max_range)
+
+
+def replay_peak(folder: Path, rows: int, cols: int, seed: int, scans: int) -> None:
+    """Write the map and bag into ``folder``, run ``symloc replay`` in a child, print its peak."""
+    from symloc.grid.map_io import save_map
+    from symloc.io.rosbag import BagWriter
+    from symloc.odometry import OdometryReading
+    from symloc.scan import LaserScan
+
+    folder.mkdir(parents=True, exist_ok=True)
+    grid = office_map(rows, cols, seed)
+    yaml = save_map(grid, folder / "map")
+    bag = folder / "bag"
+    if not bag.exists():
+        beams = 360
+        with BagWriter(bag, "ros2") as w:
+            for i in range(scans):
+                t = 1.0 + 0.2 * i
+                pose = np.array([(50 + 40) * 0.05, (50 + 40) * 0.05 + 0.1, 0.05 * i])
+                w.write_odometry(OdometryReading(pose, t))
+                ranges = cast_scan(grid, pose, beams, 8.0)
+                w.write_scan(LaserScan(-math.pi, 2 * math.pi / beams, 0.1, 8.0, ranges, stamp=t))
+    del grid
+    out = folder / "out"
+    cmd = [sys.executable, "-m", "symloc.cli.main", "replay", str(bag), "--map", str(yaml)]
+    cmd += ["--out", str(out)]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # KiB on Linux
+    print(f"replay exit {proc.returncode}: {rows} x {cols} map, {scans} scans")
+    if proc.returncode not in (0, 3):
+        print(proc.stderr[-2000:])
+    for name in ("replay_scans.csv", "replay_scans.tum"):
+        f = out / name
+        digest = hashlib.sha256(f.read_bytes()).hexdigest()[:16] if f.exists() else "missing"
+        print(f"  {name}: sha256 {digest}")
+    print(f"  peak RSS {peak:.0f} MiB, wall {wall:.1f} s")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rows", type=int, default=6000)
-    ap.add_argument("--cols", type=int, default=5000)
+    ap.add_argument("--rows", type=int, default=None, help="default 6000 (8192 with --replay)")
+    ap.add_argument("--cols", type=int, default=None, help="default 5000 (8192 with --replay)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--replay", type=Path, default=None, help="folder for the map, bag, output")
+    ap.add_argument("--scans", type=int, default=20, help="scans in the --replay bag")
     ap.add_argument("--one", choices=["distance", "surface"], help=argparse.SUPPRESS)
     args = ap.parse_args()
+    big = args.replay is not None
+    args.rows = args.rows or (8192 if big else 6000)
+    args.cols = args.cols or (8192 if big else 5000)
+    if big:
+        replay_peak(args.replay, args.rows, args.cols, args.seed, args.scans)
+        return 0
     if args.one:
         one(args.one, args.rows, args.cols, args.seed)
         return 0

@@ -151,6 +151,19 @@ def _node_feed(
     return feed
 
 
+def moved_box_map(base: Any, k: int) -> Any:
+    """``base`` (an OccupancyGrid) with a 2 x 2-cell box on the ``k``-th free cell of a stride.
+
+    A new map for each ``k`` (the same room, a box somewhere else), so a node that receives it
+    rebuilds its localizer. Shared with ``soak_node.py --map-change``.
+    """
+    d = base.data.copy()
+    free = np.argwhere(d == 0)
+    r, c = free[(k * 7919) % len(free)]
+    d[r : r + 2, c : c + 2] = 100
+    return type(base)(d, base.resolution, base.origin)
+
+
 def _object_counts() -> Counter[str]:
     """Live objects tracked by the garbage collector, by type name."""
     gc.collect()
@@ -211,13 +224,6 @@ def main(argv: list[str] | None = None) -> int:
             [centre[0] + 0.4 * math.cos(a), centre[1] + 0.4 * math.sin(a), a + math.pi / 2]
         )
 
-    def new_map(k: int) -> Any:
-        d = base.data.copy()
-        free = np.argwhere(d == 0)
-        r, c = free[(k * 7919) % len(free)]
-        d[r : r + 2, c : c + 2] = 100  # a 10 cm box somewhere: a new map each time
-        return type(base)(d, base.resolution, base.origin)
-
     def map_message(grid: Any, stamp: float) -> Any:
         """The map as it arrives on the topic (a nav_msgs/OccupancyGrid look-alike)."""
         from types import SimpleNamespace as NS  # noqa: N814 - short, read as a message
@@ -264,7 +270,7 @@ def main(argv: list[str] | None = None) -> int:
             statuses[status] = statuses.get(status, 0) + 1
         if k < args.rebuilds:
             old.append(weakref.ref(core.localizer))
-            feed.map(new_map(k), t_base + t)
+            feed.map(moved_box_map(base, k), t_base + t)
             assert getattr(core, "map_refused", "") == "", core.map_refused
         if args.collect:
             gc.collect()

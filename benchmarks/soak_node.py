@@ -1,7 +1,7 @@
 """Soak test of the node logic: 30 minutes at 10 Hz with 1 % malformed messages (not in CI).
 
     python benchmarks/soak_node.py [--minutes 30] [--rate 10] [--malformed 0.01] [--seed 0]
-                                   [--json soak.json]
+                                   [--map-change 10] [--json soak.json]
 
 A robot circles in an L-shaped room (simulated RPLIDAR A2 scans, exact odometry at 5x the scan
 rate, a camera image every second that nobody asked for) and :class:`symloc.ros.core.NodeCore`
@@ -9,11 +9,16 @@ with the real localizer (nav2 AMCL defaults) runs on the messages, paced in real
 of the messages is replaced by a malformed one drawn from a fixed catalogue (NaN or absurd
 odometry, odometry from the future, clock jumps, scans of the wrong length or with NaN fields,
 image bombs, unknown encodings, initial poses outside the map, maps with no free cell).
+With ``--map-change S`` a new map arrives on the map topic every S seconds of simulated time
+(the same room with a 2 x 2-cell box somewhere else, as in ``map_change_memory.py``), so the
+localizer is rebuilt on it (issue 31: "a 30-minute soak with a map change every 10 s").
 
 Prints, per 5-minute window: scans, statuses, tracked scans, latency p50 / p99 of the scan
-handling [ms] and the process RSS [MB]; then the verdicts: RSS flat within 10 % (after the
-first minute's warm-up), p99 stable (the last window within 1.5x the first), a status for every
-scan, and the drop and recovery counters.
+handling [ms] and the process RSS [MB], and a line ``rss`` every minute; with ``--json`` the
+file is rewritten after every window, so a run that is stopped leaves its partial results. Then
+the verdicts: RSS flat within 10 % of the median after the first minute's warm-up, RSS within
+5 % of its level at the first minute (issue 31's criterion), p99 stable (the last window within
+1.5x the first), a status for every scan, and the drop and recovery counters.
 """
 
 from __future__ import annotations
@@ -45,11 +50,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--malformed", type=float, default=0.01, help="share of messages")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--window", type=float, default=5.0, help="report window [min]")
+    ap.add_argument(
+        "--map-change",
+        type=float,
+        default=0.0,
+        help="a new map on the map topic every this many seconds (0: never)",
+    )
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
-
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from rosbags.typesys import Stores, get_typestore
 
+    from map_change_memory import moved_box_map
     from symloc.grid import OccupancyGrid
     from symloc.msgs import (
         build_rosbags,
@@ -167,6 +179,8 @@ def main(argv: list[str] | None = None) -> int:
     period = 1.0 / args.rate
     n_scans = int(args.minutes * 60.0 * args.rate)
     per_window = int(args.window * 60.0 * args.rate)
+    per_map = round(args.map_change * args.rate) if args.map_change > 0 else 0
+    maps_sent = 0
     rows: list[dict[str, Any]] = []
     lat: list[float] = []
     window = Counter()
@@ -176,7 +190,8 @@ def main(argv: list[str] | None = None) -> int:
     start = time.monotonic()
     print(
         f"# soak: {args.minutes:g} min at {args.rate:g} Hz ({n_scans} scans), "
-        f"{100 * args.malformed:g} % malformed, seed {args.seed}, pid {os.getpid()}",
+        f"{100 * args.malformed:g} % malformed, seed {args.seed}, pid {os.getpid()}, "
+        f"map change every {args.map_change:g} s",
         flush=True,
     )
 
@@ -206,8 +221,21 @@ def main(argv: list[str] | None = None) -> int:
                 window["tracked"] += 1
                 err = float(np.hypot(*(est.pose[:2] - truth(t)[:2])))
                 window["tracked_within_0.2m"] += err < 0.2
+        if per_map and (i + 1) % per_map == 0:
+            maps_sent += 1
+            grid_k = moved_box_map(grid, maps_sent)
+            core.on_map(msg("nav_msgs/msg/OccupancyGrid", grid_to_fields(grid_k, stamp=t)))
+            if core.map_refused:
+                print(f"# map {maps_sent} refused: {core.map_refused}", flush=True)
         if i % int(10 * args.rate) == 0:
             rss.append((time.monotonic() - start, rss_mb()))
+            if i % int(60 * args.rate) == 0:
+                print(
+                    json.dumps(
+                        {"rss": round(rss[-1][1], 1), "s": round(rss[-1][0], 1), "maps": maps_sent}
+                    ),
+                    flush=True,
+                )
         if (i + 1) % per_window == 0 or i + 1 == n_scans:
             a = np.array(lat) * 1000.0
             row = {
@@ -221,6 +249,9 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(row), flush=True)
             lat.clear()
             window = Counter()
+            if args.json is not None:
+                partial = {"windows": rows, "rss_mb": rss, "maps_sent": maps_sent, "partial": True}
+                args.json.write_text(json.dumps(partial, indent=2) + "\n")
         sleep = start + (i + 1) * period - time.monotonic()
         if sleep > 0:
             time.sleep(sleep)
@@ -228,6 +259,8 @@ def main(argv: list[str] | None = None) -> int:
     warm = [r for s, r in rss if s >= 60.0] or [r for _, r in rss]
     med = float(np.median(warm))
     spread = max(abs(r - med) for r in warm) / med
+    at_1min = warm[0]
+    from_1min = max(abs(r - at_1min) for r in warm) / at_1min
     p99 = [r["latency_p99_ms"] for r in rows]
     scans = sum(r.get("scans", 0) for r in rows)
     statuses = sum(r.get("statuses", 0) for r in rows)
@@ -236,6 +269,10 @@ def main(argv: list[str] | None = None) -> int:
         "rss_mb_median_after_1min": round(med, 1),
         "rss_max_deviation_from_median": round(spread, 4),
         "rss_flat_within_10pct": spread <= 0.10,
+        "rss_mb_at_1min_max_end": [round(at_1min, 1), round(max(warm), 1), round(warm[-1], 1)],
+        "rss_max_deviation_from_1min": round(from_1min, 4),
+        "rss_within_5pct_of_1min": from_1min <= 0.05,
+        "maps_sent": maps_sent,
         "latency_p99_ms_first_last_window": [p99[0], p99[-1]],
         "latency_p99_stable": p99[-1] <= 1.5 * p99[0],
         "scans": scans,
@@ -252,7 +289,8 @@ def main(argv: list[str] | None = None) -> int:
     }
     print(json.dumps(verdict, indent=2))
     if args.json is not None:
-        args.json.write_text(json.dumps({"windows": rows, "verdict": verdict}, indent=2) + "\n")
+        final = {"windows": rows, "rss_mb": rss, "verdict": verdict}
+        args.json.write_text(json.dumps(final, indent=2) + "\n")
     ok = verdict["rss_flat_within_10pct"] and verdict["status_every_scan"]
     return 0 if ok else 1
 

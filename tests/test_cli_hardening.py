@@ -226,20 +226,24 @@ def _bag_with_a_bad_scan(folder: Path, bad: int = 3, scans: int = 20) -> Path:
     return path
 
 
-def test_an_undecodable_bag_message_is_skipped_and_counted_not_the_rest(tmp_path: Path) -> None:
-    import warnings
+def test_an_undecodable_bag_message_is_skipped_and_counted_not_the_rest(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
     from collections import Counter
 
     from symloc.io.rosbag import read_bag
 
     path = _bag_with_a_bad_scan(tmp_path)
     dropped: Counter[str] = Counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with caplog.at_level("DEBUG", logger="symloc.io.rosbag"):
         kinds = Counter(m.kind for m in read_bag(path, on_error="skip", dropped=dropped))
     assert kinds == Counter({"odom": 20, "scan": 19, "map": 1})
     assert dropped == Counter({"/scan": 1})
-    assert any("size mismatch" in str(w.message) for w in caught)
+    # each skip at DEBUG, then one summary line: the count per topic and the first reason
+    assert [r.levelname for r in caplog.records] == ["DEBUG", "WARNING"]
+    summary = caplog.records[-1].getMessage()
+    assert summary.startswith(f"bag {path}: skipped 1 undecodable message(s): /scan 1 (first at")
+    assert "size mismatch" in summary
     with pytest.raises(DataFormatError, match="topic /scan at log time"):
         list(read_bag(path, on_error="raise"))
 

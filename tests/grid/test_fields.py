@@ -96,7 +96,7 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
-    calls: dict[str, int] = {"distance": 0, "surface": 0, "edt": 0}
+    calls: dict[str, int] = {"distance": 0, "surface": 0, "edt": 0, "obstacle": 0}
 
     def counted(name, fn):
         def wrapper(*a, **k):
@@ -115,6 +115,9 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
     )
     monkeypatch.setattr(
         fields_mod, "distance_transform_edt", counted("edt", distance_transform_edt)
+    )
+    monkeypatch.setattr(
+        fields_mod, "_obstacle_distance", counted("obstacle", fields_mod._obstacle_distance)
     )
 
     grid = asymmetric_room()
@@ -150,23 +153,30 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
 
     f = MapFields.of(grid)
     # likelihood field = consistency field (2.0 m > 0.4 m), the rival search's grown field,
-    # the claim gate's surface field, the scorer's and symmetries' EDT, the beam model's EDT
+    # the claim gate's surface field, the scorer's and symmetries' squared distances in cells
+    # (2 bytes per cell; the float64 obstacle distance is not needed), the beam model's EDT
     assert dict(f.n_computed) == {
         "distance": 1,
         "grown": 1,
         "surface": 1,
-        "obstacle_distance": 1,
+        "obstacle_squared_cells": 1,
         "blocked_distance": 1,
     }
-    assert calls == {"distance": 2, "surface": 1, "edt": 2}  # distance: the map and the grown
+    # distance: the map and the grown; scipy's EDT: the beam model's
+    assert calls == {"distance": 2, "surface": 1, "edt": 1, "obstacle": 0}
     assert amcl.field is beam.field is tracker.judge.consistency_field is judge.consistency_field
-    assert scorer._dist is f.obstacle_distance()
+    assert scorer._k is f.obstacle_squared_cells()[0]
     assert gate.field is f.surface()
     assert isinstance(syms, list)
 
     # the same numbers as the fields each consumer computed for itself before
     occ = grid.occupied_mask
     assert _same(f.obstacle_distance(), distance_transform_edt(~occ) * grid.resolution)
+    k, metres = f.obstacle_squared_cells()
+    assert k.dtype == np.uint16
+    assert _same(metres[k], f.obstacle_distance())  # every cell is within the 2-byte reach
+    for tol in (0.0, 0.05, 0.1, 0.37):
+        assert np.array_equal(f.near_obstacle(tol), f.obstacle_distance() <= tol)
     assert _same(f.blocked_distance(), _old_blocked(grid))
     assert _same(f.distance(2.0).padded, compute_distance_field(grid, 2.0).padded)
     assert _same(f.surface(1.0).padded, compute_surface_distance_field(grid, 1.0).padded)
@@ -196,3 +206,51 @@ def test_the_map_symmetries_are_computed_once_per_map_and_kept_with_its_fields()
     MapFields.of(g).clear()
     assert grid_symmetries(g) is not first  # cleared with the fields
     assert MapFields.of(g).n_computed["map_symmetries"] == 2
+
+
+def test_the_lean_obstacle_distance_equals_scipys_value_for_value():
+    rng = np.random.default_rng(7)
+    for share, res, shape in (
+        (0.002, 0.05, (300, 411)),
+        (0.1, 0.013, (97, 64)),
+        (0.5, 1.0, (5, 9)),
+    ):
+        occ = rng.random(shape) < share
+        assert _same(fields_mod._obstacle_distance(occ, res), distance_transform_edt(~occ) * res)
+    # no obstacle, and one cell farther than OpenCV's float32 keeps exact: scipy's path
+    for occ in (np.zeros((4, 6), bool), np.zeros((2100, 3), bool)):
+        occ[0, 0] = occ.shape[0] > 4
+        assert _same(fields_mod._obstacle_distance(occ, 0.05), distance_transform_edt(~occ) * 0.05)
+
+
+def test_the_integral_image_counts_the_free_cells_above_and_left():
+    from symloc.grid.precomputation import _integral_image
+
+    free = np.random.default_rng(3).random((600, 37)) < 0.7  # more rows than one band
+    got = _integral_image(free)
+    assert got.dtype == np.int32
+    assert got.shape == (601, 38)
+    assert not got[0].any()
+    assert not got[:, 0].any()
+    assert np.array_equal(got[1:, 1:], free.cumsum(axis=0).cumsum(axis=1))
+
+
+def test_the_two_byte_obstacle_distance_is_exact_up_to_its_reach_and_clipped_beyond():
+    from symloc.mcl.global_search import _clipped_distance
+
+    d = np.zeros((40, 400), np.int8)
+    d[:, 0] = 100  # the far end is 399 cells (more than the 256 of the reach) from a wall
+    grid = OccupancyGrid(d, 0.05)
+    f = MapFields(grid)
+    k, metres = f.obstacle_squared_cells()
+    full = f.obstacle_distance()
+    inside = k < fields_mod.OBSTACLE_K_MAX
+    assert not inside.all()
+    assert np.array_equal(metres[k][inside], full[inside])
+    assert (full[~inside] >= f.obstacle_reach()).all()
+    # the global search's clipped distance: from the 2-byte field, or (a cap beyond its
+    # reach) from the float64 one; the same values as min(obstacle distance, cap) both ways
+    for cap in (0.2, 15.0):
+        codes, table = _clipped_distance(f, cap)
+        assert table[-1] == cap
+        assert np.array_equal(table[codes], np.minimum(full, cap))

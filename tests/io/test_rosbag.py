@@ -72,7 +72,9 @@ def test_compressed_images_and_db3_file_path(tmp_path: Path) -> None:
     assert "/camera/image_raw/compressed" in bag_topics(path)
 
 
-def test_malformed_message_names_topic_and_field(tmp_path: Path) -> None:
+def test_malformed_message_names_topic_and_field(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
     path = tmp_path / "bad"
     with BagWriter(path) as w:
         w.write_fields(
@@ -88,8 +90,13 @@ def test_malformed_message_names_topic_and_field(tmp_path: Path) -> None:
     ):
         list(read_bag(path))
     dropped: Counter[str] = Counter()
-    with pytest.warns(UserWarning, match="skipped"):
+    with caplog.at_level("WARNING", logger="symloc.io.rosbag"):
         got = list(read_bag(path, on_error="skip", dropped=dropped))
+    (summary,) = (r.getMessage() for r in caplog.records)  # one line for the whole bag
+    assert summary.startswith(
+        f"bag {path}: skipped 1 undecodable message(s): /scan 1 (first at log time 1.000 s:"
+    )
+    assert "LaserScan.angle_increment" in summary
     assert len(got) == 1
     assert got[0].stamp == pytest.approx(2.0)
     assert dropped["/scan"] == 1

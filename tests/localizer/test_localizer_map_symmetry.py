@@ -205,3 +205,21 @@ def test_a_partial_symmetry_needs_its_centre_in_the_free_space():
     data[data == -1] = 0  # the box's centre free: it is found
     free = map_symmetries(OccupancyGrid(data, 0.05, grid.origin), (2,), min_partial=0.4)
     assert any(np.hypot(*(s.centre - [0.0, 3.5])) <= 0.1 for s in free)
+
+
+def test_window_counts_by_fft_equal_the_direct_counts(monkeypatch: pytest.MonkeyPatch) -> None:
+    from symloc.localizer import map_symmetry as ms
+
+    rng = np.random.default_rng(2)
+    hits = rng.random((1500, 700)) < 0.2  # more than one FFT tile each way
+    size = 24
+    cells = np.column_stack(
+        [rng.integers(-size - 3, 700 + 3, 5000), rng.integers(-size - 3, 1500 + 3, 5000)]
+    ).astype(np.intp)
+    monkeypatch.setattr(ms, "DIRECT_WINDOW_WORK", 1 << 62)
+    direct = ms._window_counts(hits, cells, size)
+    assert direct.shape == (size, size)
+    monkeypatch.setattr(ms, "WINDOW_BYTES", 1 << 12)  # the direct sum in many parts
+    assert np.array_equal(ms._window_counts(hits, cells, size), direct)
+    monkeypatch.setattr(ms, "DIRECT_WINDOW_WORK", 0)
+    assert np.array_equal(ms._window_counts(hits, cells, size), direct)

@@ -174,15 +174,28 @@ def test_precomputation_levels_are_block_maxima_and_shared_per_map() -> None:
         for i in range(0, big.shape[0], 3):
             for j in range(0, big.shape[1], 2):
                 want = big[i : i + s, j : j + s].any()
-                assert pyr.levels[lvl, i, j] == want
+                assert pyr.level(lvl)[i, j] == want
     assert pyr.free_count(0, 23, 0, 31) == int(grid.free_mask.sum())
     assert pyr.free_count(5, 9, -3, 7) == int(grid.free_mask[5:9, 0:7].sum())
     assert pyr.nbytes > 0
+    deep = fields.precomputation_grids(0.05, 9)  # beyond 8 levels: two bytes per cell
+    assert deep.bits.dtype == np.uint16
+    big9 = np.zeros((23 + 1024, 31 + 1024), bool)
+    big9[512:-512, 512:-512] = hit
+    for lvl in (0, 3, 8, 9):
+        s = 1 << lvl
+        want = np.array(
+            [
+                [big9[i : i + s, j : j + s].any() for j in range(500, 560, 3)]
+                for i in range(500, 540, 3)
+            ]
+        )
+        assert np.array_equal(deep.level(lvl)[500:540:3, 500:560:3], want)
     # no occupied cell: nothing is a hit
     empty = build_precomputation_grids(
         np.zeros((4, 4)), np.zeros((4, 4), bool), np.ones((4, 4), bool), 0.1, 1
     )
-    assert not empty.levels.any()
+    assert not empty.bits.any()
     with pytest.raises(ConfigurationError, match="depth"):
         build_precomputation_grids(
             np.zeros((2, 2)), np.zeros((2, 2), bool), np.ones((2, 2), bool), 0.1, 13
@@ -212,14 +225,14 @@ def test_block_bound_is_admissible(data: st.DataObject) -> None:
     s = 1 << d
     r0 = data.draw(st.integers(-s, grid.height), label="r0")
     c0 = data.draw(st.integers(-s, grid.width), label="c0")
-    bound = gs.block_count_py(pyr.levels[d], pyr.pad, dr, dc, r0, c0)
+    bound = gs.block_count_py(pyr.bits, d, pyr.pad, dr, dc, r0, c0)
     exact = max(
-        gs.block_count_py(pyr.levels[0], pyr.pad, dr, dc, r, c)
+        gs.block_count_py(pyr.bits, 0, pyr.pad, dr, dc, r, c)
         for r in range(r0, r0 + s)
         for c in range(c0, c0 + s)
     )
     assert bound >= exact
-    assert gs._block_count(pyr.levels[d], pyr.pad, dr, dc, r0, c0) == bound
+    assert gs._block_count(pyr.bits, d, pyr.pad, dr, dc, r0, c0) == bound
 
 
 # --------------------------------------------------------------------------- exhaustive agreement

@@ -256,8 +256,11 @@ def test_free_space_sampler_int32_cells_same_draws() -> None:
     fs = FreeSpaceSampler(grid)
     np.testing.assert_array_equal(fs.free_cells, np.flatnonzero(grid.free_mask.ravel()))
     assert fs.free_cells.dtype == np.int32
+    # the k-th free cell through the block counts is the list's k-th entry
+    np.testing.assert_array_equal(fs.nth_free(np.arange(fs.n_free)), fs.free_cells)
     a = fs.sample(500, np.random.default_rng(1))
-    # the former int64 list draws the same poses
-    fs._free_cells = np.flatnonzero(grid.free_mask.ravel())
-    b = fs.sample(500, np.random.default_rng(1))
+    # the same poses as the draws from the list of free cells
+    monkey = FreeSpaceSampler(grid)
+    monkey.nth_free = lambda k: np.flatnonzero(grid.free_mask.ravel())[k]  # type: ignore[method-assign]
+    b = monkey.sample(500, np.random.default_rng(1))
     np.testing.assert_array_equal(a, b)

@@ -20,6 +20,25 @@ _COLOURS = {
 }
 
 
+#: Largest side [cells] of the map image drawn; a larger map is drawn in blocks of cells.
+MAX_IMAGE_SIDE = 1024
+
+
+def _map_image(data: np.ndarray, max_side: int = MAX_IMAGE_SIDE) -> np.ndarray:
+    """Grey levels in [0, 1] (float32) of an occupancy grid's ``data`` (H, W) int8 (-1 unknown,
+    0..100): 1 free, 0 occupied, 0.75 unknown. A grid with a side over ``max_side`` cells is
+    reduced to blocks of k x k cells (k the smallest that fits; the last row and column of
+    blocks may be narrower), each as dark as its darkest cell so that thin walls stay drawn:
+    the map's axes are about 750 pixels wide, and the full grid as float64 with matplotlib's
+    RGBA copies was gigabytes for a map of 8,192 x 8,192 cells."""
+    level = np.where(data < 0, np.int8(25), data)  # unknown as 25 % occupied: grey 0.75
+    k = -(-max(level.shape) // max_side)
+    if k > 1:
+        level = np.maximum.reduceat(level, np.arange(0, level.shape[0], k), axis=0)
+        level = np.maximum.reduceat(level, np.arange(0, level.shape[1], k), axis=1)
+    return 1.0 - level.astype(np.float32) / np.float32(100.0)
+
+
 def plot_replay(
     path: str | Path,
     *,
@@ -38,7 +57,7 @@ def plot_replay(
 
     fig, (ax, axs) = plt.subplots(1, 2, figsize=(12, 5.5), gridspec_kw={"width_ratios": [1.3, 1.0]})
     if grid is not None:
-        img = np.where(grid.data < 0, 0.75, 1.0 - grid.data / 100.0)
+        img = _map_image(np.asarray(grid.data))
         ax.imshow(img, cmap="gray", origin="lower", extent=grid.extent(), vmin=0, vmax=1)
     tr = np.asarray(truth if truth is not None else np.zeros((0, 4)), dtype=float).reshape(-1, 4)
     if len(tr):

@@ -7,7 +7,8 @@ nearest occupied cell, clipped at ``laser_likelihood_max_dist``. This module com
 ``DIST_MASK_PRECISE``, Felzenszwalb and Huttenlocher's algorithm) gives the squared distance in
 cells, and a small table maps each squared distance to metres exactly as
 :func:`scipy.ndimage.distance_transform_edt` with ``sampling`` computes them. A 30-million-cell
-map takes about a second and 9 bytes per cell at the peak; the field keeps 4.
+map takes about a second and 5 bytes per cell at the peak (the transform is turned into
+metres in place); the field keeps 4.
 
 Lookups go through a *padded* float32 table: the grid plus a one-cell border that holds the
 clipped maximum, so any world point is one clip and one fancy index away from its value, and a
@@ -188,24 +189,30 @@ def _padded_distances(
     ``True`` cell every value is ``max_dist``.
     """
     h, w = target.shape
-    padded = np.full((h + 2, w + 2), max_dist, dtype=np.float32)
     if not target.any():
-        return padded
-    src = np.empty((h, w), dtype=np.uint8)
-    np.logical_not(target, out=src.view(np.bool_))  # 0 on the targets, 1 elsewhere
-    cells = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # float32, exact
+        return np.full((h + 2, w + 2), max_dist, dtype=np.float32)
+    # the transform runs on the padded frame (the border holds no target, so every map cell
+    # keeps its distance) and is turned into metres in place: one float32 array of the map's
+    # size at the peak, not two
+    src = np.ones((h + 2, w + 2), dtype=np.uint8)
+    np.logical_not(target, out=src[1:-1, 1:-1].view(np.bool_))  # 0 on the targets
+    padded = np.asarray(
+        cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_PRECISE), dtype=np.float32
+    )  # float32, exact (no copy)
     del src
-    # squared distance in cells, exact: cells holds the float32 root of an integer below 2^24
+    # squared distance in cells, exact: it holds the float32 root of an integer below 2^24
     k_cap = int(np.ceil(max_dist / resolution)) ** 2 + 2
     lut = _metres_by_squared_cells(k_cap, resolution, max_dist)
     cap = np.float32(np.sqrt(k_cap))
     rows = max(1, _TABLE_BLOCK // max(1, w))
-    for a in range(0, h, rows):
-        blk = cells[a : a + rows]
+    for a in range(1, h + 1, rows):
+        blk = padded[a : min(a + rows, h + 1), 1:-1]
         np.minimum(blk, cap, out=blk)
         np.multiply(blk, blk, out=blk)
         np.rint(blk, out=blk)
-        padded[1 + a : 1 + a + blk.shape[0], 1:-1] = lut[blk.astype(np.intp)]
+        blk[...] = lut[blk.astype(np.intp)]
+    padded[[0, -1], :] = max_dist
+    padded[:, [0, -1]] = max_dist
     return padded
 
 

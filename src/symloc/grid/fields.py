@@ -23,6 +23,7 @@ from collections import Counter
 from collections.abc import Callable
 from typing import TypeVar, cast
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
@@ -83,6 +84,8 @@ class MapFields:
         self._surface: dict[float, DistanceField] = {}
         self._grown: dict[float, DistanceField] = {}
         self._obstacle: NDArray[np.float64] | None = None
+        self._obstacle_k: NDArray[np.uint16] | None = None
+        self._obstacle_m: NDArray[np.float64] | None = None
         self._blocked: NDArray[np.float32] | None = None
         self._pyramids: dict[tuple[float, int], PrecomputationGrids] = {}
         self._derived: dict[str, object] = {}
@@ -177,20 +180,62 @@ class MapFields:
     def obstacle_distance(self) -> NDArray[np.float64]:
         """Unclipped distance [m] of each cell ``(H, W)`` to the nearest occupied cell, float64.
 
-        :func:`scipy.ndimage.distance_transform_edt` of the free-of-obstacle mask times the
-        resolution (read-only). Read by the localizer's pose
-        scorer (:class:`symloc.localizer.adapters.GridScorer`) and by
+        The values of :func:`scipy.ndimage.distance_transform_edt` of the free-of-obstacle
+        mask times the resolution (read-only), computed by :func:`_obstacle_distance` with
+        a third of its memory. Read by the localizer's pose scorer
+        (:class:`symloc.localizer.adapters.GridScorer`), the global search and
         :func:`symloc.localizer.map_symmetry.map_symmetries`.
         """
         with self._lock:
             if self._obstacle is None:
-                occ = np.asarray(self.grid.occupied_mask, dtype=bool)
-                dist = np.asarray(distance_transform_edt(~occ), dtype=np.float64)
-                dist = dist * self.grid.resolution
+                dist = _obstacle_distance(self.grid.occupied_mask, self.grid.resolution)
                 dist.setflags(write=False)
                 self._obstacle = dist
                 self.n_computed["obstacle_distance"] += 1
             return self._obstacle
+
+    def obstacle_squared_cells(self) -> tuple[NDArray[np.uint16], NDArray[np.float64]]:
+        """The obstacle distance in 2 bytes per cell: ``(k, metres)``.
+
+        ``k`` ``(H, W)`` uint16 (read-only) is each cell's squared distance ``dx^2 + dy^2``
+        [cells^2] to the nearest occupied cell, clipped at :data:`OBSTACLE_K_MAX` (farther,
+        or a map without an occupied cell); ``metres`` ``(OBSTACLE_K_MAX + 1,)`` float64 maps
+        it to metres: ``metres[k]`` equals :meth:`obstacle_distance` value for value wherever
+        ``k < OBSTACLE_K_MAX``, and ``metres[OBSTACLE_K_MAX]`` (:meth:`obstacle_reach`) is a
+        lower bound elsewhere. The consumers that only need the distance up to some cap (the
+        global search, the pose scorer, the hit masks) read this, a quarter of the float64
+        field (the 8,192^2 map file cap: 134 MB instead of 537 MB, and no float64 ever).
+        """
+        with self._lock:
+            if self._obstacle_k is None:
+                k = _obstacle_squared_cells(self.grid.occupied_mask)
+                k.setflags(write=False)
+                metres = np.sqrt(np.arange(OBSTACLE_K_MAX + 1, dtype=np.float64))
+                metres *= self.grid.resolution
+                metres.setflags(write=False)
+                self._obstacle_k, self._obstacle_m = k, metres
+                self.n_computed["obstacle_squared_cells"] += 1
+            assert self._obstacle_m is not None
+            return self._obstacle_k, self._obstacle_m
+
+    def obstacle_reach(self) -> float:
+        """Distance [m] up to which :meth:`obstacle_squared_cells` is exact:
+        ``sqrt(OBSTACLE_K_MAX)`` cells (about 256)."""
+        return math.sqrt(OBSTACLE_K_MAX) * self.grid.resolution
+
+    def near_obstacle(self, tolerance: float) -> NDArray[np.bool_]:
+        """``(H, W)`` bool: cells whose centre lies within ``tolerance`` [m] (>= 0) of an occupied
+        cell's centre: ``obstacle_distance() <= tolerance``, read from the 2-byte field when the
+        tolerance is below :meth:`obstacle_reach` and the map has an occupied cell. A new array
+        each call."""
+        tol = check_positive(tolerance, "tolerance", allow_zero=True)
+        if tol >= self.obstacle_reach() or not self.grid.occupied_mask.any():
+            # (scipy's transform of a map without an occupied cell measures from outside it)
+            return np.asarray(self.obstacle_distance() <= tol)
+        k, metres = self.obstacle_squared_cells()
+        near_k = metres <= tol  # monotone in k: the near ones are k <= some k_tol
+        k_tol = int(np.count_nonzero(near_k)) - 1
+        return np.asarray(k <= k_tol)
 
     def blocked_distance(self) -> NDArray[np.float32]:
         """Distance [m] to the nearest non-free cell, padded ``(H + 2, W + 2)`` float32.
@@ -224,7 +269,7 @@ class MapFields:
             if pg is None:
                 g = self.grid
                 pg = build_precomputation_grids(
-                    self.obstacle_distance(), g.occupied_mask, g.free_mask, tol, depth
+                    self.near_obstacle(tol), g.occupied_mask, g.free_mask, tol, depth
                 )
                 self.n_computed["precomputation"] += 1
                 self._pyramids[key] = pg
@@ -248,7 +293,75 @@ class MapFields:
             self._surface.clear()
             self._grown.clear()
             self._obstacle = None
+            self._obstacle_k = None
+            self._obstacle_m = None
             self._blocked = None
+
+
+#: Largest squared distance [cells^2] :meth:`MapFields.obstacle_squared_cells` holds (uint16).
+OBSTACLE_K_MAX = 65535
+#: Largest distance [cells] below which OpenCV's float32 distance gives back the squared
+#: distance exactly (its rounding error, about k 2^-23 for k = dx^2 + dy^2, stays below 1/2).
+_EXACT_CELLS = 2000.0
+#: Cells converted at a time from OpenCV's float32 to the float64 field (bounds temporaries).
+_BLOCK_CELLS = 1 << 20
+
+
+def _obstacle_distance(occupied: NDArray[np.bool_], resolution: float) -> NDArray[np.float64]:
+    """Distance [m] ``(H, W)`` float64 of each cell centre to the nearest ``occupied`` cell.
+
+    Equal, value for value, to ``distance_transform_edt(~occupied) * resolution``: OpenCV's
+    exact transform (``DIST_MASK_PRECISE``, float32) gives each cell's distance in cells, whose
+    square rounds back to the integer ``k = dx^2 + dy^2`` below :data:`_EXACT_CELLS`; the
+    field is ``sqrt(k) * resolution`` in float64, as scipy computes it. Peak memory about 13
+    bytes per cell (scipy's transform needs about 40: its int32 feature transform, the index
+    grids and a float64 copy per axis); a map with a cell farther than :data:`_EXACT_CELLS`
+    from every obstacle, or with none, goes through scipy.
+    """
+    occ = np.asarray(occupied, dtype=bool)
+    if not occ.any():
+        return np.asarray(distance_transform_edt(~occ), dtype=np.float64) * resolution
+    src = np.empty(occ.shape, dtype=np.uint8)
+    np.logical_not(occ, out=src.view(np.bool_))  # 0 on the obstacles, 1 elsewhere
+    cells = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    del src
+    if float(cells.max()) >= _EXACT_CELLS:
+        del cells
+        return np.asarray(distance_transform_edt(~occ), dtype=np.float64) * resolution
+    out = np.empty(occ.shape, dtype=np.float64)
+    flat_in, flat_out = cells.reshape(-1), out.reshape(-1)
+    for a in range(0, flat_in.size, _BLOCK_CELLS):
+        blk = flat_out[a : a + _BLOCK_CELLS]
+        np.multiply(flat_in[a : a + _BLOCK_CELLS], flat_in[a : a + _BLOCK_CELLS], out=blk)
+        np.rint(blk, out=blk)  # k, exactly
+        np.sqrt(blk, out=blk)
+        np.multiply(blk, resolution, out=blk)
+    return out
+
+
+def _obstacle_squared_cells(occupied: NDArray[np.bool_]) -> NDArray[np.uint16]:
+    """``(H, W)`` uint16: ``dx^2 + dy^2`` [cells^2] of each cell to the nearest ``occupied``
+    cell, clipped at :data:`OBSTACLE_K_MAX` (all of it without an occupied cell).
+
+    OpenCV's exact transform in float32, squared and rounded back to the integer (exact below
+    :data:`_EXACT_CELLS` cells, far above the clip), a block at a time: peak about 7 bytes
+    per cell."""
+    occ = np.asarray(occupied, dtype=bool)
+    out = np.full(occ.shape, OBSTACLE_K_MAX, dtype=np.uint16)
+    if not occ.any():
+        return out
+    src = np.empty(occ.shape, dtype=np.uint8)
+    np.logical_not(occ, out=src.view(np.bool_))  # 0 on the obstacles, 1 elsewhere
+    cells = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    del src
+    flat_in, flat_out = cells.reshape(-1), out.reshape(-1)
+    for a in range(0, flat_in.size, _BLOCK_CELLS):
+        blk = flat_in[a : a + _BLOCK_CELLS].astype(np.float64)
+        np.multiply(blk, blk, out=blk)
+        np.rint(blk, out=blk)
+        np.minimum(blk, OBSTACLE_K_MAX, out=blk)
+        flat_out[a : a + _BLOCK_CELLS] = blk
+    return out
 
 
 def distance_field(grid: OccupancyGrid | MapFields, max_dist: float = 2.0) -> DistanceField:

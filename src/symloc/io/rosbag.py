@@ -35,7 +35,7 @@ transient-local durability, as map_server publishes it.
 from __future__ import annotations
 
 import contextlib
-import warnings
+import logging
 from collections import Counter
 from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -76,6 +76,11 @@ __all__ = [
 ]
 
 BagFormat = Literal["ros2", "mcap", "ros1"]
+
+_LOG = logging.getLogger(__name__)
+
+#: The ``dropped`` key of a bag that turned unreadable part-way.
+_UNREADABLE = "<unreadable rest of the bag>"
 
 _TYPES = {
     "scan": ("sensor_msgs/msg/LaserScan",),
@@ -309,6 +314,7 @@ def read_bag(
     dropped: Counter[str] | None = None,
     max_image_pixels: int = MAX_IMAGE_PIXELS,
     kinds: Collection[str] | None = None,
+    report_skips: bool = True,
 ) -> Iterator[BagMessage]:
     """Yield the bag's scans, odometry, images, maps, ground truth and initial poses in order.
 
@@ -320,10 +326,12 @@ def read_bag(
         Which topics to read; by default the first topic of each message type.
     on_error : {"raise", "skip"}
         A malformed message raises :class:`DataFormatError` (naming the topic, the log time and
-        the field), or is skipped with a warning and counted in ``dropped[topic]``. A bag that
-        turns unreadable part-way (truncated, corrupt) raises, or with ``"skip"`` ends there
-        with a warning, counted in ``dropped["<unreadable rest of the bag>"]``: iterating never
-        raises with ``"skip"`` once the bag is open.
+        the field), or is skipped and counted in ``dropped[topic]``. A bag that turns
+        unreadable part-way (truncated, corrupt) raises, or with ``"skip"`` ends there, counted
+        in ``dropped["<unreadable rest of the bag>"]``: iterating never raises with ``"skip"``
+        once the bag is open. Each skip is logged at DEBUG; when the iteration ends (or is
+        closed), one WARNING line sums them up: the count per topic with the first reason of
+        each (:func:`skip_summary`).
     dropped : Counter, optional
         Receives the number of skipped messages per topic.
     max_image_pixels : int
@@ -331,6 +339,8 @@ def read_bag(
     kinds : collection of str, optional
         Read only these kinds (their topics are still chosen, and checked, as for all kinds);
         the others' messages are not even deserialised. Default: every kind.
+    report_skips : bool
+        Log the summary line (False for a pass over a bag that another pass reports).
 
     Raises
     ------
@@ -346,6 +356,8 @@ def read_bag(
         )
     bag = resolve_bag_path(path)
     reader = _open_reader(bag)
+    skipped: Counter[str] = Counter()
+    first: dict[str, str] = {}
     try:
         chosen = _pick_topics(reader.connections, topics or BagTopics(), bag)
         if kinds is not None:
@@ -368,9 +380,11 @@ def read_bag(
                 )
                 if on_error == "raise":
                     raise DataFormatError(text) from err
-                warnings.warn(f"stopped: {text}", stacklevel=2)
+                _LOG.debug("stopped: %s", text)
+                skipped[_UNREADABLE] += 1
+                first[_UNREADABLE] = f"after {n_read} messages ({type(err).__name__}: {err})"
                 if dropped is not None:
-                    dropped["<unreadable rest of the bag>"] += 1
+                    dropped[_UNREADABLE] += 1
                 break
             n_read += 1
             kind = chosen[conn.topic]
@@ -381,13 +395,46 @@ def read_bag(
                 text = f"bag {bag} topic {conn.topic} at log time {log_time} ns: {err}"
                 if on_error == "raise":
                     raise DataFormatError(text) from err
-                warnings.warn(f"skipped: {text}", stacklevel=2)
+                _LOG.debug("skipped: %s", text)
+                skipped[conn.topic] += 1
+                first.setdefault(conn.topic, f"at log time {int(log_time) * 1e-9:.3f} s: {err}")
                 if dropped is not None:
                     dropped[conn.topic] += 1
                 continue
             yield BagMessage(kind, conn.topic, stamp, int(log_time), value)
-    finally:
+    finally:  # also when the caller stops early (GeneratorExit)
         _close_reader(reader)
+        if report_skips and skipped:
+            _LOG.warning("%s", skip_summary(bag, skipped, first))
+
+
+def skip_summary(bag: str | Path, skipped: Counter[str], first: dict[str, str]) -> str:
+    """One line that sums up the messages :func:`read_bag` skipped.
+
+    Parameters
+    ----------
+    bag : str or Path
+        The bag, as named in the line.
+    skipped : Counter
+        Skipped messages per topic (``"<unreadable rest of the bag>"`` for a bag that turned
+        unreadable part-way).
+    first : dict of str to str
+        The first reason per topic.
+
+    Returns
+    -------
+    str
+        ``bag B: skipped N undecodable message(s): /scan 5 (first at log time 1.300 s:
+        <reason>); /odom 2 (...)``, the topics by count, most first; then, if so, ``; the rest
+        of the bag is unreadable after M messages (<reason>)``.
+    """
+    per_topic = [(t, n) for t, n in skipped.most_common() if t != _UNREADABLE]
+    total = sum(n for _, n in per_topic)
+    parts = [f"{t} {n} (first {first.get(t, '?')})" for t, n in per_topic]
+    head = f"skipped {total} undecodable message(s): " if per_topic else ""
+    if skipped[_UNREADABLE]:
+        parts.append(f"the rest of the bag is unreadable {first.get(_UNREADABLE, '')}".rstrip())
+    return f"bag {bag}: {head}" + "; ".join(parts)
 
 
 # ------------------------------------------------------------------------------------ writing

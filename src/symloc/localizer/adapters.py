@@ -215,8 +215,10 @@ class GridScorer:
     Parameters
     ----------
     grid : OccupancyGrid or MapFields
-        The map, or its shared fields (the unclipped distance to the nearest occupied cell is
-        read from :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
+        The map, or its shared fields (the distance to the nearest occupied cell is read from
+        :meth:`~symloc.grid.fields.MapFields.obstacle_squared_cells`, 2 bytes per cell, when
+        ``sigma`` is small enough that every distance beyond its reach scores exactly 0;
+        else from :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
     sigma : float
         Standard deviation [m] of the fit (nav2's ``sigma_hit`` is 0.2).
     max_beams : int
@@ -238,7 +240,14 @@ class GridScorer:
         self.grid = fields.grid
         self.sigma = check_positive(sigma, "GridScorer.sigma")
         self.max_beams = int(max_beams)
-        self._dist = fields.obstacle_distance()
+        self._k: NDArray[np.uint16] | None = None
+        self._metres: FloatArray | None = None
+        self._dist: FloatArray | None = None
+        reach = fields.obstacle_reach()
+        if reach > _ZERO_SCORE_SIGMAS * self.sigma and self.grid.occupied_mask.any():
+            self._k, self._metres = fields.obstacle_squared_cells()
+        else:
+            self._dist = fields.obstacle_distance()
 
     def __call__(self, poses: FloatArray, scan: LaserScan) -> FloatArray:
         """Scores (K,) in [0, 1] of ``scan`` at ``poses`` (K, 3)."""
@@ -253,9 +262,19 @@ class GridScorer:
         cells = self.grid.world_to_cell(np.column_stack([xs.ravel(), ys.ravel()]))
         inside = self.grid.in_bounds(cells)
         d = np.full(cells.shape[0], 10.0 * self.sigma)
-        d[inside] = self._dist[cells[inside, 0], cells[inside, 1]]
+        if self._dist is not None:
+            d[inside] = self._dist[cells[inside, 0], cells[inside, 1]]
+        else:
+            assert self._k is not None
+            assert self._metres is not None
+            d[inside] = self._metres[self._k[cells[inside, 0], cells[inside, 1]]]
         s = np.exp(-0.5 * (d / self.sigma) ** 2).reshape(p.shape[0], -1)
         return np.asarray(s.mean(axis=1) if s.shape[1] else np.zeros(p.shape[0]))
+
+
+#: A distance of this many sigmas scores exp(-0.5 * 40^2) = exp(-800): 0.0 in float64 (below
+#: the least subnormal, exp(-745.1)), so a clipped distance beyond it scores as the true one.
+_ZERO_SCORE_SIGMAS = 40.0
 
 
 def _pose3(value: ArrayLike, name: str) -> FloatArray:

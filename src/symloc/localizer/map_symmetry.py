@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
+from scipy.fft import irfft2, next_fast_len, rfft2
 from scipy.ndimage import maximum_filter
 from scipy.signal import fftconvolve
 
@@ -62,6 +63,14 @@ RIDGE = 0.8
 #: (CPU, one core): 12-150 ms on the dev SLAM maps (median 38 ms), 60 ms for the 40 m
 #: hallway with its lab, 0.5 s for a 60 m x 60 m grid of offices (25,000 occupied cells).
 MAX_FFT_CELLS = 1 << 18
+#: Bytes of shifted windows :func:`_window_counts` gathers at once (bounds its memory).
+WINDOW_BYTES = 1 << 24
+#: Above this many cell-window reads (cells x size^2) :func:`_window_counts` correlates by FFT.
+DIRECT_WINDOW_WORK = 1 << 30
+#: Side [cells] of the tiles the FFT correlation of :func:`_window_counts_fft` works on.
+FFT_TILE = 1024
+#: Occupied cells turned at a time by :func:`_overlap` (its float64 temporaries: 16 MiB each).
+OVERLAP_CHUNK = 1 << 20
 #: Local maxima of one order's overlap looked at (when the map is correlated coarsely: counted
 #: exactly around each).
 PEAKS = 12
@@ -121,8 +130,8 @@ def map_symmetries(
     Parameters
     ----------
     grid : OccupancyGrid or MapFields
-        The map, or its shared fields (the distance to the nearest occupied cell is read from
-        :meth:`~symloc.grid.fields.MapFields.obstacle_distance`).
+        The map, or its shared fields (the cells near an occupied cell are read from
+        :meth:`~symloc.grid.fields.MapFields.near_obstacle`).
     orders : tuple of int
         Orders k (>= 2) to test (rotation by ``2 pi / k``).
     tolerance : float
@@ -154,7 +163,7 @@ def map_symmetries(
     if int(np.count_nonzero(grid.occupied_mask)) < 10:
         return []
     margin = math.ceil(tolerance / grid.resolution) + 1
-    cells = _Cells.of(grid, fields.obstacle_distance() <= tolerance, margin)
+    cells = _Cells.of(grid, fields.near_obstacle(tolerance), margin)
     out: list[MapSymmetry] = []
     for k in sorted({int(k) for k in orders if int(k) >= 2}, reverse=True):
         found = _order_symmetries(grid, cells, k, tolerance, least, min_overlap)
@@ -183,7 +192,11 @@ def _order_symmetries(
     """The centres (world [m]) about which turning by ``2 pi / k`` reaches an overlap of
     ``least``, best first; partial below ``whole``."""
     rot = _rotation(k)
-    turned = np.floor(cells.xy @ rot.T + 0.5).astype(np.intp)
+    turned_f = cells.xy @ rot.T  # rounded in place: one float64 temporary, not three
+    turned_f += 0.5
+    np.floor(turned_f, out=turned_f)
+    turned = turned_f.astype(np.intp)
+    del turned_f
     need = math.ceil(least * cells.xy.shape[0] - 1e-9)
     # moving the centre by d [m] moves every turned cell by 2 sin(pi / k) d
     sep = 2.0 * math.sin(math.pi / k) * SEPARATION / grid.resolution
@@ -274,15 +287,71 @@ def _count_near_blocks(
 
 def _window_counts(hits: BoolArray, cells: IntArray, size: int) -> FloatArray:
     """How many ``cells`` (N, 2) (x, y) land on ``hits`` (H, W) when shifted by each (dx, dy)
-    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx]."""
+    in [0, size)^2: ``(size, size)`` counts indexed [dy, dx].
+
+    The windows are gathered :data:`WINDOW_BYTES` at a time (N x size^2 bytes at once was
+    gigabytes on a map of millions of occupied cells), or correlated by FFT
+    (:func:`_window_counts_fft`) when that is over :data:`DIRECT_WINDOW_WORK` reads; the
+    counts are whole numbers, so the sum in parts is the same sum."""
     h, w = hits.shape
+    x, y = cells[:, 0], cells[:, 1]
+    ok = (x >= -size) & (x <= w) & (y >= -size) & (y <= h)  # the window lies in the padding
+    # (row, column) of each window's corner in the map padded by ``size`` on every side
+    rows = y[ok].astype(np.int32)
+    rows += size
+    cols = x[ok].astype(np.int32)
+    cols += size
+    del ok
+    if rows.size * size * size > DIRECT_WINDOW_WORK:
+        return _window_counts_fft(hits, rows, cols, size)
     padded = np.zeros((h + 2 * size, w + 2 * size), dtype=np.uint8)
     padded[size : size + h, size : size + w] = hits
-    at = cells + size
-    ok = (at[:, 0] >= 0) & (at[:, 0] <= w + size) & (at[:, 1] >= 0) & (at[:, 1] <= h + size)
     windows = sliding_window_view(padded, (size, size))
-    out: FloatArray = windows[at[ok, 1], at[ok, 0]].sum(axis=0, dtype=np.float64)
+    out: FloatArray = np.zeros((size, size))
+    step = max(1, WINDOW_BYTES // (size * size))
+    for i in range(0, rows.size, step):
+        out += windows[rows[i : i + step], cols[i : i + step]].sum(axis=0, dtype=np.float64)
     return out
+
+
+def _window_counts_fft(
+    hits: BoolArray, rows: NDArray[np.int32], cols: NDArray[np.int32], size: int
+) -> FloatArray:
+    """:func:`_window_counts` by FFT, tile by tile: ``(size, size)`` counts indexed [dy, dx]
+    of ``padded[rows + dy, cols + dx]`` summed over the cells, ``padded`` being ``hits``
+    (H, W) with ``size`` cells of zeros on every side (each window inside it).
+
+    The cells are binned into tiles of :data:`FFT_TILE` x :data:`FFT_TILE`; per tile, the
+    correlation of its cell counts with the hits under it (the tile grown by ``size``) is one
+    FFT product of side ``FFT_TILE + size`` (no wrap-around reaches the shifts kept). Sums of
+    whole numbers below 2^31, rounded to them (float64 FFT error is orders below 1/2). For
+    millions of cells and windows of hundreds of cells (an 8,192 x 8,192 office map) this is
+    seconds where gathering each cell's window was hours."""
+    h, w = hits.shape
+    t = FFT_TILE
+    side = next_fast_len(t + size, real=True)
+    out: FloatArray = np.zeros((size, size))
+    tile = rows // t
+    tile *= (w + 2 * size) // t + 1
+    tile += cols // t
+    order = np.argsort(tile, kind="stable")
+    starts = np.flatnonzero(np.diff(tile[order], prepend=-1))
+    del tile
+    for a, b in zip(starts, [*starts[1:], order.size], strict=True):
+        sel = order[a:b]
+        r0, c0 = (int(rows[sel[0]]) // t) * t, (int(cols[sel[0]]) // t) * t
+        cells = np.zeros((t, t))
+        np.add.at(cells, (rows[sel] - r0, cols[sel] - c0), 1.0)
+        # the padded map's [r0, r0 + t + size) x [c0, c0 + t + size), read from ``hits``
+        under = np.zeros((t + size, t + size))
+        hr, hc = r0 - size, c0 - size  # where ``under`` starts in ``hits``
+        a0, a1 = max(hr, 0), min(hr + t + size, h)
+        b0, b1 = max(hc, 0), min(hc + t + size, w)
+        if a1 > a0 and b1 > b0:
+            under[a0 - hr : a1 - hr, b0 - hc : b1 - hc] = hits[a0:a1, b0:b1]
+        spec = np.conj(rfft2(cells, s=(side, side))) * rfft2(under, s=(side, side))
+        out += irfft2(spec, s=(side, side))[:size, :size]
+    return np.rint(out)
 
 
 def _joined(
@@ -358,13 +427,16 @@ def _free_at(grid: OccupancyGrid, centre: FloatArray) -> bool:
 def _overlap(grid: OccupancyGrid, cells: _Cells, k: int, centre: FloatArray) -> float:
     """Share of occupied cells that land on the hits when turned by ``2 pi / k`` about
     ``centre`` (2,) [m]."""
-    landed = np.asarray(grid.world_to_cell(centre + (cells.world - centre) @ _rotation(k).T))
-    landed = landed - cells.offset[::-1]
+    rot = _rotation(k).T
     h, w = cells.hits.shape
-    inside = (landed[:, 0] >= 0) & (landed[:, 0] < h) & (landed[:, 1] >= 0) & (landed[:, 1] < w)
-    on = np.zeros(landed.shape[0], dtype=bool)
-    on[inside] = cells.hits[landed[inside, 0], landed[inside, 1]]
-    return float(on.mean())
+    n_on = 0
+    for a in range(0, cells.world.shape[0], OVERLAP_CHUNK):  # bounded temporaries
+        part = cells.world[a : a + OVERLAP_CHUNK]
+        landed = np.asarray(grid.world_to_cell(centre + (part - centre) @ rot))
+        landed = landed - cells.offset[::-1]
+        inside = (landed[:, 0] >= 0) & (landed[:, 0] < h) & (landed[:, 1] >= 0) & (landed[:, 1] < w)
+        n_on += int(np.count_nonzero(cells.hits[landed[inside, 0], landed[inside, 1]]))
+    return n_on / cells.world.shape[0] if cells.world.shape[0] else float("nan")
 
 
 def _polish(

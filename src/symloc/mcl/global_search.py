@@ -64,8 +64,10 @@ evaluated ``max_nodes`` nodes (roots included; the roots alone are counted befor
 when ``max_seconds`` of wall time have passed (checked every ``_CHUNK_NODES`` nodes), or when
 more than ``max_hits`` lattice poses lie within the margin (a long featureless corridor). So a
 huge map never blocks its caller: the work is at most ``max_nodes x max_points`` look-ups.
-Memory per map: ``depth + 1`` bytes per (padded) cell for the pyramid and 4 for the integral
-image, shared through :class:`~symloc.grid.fields.MapFields`.
+Memory per map: 1 byte per (padded) cell for the pyramid (its levels are the bits of one
+array; 2 beyond depth 7), 4 for the integral image and 2 for the clipped distance of the end
+points (:meth:`~symloc.grid.fields.MapFields.obstacle_squared_cells`), shared through
+:class:`~symloc.grid.fields.MapFields`.
 
 The compiled loops (numba, cached on disk, as :mod:`symloc.mcl.kernels`) are written as plain
 Python (``*_py``); the tests run both against the NumPy exhaustive search.
@@ -373,22 +375,24 @@ _need = _jit(need_py)
 
 
 def block_count_py(
-    level: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    bit: int,
     pad: int,
     drk: NDArray[np.int32],
     dck: NDArray[np.int32],
     r: int,
     c: int,
 ) -> int:
-    """Sum of ``level`` at the end points ``(r + drk[j], c + dck[j])`` (index shifted by
-    ``pad``; outside the array reads 0): the bound of the block whose corner is ``(r, c)``."""
-    h2, w2 = level.shape
+    """Sum of level ``bit`` of the pyramid ``bits`` at the end points ``(r + drk[j], c +
+    dck[j])`` (index shifted by ``pad``; outside the array reads 0): the bound of the block
+    whose corner is ``(r, c)``."""
+    h2, w2 = bits.shape
     s = 0
     for j in range(drk.shape[0]):
         i = r + drk[j] + pad
         q = c + dck[j] + pad
         if 0 <= i < h2 and 0 <= q < w2:
-            s += level[i, q]
+            s += (bits[i, q] >> bit) & 1
     return s
 
 
@@ -417,7 +421,8 @@ _free_in = _jit(free_in_py)
 
 
 def root_bounds_py(
-    level: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    bit: int,
     pad: int,
     dr: NDArray[np.int32],
     dc: NDArray[np.int32],
@@ -429,21 +434,22 @@ def root_bounds_py(
     """``out[i]``: the bound of root ``i`` (heading ``rk[i]``, corner ``(rr[i], rc[i])``)."""
     for i in range(rk.shape[0]):
         k = rk[i]
-        out[i] = _block_count(level, pad, dr[k], dc[k], rr[i], rc[i])
+        out[i] = _block_count(bits, bit, pad, dr[k], dc[k], rr[i], rc[i])
 
 
 root_bounds = _jit(root_bounds_py)
 
 
 def branch_and_bound_py(
-    levels: NDArray[np.uint8],
+    bits: NDArray[np.unsignedinteger],
+    depth: int,
     pad: int,
     dr: NDArray[np.int32],
     dc: NDArray[np.int32],
     integral: NDArray[np.int32],
     box: IntArray,
-    dist: FloatArray,
-    dist_cap: float,
+    dist_k: NDArray[np.uint16],
+    dist_of_k: FloatArray,
     min_score: float,
     margin: float,
     roots_k: IntArray,
@@ -472,10 +478,10 @@ def branch_and_bound_py(
     every node and raised here, it only ever lifts the threshold to one that some pose of the
     lattice reaches (a stale read prunes less, never wrongly).
     """
-    depth = levels.shape[0] - 1
     m = dr.shape[1]
-    h_map = dist.shape[0]
-    w_map = dist.shape[1]
+    h_map = dist_k.shape[0]
+    w_map = dist_k.shape[1]
+    dist_cap = dist_of_k[-1]
     cap = hk.shape[0]
     n_roots = roots_k.shape[0]
     size = 3 * depth + 2
@@ -529,7 +535,7 @@ def branch_and_bound_py(
                     cc = c + dck[j]
                     v = dist_cap
                     if 0 <= rr < h_map and 0 <= cc < w_map:
-                        v = min(dist[rr, cc], dist_cap)
+                        v = dist_of_k[dist_k[rr, cc]]
                     s += v
                 if nh == cap:  # drop what the risen threshold excludes
                     w = 0
@@ -575,7 +581,7 @@ def branch_and_bound_py(
                     state[2] = nh
                     state[3] = 1
                     return i
-                cb = _block_count(levels[d - 1], pad, drk, dck, cr, cq)
+                cb = _block_count(bits, d - 1, pad, drk, dck, cr, cq)
                 nodes += 1
                 if cb >= need:
                     # insertion sort, ascending by bound
@@ -608,6 +614,26 @@ branch_and_bound = _jit(branch_and_bound_py)
 
 
 # --------------------------------------------------------------------------- the search
+def _clipped_distance(
+    fields: MapFields, cap: float
+) -> tuple[NDArray[np.unsignedinteger], FloatArray]:
+    """The distance [m] of each cell to the nearest occupied cell, clipped at ``cap`` [m]:
+    ``(codes, table)`` with ``codes`` ``(H, W)`` (uint16) indexing ``table`` (float64), whose
+    last entry is ``cap``; ``table[codes]`` equals ``min(obstacle_distance, cap)`` value for
+    value.
+
+    From :meth:`~symloc.grid.fields.MapFields.obstacle_squared_cells` (2 bytes per cell)
+    when ``cap`` is within its reach; else (a hit tolerance of over 127 cells, or a map
+    without an occupied cell) from the distinct values of the float64 field."""
+    if cap < fields.obstacle_reach() and fields.grid.occupied_mask.any():
+        k, metres = fields.obstacle_squared_cells()
+        return k, np.minimum(metres, cap)
+    values, codes = np.unique(np.minimum(fields.obstacle_distance(), cap), return_inverse=True)
+    table = np.append(values, cap)
+    dtype = np.uint16 if table.size <= 1 << 16 else np.uint32
+    return codes.reshape(fields.grid.data.shape).astype(dtype), table
+
+
 @dataclass(frozen=True, slots=True)
 class _Lattice:
     points: FloatArray  # (M, 2) robot frame, sub-sampled
@@ -643,7 +669,9 @@ class GlobalSearch:
         self.pyramid: PrecomputationGrids = self.fields.precomputation_grids(
             cfg.hit_tolerance, cfg.depth
         )
-        self.distance = self.fields.obstacle_distance()
+        # the end points' distance, clipped at dist_cap: 2 bytes per cell and a table
+        self.dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
+        self.dist_k, self.dist_of_k = _clipped_distance(self.fields, self.dist_cap)
 
     # ----------------------------------------------------------------- inputs
     def scan_points(self, scan: LaserScan, laser_pose: ArrayLike | None = None) -> FloatArray:
@@ -779,7 +807,6 @@ class GlobalSearch:
         bl = np.asarray(blocks, dtype=np.int64).reshape(-1, 2)
         n_b = bl.shape[0]
         need0 = need_py(0, m, cfg.min_score, cfg.score_margin)
-        dist_cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
         parts: dict[int, tuple[IntArray, IntArray, IntArray, IntArray, IntArray, FloatArray, str]]
         parts = {}
         shared = np.zeros(1, dtype=np.int64)  # the best count of any thread so far
@@ -804,7 +831,7 @@ class GlobalSearch:
             chunk = max(1, _CHUNK_NODES)
             for q in range(0, rk.size, chunk):
                 sl = slice(q, q + chunk)
-                root_bounds(pyr.levels[depth], s, lat.dr, lat.dc, rk[sl], rr[sl], rc[sl], rb[sl])
+                root_bounds(pyr.bits, depth, s, lat.dr, lat.dc, rk[sl], rr[sl], rc[sl], rb[sl])
                 if q + chunk < rk.size and time.perf_counter() - t0 > cfg.max_seconds:
                     reason = f"time budget: max_seconds={cfg.max_seconds:g} s passed"
                     break
@@ -816,8 +843,8 @@ class GlobalSearch:
                 rk, rr, rc, rb = rk[order], rr[order], rc[order], rb[order]
             while not reason and i < rk.size:
                 i = branch_and_bound(
-                    pyr.levels, s, lat.dr, lat.dc, pyr.free_integral, box, self.distance,
-                    dist_cap, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
+                    pyr.bits, depth, s, lat.dr, lat.dc, pyr.free_integral, box, self.dist_k,
+                    self.dist_of_k, cfg.min_score, cfg.score_margin, rk, rr, rc, rb, i, chunk, budget,
                     state, shared, hk, hr, hc, hn, hd,
                 )  # fmt: skip
                 if state[3] == 1:
@@ -860,21 +887,21 @@ class GlobalSearch:
             box[0] : box[1], box[2] : box[3]
         ]
         rows, cols = np.nonzero(free)
-        level0 = self.pyramid.levels[0]
+        bits = self.pyramid.bits
         pad = self.pyramid.pad
-        h2, w2 = level0.shape
-        cap = 2.0 * max(cfg.hit_tolerance, self.grid.resolution)
+        h2, w2 = bits.shape
+        cap = self.dist_cap
         counts = np.zeros((lat.headings.size, rows.size), dtype=np.int64)
         fits = np.zeros((lat.headings.size, rows.size))
         for k in range(lat.headings.size):
             ri = rows[:, None] + lat.dr[k][None, :]
             ci = cols[:, None] + lat.dc[k][None, :]
             inside = (ri + pad >= 0) & (ri + pad < h2) & (ci + pad >= 0) & (ci + pad < w2)
-            v = level0[np.where(inside, ri + pad, 0), np.where(inside, ci + pad, 0)]
+            v = bits[np.where(inside, ri + pad, 0), np.where(inside, ci + pad, 0)] & 1
             counts[k] = np.where(inside, v, 0).sum(axis=1)
             on_map = (ri >= 0) & (ri < self.grid.height) & (ci >= 0) & (ci < self.grid.width)
-            dv = self.distance[np.where(on_map, ri, 0), np.where(on_map, ci, 0)]
-            fits[k] = np.where(on_map, np.minimum(dv, cap), cap).sum(axis=1) / m
+            dv = self.dist_of_k[self.dist_k[np.where(on_map, ri, 0), np.where(on_map, ci, 0)]]
+            fits[k] = np.where(on_map, dv, cap).sum(axis=1) / m
         best = int(counts.max()) if counts.size else 0
         need0 = need_py(0, m, cfg.min_score, cfg.score_margin)
         if best < need0:

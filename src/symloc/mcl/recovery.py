@@ -55,12 +55,18 @@ class RecoveryState:
         self.w_fast = 0.0
 
 
+#: Cells per block of the free-cell counts :class:`FreeSpaceSampler` draws through.
+FREE_BLOCK = 64
+
+
 class FreeSpaceSampler:
     """Poses uniform over the free cells of a grid (position uniform inside each cell).
 
-    Raises :class:`~symloc.errors.ConfigurationError` if the grid has no free cell. The list
-    of free cells (4 bytes per free cell; 8 on maps of 2^31 cells or more) is built on the
-    first draw, so a filter that only tracks never holds it.
+    Raises :class:`~symloc.errors.ConfigurationError` if the grid has no free cell. A draw
+    picks the k-th free cell (row-major) for uniform k, found through the count of free cells
+    before each block of :data:`FREE_BLOCK` cells (built on the first draw, 8 bytes per block:
+    8 MiB for the 8,192^2 map file cap, where the list of free cells was 4 bytes per free
+    cell, about 240 MiB), so a filter that only tracks never holds it.
     """
 
     def __init__(self, grid: OccupancyGrid) -> None:
@@ -73,6 +79,7 @@ class FreeSpaceSampler:
         self.grid = grid
         self.n_free = n_free
         self._free_cells: NDArray[np.signedinteger[Any]] | None = None
+        self._before_block: NDArray[np.int64] | None = None
 
     @property
     def free_cells(self) -> NDArray[np.signedinteger[Any]]:
@@ -93,12 +100,49 @@ class FreeSpaceSampler:
                 self._free_cells = out
         return self._free_cells
 
+    def _free_flags(self, flat: NDArray[np.int8]) -> NDArray[np.bool_]:
+        """Free (as :attr:`OccupancyGrid.free_mask`) flags of some of the grid's cells."""
+        return (flat >= 0) & (flat < self.grid.free_thresh * 100.0)
+
+    def _block_starts(self) -> NDArray[np.int64]:
+        """``(n_blocks + 1,)``: free cells before each block of :data:`FREE_BLOCK` cells of the
+        row-major grid (and, last, all of them); counted a few MiB of cells at a time."""
+        if self._before_block is None:
+            flat = self.grid.data.reshape(-1)
+            n_blocks = -(-flat.size // FREE_BLOCK)
+            out = np.zeros(n_blocks + 1, dtype=np.int64)
+            step = FREE_BLOCK * 65536
+            for a in range(0, flat.size, step):
+                f = self._free_flags(flat[a : a + step])
+                m = -(-f.size // FREE_BLOCK)
+                padded = np.zeros(m * FREE_BLOCK, dtype=bool)
+                padded[: f.size] = f
+                b = a // FREE_BLOCK
+                out[1 + b : 1 + b + m] = padded.reshape(m, FREE_BLOCK).sum(axis=1)
+            np.cumsum(out, out=out)
+            self._before_block = out
+        return self._before_block
+
+    def nth_free(self, k: NDArray[np.integer[Any]]) -> NDArray[np.int64]:
+        """Flat (row-major) indices ``(n,)`` of the ``k``-th free cells (``k`` ``(n,)`` in
+        ``[0, n_free)``): ``free_cells[k]``, without the list."""
+        before = self._block_starts()
+        k = np.asarray(k, dtype=np.int64)
+        block = np.searchsorted(before, k, side="right") - 1
+        j = k - before[block]  # the j-th free cell of its block
+        cells = block[:, None] * FREE_BLOCK + np.arange(FREE_BLOCK)
+        flat = self.grid.data.reshape(-1)
+        inside = cells < flat.size
+        free = self._free_flags(flat[np.minimum(cells, flat.size - 1)]) & inside
+        seen = np.cumsum(free, axis=1)
+        return np.asarray(cells[np.arange(k.size), np.argmax(seen > j[:, None], axis=1)])
+
     def sample(self, n: int, rng: np.random.Generator) -> FloatArray:
         """``(n, 3)`` poses x [m], y [m], theta [rad] in the map frame."""
         if n < 0:
             raise ConfigurationError(f"n: expected a count >= 0, got {n}")
         g = self.grid
-        pick = self.free_cells[rng.integers(0, self.n_free, size=n)]
+        pick = self.nth_free(rng.integers(0, self.n_free, size=n))
         rows, cols = np.divmod(pick, g.width)
         jitter = rng.random((n, 2))
         lx = (cols + jitter[:, 0]) * g.resolution
