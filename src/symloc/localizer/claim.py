@@ -111,7 +111,8 @@ class ClaimConfig:
         the bench's dev maps): 1 cm since SLAM moves the map onto its poses and estimates its
         error, and the scale term below carries what that estimate cannot see (2 cm before:
         on 84 dev trials of seven families, 1 cm with the scale term claimed in 64 where 2 cm
-        without it claimed in 61, both never wrong, coverage 1.00).
+        without it claimed in 61, both never wrong, coverage 1.00). A round room's rotation
+        error is not in it: there the heading comes from the camera or a piece of furniture.
     map_scale_std : float
         The map's scale error (std, a fraction: 0.01 is 1 %), 0 to leave it out. A lidar whose
         ranges read a little long or short builds, by laser SLAM, a map that is a scaled copy
