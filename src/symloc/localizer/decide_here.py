@@ -21,9 +21,9 @@ copies open) the localizer first tries to decide without driving anywhere:
    several that are one pose (:mod:`~symloc.localizer.verified_together`: neighbouring
    samples of a round room's family, which the laser sets within the tolerance of each other
    from the camera's heading): the laser sets the pose from it (:meth:`ClaimGate.confirm`),
-   AMCL is reseeded there, and the pose is published only if the gate claims it. Otherwise the robot looks elsewhere the same
-   way, up to ``decide_views`` images; where no heading shows a keyframe to any hypothesis,
-   no image is taken.
+   AMCL is reseeded there, and the pose is published only if the gate claims it. Otherwise
+   the robot looks elsewhere the same way, up to ``decide_views`` images; where no heading
+   shows a keyframe to any hypothesis, no image is taken.
    **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
    hypothesis, or its ``decide_views`` used up; the search complete, the scan not judged
    symmetric, no known place where the robot stands), the laser watches the survivors as the
