@@ -496,9 +496,10 @@ class ClaimGate:
         self._resume.miss()
         cfg = self.config
         fit = claim.match.inlier_fraction if claim.match is not None else math.nan
-        gross = cfg.gross_after > 0 and fit <= cfg.gross_fit and self._gross.hit()
-        if not fit <= cfg.gross_fit:
+        contradicted = fit <= cfg.gross_fit  # False without a match (NaN)
+        if not contradicted:
             self._gross.miss()
+        gross = cfg.gross_after > 0 and contradicted and self._gross.hit()
         if gross or self._patience.hit():
             tracker.initialize_global()
             self.reset()

@@ -15,7 +15,8 @@ heading (:meth:`~symloc.localizer.claim.ClaimGate.confirm`, the heading known to
 within the claim tolerance of the best-fitting one. Hypotheses of different symmetric copies
 (a square's quarter turns) measure headings a quarter turn apart and never agree, so this
 never merges what the camera told apart. The margin over the other hypotheses is the one
-:func:`~symloc.localizer.vision_store.single_verified` asks of a single verified hypothesis.
+:func:`~symloc.localizer.vision_store.single_verified` asks of a single verified hypothesis,
+over the same rivals (:func:`is_rival`).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from symloc.scan import LaserScan
 from .claim import ClaimGate, Verdict
 from .types import HypothesisVerdict, Verification
 
-__all__ = ["OnePose", "one_pose_verified"]
+__all__ = ["OnePose", "is_rival", "one_pose_verified"]
 
 FloatArray = NDArray[np.float64]
 
@@ -95,7 +96,7 @@ def one_pose_verified(
     rivals = [
         c.inliers
         for j, c in enumerate(checks)
-        if j not in members and _rival(c, float(poses[j, 2]), heading, tolerance)
+        if j not in members and is_rival(float(poses[j, 2]), c.heading_offset, heading, tolerance)
     ]
     top = checks[members[best]].inliers
     rival = max(rivals, default=0)
@@ -121,12 +122,14 @@ def _with_heading(pose: FloatArray, check: HypothesisVerdict) -> FloatArray:
     return out
 
 
-def _rival(check: HypothesisVerdict, theta: float, heading: float, tolerance: float) -> bool:
-    """As :func:`~symloc.localizer.vision_store.single_verified` counts rivals: a hypothesis
-    at ``theta`` [rad] within ``tolerance`` of the group's ``heading`` (the camera does not
-    measure position), or one whose fit measures another heading."""
+def is_rival(theta: float, heading_offset: float, heading: float, tolerance: float) -> bool:
+    """Whether a hypothesis at heading ``theta`` [rad], whose best fit measured the camera's
+    heading as ``theta + heading_offset`` (NaN: no fit), rivals a decision for the camera
+    heading ``heading``: it lies within ``tolerance`` of that heading (the camera does not
+    measure position), or its fit measures another heading. A hypothesis turned away whose fit
+    measures the decided heading is evidence for it, not a rival."""
     if abs(float(wrap_angle(theta - heading))) <= tolerance:
         return True
-    if not math.isfinite(check.heading_offset):
+    if not math.isfinite(heading_offset):
         return True
-    return abs(float(wrap_angle(theta + check.heading_offset - heading))) > tolerance
+    return abs(float(wrap_angle(theta + heading_offset - heading))) > tolerance

@@ -20,11 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
-from symloc.geometry import wrap_angle
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
 from symloc.vision.verification import (
-    HypothesisCheck,
     VerificationDecision,
     VerificationSettings,
     expected_counts,
@@ -32,6 +30,7 @@ from symloc.vision.verification import (
 )
 
 from .types import Decision, DecisionStatus, HypothesisVerdict, Place, Verification
+from .verified_together import is_rival
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore", "single_verified"]
 
@@ -57,16 +56,14 @@ def single_verified(
         return None, dec.reason
     i = verified[0]
     heading = float(checks[i].corrected_pose[2])
-
-    def rival(c: HypothesisCheck) -> bool:
-        if abs(float(wrap_angle(c.pose[2] - heading))) <= heading_tolerance:
-            return True
-        if not math.isfinite(c.heading_offset):
-            return True
-        measured = float(c.pose[2]) + c.heading_offset
-        return abs(float(wrap_angle(measured - heading))) > heading_tolerance
-
-    best_rival = max((c.inliers for j, c in enumerate(checks) if j != i and rival(c)), default=0)
+    best_rival = max(
+        (
+            c.inliers
+            for j, c in enumerate(checks)
+            if j != i and is_rival(float(c.pose[2]), c.heading_offset, heading, heading_tolerance)
+        ),
+        default=0,
+    )
     if checks[i].inliers < margin * best_rival:
         return None, (
             f"hypothesis {i + 1} verified with {checks[i].inliers} inliers, but a rival fits "
