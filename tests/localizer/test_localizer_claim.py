@@ -342,6 +342,16 @@ def test_the_map_scale_error_grows_with_the_distance_from_the_centre(l_room) -> 
     )  # off by default
     with pytest.raises(ConfigurationError, match="map_scale_std"):
         ClaimConfig(map_scale_std=0.7)
+    with pytest.raises(ConfigurationError, match="map_scale_std"):
+        ClaimConfig(map_scale_std=float("nan"))
+    with pytest.raises(ConfigurationError, match="scale_centre"):
+        ClaimGate(field, ALPHAS, cfg, scale_centre=(float("inf"), 0.0))
+    with pytest.raises(ConfigurationError, match="gross_fit"):
+        ClaimConfig(gross_fit=1.0)
+    with pytest.raises(ConfigurationError, match="gross_after"):
+        ClaimConfig(gross_after=-1)
+    with pytest.raises(ConfigurationError, match="gross_after"):
+        ClaimConfig(gross_after=True)
 
 
 def test_a_scaled_map_withholds_claims_far_from_its_centre() -> None:
