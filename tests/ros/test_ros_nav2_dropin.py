@@ -459,6 +459,8 @@ def _play(sim: Any, side: Nav2Side, rec: Run, proc: Any) -> None:
         side.spin_until(lambda: False, 0.5)
     rec.parameter_get = _get_parameter(side, "alpha1")
     rec.states.append(("deactivate", side.state() if side.transition(DEACTIVATE) else -1))
+    # like nav2's manager, wait (bondcpp's disconnect timeout) for the node to say it broke up
+    side.spin_until(lambda: any(not b.active for b in side.bond), 2.0)
     rec.states.append(("cleanup", side.state() if side.transition(CLEANUP) else -1))
     assert proc.poll() is None, "the node died"
 

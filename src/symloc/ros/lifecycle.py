@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import time
 import uuid
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -80,6 +81,8 @@ DEFAULT_NODE_NAME = "amcl"
 INITIAL_COVARIANCE = np.diag([0.25, 0.25, (math.pi / 12.0) ** 2])
 #: bondcpp's heartbeat timeout that nav2's lifecycle nodes announce [s].
 BOND_HEARTBEAT_TIMEOUT = 4.0
+#: bondcpp's disconnect timeout: how long a broken bond keeps saying so [s].
+BOND_DISCONNECT_TIMEOUT = 2.0
 
 #: Outputs built and published only while someone listens (RViz displays).
 _ON_DEMAND = frozenset({"particle_cloud", "candidates"})
@@ -173,6 +176,7 @@ class LocalizationNode(LifecycleNode):
         self._srv_handles: list[Any] = []
         self._timer_handles: list[Any] = []
         self._bond: _Bond | None = None
+        self._broken_bonds: list[_Bond] = []
         self._odom_sub: Any = None
         self._odom_feed: Callable[[Any], None] | None = None
         self._pending_pose: tuple[Any, Any] | None = None
@@ -408,9 +412,13 @@ class LocalizationNode(LifecycleNode):
         self._timer_handles = []
         if self._bond is not None:
             self._bond.breakup()
+            self._broken_bonds.append(self._bond)
             self._bond = None
 
     def _release(self) -> None:
+        for bond in self._broken_bonds:
+            bond.close()
+        self._broken_bonds = []
         self._destroy_io()
         for srv in self._srv_handles:
             self.destroy_service(srv)
@@ -757,6 +765,8 @@ class _Bond:
         self.id = node.get_name()
         self.instance = str(uuid.uuid4())
         self.sister: str | None = None
+        self.sister_broken = False
+        self.closed = False
         self.pub = node.create_publisher(
             status_type, "bond", QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE)
         )
@@ -767,6 +777,7 @@ class _Bond:
     def _on_status(self, msg: Any) -> None:
         if msg.id == self.id and msg.instance_id != self.instance:
             self.sister = msg.instance_id
+            self.sister_broken = not msg.active
 
     def _send(self, active: bool) -> None:
         now = self.node.get_clock().now().nanoseconds * 1e-9
@@ -785,9 +796,29 @@ class _Bond:
         )
 
     def breakup(self) -> None:
-        """Tell the sister the bond is broken, then stop."""
+        """Say the bond is broken, and keep saying so every period until the sister answers
+        that it is broken too or :data:`BOND_DISCONNECT_TIMEOUT` passes (bondcpp's protocol).
+
+        The writer stays up meanwhile: a status published just before its publisher is
+        destroyed may never reach a subscriber that has not acknowledged it yet.
+        """
         self.node.destroy_timer(self.timer)
-        for _ in range(3):
-            self._send(False)
+        self._send(False)
+        deadline = time.monotonic() + BOND_DISCONNECT_TIMEOUT
+
+        def resend() -> None:
+            if self.sister_broken or time.monotonic() > deadline:
+                self.close()
+            else:
+                self._send(False)
+
+        self.timer = self.node.create_timer(min(self.period, 0.25), resend)
+
+    def close(self) -> None:
+        """Destroy the timer, publisher and subscription (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        self.node.destroy_timer(self.timer)
         self.node.destroy_subscription(self.sub)
         self.node.destroy_publisher(self.pub)
