@@ -137,3 +137,27 @@ def test_bench_slam_cli_runs_a_small_log_and_skips_a_peer_without_source(
     )
     assert code == 0
     assert "carries no real odometry" in capsys.readouterr().out
+
+
+def test_every_command_draws_the_same_odometry_for_a_log_and_seed(
+    tmp_path: Path, room: np.ndarray
+) -> None:
+    """``map build`` and ``experiment slam`` (through ``run_carmen``) draw a log's noisy
+    odometry from the stream ``bench slam`` draws it from; other logs draw other streams."""
+    from symloc.bench.slam_runs import carmen_odometry, log_name, odometry_seed, run_carmen
+
+    poses = _loop(12)
+    scans = [make_scan(room, p) for p in poses]
+    path = write_peer_log(tmp_path / "lab-corrected.log", scans, poses, np.arange(12.0))
+    assert log_name(path) == "lab"
+    run = run_carmen(path, odometry="realistic", rng=7, progress=False)
+    bench = carmen_odometry(
+        read_carmen(path), "realistic", np.random.default_rng(odometry_seed("lab", 7)), name="lab"
+    )
+    np.testing.assert_array_equal(run.odometry, bench)
+    other = carmen_odometry(
+        read_carmen(path), "realistic", np.random.default_rng(odometry_seed("aces", 7)), name="lab"
+    )
+    assert not np.allclose(other, bench)
+    again = run_carmen(path, odometry="realistic", rng=8, progress=False)
+    assert not np.allclose(again.odometry, bench)

@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 import sys
 import tempfile
-import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +33,7 @@ import numpy as np
 from symloc.bench.measure import run_measured
 from symloc.bench.peers.gmapping import GMappingPeer, PeerUnavailableError, write_peer_log
 from symloc.bench.slam_metrics import ate
-from symloc.bench.slam_runs import carmen_odometry, log_duration
+from symloc.bench.slam_runs import carmen_odometry, log_duration, log_name, odometry_seed
 from symloc.errors import ConfigurationError
 from symloc.files.atomic import atomic_path
 from symloc.io.carmen import CarmenLog, read_carmen
@@ -58,16 +57,6 @@ TARGETS: dict[str, dict[str, float | bool]] = {
 }
 PEAK_MB = 300.0
 MIN_REALTIME = 10.0
-
-
-def log_name(path: str | Path) -> str:
-    """``intel`` for ``.../intel-corrected.log.gz``."""
-    return Path(path).name.split(".")[0].removesuffix("-corrected")
-
-
-def odometry_seed(name: str, seed: int) -> np.random.SeedSequence:
-    """The odometry noise seed of (log, seed): independent streams per log."""
-    return np.random.SeedSequence([int(seed), zlib.crc32(name.encode())])
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,7 +38,9 @@ __all__ = [
     "SlamRun",
     "carmen_odometry",
     "log_duration",
+    "log_name",
     "log_odometry",
+    "odometry_seed",
     "run_carmen",
     "run_simulated",
 ]
@@ -235,6 +238,28 @@ def _truncated(log: CarmenLog, max_scans: int | None) -> CarmenLog:
     return CarmenLog(log.scans[:max_scans], log.odometry, log.params, log.skipped)
 
 
+def log_name(path: str | Path) -> str:
+    """``intel`` for ``.../intel-corrected.log.gz``."""
+    return Path(path).name.split(".")[0].removesuffix("-corrected")
+
+
+def odometry_seed(name: str, seed: int) -> np.random.SeedSequence:
+    """The odometry noise stream of (log or world ``name``, ``seed``).
+
+    ``symloc map build``, ``symloc experiment slam`` and ``symloc bench slam`` all draw from it,
+    so one log, seed and regime give one noisy odometry, and so one ATE, whichever command runs
+    it; and each log's stream is independent of the others'.
+    """
+    return np.random.SeedSequence([int(seed), zlib.crc32(name.encode())])
+
+
+def _noise_rng(name: str, rng: np.random.Generator | int | None) -> np.random.Generator:
+    """An int ``rng`` is a seed: :func:`odometry_seed` of it; anything else as given."""
+    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
+        return np.random.default_rng(odometry_seed(name, int(rng)))
+    return as_rng(rng)
+
+
 def run_carmen(
     path: str | Path,
     *,
@@ -244,8 +269,12 @@ def run_carmen(
     max_scans: int | None = None,
     progress: bool = True,
 ) -> SlamRun:
-    """SLAM on a CARMEN log with odometry from :func:`carmen_odometry` (see module doc)."""
-    name = Path(path).name.split(".")[0].removesuffix("-corrected")
+    """SLAM on a CARMEN log with odometry from :func:`carmen_odometry` (see module doc).
+
+    An int ``rng`` is the run's seed: the odometry noise is drawn from
+    :func:`odometry_seed` (log name, seed), as ``symloc bench slam`` draws it.
+    """
+    name = log_name(path)
     log = _truncated(read_carmen(path), max_scans)
     if len(log.scans) < 2:
         raise DataFormatError(
@@ -253,7 +282,7 @@ def run_carmen(
             "least 2"
         )
     reference = log.laser_poses
-    odom = carmen_odometry(log, odometry, rng, name=name)
+    odom = carmen_odometry(log, odometry, _noise_rng(name, rng), name=name)
     scans = [s.scan for s in log.scans]
     result = run_slam(scans, odom, params, progress=progress, desc=name)
     duration = log_duration(log.stamps)
@@ -280,7 +309,11 @@ def run_simulated(
     laps: float = 1.3,
     progress: bool = True,
 ) -> SlamRun:
-    """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`)."""
+    """SLAM on a simulated exploration of ``world`` (a key of :data:`SIM_WORLDS`).
+
+    An int ``rng`` is the run's seed, drawn through :func:`odometry_seed` (world name, seed)
+    as for a log: one world and seed drive and measure alike in every command.
+    """
     if world not in SIM_WORLDS:
         raise ConfigurationError(f"world: expected one of {sorted(SIM_WORLDS)}, got {world!r}")
     regime = _regime(odometry)
@@ -288,7 +321,7 @@ def run_simulated(
         raise ConfigurationError("odometry: 'log' needs a log; a simulated world takes a regime")
     room_name, gv, in_lab = SIM_WORLDS[world]
     room = build_room(room_name, gv, lab=in_lab)
-    gen = as_rng(rng)
+    gen = _noise_rng(world, rng)
     run = simulate_exploration(room, alphas=(0.0, 0.0, 0.0, 0.0), laps=laps, rng=gen)
     odom = regime_odometry(run.truth, regime, gen)
     result = run_slam(run.scans, odom, params, progress=progress, desc=world)

@@ -13,9 +13,10 @@ reported: ATE RMSE (SE(2) Umeyama alignment) and RPE (consecutive scans) against
 poses, evo's definitions; loop closures; processing speed as data duration / CPU time and /
 wall-clock time. Targets: ATE < 0.10 m on intel and aces, >= 10x real time.
 
-Seeds: world ``w`` uses ``seed + index of w in SIM_WORLDS``, log ``l`` uses
-``seed + 100 + index of l in CARMEN_LOGS``, so a row is the same whether run alone or with
-the others.
+Seeds: each world and log draws its noise from
+:func:`symloc.bench.slam_runs.odometry_seed` (its name, ``--seed``), as ``symloc map build``
+and ``symloc bench slam`` do: a row is the same whether run alone, with the others or by those
+commands.
 """
 
 from __future__ import annotations
@@ -119,13 +120,6 @@ def _print_warnings(s: dict[str, Any]) -> None:
         print(f"{'':<14} doubtful: {w}")
 
 
-def _world_index(world: str, k: int) -> int:
-    from symloc.bench.slam_runs import SIM_WORLDS
-
-    names = list(SIM_WORLDS)
-    return names.index(world) if world in names else k
-
-
 def _requested_logs(args: argparse.Namespace) -> dict[str, Path]:
     """The CARMEN logs to run: those named with ``--logs`` must all exist (else a
     ConfigurationError before any work); the default ones are skipped, with a warning, when the
@@ -181,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
         "slam",
         {
             "seed": args.seed,
+            "odometry_seed": "SeedSequence([seed, crc32(name)]), as map build and bench slam",
             "worlds": worlds,
             "logs": list(logs),
             "odometry": regime.describe() if regime is not None else "the log's own",
@@ -194,12 +189,12 @@ def run(args: argparse.Namespace) -> int:
     )
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
-    for k, world in enumerate(worlds):
+    for world in worlds:
         assert regime is not None
         r = run_simulated(
             world,
             odometry=regime,
-            rng=args.seed + _world_index(world, k),
+            rng=args.seed,
             laps=args.laps,
             params=params,
         )
@@ -217,11 +212,11 @@ def run(args: argparse.Namespace) -> int:
             loop_nodes=[i for _, i in r.result.loop_closures],
             title=f"{world}: ATE {s['ate_rmse_m']:.3f} m",
         )
-    for k, (name, path) in enumerate(logs.items()):
+    for name, path in logs.items():
         r = run_carmen(
             path,
             odometry=args.odometry,
-            rng=args.seed + 100 + (CARMEN_LOGS.index(name) if name in CARMEN_LOGS else k),
+            rng=args.seed,
             max_scans=args.max_scans,
             params=params,
         )

@@ -86,7 +86,7 @@ def _logs(args: argparse.Namespace) -> list[Path]:
     """The logs to run, checked before any work: a ConfigurationError when none is found or
     one named with ``--logs`` is missing."""
     from symloc.bench.shared_data import find_carmen_dir
-    from symloc.bench.slam_bench import log_name
+    from symloc.bench.slam_runs import log_name
     from symloc.errors import ConfigurationError
 
     src = args.carmen if args.carmen is not None else find_carmen_dir()

@@ -255,7 +255,10 @@ def _build(args: argparse.Namespace) -> int:
     source = f"world {args.world}" if args.world else f"CARMEN log {args.carmen}"
     regime = ODOMETRY_REGIMES.get(args.odometry)
     odo = regime.describe() if regime is not None else "the log's own"
-    print(f"# symloc map build: {source}, seed {args.seed}, odometry {odo}")
+    print(
+        f"# symloc map build: {source}, seed {args.seed} (noise stream SeedSequence([seed, "
+        f"crc32(name)]), as bench slam and experiment slam), odometry {odo}"
+    )
     if args.world:
         if regime is None:
             raise ConfigurationError("--odometry log needs a CARMEN log (--carmen)")
