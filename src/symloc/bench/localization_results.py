@@ -18,6 +18,7 @@ from symloc.bench.stats import wilson_interval
 
 __all__ = [
     "SUMMARY_FIELDS",
+    "FiguresChangedError",
     "LocalizationFigures",
     "Row",
     "compact_figures",
@@ -125,6 +126,10 @@ class Row:
         return "-" if c is None else f"{c:.{digits}f}"
 
 
+class FiguresChangedError(AssertionError):
+    """A README sentence that names families no longer matches its results file."""
+
+
 class LocalizationFigures:
     """The figures of a ``bench localization`` results file (see :mod:`symloc.bench.results_file`)."""
 
@@ -144,7 +149,7 @@ class LocalizationFigures:
             return self._rows[(family, method)]
         except KeyError:
             raise KeyError(
-                f"no row {family!r}/{method!r}: families {self.families + ['all']}, "
+                f"no row {family!r}/{method!r}: families {[*self.families, 'all']}, "
                 f"methods {self.methods}"
             ) from None
 
@@ -154,6 +159,34 @@ class LocalizationFigures:
     def where(self, method: str, test: Callable[[Row], bool]) -> list[str]:
         """The families (alphabetical) whose row of ``method`` passes ``test``."""
         return [f for f in self.families if test(self.row(f, method))]
+
+    def expect(self, method: str, key: str, counts: Mapping[str, int]) -> str:
+        """Check a sentence that names families: the families whose ``method`` row has ``key``
+        above 0 are exactly those of ``counts``, with those counts. Raises
+        :class:`FiguresChangedError` (the sentence needs rewriting) otherwise; returns ``""`` so a
+        README block can call it inline."""
+        found = {f: int(self.row(f, method)[key]) for f in self.families}
+        found = {f: k for f, k in found.items() if k > 0}
+        if found != dict(counts):
+            raise FiguresChangedError(
+                f"{self.doc.get('command')}: the README names {dict(counts)} as the families with "
+                f"{key} ({method}); the results file has {found}: rewrite the sentence"
+            )
+        return ""
+
+    def run(self, machine: bool = True) -> str:
+        """How the run went, for a README: ``"958 s wall on 2 workers (commit 1854f5b,
+        2026-11-28; MACHINE; LOAD)"``, or without the machine and its load
+        ``"313 s wall on 2 workers, commit 1854f5b, 2026-11-28"``."""
+        from symloc.bench.results_file import describe_load, describe_machine
+
+        d = self.doc
+        wall = d.get("wall_s")
+        head = f"{wall:.0f} s wall on {d.get('workers')} workers" if wall is not None else "run"
+        when = f"commit {d['commit']}, {d['date'][:10]}"
+        if not machine:
+            return f"{head}, {when}"
+        return f"{head} ({when}; {describe_machine(d['machine'])}; {describe_load(d['load'])})"
 
     def table(self, methods: Sequence[str] | None = None) -> str:
         """The Markdown table: per family, each method's correct / confident wrong [95 % CI] /

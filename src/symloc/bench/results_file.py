@@ -65,6 +65,34 @@ def validate(doc: Mapping[str, Any], where: str = "results") -> None:
         raise ResultsFileError(f"{where}: " + "; ".join(problems))
 
 
+def describe_machine(machine: Mapping[str, Any] | str) -> str:
+    """A results file's ``machine`` in words: ``"2 cores, 23.4 GiB, x86_64, Linux 6.1, Python
+    3.11.7"`` (a string is given back as written)."""
+    if isinstance(machine, str):
+        return machine
+    parts = [
+        f"{machine.get('cpus')} cores",
+        f"{machine.get('memory_gib')} GiB",
+        machine.get("processor"),
+        machine.get("system"),
+        f"Python {machine.get('python')}",
+    ]
+    return ", ".join(str(p) for p in parts if p)
+
+
+def describe_load(load: Mapping[str, Any] | str) -> str:
+    """A results file's ``load`` in words: ``"load average 0.4 at the start, 2.1 at the end"``
+    (a string is given back as written)."""
+    if isinstance(load, str):
+        return load
+    text = (
+        f"load average {load.get('load_1min_start')} at the start, "
+        f"{load.get('load_1min_end')} at the end"
+    )
+    note = load.get("note")
+    return f"{text}, {note}" if note else text
+
+
 def load_results(path: str | Path) -> dict[str, Any]:
     """Read and validate a results file; raises :class:`ResultsFileError`."""
     p = Path(path)
