@@ -12,9 +12,9 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import logging
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from symloc.bench.stats import json_safe
 from symloc.errors import DataFormatError
@@ -27,7 +27,11 @@ __all__ = [
     "load_results",
     "validate",
     "write_results",
+    "write_run_results",
 ]
+
+if TYPE_CHECKING:
+    from symloc.bench.provenance import RunClock
 
 log = logging.getLogger(__name__)
 
@@ -164,3 +168,32 @@ def write_results(
     out = atomic_write_text(Path(path), dumps(doc) + "\n")
     log.info("wrote results file %s", out)
     return out
+
+
+def write_run_results(
+    path: str | Path,
+    *,
+    argv: Sequence[str],
+    clock: RunClock,
+    settings: Mapping[str, Any],
+    figures: Mapping[str, Any],
+    **extra: Any,
+) -> Path:
+    """Write the results file of a run of this process: the command from ``argv`` (the words
+    after ``symloc``), this checkout's commit, the date the ``clock`` stopped, this machine and
+    the load around the run, and its wall time."""
+    from symloc.bench.provenance import command_line, commit, machine
+
+    clock.stop()
+    return write_results(
+        path,
+        command=command_line(argv),
+        commit=commit(),
+        date=clock.finished or clock.started,
+        machine=machine(),
+        load=clock.load(),
+        settings=settings,
+        figures=figures,
+        wall_s=None if clock.wall_s is None else round(clock.wall_s, 1),
+        **extra,
+    )
