@@ -85,14 +85,16 @@ def describe_machine(machine: Mapping[str, Any] | str) -> str:
 
 
 def describe_load(load: Mapping[str, Any] | str) -> str:
-    """A results file's ``load`` in words: ``"load average 0.4 at the start, 2.1 at the end"``
-    (a string is given back as written)."""
+    """A results file's ``load`` in words: ``"load average 0.4 at the start, 2.1 at the end, on
+    2 cores"`` (a string is given back as written)."""
     if isinstance(load, str):
         return load
     text = (
         f"load average {load.get('load_1min_start')} at the start, "
         f"{load.get('load_1min_end')} at the end"
     )
+    if load.get("cpus"):
+        text += f", on {load['cpus']} cores"
     note = load.get("note")
     return f"{text}, {note}" if note else text
 
