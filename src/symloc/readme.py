@@ -183,7 +183,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _from_bench(args)
         if args.check:
             ok, report = check(args.readme)
-            print(report or f"{args.readme}: every block agrees with its results file")
+            print(report if not ok else f"{args.readme}: every block agrees with its results file")
             return 0 if ok else 1
         print(render(args.readme) or f"{args.readme}: re-rendered")
         problems = _check_all_results(args.readme)

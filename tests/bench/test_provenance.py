@@ -35,3 +35,4 @@ def test_machine_and_clock() -> None:
     assert clock.stop().wall_s == first  # the first stop counts
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", utc_now())
     assert clock.load()["cpus"] == m["cpus"]
+    assert clock.revision == commit()

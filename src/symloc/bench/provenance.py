@@ -94,11 +94,13 @@ def _load_1min() -> float | None:
 
 @dataclass
 class RunClock:
-    """Wall time and 1-minute load average around a run: create it at the start, call
-    :meth:`stop` at the end, then :meth:`load` and :attr:`wall_s`."""
+    """Commit, wall time and 1-minute load average around a run: create it at the start, call
+    :meth:`stop` at the end, then :meth:`load`, :attr:`wall_s` and :attr:`revision`."""
 
     started: str = field(default_factory=utc_now)
     load_start: float | None = field(default_factory=_load_1min)
+    revision: str = field(default_factory=commit)
+    """The commit at the start: the code that ran, whatever changes in the tree meanwhile."""
     _t0: float = field(default_factory=time.perf_counter)
     wall_s: float | None = None
     load_end: float | None = None

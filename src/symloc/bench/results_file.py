@@ -182,15 +182,15 @@ def write_run_results(
     **extra: Any,
 ) -> Path:
     """Write the results file of a run of this process: the command from ``argv`` (the words
-    after ``symloc``), this checkout's commit, the date the ``clock`` stopped, this machine and
-    the load around the run, and its wall time."""
-    from symloc.bench.provenance import command_line, commit, machine
+    after ``symloc``), the commit when the ``clock`` started, the date it stopped, this machine
+    and the load around the run, and its wall time."""
+    from symloc.bench.provenance import command_line, machine
 
     clock.stop()
     return write_results(
         path,
         command=command_line(argv),
-        commit=commit(),
+        commit=clock.revision,
         date=clock.finished or clock.started,
         machine=machine(),
         load=clock.load(),

@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         world_summary,
     )
     from symloc.bench.localization_results import write_localization_results
-    from symloc.bench.provenance import RunClock, command_line, commit, machine
+    from symloc.bench.provenance import RunClock, command_line, machine
     from symloc.bench.stats import json_safe
     from symloc.bench.sweep import run_sweep
     from symloc.bench.trial import TrialConfig
@@ -244,7 +244,7 @@ def run(args: argparse.Namespace) -> int:
             target,
             doc,
             command=command_line(getattr(args, "argv", [])),
-            commit=commit(),
+            commit=clock.revision,
             date=clock.finished or clock.started,
             machine=machine(),
             load=clock.load(),
