@@ -182,7 +182,9 @@ class LocalizationFigures:
 
         d = self.doc
         wall = d.get("wall_s")
-        head = f"{wall:.0f} s wall on {d.get('workers')} workers" if wall is not None else "run"
+        workers = d.get("workers")
+        plural = "" if workers == 1 else "s"
+        head = f"{wall:.0f} s wall on {workers} worker{plural}" if wall is not None else "run"
         when = f"commit {d['commit']}, {d['date'][:10]}"
         if not machine:
             return f"{head}, {when}"
