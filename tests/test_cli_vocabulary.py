@@ -164,7 +164,7 @@ def test_angles_are_degrees_at_the_command_line() -> None:
 
 #: Destinations of options that name a path the command writes: a folder or one file.
 OUTPUT_FOLDERS = {"out", "keep_build", "peer_build"}
-OUTPUT_FILES = {"json", "png", "build_map", "output"}
+OUTPUT_FILES = {"json", "png", "build_map", "output", "results"}
 
 
 @pytest.mark.parametrize("path", sorted(LEAVES), ids=_ids)

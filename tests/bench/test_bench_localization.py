@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from symloc.bench.localization import WorldTask, run_world, summarize, trial_rows
+from symloc.bench.results_file import load_results
 from symloc.bench.scenario import build_scenario
 from symloc.bench.sweep import run_sweep
 from symloc.bench.trial import (
@@ -76,6 +77,14 @@ def test_sweep_json_is_identical_for_one_and_two_workers(tmp_path: Path) -> None
         assert 0.0 <= lo <= r["confident_wrong_rate"] <= hi <= 1.0
     assert "NaN" not in a.decode()  # standard JSON: null
     assert (tmp_path / "w1" / "bench_localization.png").stat().st_size > 10_000
+    # the compact results file beside it: the summary and the run's provenance
+    results = load_results(tmp_path / "w2" / "bench_localization.results.json")
+    assert results["command"].startswith("symloc bench localization --families square")
+    assert results["settings"] == doc["settings"]
+    assert results["workers"] == 2
+    assert results["machine"]["cpus"] >= 1
+    assert set(results["load"]) >= {"load_1min_start", "load_1min_end"}
+    assert len(results["figures"]["summary"]) == len(doc["summary"])
 
 
 @pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs the [ray] extra")

@@ -53,6 +53,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``symloc`` command; returns the process exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    # the command line as given, for the provenance of the results files a command writes
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         code: int = args.func(args)
     except SymlocError as err:

@@ -30,25 +30,35 @@ def register(subparsers: Any) -> None:
         "--side", type=options.room_side, default=3.0, help="square side [m] (paper: 3)"
     )
     options.add_lidars(parser, help="simulated lidars (the README's table: rplidar_a2 lds01)")
+    parser.add_argument(
+        "--results",
+        type=options.output_file,
+        default=None,
+        metavar="PATH",
+        help="also write a results file here (the README's: docs/results/table2.json): the "
+        "figures with the command, commit, date, machine and load; python -m symloc.readme "
+        "re-renders the README from it",
+    )
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from symloc.bench.provenance import RunClock
+    from symloc.bench.results_file import write_run_results
     from symloc.bench.table2 import run_table2
     from symloc.sim.lidar import PRESETS
 
     names = options.lidar_names(args.lidar)
     presets = [PRESETS[n] for n in names]
-    print_config(
-        "table2",
-        {
-            "seed": args.seed,
-            "positions": args.positions,
-            "room": f"square {args.side:g} m x {args.side:g} m inside a textured lab",
-            "presets": ", ".join(names),
-            "robot": "DiffDriveRobot (radius 0.177 m, default odometry noise)",
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "positions": args.positions,
+        "room": f"square {args.side:g} m x {args.side:g} m inside a textured lab",
+        "presets": ", ".join(names),
+        "robot": "DiffDriveRobot (radius 0.177 m, default odometry noise)",
+    }
+    print_config("table2", config)
+    clock = RunClock()
     results = run_table2(presets, positions=args.positions, side=args.side, rng=args.seed)
     print()
     print(
@@ -76,4 +86,15 @@ def run(args: argparse.Namespace) -> int:
     write_json(
         args.json, {"seed": args.seed, "paper": PAPER, "results": [r.to_dict() for r in results]}
     )
+    if args.results is not None:
+        rows = [{k: v for k, v in r.to_dict().items() if k != "errors_mm"} for r in results]
+        written = write_run_results(
+            args.results,
+            argv=getattr(args, "argv", []),
+            clock=clock,
+            settings=config,
+            figures={"paper": PAPER, "results": rows},
+            workers=1,
+        )
+        print(f"wrote {written}")
     return 0

@@ -109,6 +109,16 @@ def register(subparsers: Any) -> None:
         help="seconds driven after the first claim (20)",
     )
     add_sweep_arguments(parser, "bench localization")
+    parser.add_argument(
+        "--results",
+        type=options.output_file,
+        default=None,
+        metavar="PATH",
+        help="also write the run's results file here (docs/results/NAME.json for a README "
+        "figure; always written as bench_localization.results.json under --out): the summary "
+        "with the command, commit, date, machine and load; python -m symloc.readme re-renders "
+        "the README from it",
+    )
     parser.set_defaults(func=run)
 
 
@@ -124,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         trial_rows,
         world_summary,
     )
+    from symloc.bench.localization_results import write_localization_results
+    from symloc.bench.provenance import RunClock, command_line, machine
     from symloc.bench.stats import json_safe
     from symloc.bench.sweep import run_sweep
     from symloc.bench.trial import TrialConfig
@@ -198,6 +210,7 @@ def run(args: argparse.Namespace) -> int:
             ok=counts["correct"], wrong=counts["confident_wrong"], undet=counts["undetermined"]
         )
 
+    clock = RunClock()
     t0 = time.perf_counter()
     results = run_sweep(run_world, tasks, workers=args.workers, ray=args.ray, on_result=on_result)
     bar.close()
@@ -225,13 +238,30 @@ def run(args: argparse.Namespace) -> int:
         "trials_s": [w.trial_seconds for w in results],
     }
     write_json(out / "timing.json", timing)
+    clock.stop()
+    written = [
+        write_localization_results(
+            target,
+            doc,
+            command=command_line(getattr(args, "argv", [])),
+            commit=clock.revision,
+            date=clock.finished or clock.started,
+            machine=machine(),
+            load=clock.load(),
+            workers=args.workers,
+            wall_s=wall,
+            note=f"Ray {args.ray}" if args.ray else None,
+        )
+        for target in [out / "bench_localization.results.json", args.results]
+        if target is not None
+    ]
     fig = outcome_figure(
         summary,
         out / "bench_localization.png",
         title=f"symloc bench localization: {len(tasks)} worlds x {args.trials} trials "
         f"({settings['split'] or 'explicit seeds'}), regime {args.regime}",
     )
-    print(f"wrote {path}, {fig} and {out / 'timing.json'}")
+    print(f"wrote {path}, {fig}, {out / 'timing.json'} and {', '.join(map(str, written))}")
     print(f"wall time {wall:.0f} s for {total} trials on {args.workers} worker(s)")
     return 0
 

@@ -1,0 +1,38 @@
+"""A run's provenance: the command as typed again, the commit, the machine, the load."""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+from symloc.bench.provenance import RunClock, command_line, commit, machine, utc_now
+
+
+def test_command_line_is_what_a_shell_would_split_back() -> None:
+    argv = ["bench", "localization", "--out", "my runs/a", "--seeds", "3"]
+    line = command_line(argv)
+    assert line.startswith("symloc bench localization")
+    assert shlex.split(line)[1:] == argv
+
+
+def test_commit_of_this_checkout_and_of_a_plain_folder(tmp_path: Path) -> None:
+    here = commit()
+    assert re.fullmatch(r"[0-9a-f]{7,40}(\+dirty)?|unknown \(not a git checkout\)", here)
+    assert commit(tmp_path) == "unknown (not a git checkout)"
+
+
+def test_machine_and_clock() -> None:
+    m = machine()
+    assert m["cpus"] >= 1
+    assert m["python"].count(".") == 2
+    clock = RunClock()
+    assert clock.wall_s is None
+    clock.stop()
+    first = clock.wall_s
+    assert first is not None
+    assert first >= 0.0
+    assert clock.stop().wall_s == first  # the first stop counts
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", utc_now())
+    assert clock.load()["cpus"] == m["cpus"]
+    assert clock.revision == commit()

@@ -1,0 +1,170 @@
+"""The README's measured figures are rendered from results files and cannot go stale.
+
+Every cog block of README.md must be exactly what its results file under ``docs/results``
+renders, and every results file must carry its provenance (command, commit, date, machine,
+load, settings). Fast: no benchmark runs here, only the committed results files are read.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from symloc.bench.localization_results import (
+    FiguresChangedError,
+    LocalizationFigures,
+    compact_figures,
+)
+from symloc.bench.results_file import (
+    PROVENANCE,
+    ResultsFileError,
+    dumps,
+    load_results,
+    write_results,
+)
+
+pytest.importorskip("cogapp", reason="cogapp renders the README's blocks (the [test] extra)")
+
+from symloc.readme import check, main, render
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "docs" / "results"
+HEADLINE = "bench_localization_test_realistic"
+
+
+@pytest.fixture
+def copy(tmp_path: Path) -> Path:
+    """README.md and docs/results copied into a temporary folder; returns the README copy."""
+    shutil.copy(ROOT / "README.md", tmp_path / "README.md")
+    shutil.copytree(RESULTS, tmp_path / "docs" / "results")
+    return tmp_path / "README.md"
+
+
+def test_readme_blocks_agree_with_their_results_files() -> None:
+    ok, report = check(ROOT / "README.md")
+    assert ok, report
+
+
+def test_every_results_file_has_its_provenance() -> None:
+    files = sorted(RESULTS.glob("*.json"))
+    assert len(files) >= 3
+    for path in files:
+        doc = load_results(path)
+        for key in PROVENANCE:
+            assert doc[key], f"{path.name}: empty {key}"
+
+
+def test_the_headline_block_is_rendered_from_its_results_file() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    table = LocalizationFigures(load_results(RESULTS / f"{HEADLINE}.json")).table()
+    assert table in readme
+    assert table.splitlines()[-1].startswith("| **all** | 280 | 68 / **0.0** [0.0, 1.4] / 32 |")
+
+
+def test_a_hand_edited_figure_fails_the_check(copy: Path) -> None:
+    text = copy.read_text(encoding="utf-8")
+    rendered = "(190 of 280; Wilson 95 % 62-73 %)"
+    assert text.count(rendered) == 1  # in the rendered bullet, not in the template
+    copy.write_text(text.replace(rendered, "(191 of 280; Wilson 95 % 62-73 %)"), "utf-8")
+    ok, report = check(copy)
+    assert not ok
+    assert "191 of 280" in report  # the diff shows the edited line
+
+
+def test_a_changed_results_file_fails_the_check_and_render_repairs_it(copy: Path) -> None:
+    path = copy.parent / "docs" / "results" / f"{HEADLINE}.json"
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    row = next(
+        r for r in doc["figures"]["summary"] if r["family"] == "all" and r["method"] == "amcl"
+    )
+    row["confident_wrong"] -= 1
+    row["undetermined"] += 1
+    path.write_text(dumps(doc) + "\n", encoding="utf-8")
+    ok, report = check(copy)
+    assert not ok
+    assert "Plain AMCL: 71 of 280" in report
+    render(copy)
+    assert check(copy)[0]
+    assert "Plain AMCL: 71 of 280 (25.4 %)" in copy.read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("field", [*PROVENANCE, "figures"])
+def test_a_results_file_without_a_provenance_field_fails(copy: Path, field: str) -> None:
+    path = copy.parent / "docs" / "results" / f"{HEADLINE}.json"
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    del doc[field]
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    with pytest.raises(ResultsFileError, match=f"no '{field}'"):
+        load_results(path)
+    ok, report = check(copy)
+    assert not ok
+    assert f"no '{field}'" in report
+
+
+def test_a_results_file_no_block_renders_is_reported(copy: Path) -> None:
+    shutil.copy(
+        copy.parent / "docs" / "results" / f"{HEADLINE}.json",
+        copy.parent / "docs" / "results" / "orphan.json",
+    )
+    ok, report = check(copy)
+    assert not ok
+    assert "orphan.json: not rendered anywhere" in report
+
+
+def test_a_sentence_naming_families_fails_when_they_change(copy: Path) -> None:
+    path = copy.parent / "docs" / "results" / "bench_localization_seed1000002_realistic.json"
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    row = next(
+        r for r in doc["figures"]["summary"] if r["family"] == "kite" and r["method"] == "symloc"
+    )
+    row["correct"] -= 1
+    row["undetermined"] += 1
+    path.write_text(dumps(doc) + "\n", encoding="utf-8")
+    ok, report = check(copy)
+    assert not ok
+    assert "rewrite the sentence" in report
+
+
+def test_expect_names_what_changed() -> None:
+    figures = LocalizationFigures(load_results(RESULTS / f"{HEADLINE}.json"))
+    assert figures.expect("symloc", "confident_wrong", {}) == ""
+    with pytest.raises(FiguresChangedError, match="kite"):
+        figures.expect("amcl", "confident_wrong", {"circle": 2})
+
+
+def test_write_results_refuses_missing_provenance_and_round_trips(tmp_path: Path) -> None:
+    summary = [
+        {"family": "all", "method": "symloc", "trials": 2, "correct": 1, "extra": 1.0},
+    ]
+    kwargs = {
+        "command": "symloc bench localization --seeds 3",
+        "commit": "abc1234",
+        "date": "2026-11-28",
+        "machine": "2 cores",
+        "load": "idle",
+        "settings": {"world_seeds": [3]},
+        "figures": compact_figures(summary),
+    }
+    with pytest.raises(ResultsFileError, match="no 'commit'"):
+        write_results(tmp_path / "bad.json", **(kwargs | {"commit": ""}))
+    with pytest.raises(ResultsFileError, match="not YYYY-MM-DD"):
+        write_results(tmp_path / "bad.json", **(kwargs | {"date": "28/11/2026"}))
+    assert not (tmp_path / "bad.json").exists()
+    path = write_results(tmp_path / "r" / "ok.json", **kwargs, wall_s=float("nan"))
+    doc = load_results(path)
+    assert doc["wall_s"] is None  # standard JSON: no NaN
+    assert "extra" not in doc["figures"]["summary"][0]  # only the summary fields are kept
+    assert doc["figures"]["summary"][0]["correct"] == 1
+
+
+def test_the_command_checks_and_says_so(copy: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--readme", str(copy), "--check"]) == 0
+    text = copy.read_text(encoding="utf-8")
+    copy.write_text(text.replace("(190 of 280;", "(189 of 280;"), "utf-8")
+    assert main(["--readme", str(copy), "--check"]) == 1
+    assert "python -m symloc.readme" in capsys.readouterr().out
+    assert main(["--readme", str(copy)]) == 0
+    assert "(190 of 280;" in copy.read_text(encoding="utf-8")
