@@ -36,6 +36,7 @@ from symloc.bench.localization_results import (
     write_localization_results,
 )
 from symloc.bench.results_file import ResultsFileError, load_results
+from symloc.bench.slam_results import SlamFigures
 
 __all__ = [
     "RESULTS_DIR",
@@ -46,6 +47,7 @@ __all__ = [
     "render",
     "results",
     "results_dir",
+    "slam",
     "wilson_upper",
 ]
 
@@ -72,6 +74,11 @@ def results(name: str) -> dict[str, Any]:
 def localization(name: str) -> LocalizationFigures:
     """The figures of a ``bench localization`` results file."""
     return LocalizationFigures(results(name))
+
+
+def slam(name: str) -> SlamFigures:
+    """The figures of a ``bench slam`` results file."""
+    return SlamFigures(results(name))
 
 
 def _cog(argv: Sequence[str]) -> tuple[int, str]:

@@ -79,6 +79,15 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--timeout", type=options.positive_float, default=3600.0, help="per process [s]")
     add_sweep_arguments(p, "bench slam")
+    p.add_argument(
+        "--results",
+        type=options.output_file,
+        default=None,
+        metavar="PATH",
+        help="also write the run's results file here (docs/results/NAME.json for a README "
+        "figure): the per-log summary and the targets with the command, commit, date, machine "
+        "and load; python -m symloc.readme re-renders the README from it",
+    )
     p.set_defaults(func=run)
 
 
@@ -122,7 +131,10 @@ def _fmt(v: Any, spec: str = ".3f") -> str:
 def run(args: argparse.Namespace) -> int:
     """Build the peers, run the sweep, print the table and the targets, write JSON + PNG."""
     from symloc.bench.peers import GMappingPeer, PeerUnavailableError
+    from symloc.bench.provenance import RunClock
+    from symloc.bench.results_file import write_run_results
     from symloc.bench.slam_bench import TARGETS, SlamBenchTask, run_bench_task, summarize
+    from symloc.bench.slam_runs import log_name
     from symloc.bench.sweep import run_sweep
     from symloc.figures.slam import slam_bench_figure
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
@@ -193,6 +205,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {row['log']} seed {row['seed']}: " + "; ".join(parts))
         sys.stdout.flush()
 
+    clock = RunClock()
     rows = run_sweep(run_bench_task, tasks, workers=args.workers, ray=args.ray, on_result=_progress)
     summary = summarize(rows, args.odometry)
     load_end = os.getloadavg()
@@ -274,5 +287,18 @@ def run(args: argparse.Namespace) -> int:
     paths = [write_json(out / f"slam_bench_{args.odometry}.json", data)]
     if args.json is not None:
         paths.append(write_json(args.json, data))
+    if args.results is not None:
+        settings = {k: v for k, v in config.items() if k not in ("command", "date")}
+        settings["logs"] = [log_name(p) for p in logs]
+        paths.append(
+            write_run_results(
+                args.results,
+                argv=getattr(args, "argv", []),
+                clock=clock,
+                settings=settings,
+                figures=summary,
+                workers=args.workers,
+            )
+        )
     print("wrote " + ", ".join(str(p) for p in [*paths, png]))
     return 0
