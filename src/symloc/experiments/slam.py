@@ -30,7 +30,12 @@ from typing import Any
 from symloc.bench.shared_data import CARMEN_LOGS, carmen_log_paths
 from symloc.cli import options
 from symloc.errors import ConfigurationError
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    add_results_argument,
+    print_config,
+    write_json,
+)
 
 __all__ = ["CARMEN_LOGS", "DEFAULT_LOGS", "register", "run"]
 
@@ -46,6 +51,7 @@ def register(subparsers: Any) -> None:
         "slam", help="laser SLAM: simulated rooms and the CARMEN logs (ATE, RPE, loops, speed)"
     )
     add_common_arguments(parser, "slam")
+    add_results_argument(parser, "docs/results/experiment_slam.json")
     parser.add_argument(
         "--worlds", nargs="*", default=list(SIM_WORLDS), help="simulated worlds (none: skip)"
     )
@@ -171,22 +177,24 @@ def run(args: argparse.Namespace) -> int:
         params = dataclasses.replace(params, loop_resample_distance=args.loop_resample)
     if args.loop_constrained is not None:
         params = dataclasses.replace(params, loop_constrained_distance=args.loop_constrained)
-    print_config(
-        "slam",
-        {
-            "seed": args.seed,
-            "odometry_seed": "SeedSequence([seed, crc32(name)]), as map build and bench slam",
-            "worlds": worlds,
-            "logs": list(logs),
-            "odometry": regime.describe() if regime is not None else "the log's own",
-            "max_scans": args.max_scans,
-            "laps": args.laps,
-            "loop_every": params.loop_every,
-            "match_filtered_scans": params.match_filtered_scans,
-            "loop_resample_distance": params.loop_resample_distance,
-            "loop_constrained_distance": params.loop_constrained_distance,
-        },
-    )
+    from symloc.bench.provenance import RunClock
+    from symloc.bench.results_file import write_run_results
+
+    config = {
+        "seed": args.seed,
+        "odometry_seed": "SeedSequence([seed, crc32(name)]), as map build and bench slam",
+        "worlds": worlds,
+        "logs": list(logs),
+        "odometry": regime.describe() if regime is not None else "the log's own",
+        "max_scans": args.max_scans,
+        "laps": args.laps,
+        "loop_every": params.loop_every,
+        "match_filtered_scans": params.match_filtered_scans,
+        "loop_resample_distance": params.loop_resample_distance,
+        "loop_constrained_distance": params.loop_constrained_distance,
+    }
+    print_config("slam", config)
+    clock = RunClock()
     rows: list[dict[str, Any]] = []
     out = Path(args.out)
     for world in worlds:
@@ -239,4 +247,14 @@ def run(args: argparse.Namespace) -> int:
         fig = slam_summary_figure(rows, out / "slam_summary.png")
         print(f"wrote {fig}")
     write_json(args.json, {"seed": args.seed, "odometry": args.odometry, "runs": rows})
+    if args.results is not None:
+        written = write_run_results(
+            args.results,
+            argv=getattr(args, "argv", []),
+            clock=clock,
+            settings=config,
+            figures={"runs": rows},
+            workers=1,
+        )
+        print(f"wrote {written}")
     return 0

@@ -6,7 +6,12 @@ import argparse
 from typing import Any
 
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    add_results_argument,
+    print_config,
+    write_json,
+)
 
 __all__ = ["register", "run"]
 
@@ -30,15 +35,7 @@ def register(subparsers: Any) -> None:
         "--side", type=options.room_side, default=3.0, help="square side [m] (paper: 3)"
     )
     options.add_lidars(parser, help="simulated lidars (the README's table: rplidar_a2 lds01)")
-    parser.add_argument(
-        "--results",
-        type=options.output_file,
-        default=None,
-        metavar="PATH",
-        help="also write a results file here (the README's: docs/results/table2.json): the "
-        "figures with the command, commit, date, machine and load; python -m symloc.readme "
-        "re-renders the README from it",
-    )
+    add_results_argument(parser, "docs/results/table2.json")
     parser.set_defaults(func=run)
 
 
