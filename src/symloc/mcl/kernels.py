@@ -31,8 +31,9 @@ __all__ = ["endpoint_table_sum", "n_threads", "split_over_threads"]
 #: Particle-beam pairs below which one thread does the whole update (threads cost ~20 us).
 PARALLEL_MIN_PAIRS = 200_000
 
-#: Poses processed together when counting matches (small, so a block gives up early).
-_CBLOCK = 64
+#: Poses processed together when counting matches (each is given up on its own, and the
+#: block stays large enough for its inner loops to run dense as poses drop out).
+_CBLOCK = 512
 
 #: Particles processed together by the table-sum kernel (its inner, vectorised loop).
 _BLOCK = 256
@@ -412,9 +413,11 @@ def count_within_py(
 
     End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); ``pre`` counts
     points known to pass everywhere, ``total`` is the number of points in all, so the value is
-    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a block of poses stops early
-    once none of them can reach ``need`` points any more: their values are then below ``need
-    / total`` but not exact (exact for every pose that reaches it).
+    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a pose is given up as soon
+    as it cannot reach ``need`` points any more (checked every 4 points): its value is then
+    below ``need / total`` but not exact (exact for every pose that reaches it). The poses of
+    a block still being counted are kept packed at its front, so the inner loops stay dense
+    however many have been given up.
     """
     one = np.float32(1.0)
     zero = np.float32(0.0)
@@ -426,6 +429,7 @@ def count_within_py(
     xb = np.empty(_CBLOCK, dtype=np.float32)
     yb = np.empty(_CBLOCK, dtype=np.float32)
     cnt = np.empty(_CBLOCK, dtype=np.int64)
+    idx = np.empty(_CBLOCK, dtype=np.int64)
     cell = np.empty(_CBLOCK, dtype=np.uint32)
     for b0 in range(start, stop, _CBLOCK):
         m = min(_CBLOCK, stop - b0)
@@ -445,6 +449,7 @@ def count_within_py(
             xb[k] = px
             yb[k] = py
             cnt[k] = 0
+            idx[k] = b0 + k
         for j in range(nb):
             bxj = bx[j]
             byj = by[j]
@@ -460,14 +465,26 @@ def count_within_py(
             for k in range(m):
                 if table[cell[k]] <= tj:
                     cnt[k] += 1
-            if need > 0 and (j & 7) == 7:
-                best = 0
+            if need > 0 and (j & 3) == 3:
+                # give up the poses that cannot reach need; pack the others at the front
+                short = need - pre - (nb - 1 - j)
+                kept = 0
                 for k in range(m):
-                    best = max(best, cnt[k])
-                if pre + best + (nb - 1 - j) < need:
-                    break  # no pose of the block can reach need points any more
+                    if cnt[k] < short:
+                        out[idx[k]] = (cnt[k] + pre) / total
+                    else:
+                        cb[kept] = cb[k]
+                        sb[kept] = sb[k]
+                        xb[kept] = xb[k]
+                        yb[kept] = yb[k]
+                        cnt[kept] = cnt[k]
+                        idx[kept] = idx[k]
+                        kept += 1
+                m = kept
+                if m == 0:
+                    break
         for k in range(m):
-            out[b0 + k] = (cnt[k] + pre) / total
+            out[idx[k]] = (cnt[k] + pre) / total
 
 
 count_within = _jit(count_within_py)
