@@ -21,12 +21,11 @@ import math
 import threading
 from collections import Counter
 from collections.abc import Callable
-from typing import TypeVar, cast
+from typing import Any, TypeVar, cast
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import distance_transform_edt
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
@@ -305,6 +304,14 @@ OBSTACLE_K_MAX = 65535
 _EXACT_CELLS = 2000.0
 #: Cells converted at a time from OpenCV's float32 to the float64 field (bounds temporaries).
 _BLOCK_CELLS = 1 << 20
+
+
+def distance_transform_edt(*args: Any, **kwargs: Any) -> Any:
+    """:func:`scipy.ndimage.distance_transform_edt`, imported on first use: scipy.ndimage is
+    not needed by a process that only tracks (its fields come from OpenCV)."""
+    from scipy.ndimage import distance_transform_edt as edt
+
+    return edt(*args, **kwargs)
 
 
 def _obstacle_distance(occupied: NDArray[np.bool_], resolution: float) -> NDArray[np.float64]:
