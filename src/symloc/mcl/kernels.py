@@ -190,6 +190,72 @@ def _find(parent: NDArray[np.int64], u: int) -> int:
 _find_jit = _jit(_find)
 
 
+def kld_stop_py(
+    particles: NDArray[np.float64],
+    bin_xy: float,
+    bin_angle: float,
+    n_angle: int,
+    pf_err: float,
+    z: float,
+    min_particles: int,
+    max_particles: int,
+) -> int:
+    """How many of the samples ``particles (N, 3)`` (drawn in this order) KLD-sampling keeps;
+    -1 when a pose is not finite (the caller then takes the NumPy path).
+
+    :func:`symloc.mcl.kld_sampling.kld_stop_index` of
+    :func:`symloc.mcl.clustering.bin_keys`, in one pass that stops where it does: the same
+    bins (``floor(x / bin_xy), floor(y / bin_xy), floor((theta + pi) / bin_angle) mod
+    n_angle``, keyed as ``bin_keys`` keys them) counted in an open-addressing hash table, and
+    the bound of :func:`~symloc.mcl.kld_sampling.kld_sample_count` with the same float
+    operations in the same order, evaluated when the count of bins grows.
+    """
+    n = particles.shape[0]
+    cap = 16
+    while cap < 2 * n:
+        cap *= 2
+    mask = cap - 1
+    slot_key = np.empty(cap, dtype=np.int64)
+    used = np.zeros(cap, dtype=np.bool_)
+    off = np.int64(1) << np.int64(25)
+    k = 0
+    bound = np.int64(max_particles)  # k <= 1 gives max_particles
+    for i in range(n):
+        x = particles[i, 0]
+        y = particles[i, 1]
+        t = particles[i, 2]
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(t)):
+            return -1
+        b0 = np.int64(math.floor(x / bin_xy))
+        b1 = np.int64(math.floor(y / bin_xy))
+        b2 = np.int64(math.floor((t + math.pi) / bin_angle)) % n_angle
+        key = ((b0 + off) << np.int64(32)) | ((b1 + off) << np.int64(6)) | b2
+        h = (key * np.int64(-7046029254386353131)) >> np.int64(20)
+        s = h & mask
+        while used[s] and slot_key[s] != key:
+            s = (s + 1) & mask
+        if not used[s]:
+            used[s] = True
+            slot_key[s] = key
+            k += 1
+            kk = np.float64(k)
+            if kk <= 1.0:
+                bound = np.int64(max_particles)
+            else:
+                km1 = max(kk - 1.0, 1.0)
+                b = 2.0 / (9.0 * km1)
+                xx = 1.0 - b + math.sqrt(b) * z
+                nb = np.ceil(km1 / (2.0 * pf_err) * xx * xx * xx)
+                nb = min(max(nb, np.float64(min_particles)), np.float64(max_particles))
+                bound = np.int64(nb)
+        if i + 1 > bound:
+            return i + 1
+    return n
+
+
+kld_stop = _jit(kld_stop_py)
+
+
 def bin_components_py(
     particles: NDArray[np.float64],
     bin_xy: float,
