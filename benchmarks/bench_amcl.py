@@ -255,11 +255,12 @@ def worker(path: Path, seed: int, *, judge: bool = True) -> int:
     lines = []
     for od, scan in zip(pr.odom, pr.scans, strict=True):
         t1 = time.process_time()
-        res = amcl.update(OdometryReading(od), scan)
+        reading = OdometryReading(od)
+        res = amcl.update(reading, scan)
         t_upd += time.process_time() - t1
         if judge_of is not None:
             t1 = time.process_time()
-            n_confident += int(judge_of(res, OdometryReading(od), scan).confident)
+            n_confident += int(judge_of(res, reading, scan).confident)
             t_judge += time.process_time() - t1
         n_upd += int(res.updated)
         e = res.estimate
