@@ -250,7 +250,7 @@ def kld_stop_py(
                 bound = np.int64(nb)
         if i + 1 > bound:
             return i + 1
-    return n
+    return int(n)
 
 
 kld_stop = _jit(kld_stop_py)
