@@ -34,6 +34,7 @@ from symloc.grid.distance_field import (
     DistanceField,
     compute_distance_field,
     compute_surface_distance_field,
+    grown_padded_distances,
 )
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.grid.precomputation import PrecomputationGrids, build_precomputation_grids
@@ -171,7 +172,15 @@ class MapFields:
                     np.asarray(g.origin, dtype=np.float64), [-pad * g.resolution] * 2 + [0]
                 )
                 big = OccupancyGrid(data, g.resolution, origin, g.occupied_thresh, g.free_thresh)
-                df = compute_distance_field(big, md)
+                own = self._distance.get(md)
+                if own is None:
+                    df = compute_distance_field(big, md)
+                else:  # the map's own field is there (AMCL's): only the margin is new
+                    padded = grown_padded_distances(
+                        own.padded, g.occupied_mask, pad, g.resolution, md
+                    )
+                    padded.setflags(write=False)
+                    df = DistanceField(big, md, padded)
                 self.n_computed["grown"] += 1
                 self._grown[md] = df
         return df
