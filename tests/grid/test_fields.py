@@ -162,8 +162,9 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
         "obstacle_squared_cells": 1,
         "blocked_distance": 1,
     }
-    # distance: the map and the grown; scipy's EDT: the beam model's
-    assert calls == {"distance": 2, "surface": 1, "edt": 1, "obstacle": 0}
+    # distance: the map's (the grown one is built from it and its edges); scipy's EDT: the
+    # beam model's
+    assert calls == {"distance": 1, "surface": 1, "edt": 1, "obstacle": 0}
     assert amcl.field is beam.field is tracker.judge.consistency_field is judge.consistency_field
     assert scorer._k is f.obstacle_squared_cells()[0]
     assert gate.field is f.surface()
