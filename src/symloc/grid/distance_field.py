@@ -237,7 +237,9 @@ def grown_padded_distances(
     """
     h, w = target.shape
     if pad < math.ceil(max_dist / resolution) + 1:
-        raise ValueError(f"pad: expected at least ceil(max_dist / resolution) + 1, got {pad}")
+        raise ConfigurationError(
+            f"pad: expected at least ceil(max_dist / resolution) + 1 cells, got {pad}"
+        )
     hg, wg = h + 2 * pad, w + 2 * pad
     out = np.full((hg + 2, wg + 2), max_dist, dtype=np.float32)
     out[1 + pad : 1 + pad + h, 1 + pad : 1 + pad + w] = own[1:-1, 1:-1]
