@@ -8,6 +8,7 @@ one pose ``(3,)`` and a particle set ``(N, 3)``. Angles are wrapped to (-pi, pi]
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -31,6 +32,8 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
+_TWO_PI = 2.0 * math.pi
+
 
 def wrap_angle(angle: ArrayLike) -> Any:
     """Wrap angles [rad] to the half-open interval (-pi, pi].
@@ -38,6 +41,10 @@ def wrap_angle(angle: ArrayLike) -> Any:
     ``pi`` stays ``pi`` and ``-pi`` becomes ``pi``, so every direction has exactly one value.
     Returns a float for scalar input, an array of the input's shape otherwise.
     """
+    if isinstance(angle, (float, int)):
+        # one number: Python's float remainder is NumPy's (fmod, then the divisor's sign),
+        # bit for bit, without an array round trip (the filter wraps a few per scan)
+        return math.pi - (math.pi - float(angle)) % _TWO_PI
     a = np.asarray(angle, dtype=np.float64)
     out = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
     return float(out) if out.ndim == 0 else out

@@ -162,8 +162,9 @@ def test_the_consumers_of_one_grid_compute_each_field_once(monkeypatch):
         "obstacle_squared_cells": 1,
         "blocked_distance": 1,
     }
-    # distance: the map and the grown; scipy's EDT: the beam model's
-    assert calls == {"distance": 2, "surface": 1, "edt": 1, "obstacle": 0}
+    # distance: the map's (the grown one is built from it and its edges); scipy's EDT: the
+    # beam model's
+    assert calls == {"distance": 1, "surface": 1, "edt": 1, "obstacle": 0}
     assert amcl.field is beam.field is tracker.judge.consistency_field is judge.consistency_field
     assert scorer._k is f.obstacle_squared_cells()[0]
     assert gate.field is f.surface()
@@ -254,3 +255,24 @@ def test_the_two_byte_obstacle_distance_is_exact_up_to_its_reach_and_clipped_bey
         codes, table = _clipped_distance(f, cap)
         assert table[-1] == cap
         assert np.array_equal(table[codes], np.minimum(full, cap))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_grown_field_from_the_maps_own_equals_its_own_transform(seed: int) -> None:
+    """The grown field built from the map's own field and four edge strips is, value for
+    value, the transform of the grown map (obstacles on the edges, small and thin maps)."""
+    rng = np.random.default_rng(seed)
+    h, w = [(60, 80), (7, 90), (90, 5), (1, 1), (33, 47)][seed]
+    data = np.where(rng.random((h, w)) < 0.08, 100, np.where(rng.random((h, w)) < 0.5, 0, -1))
+    data[0, : w // 2] = 100  # walls touching the map's edges
+    data[:, -1] = 100
+    grid = OccupancyGrid(data.astype(np.int8), 0.05, (1.0, -2.0, 0.0))
+    for md in (0.3, 1.0, 2.0):
+        direct = MapFields(grid).grown(md)  # no own field yet: one transform of the grown map
+        fields = MapFields(grid)
+        fields.distance(md)
+        derived = fields.grown(md)
+        assert derived.padded.shape == direct.padded.shape
+        np.testing.assert_array_equal(derived.padded, direct.padded)
+        np.testing.assert_array_equal(derived.grid.origin, direct.grid.origin)
+        assert derived.max_dist == direct.max_dist

@@ -107,3 +107,33 @@ def test_resample_indices_sorted_and_sized():
 def test_resampling_rejects_bad_weights(w):
     with pytest.raises(ConfigurationError, match="weights"):
         low_variance_counts(w, 10, 0.5)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_kld_stop_kernel_equals_numpy(seed):
+    """The compiled one-pass stop (what the filter runs) against its NumPy definition."""
+    from symloc.mcl import kernels
+    from symloc.mcl.clustering import BIN_ANGLE, BIN_XY, N_ANGLE_BINS, bin_keys
+
+    rng = np.random.default_rng(seed)
+    z = pf_z_quantile(0.99)
+    for spread, n, (lo, hi), err in [
+        (0.05, 2000, (500, 2000), 0.01),
+        (0.6, 2000, (500, 2000), 0.01),
+        (30.0, 5000, (100, 5000), 0.05),
+        (2.0, 300, (10, 300), 0.2),
+        (1e-3, 50, (50, 60), 0.01),
+        (5.0, 1, (1, 10), 0.01),
+    ]:
+        p = np.column_stack(
+            [
+                rng.normal(rng.uniform(-100, 100), spread, n),
+                rng.normal(rng.uniform(-100, 100), spread, n),
+                rng.uniform(-np.pi, np.pi, n),
+            ]
+        )
+        p[: n // 7, 2] = np.pi  # the heading bins' edge
+        got = kernels.kld_stop(p, BIN_XY, BIN_ANGLE, N_ANGLE_BINS, err, z, lo, hi)
+        assert got == kld_stop_index(bin_keys(p), err, z, lo, hi)
+    p[0, 1] = np.nan
+    assert kernels.kld_stop(p, BIN_XY, BIN_ANGLE, N_ANGLE_BINS, 0.01, z, 1, 10) == -1

@@ -18,6 +18,7 @@ point off the map reads the maximum distance exactly as nav2_amcl does (``!MAP_V
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import cv2
@@ -214,6 +215,56 @@ def _padded_distances(
     padded[[0, -1], :] = max_dist
     padded[:, [0, -1]] = max_dist
     return padded
+
+
+def grown_padded_distances(
+    own: NDArray[np.float32],
+    target: NDArray[np.bool_],
+    pad: int,
+    resolution: float,
+    max_dist: float,
+) -> NDArray[np.float32]:
+    """:func:`_padded_distances` of ``target (H, W)`` grown by ``pad`` cells of no target on
+    every side, from the map's own ``own = _padded_distances(target, resolution, max_dist)``.
+
+    Returns ``(H + 2 pad + 2, W + 2 pad + 2)`` float32, value for value what the transform of
+    the grown mask gives, with ``pad`` at least ``ceil(max_dist / resolution) + 1``: inside
+    the map the nearest target is the same (the margin holds none), so the map's values are
+    copied; a margin cell within ``max_dist`` of a target has it within ``pad`` cells of its
+    own edge of the map, so four strips ``2 pad`` cells wide along the edges (margin and map)
+    give its distance exactly, and every farther one reads ``max_dist`` either way. About a
+    sixth of the cells of one transform of the grown map.
+    """
+    h, w = target.shape
+    if pad < math.ceil(max_dist / resolution) + 1:
+        raise ConfigurationError(
+            f"pad: expected at least ceil(max_dist / resolution) + 1 cells, got {pad}"
+        )
+    hg, wg = h + 2 * pad, w + 2 * pad
+    out = np.full((hg + 2, wg + 2), max_dist, dtype=np.float32)
+    out[1 + pad : 1 + pad + h, 1 + pad : 1 + pad + w] = own[1:-1, 1:-1]
+    band = 2 * pad  # strip width in the grown frame: the margin and as much of the map
+
+    def strip(r0: int, r1: int, c0: int, c1: int) -> NDArray[np.float32]:
+        """Distances of the grown frame's rows r0:r1, columns c0:c1 from their targets."""
+        sub = np.zeros((r1 - r0, c1 - c0), dtype=np.bool_)
+        mr0, mr1 = max(r0, pad), min(r1, pad + h)  # the map's part of the strip
+        mc0, mc1 = max(c0, pad), min(c1, pad + w)
+        if mr0 < mr1 and mc0 < mc1:
+            sub[mr0 - r0 : mr1 - r0, mc0 - c0 : mc1 - c0] = target[
+                mr0 - pad : mr1 - pad, mc0 - pad : mc1 - pad
+            ]
+        return _padded_distances(sub, resolution, max_dist)[1:-1, 1:-1]
+
+    top = strip(0, min(band, hg), 0, wg)
+    out[1 : 1 + pad, 1:-1] = top[:pad]
+    bottom = strip(max(0, hg - band), hg, 0, wg)
+    out[1 + hg - pad : 1 + hg, 1:-1] = bottom[bottom.shape[0] - pad :]
+    left = strip(0, hg, 0, min(band, wg))
+    out[1 : 1 + hg, 1 : 1 + pad] = left[:, :pad]
+    right = strip(0, hg, max(0, wg - band), wg)
+    out[1 : 1 + hg, 1 + wg - pad : 1 + wg] = right[:, right.shape[1] - pad :]
+    return out
 
 
 def compute_distance_field(grid: OccupancyGrid, max_dist: float) -> DistanceField:

@@ -21,12 +21,11 @@ import math
 import threading
 from collections import Counter
 from collections.abc import Callable
-from typing import TypeVar, cast
+from typing import Any, TypeVar, cast
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import distance_transform_edt
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
@@ -35,6 +34,7 @@ from symloc.grid.distance_field import (
     DistanceField,
     compute_distance_field,
     compute_surface_distance_field,
+    grown_padded_distances,
 )
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.grid.precomputation import PrecomputationGrids, build_precomputation_grids
@@ -172,7 +172,15 @@ class MapFields:
                     np.asarray(g.origin, dtype=np.float64), [-pad * g.resolution] * 2 + [0]
                 )
                 big = OccupancyGrid(data, g.resolution, origin, g.occupied_thresh, g.free_thresh)
-                df = compute_distance_field(big, md)
+                own = self._distance.get(md)
+                if own is None:
+                    df = compute_distance_field(big, md)
+                else:  # the map's own field is there (AMCL's): only the margin is new
+                    padded = grown_padded_distances(
+                        own.padded, g.occupied_mask, pad, g.resolution, md
+                    )
+                    padded.setflags(write=False)
+                    df = DistanceField(big, md, padded)
                 self.n_computed["grown"] += 1
                 self._grown[md] = df
         return df
@@ -305,6 +313,14 @@ OBSTACLE_K_MAX = 65535
 _EXACT_CELLS = 2000.0
 #: Cells converted at a time from OpenCV's float32 to the float64 field (bounds temporaries).
 _BLOCK_CELLS = 1 << 20
+
+
+def distance_transform_edt(*args: Any, **kwargs: Any) -> Any:
+    """:func:`scipy.ndimage.distance_transform_edt`, imported on first use: scipy.ndimage is
+    not needed by a process that only tracks (its fields come from OpenCV)."""
+    from scipy.ndimage import distance_transform_edt as edt
+
+    return edt(*args, **kwargs)
 
 
 def _obstacle_distance(occupied: NDArray[np.bool_], resolution: float) -> NDArray[np.float64]:

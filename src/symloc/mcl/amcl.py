@@ -50,9 +50,18 @@ from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
+from symloc.mcl import kernels
 from symloc.mcl.beam_model import beam_model_weights
 from symloc.mcl.beams import BeamSet, select_beams
-from symloc.mcl.clustering import ClusterStats, Hypothesis, bin_keys, cluster_particles
+from symloc.mcl.clustering import (
+    BIN_ANGLE,
+    BIN_XY,
+    N_ANGLE_BINS,
+    ClusterStats,
+    Hypothesis,
+    bin_keys,
+    cluster_particles,
+)
 from symloc.mcl.kld_sampling import kld_stop_index, pf_z_quantile
 from symloc.mcl.likelihood_field import likelihood_field_weights
 from symloc.mcl.likelihood_field_prob import BeamSkipReport, likelihood_field_prob_log_weights
@@ -434,7 +443,20 @@ class Amcl:
         if p.min_particles < p.max_particles:
             idx = idx[self.rng.permutation(idx.size)]
             new = parts[idx]
-            n = kld_stop_index(bin_keys(new), p.pf_err, self._z, p.min_particles, p.max_particles)
+            n = kernels.kld_stop(
+                new,
+                BIN_XY,
+                BIN_ANGLE,
+                N_ANGLE_BINS,
+                p.pf_err,
+                self._z,
+                p.min_particles,
+                p.max_particles,
+            )
+            if n < 0:  # a pose that is not finite: the NumPy definition decides
+                n = kld_stop_index(
+                    bin_keys(new), p.pf_err, self._z, p.min_particles, p.max_particles
+                )
             new = new[:n]
         else:
             new = parts[idx]

@@ -23,8 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from symloc.errors import ConfigurationError
 from symloc.hypothesis import Hypothesis
@@ -156,6 +154,9 @@ def cluster_particles_reference(particles: FloatArray, weights: FloatArray) -> C
     ``np.unique`` on integer bin keys, ``np.searchsorted`` for the 26 neighbours,
     ``scipy.sparse.csgraph.connected_components``, ``np.bincount`` for the moments.
     """
+    from scipy.sparse import coo_matrix  # the reference only: not imported with the filter
+    from scipy.sparse.csgraph import connected_components
+
     p, w, total = _checked(particles, weights)
     w = w / total
     b = bin_indices(p)

@@ -31,8 +31,9 @@ __all__ = ["endpoint_table_sum", "n_threads", "split_over_threads"]
 #: Particle-beam pairs below which one thread does the whole update (threads cost ~20 us).
 PARALLEL_MIN_PAIRS = 200_000
 
-#: Poses processed together when counting matches (small, so a block gives up early).
-_CBLOCK = 64
+#: Poses processed together when counting matches (each is given up on its own, and the
+#: block stays large enough for its inner loops to run dense as poses drop out).
+_CBLOCK = 512
 
 #: Particles processed together by the table-sum kernel (its inner, vectorised loop).
 _BLOCK = 256
@@ -187,6 +188,72 @@ def _find(parent: NDArray[np.int64], u: int) -> int:
 
 
 _find_jit = _jit(_find)
+
+
+def kld_stop_py(
+    particles: NDArray[np.float64],
+    bin_xy: float,
+    bin_angle: float,
+    n_angle: int,
+    pf_err: float,
+    z: float,
+    min_particles: int,
+    max_particles: int,
+) -> int:
+    """How many of the samples ``particles (N, 3)`` (drawn in this order) KLD-sampling keeps;
+    -1 when a pose is not finite (the caller then takes the NumPy path).
+
+    :func:`symloc.mcl.kld_sampling.kld_stop_index` of
+    :func:`symloc.mcl.clustering.bin_keys`, in one pass that stops where it does: the same
+    bins (``floor(x / bin_xy), floor(y / bin_xy), floor((theta + pi) / bin_angle) mod
+    n_angle``, keyed as ``bin_keys`` keys them) counted in an open-addressing hash table, and
+    the bound of :func:`~symloc.mcl.kld_sampling.kld_sample_count` with the same float
+    operations in the same order, evaluated when the count of bins grows.
+    """
+    n = particles.shape[0]
+    cap = 16
+    while cap < 2 * n:
+        cap *= 2
+    mask = cap - 1
+    slot_key = np.empty(cap, dtype=np.int64)
+    used = np.zeros(cap, dtype=np.bool_)
+    off = np.int64(1) << np.int64(25)
+    k = 0
+    bound = np.int64(max_particles)  # k <= 1 gives max_particles
+    for i in range(n):
+        x = particles[i, 0]
+        y = particles[i, 1]
+        t = particles[i, 2]
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(t)):
+            return -1
+        b0 = np.int64(math.floor(x / bin_xy))
+        b1 = np.int64(math.floor(y / bin_xy))
+        b2 = np.int64(math.floor((t + math.pi) / bin_angle)) % n_angle
+        key = ((b0 + off) << np.int64(32)) | ((b1 + off) << np.int64(6)) | b2
+        h = (key * np.int64(-7046029254386353131)) >> np.int64(20)
+        s = h & mask
+        while used[s] and slot_key[s] != key:
+            s = (s + 1) & mask
+        if not used[s]:
+            used[s] = True
+            slot_key[s] = key
+            k += 1
+            kk = np.float64(k)
+            if kk <= 1.0:
+                bound = np.int64(max_particles)
+            else:
+                km1 = max(kk - 1.0, 1.0)
+                b = 2.0 / (9.0 * km1)
+                xx = 1.0 - b + math.sqrt(b) * z
+                nb = np.ceil(km1 / (2.0 * pf_err) * xx * xx * xx)
+                nb = min(max(nb, np.float64(min_particles)), np.float64(max_particles))
+                bound = np.int64(nb)
+        if i + 1 > bound:
+            return i + 1
+    return int(n)
+
+
+kld_stop = _jit(kld_stop_py)
 
 
 def bin_components_py(
@@ -412,9 +479,11 @@ def count_within_py(
 
     End points as :func:`endpoint_table_sum_py` (the same cells, bit for bit); ``pre`` counts
     points known to pass everywhere, ``total`` is the number of points in all, so the value is
-    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a block of poses stops early
-    once none of them can reach ``need`` points any more: their values are then below ``need
-    / total`` but not exact (exact for every pose that reaches it).
+    ``np.count_nonzero(...) / total`` exactly. With ``need > 0`` a pose is given up as soon
+    as it cannot reach ``need`` points any more (checked every 4 points): its value is then
+    below ``need / total`` but not exact (exact for every pose that reaches it). The poses of
+    a block still being counted are kept packed at its front, so the inner loops stay dense
+    however many have been given up.
     """
     one = np.float32(1.0)
     zero = np.float32(0.0)
@@ -426,6 +495,7 @@ def count_within_py(
     xb = np.empty(_CBLOCK, dtype=np.float32)
     yb = np.empty(_CBLOCK, dtype=np.float32)
     cnt = np.empty(_CBLOCK, dtype=np.int64)
+    idx = np.empty(_CBLOCK, dtype=np.int64)
     cell = np.empty(_CBLOCK, dtype=np.uint32)
     for b0 in range(start, stop, _CBLOCK):
         m = min(_CBLOCK, stop - b0)
@@ -445,6 +515,7 @@ def count_within_py(
             xb[k] = px
             yb[k] = py
             cnt[k] = 0
+            idx[k] = b0 + k
         for j in range(nb):
             bxj = bx[j]
             byj = by[j]
@@ -460,14 +531,26 @@ def count_within_py(
             for k in range(m):
                 if table[cell[k]] <= tj:
                     cnt[k] += 1
-            if need > 0 and (j & 7) == 7:
-                best = 0
+            if need > 0 and (j & 3) == 3:
+                # give up the poses that cannot reach need; pack the others at the front
+                short = need - pre - (nb - 1 - j)
+                kept = 0
                 for k in range(m):
-                    best = max(best, cnt[k])
-                if pre + best + (nb - 1 - j) < need:
-                    break  # no pose of the block can reach need points any more
+                    if cnt[k] < short:
+                        out[idx[k]] = (cnt[k] + pre) / total
+                    else:
+                        cb[kept] = cb[k]
+                        sb[kept] = sb[k]
+                        xb[kept] = xb[k]
+                        yb[kept] = yb[k]
+                        cnt[kept] = cnt[k]
+                        idx[kept] = idx[k]
+                        kept += 1
+                m = kept
+                if m == 0:
+                    break
         for k in range(m):
-            out[b0 + k] = (cnt[k] + pre) / total
+            out[idx[k]] = (cnt[k] + pre) / total
 
 
 count_within = _jit(count_within_py)

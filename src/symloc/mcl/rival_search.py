@@ -147,37 +147,65 @@ def match_scores(
     if m == 0:
         return np.zeros(pz.shape[0])
     t = np.broadcast_to(np.asarray(tol, dtype=np.float32), (m,))
-    r = np.hypot(pts[:, 0], pts[:, 1])
-    a = np.arctan2(pts[:, 1], pts[:, 0])
-    local = np.ascontiguousarray(field.grid_frame_poses(pz))
-    flat = field.padded.ravel()
-    out = np.empty(pz.shape[0])
     h2, w2 = field.padded.shape
     if h2 * w2 >= 2**31:  # beyond the kernel's 32-bit cell index: NumPy blocks
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        a = np.arctan2(pts[:, 1], pts[:, 0])
+        local = field.grid_frame_poses(pz)
+        flat = field.padded.ravel()
+        out = np.empty(pz.shape[0])
         step = max(1, _CHUNK // m)
         for s in range(0, pz.shape[0], step):
             idx = endpoint_flat_indices(field, local[s : s + step], r, a)
             out[s : s + step] = np.count_nonzero(flat[idx] <= t, axis=1) / m
         return out
-    # A point whose tolerance reaches the field's clip distance passes at every pose (every
-    # value of the table is at most the clip): counted once, not looked up.
-    tt_all = np.ascontiguousarray(t, dtype=np.float32)
-    sure = tt_all >= np.float32(field.max_dist)
-    pre = int(np.count_nonzero(sure))
-    look = ~sure
-    inv_res = 1.0 / field.grid.resolution
-    bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * inv_res, dtype=np.float32)
-    by = np.ascontiguousarray(r[look] * np.sin(a[look]) * inv_res, dtype=np.float32)
-    tt = np.ascontiguousarray(tt_all[look])
-    need = 0 if at_least is None else needed_count(at_least, m)
+    return _Scorer(field, pts, t).scores(field.grid_frame_poses(pz), at_least)
 
-    def run(start: int, stop: int) -> None:
-        kernels.count_within(
-            flat, w2, h2, local, inv_res, bx, by, tt, pre, m, need, start, stop, out
-        )
 
-    kernels.split_over_threads(pz.shape[0], pz.shape[0] * max(1, bx.size), run)
-    return out
+class _Scorer:
+    """The evidence ``points (M, 2)`` [m] (robot frame, M > 0) with one tolerance per point
+    ``tol (M,)`` [m], made ready once for :func:`symloc.mcl.kernels.count_within` (end points
+    in cell units, float32; the points whose tolerance reaches the field's clip counted once),
+    so that a search scoring many blocks of poses against the same points and tolerance
+    prepares them once. The field's padded table must have fewer than 2^31 cells."""
+
+    __slots__ = ("bx", "by", "flat", "h2", "inv_res", "m", "pre", "tt", "w2")
+
+    def __init__(self, field: DistanceField, pts: FloatArray, tol: ArrayLike) -> None:
+        m = pts.shape[0]
+        t = np.broadcast_to(np.asarray(tol, dtype=np.float32), (m,))
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        a = np.arctan2(pts[:, 1], pts[:, 0])
+        self.flat = field.padded.ravel()
+        self.h2, self.w2 = field.padded.shape
+        # A point whose tolerance reaches the field's clip distance passes at every pose
+        # (every value of the table is at most the clip): counted once, not looked up.
+        tt_all = np.ascontiguousarray(t, dtype=np.float32)
+        sure = tt_all >= np.float32(field.max_dist)
+        self.pre = int(np.count_nonzero(sure))
+        look = ~sure
+        self.inv_res = 1.0 / field.grid.resolution
+        self.bx = np.ascontiguousarray(r[look] * np.cos(a[look]) * self.inv_res, dtype=np.float32)
+        self.by = np.ascontiguousarray(r[look] * np.sin(a[look]) * self.inv_res, dtype=np.float32)
+        self.tt = np.ascontiguousarray(tt_all[look])
+        self.m = m
+
+    def scores(self, local: FloatArray, at_least: float | None = None) -> FloatArray:
+        """:func:`match_scores` of poses ``local (P, 3)`` already in the grid frame
+        (:meth:`~symloc.grid.distance_field.DistanceField.grid_frame_poses`)."""
+        local = np.ascontiguousarray(local)
+        out = np.empty(local.shape[0])
+        need = 0 if at_least is None else needed_count(at_least, self.m)
+        flat, w2, h2, inv_res = self.flat, self.w2, self.h2, self.inv_res
+        bx, by, tt, pre, m = self.bx, self.by, self.tt, self.pre, self.m
+
+        def run(start: int, stop: int) -> None:
+            kernels.count_within(
+                flat, w2, h2, local, inv_res, bx, by, tt, pre, m, need, start, stop, out
+            )
+
+        kernels.split_over_threads(local.shape[0], local.shape[0] * max(1, bx.size), run)
+        return out
 
 
 def needed_count(at_least: float, m: int) -> int:
@@ -413,14 +441,27 @@ def rival_search_steps(
     cand_p: list[FloatArray] = []
     cand_s: list[FloatArray] = []
     n_cand = 0
+    # The lattice's positions in the grid frame, once (each heading only sets the third
+    # column): what match_scores would compute for every block, value for value.
+    small = field.padded.size < 2**31
+    coarse = _Scorer(field, pts, loose) if small else None
+    local = None
+    if coarse is not None and field.grid.origin[2] == 0.0:
+        local = field.grid_frame_poses(np.column_stack([xy, np.zeros(xy.shape[0])]))
     for h in heads:
         for s0 in range(0, xy.shape[0], block):
             part = xy[s0 : s0 + block]
-            poses = np.column_stack([part, np.full(part.shape[0], h)])
-            sc = match_scores(field, poses, pts, loose, at_least=threshold)
+            if coarse is not None and local is not None:
+                lp = local[s0 : s0 + block]
+                lp[:, 2] = h
+                sc = coarse.scores(lp, threshold)
+            else:
+                poses = np.column_stack([part, np.full(part.shape[0], h)])
+                sc = match_scores(field, poses, pts, loose, at_least=threshold)
             keep = sc >= threshold
             if keep.any():
-                kp, ks = poses[keep], sc[keep]
+                kp = np.column_stack([part[keep], np.full(int(np.count_nonzero(keep)), h)])
+                ks = sc[keep]
                 far = _far(kp, est, min_distance - stride * res, min_angle - da)
                 cand_p.append(kp[far])
                 cand_s.append(ks[far])
@@ -446,10 +487,15 @@ def rival_search_steps(
         kids = (cp[:, None, :] + offs[None, :, :]).reshape(-1, 3)
         bound = tol + math.sqrt(2.0) * h_xy + rng_pts * h_a + res
         sc = np.empty(kids.shape[0])
+        level = _Scorer(field, pts, bound) if small else None
         for s0 in range(0, kids.shape[0], block):
-            sc[s0 : s0 + block] = match_scores(
-                field, kids[s0 : s0 + block], pts, bound, at_least=threshold
-            )
+            if level is not None:
+                lk = field.grid_frame_poses(kids[s0 : s0 + block])
+                sc[s0 : s0 + block] = level.scores(lk, threshold)
+            else:
+                sc[s0 : s0 + block] = match_scores(
+                    field, kids[s0 : s0 + block], pts, bound, at_least=threshold
+                )
             yield min(block, kids.shape[0] - s0) * m
         keep = (sc >= threshold) & _far(kids, est, min_distance - h_xy, min_angle - h_a)
         cp, cs = kids[keep], sc[keep]
