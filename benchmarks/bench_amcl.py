@@ -49,7 +49,6 @@ CMD] [--carmen DIR [--large]]``
 from __future__ import annotations
 
 import argparse
-import gc
 import itertools
 import math
 import os
@@ -237,13 +236,6 @@ def worker(path: Path, seed: int, *, judge: bool = True) -> int:
     amcl = Amcl(pr.grid, pr.params, np.random.default_rng(seed))
     judge_of = ConfidenceJudge(amcl) if judge else None
     t_map = time.process_time() - t0
-    # Everything alive now (the libraries, the map's fields, the filter) lives as long as this
-    # process: moved out of the cyclic collector's reach, so that neither its full collections
-    # during the run nor the interpreter's own at exit walk it again. Those at exit cost
-    # about 0.3 s of CPU in any process that has called a numba kernel (its typing and
-    # lowering registries are hundreds of thousands of objects), work that frees nothing the
-    # operating system would not reclaim anyway; the C++ peer frees nothing at exit either.
-    gc.freeze()
     t_judge = 0.0
     n_confident = 0
     if pr.init_global:
