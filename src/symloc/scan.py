@@ -30,7 +30,7 @@ FloatArray = NDArray[np.float64]
 def _beam_angles(angle_min: float, angle_increment: float, n: int) -> FloatArray:
     """Read-only beam angles ``(n,)`` [rad], one array shared by every scan of the same
     geometry (a log's thousands of scans would otherwise each hold a copy)."""
-    angles = angle_min + angle_increment * np.arange(n)
+    angles: FloatArray = angle_min + angle_increment * np.arange(n, dtype=np.float64)
     angles.setflags(write=False)
     return angles
 
