@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from conftest import raycast
 
 from symloc.scan import LaserScan
@@ -76,10 +77,16 @@ def test_density_table_ridge_lies_on_the_mean_of_the_points() -> None:
     assert density_table(lambda: [pts], 0.025, 0.04, max_cells=100) is None
 
 
-def test_splat_accumulates_as_a_dense_float64_splat_would() -> None:
-    """add_splat keeps temporaries of the points' size; the counts are those of adding a
+@pytest.mark.parametrize("band_cells", [1000, 1 << 20])
+def test_splat_accumulates_as_a_dense_float64_splat_would(
+    band_cells: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """add_splat works a band of rows at a time; the counts are those of adding a
     dense float64 (H, W) splat rounded to float32, batch after batch."""
+    import symloc.slam.map_refinement as mr
     from symloc.slam.map_refinement import add_splat, splat_points
+
+    monkeypatch.setattr(mr, "_BAND_CELLS", band_cells)
 
     rng = np.random.default_rng(0)
     origin = np.array([-1.0, -2.0])

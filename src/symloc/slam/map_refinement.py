@@ -18,7 +18,7 @@ bilinear table), from its current pose.
 
 Memory: the density grid covers the map's bounding box (``max_cells`` at most; a larger map is
 not refined and the result says so); building it holds three float32 grids of that size at
-most, and splatting needs memory of the points' size only.
+most, and splatting a band of rows at a time adds two float64 buffers of a million cells.
 """
 
 from __future__ import annotations
@@ -51,36 +51,38 @@ def splat_points(
     return out
 
 
+#: Grid cells splatted at once by :func:`add_splat` (two float64 buffers of this size).
+_BAND_CELLS = 1 << 20
+
+
 def add_splat(
     counts: NDArray[np.float32], points: FloatArray, origin_xy: FloatArray, resolution: float
 ) -> None:
     """Add the bilinear splat of ``points`` (M, 2) [m] to ``counts`` (H, W) in place.
 
-    Each touched cell gets, in float64, its four corner sums in the order (0, 0), (1, 0),
-    (0, 1), (1, 1), each summed over the points in their order, then rounded to float32 and
-    added: what adding a full (H, W) float64 splat would give, with temporaries of the size of
-    the points, not of the grid.
+    Each cell gets, in float64, its four corner sums in the order (0, 0), (1, 0), (0, 1),
+    (1, 1), each summed over the points in their order, then rounded to float32 and added:
+    what adding a full (H, W) float64 splat gives, computed a band of rows at a time so that
+    the float64 buffers hold ``_BAND_CELLS`` cells, not the whole grid.
     """
     h, w = counts.shape
     u = (points - origin_xy) / resolution - 0.5
     i0 = np.floor(u).astype(np.intp)
     f = u - i0
-    flat: list[NDArray[np.intp]] = []
-    weights: list[FloatArray] = []
-    for dc, dr in ((0, 0), (1, 0), (0, 1), (1, 1)):
-        c = i0[:, 0] + dc
-        r = i0[:, 1] + dr
-        wgt = (f[:, 0] if dc else 1.0 - f[:, 0]) * (f[:, 1] if dr else 1.0 - f[:, 1])
-        ok = (c >= 0) & (c < w) & (r >= 0) & (r < h)
-        flat.append(r[ok] * w + c[ok])
-        weights.append(wgt[ok])
-    cells, inverse = np.unique(np.concatenate(flat), return_inverse=True)
-    acc = np.zeros(cells.size, dtype=np.float64)
-    start = 0
-    for idx, wgt in zip(flat, weights, strict=True):
-        acc += np.bincount(inverse[start : start + idx.size], weights=wgt, minlength=cells.size)
-        start += idx.size
-    counts.reshape(-1)[cells] += acc.astype(np.float32)
+    del u
+    out = counts.reshape(-1)
+    rows = max(1, _BAND_CELLS // max(w, 1))
+    for r_lo in range(0, h, rows):
+        r_hi = min(r_lo + rows, h)
+        acc = np.zeros((r_hi - r_lo) * w, dtype=np.float64)
+        for dc, dr in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            c = i0[:, 0] + dc
+            r = i0[:, 1] + dr
+            sel = np.flatnonzero((c >= 0) & (c < w) & (r >= r_lo) & (r < r_hi))
+            fs = f[sel]
+            wgt = (fs[:, 0] if dc else 1.0 - fs[:, 0]) * (fs[:, 1] if dr else 1.0 - fs[:, 1])
+            acc += np.bincount((r[sel] - r_lo) * w + c[sel], weights=wgt, minlength=acc.size)
+        out[r_lo * w : r_hi * w] += acc.astype(np.float32)
 
 
 def density_table(
