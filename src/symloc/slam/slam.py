@@ -995,6 +995,11 @@ def run_slam(
     run.verifier.finish()
     run.optimize(run.node_scans[-1], len(run.node_scans) - 1)
     timings["optimize"] += time.perf_counter() - t2
+    # the submaps (two active grids) and their cached tables are done with: free them before
+    # the refinement's density grid and the final map
+    n_submaps = len(run.active.submaps)
+    run.active.submaps.clear()
+    run.cache.order.clear()
     t_ref = time.perf_counter()
     if not run.refine_to_map():
         _LOG.warning(
@@ -1013,10 +1018,6 @@ def run_slam(
     poses = compose(node_poses[owner], relative(local[nodes[owner]], local))
     timings["optimize"] += time.perf_counter() - t2
 
-    # the submaps and their tables are done with: free them before the final map
-    n_submaps = len(run.active.submaps)
-    run.active.submaps.clear()
-    run.cache.order.clear()
     t3 = time.perf_counter()
     model = InverseSensorModel(
         p_hit=prm.submap.model.p_hit,
