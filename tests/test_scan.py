@@ -211,3 +211,14 @@ def test_deskew_an_upside_down_laser_off_the_centre() -> None:
     assert off_wall_p95(upright) > 5 * fixed
     # the robot's twist alone (the laser taken for the centre) leaves an error
     assert off_wall_p95(deskew(upright, v, w)) > 2 * fixed
+
+
+def test_scans_of_one_geometry_share_their_read_only_angles() -> None:
+    """A log's scans hold one angle array between them (memory), which nobody can change."""
+    a = LaserScan(-1.5, 0.01, 0.1, 30.0, np.ones(300))
+    b = LaserScan(-1.5, 0.01, 0.1, 30.0, np.full(300, 2.0))
+    c = LaserScan(-1.5, 0.01, 0.1, 30.0, np.ones(301))
+    assert a.angles is b.angles
+    assert not a.angles.flags.writeable
+    assert c.angles is not a.angles
+    np.testing.assert_array_equal(a.angles, -1.5 + 0.01 * np.arange(300))

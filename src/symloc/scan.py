@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,6 +24,15 @@ from symloc.errors import DataFormatError
 __all__ = ["LaserScan", "ScanPoints", "deskew", "mirror", "sensor_twist"]
 
 FloatArray = NDArray[np.float64]
+
+
+@lru_cache(maxsize=64)
+def _beam_angles(angle_min: float, angle_increment: float, n: int) -> FloatArray:
+    """Read-only beam angles ``(n,)`` [rad], one array shared by every scan of the same
+    geometry (a log's thousands of scans would otherwise each hold a copy)."""
+    angles: FloatArray = angle_min + angle_increment * np.arange(n, dtype=np.float64)
+    angles.setflags(write=False)
+    return angles
 
 
 def _finite_field(value: object, name: str) -> float:
@@ -147,9 +157,7 @@ class LaserScan:
                 )
             inten.setflags(write=False)
             set_(self, "intensities", inten if inten.size else None)
-        angles = self.angle_min + self.angle_increment * np.arange(ranges.size)
-        angles.setflags(write=False)
-        set_(self, "_angles", angles)
+        set_(self, "_angles", _beam_angles(self.angle_min, self.angle_increment, ranges.size))
 
     @classmethod
     def from_angle_range(

@@ -128,3 +128,63 @@ def test_crop_keeps_world_coordinates() -> None:
     a = full.world_to_cell(hit)[0]
     b = crop.world_to_cell(hit)[0]
     assert full.data[a[0], a[1]] == crop.data[b[0], b[1]] == 70
+
+
+def _walk(n: int = 40) -> tuple[np.ndarray, list[LaserScan]]:
+    rng = np.random.default_rng(3)
+    poses, scans = [], []
+    p = np.zeros(3)
+    for _ in range(n):
+        p = p + np.array([rng.normal(0.5, 0.3), rng.normal(0.2, 0.3), rng.normal(0.0, 0.3)])
+        r = rng.uniform(0.5, 12.0, 180)
+        r[rng.random(180) < 0.05] = 80.0  # no return
+        r[rng.random(180) < 0.02] = np.nan
+        scans.append(LaserScan(-math.pi / 2, math.pi / 179, 0.1, 50.0, r))
+        poses.append(p.copy())
+    return np.array(poses), scans
+
+
+@pytest.mark.parametrize("clamp", [True, False])
+def test_reserve_allocates_once_and_changes_nothing(clamp: bool) -> None:
+    """A reserved grid grows into one buffer (no copy per growth step) through exactly the
+    shapes, origins and values of an unreserved one."""
+    poses, scans = _walk()
+    model = InverseSensorModel(max_range=40.0)
+    plain = LogOddsGrid(0.05, model, poses[0, :2], clamp=clamp)
+    reserved = LogOddsGrid(0.05, model, poses[0, :2], clamp=clamp)
+    reserved.reserve(poses, scans)
+    first = None
+    for p, s in zip(poses, scans, strict=True):
+        plain.integrate(p, s)
+        reserved.integrate(p, s)
+        first = reserved.values if first is None else first
+        assert reserved.shape == plain.shape
+        assert np.array_equal(reserved.origin_xy, plain.origin_xy)
+    assert np.array_equal(reserved.values, plain.values)
+    assert np.shares_memory(first, reserved.values)  # the same memory from the first scan on
+    a = plain.to_occupancy_grid(crop_margin=10)
+    b = reserved.to_occupancy_grid(crop_margin=10)
+    assert np.array_equal(a.data, b.data)
+    assert np.array_equal(a.origin, b.origin)
+
+
+def test_occupancy_grid_is_the_crop_of_the_full_conversion(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Converting only the cropped cells, a block of rows at a time, gives the crop of the
+    whole grid converted at once."""
+    import symloc.grid.log_odds as lo
+
+    poses, scans = _walk(15)
+    g = LogOddsGrid(0.05, InverseSensorModel(max_range=40.0), poses[0, :2], clamp=False)
+    for p, s in zip(poses, scans, strict=True):
+        g.integrate(p, s)
+    full = g.occupancy_percent()
+    full[~g.known_mask()] = -1
+    monkeypatch.setattr(lo, "_BLOCK_CELLS", 1000)  # many blocks
+    occ = g.to_occupancy_grid(crop_margin=3)
+    rows = np.flatnonzero(g.known_mask().any(axis=1))
+    cols = np.flatnonzero(g.known_mask().any(axis=0))
+    r0, c0 = max(rows[0] - 3, 0), max(cols[0] - 3, 0)
+    expected = full[r0 : rows[-1] + 4, c0 : cols[-1] + 4]
+    assert np.array_equal(occ.data, expected)
+    assert np.allclose(occ.origin[:2], g.origin_xy + np.array([c0, r0]) * 0.05)
+    assert np.array_equal(g.to_occupancy_grid().data, full)

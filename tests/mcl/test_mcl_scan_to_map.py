@@ -140,3 +140,20 @@ def test_a_round_room_leaves_the_rotation_about_its_centre_unconstrained() -> No
     # distance from the centre is known
     radial = truth[:2] / np.hypot(*truth[:2])
     assert math.sqrt(radial @ m.covariance[:2, :2] @ radial) < 0.02
+
+
+def test_numpy_lookups_give_the_compiled_match_bit_for_bit(l_room) -> None:
+    """``compiled=False`` (SLAM's map error, a process without numba) runs the kernels'
+    expressions in NumPy: the same match, to the last bit."""
+    room, field = l_room
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        truth = np.array([*room.positions_inside(30, margin=0.4)[rng.integers(30)], 0.3])
+        init = truth + np.array([0.06, -0.04, math.radians(3.0)])
+        pts = _points(room.world, truth, seed=int(rng.integers(99)))
+        a = match_scan_to_map(field, pts, init)
+        b = match_scan_to_map(field, pts, init, ScanMatchConfig(compiled=False))
+        assert np.array_equal(a.pose, b.pose)
+        assert np.array_equal(a.information, b.information)
+        assert np.array_equal(a.covariance, b.covariance)
+        assert (a.inlier_fraction, a.iterations) == (b.inlier_fraction, b.iterations)

@@ -95,3 +95,26 @@ def test_params_validation(kwargs: dict[str, float], match: str) -> None:
 def test_table_validation() -> None:
     with pytest.raises(ConfigurationError, match=r"LikelihoodTable\.values: expected"):
         LikelihoodTable(np.zeros(3), 0.05, (0, 0))
+
+
+def test_coarse_scores_do_not_depend_on_how_headings_are_grouped(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The coarse level is scored a group of headings at a time (bounded memory): every
+    grouping gives exactly the scores of one gather over all headings."""
+    import symloc.slam.correlative_scan_matching as csm
+
+    rng = np.random.default_rng(1)
+    coarse = rng.random((300, 300)).astype(np.float32)
+    k, n, nb = 37, 150, 9
+    cells = rng.integers(20, 250, size=(k, n, 2)).astype(np.intp)
+    inside = rng.random((k, n)) > 0.1
+    offs = (np.arange(nb) * 4 - 16).astype(np.intp)
+    rr = cells[:, :, 0, None, None] + offs[None, None, :, None]
+    cc = cells[:, :, 1, None, None] + offs[None, None, None, :]
+    one_gather = np.where(inside[:, :, None, None], coarse[rr, cc], 0.0).sum(axis=1) / n
+    for budget in (1, 5_000, 1 << 30):
+        monkeypatch.setattr(csm, "_GATHER_BUDGET", budget)
+        out = csm._coarse_scores(coarse, cells, inside, offs, n)
+        assert out.dtype == np.float64
+        assert np.array_equal(out, one_gather.astype(np.float64))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from conftest import raycast
 
 from symloc.scan import LaserScan
@@ -74,3 +75,39 @@ def test_density_table_ridge_lies_on_the_mean_of_the_points() -> None:
     val, _ = table.interpolate(pts)
     assert val.max() <= 1.0 + 1e-6
     assert density_table(lambda: [pts], 0.025, 0.04, max_cells=100) is None
+
+
+@pytest.mark.parametrize("band_cells", [1000, 1 << 20])
+def test_splat_accumulates_as_a_dense_float64_splat_would(
+    band_cells: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """add_splat works a band of rows at a time; the counts are those of adding a
+    dense float64 (H, W) splat rounded to float32, batch after batch."""
+    import symloc.slam.map_refinement as mr
+    from symloc.slam.map_refinement import add_splat, splat_points
+
+    monkeypatch.setattr(mr, "_BAND_CELLS", band_cells)
+
+    rng = np.random.default_rng(0)
+    origin = np.array([-1.0, -2.0])
+    shape = (300, 400)
+    counts = np.zeros(shape, np.float32)
+    dense = np.zeros(shape, np.float32)
+    for _ in range(3):
+        pts = rng.normal(3.0, 3.0, size=(20_000, 2))
+        pts[:5000] = np.round(pts[:5000], 1)  # many points on the same cells
+        add_splat(counts, pts, origin, 0.025)
+        u = (pts - origin) / 0.025 - 0.5
+        i0 = np.floor(u).astype(np.intp)
+        f = u - i0
+        acc = np.zeros(shape[0] * shape[1])
+        for dc, dr in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            c, r = i0[:, 0] + dc, i0[:, 1] + dr
+            w = (f[:, 0] if dc else 1 - f[:, 0]) * (f[:, 1] if dr else 1 - f[:, 1])
+            ok = (c >= 0) & (c < shape[1]) & (r >= 0) & (r < shape[0])
+            acc += np.bincount(r[ok] * shape[1] + c[ok], weights=w[ok], minlength=acc.size)
+        dense += acc.reshape(shape).astype(np.float32)
+    assert np.array_equal(counts, dense)
+    assert np.array_equal(
+        splat_points(pts, origin, 0.025, shape), acc.reshape(shape).astype(np.float32)
+    )

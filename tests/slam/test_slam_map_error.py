@@ -121,3 +121,27 @@ def test_claim_gate_takes_the_larger_map_error() -> None:
         gate = loc.claim_gate
         assert gate is not None
         assert gate.config.map_std_xy == pytest.approx(want)
+
+
+def test_the_map_error_runs_without_the_compiled_kernels(monkeypatch: pytest.MonkeyPatch) -> None:
+    """By default the map error aligns in NumPy (a mapping process need not load numba, ~120
+    MB): the same estimate as the localizer's compiled look-ups."""
+    from symloc.mcl import kernels
+    from symloc.mcl.scan_to_map import ScanMatchConfig
+
+    rng = np.random.default_rng(3)
+    poses = _poses(rng, 12)
+    scans = [_scan(p, rng) for p in poses]
+    grid = _drawn(scans, poses)
+    compiled = estimate_map_error(grid, scans, poses, config=ScanMatchConfig())
+
+    def _refuse(*args: object) -> None:
+        raise AssertionError("the map error used a compiled kernel")
+
+    monkeypatch.setattr(kernels, "bilinear", _refuse)
+    monkeypatch.setattr(kernels, "squared_distance_sum", _refuse)
+    plain = estimate_map_error(grid, scans, poses)
+    assert compiled is not None
+    assert plain is not None
+    assert np.array_equal(plain.moves, compiled.moves)
+    assert np.array_equal(plain.shift, compiled.shift)

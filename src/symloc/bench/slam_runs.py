@@ -21,15 +21,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.bench.exploration import simulate_exploration
 from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, map_agreement, rpe
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.geometry import compose
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.io.carmen import CarmenLog, read_carmen
 from symloc.sim.odometry_noise import ODOMETRY_REGIMES, OdometryRegime, regime_odometry
-from symloc.sim.rasterize import world_to_grid
-from symloc.sim.rooms import build_room
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
 __all__ = [
@@ -319,6 +316,11 @@ def run_simulated(
     regime = _regime(odometry)
     if regime is None:
         raise ConfigurationError("odometry: 'log' needs a log; a simulated world takes a regime")
+    # imported here: the simulator (lidar, rooms, OpenCV, numba) is not needed on a log
+    from symloc.bench.exploration import simulate_exploration
+    from symloc.sim.rasterize import world_to_grid
+    from symloc.sim.rooms import build_room
+
     room_name, gv, in_lab = SIM_WORLDS[world]
     room = build_room(room_name, gv, lab=in_lab)
     gen = _noise_rng(world, rng)

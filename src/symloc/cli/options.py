@@ -62,11 +62,13 @@ import os
 import stat
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from symloc.lidar_spec import PRESETS
 from symloc.mcl.params import MAX_PARTICLES, PARTICLE_MEMORY
-from symloc.symmetry.order import SymmetryOrder
+
+if TYPE_CHECKING:  # a type only: symloc.symmetry loads the features' numba kernels
+    from symloc.symmetry.order import SymmetryOrder
 
 __all__ = [
     "DEFAULT_LIDAR",

@@ -13,8 +13,49 @@ from symloc.figures._save import save_figure
 __all__ = ["map_trajectory_figure", "slam_bench_figure", "slam_summary_figure"]
 
 
+#: Largest image side [pixels] drawn as it is; a larger map is drawn averaged over blocks of
+#: cells (the 8-inch, 120-dpi figure shows about 900 pixels across anyway).
+_MAX_IMAGE_SIDE = 2048
+
+#: Grid rows converted to gray at once (bounds the float64 temporaries of a large map).
+_BAND_ROWS = 128
+
+
 def _grid_image(grid: Any) -> np.ndarray:
-    return np.where(grid.data < 0, 0.5, 1.0 - grid.data / 100.0)
+    """Gray image ``(h, w)`` of ``grid.data (H, W)``: 1 free, 0 occupied, 0.5 unknown.
+
+    A map wider or taller than ``_MAX_IMAGE_SIDE`` cells is averaged over ``f x f`` blocks
+    (``f`` the smallest factor that brings it under; a partial block at the top or right
+    edge is averaged over its cells), converting a band of rows at a time, so that drawing a
+    map of tens of millions of cells does not hold several float64 copies of it.
+    """
+    data = grid.data
+    h, w = data.shape
+    f = -(-max(h, w) // _MAX_IMAGE_SIDE)
+    if f <= 1:
+        return np.where(data < 0, 0.5, 1.0 - data / 100.0)
+    hb, wb = -(-h // f), -(-w // f)
+    out = np.empty((hb, wb), dtype=np.float64)
+    step = max(1, _BAND_ROWS // f) * f
+    col_counts = np.bincount(np.arange(w) // f, minlength=wb).astype(np.float64)
+    for a in range(0, h, step):
+        band = data[a : a + step]
+        gray = np.where(band < 0, 0.5, 1.0 - band / 100.0)
+        rows = np.add.reduceat(gray, np.arange(0, gray.shape[0], f), axis=0)
+        sums = np.add.reduceat(rows, np.arange(0, w, f), axis=1)
+        n_rows = np.bincount(np.arange(gray.shape[0]) // f).astype(np.float64)
+        out[a // f : a // f + sums.shape[0]] = sums / n_rows[:, None] / col_counts[None, :]
+    return out
+
+
+def _known_box(data: np.ndarray) -> np.ndarray | None:
+    """``[[row_min, col_min], [row_max, col_max]]`` of the cells ``>= 0``, or None."""
+    known = data >= 0
+    rows = np.flatnonzero(known.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(known.any(axis=0))
+    return np.array([[rows[0], cols[0]], [rows[-1], cols[-1]]])
 
 
 def map_trajectory_figure(
@@ -75,9 +116,9 @@ def map_trajectory_figure(
             width=0.004,
             label=f"keyframes ({kf.shape[0]})",
         )
-    known = np.argwhere(grid.data >= 0)
-    if known.size:
-        c = grid.cell_to_world(np.array([known.min(axis=0), known.max(axis=0)]))
+    box = _known_box(grid.data)
+    if box is not None:
+        c = grid.cell_to_world(box)
         xs = np.concatenate([c[:, 0], poses[:, 0]])
         ys = np.concatenate([c[:, 1], poses[:, 1]])
         ax.set_xlim(xs.min() - 1.0, xs.max() + 1.0)

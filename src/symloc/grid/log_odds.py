@@ -18,6 +18,7 @@ probability grid does the same). Cell traversal samples points along every beam 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -229,6 +230,9 @@ class LogOddsGrid:
         self.model = model if model is not None else InverseSensorModel()
         self.origin_xy = np.asarray(origin_xy, dtype=np.float64).reshape(2).copy()
         self.values = np.zeros((1, 1), dtype=np.float32)
+        # reserved memory (see reserve): values is the window of _buffer starting at _view
+        self._buffer: NDArray[np.float32] | None = None
+        self._view = (0, 0)
         self.chunk = int(chunk)
         self.clamp = bool(clamp)
         self.n_scans = 0
@@ -240,32 +244,75 @@ class LogOddsGrid:
 
     def ensure_contains(self, xy_min: ArrayLike, xy_max: ArrayLike) -> None:
         """Grow the grid so that the world box ``[xy_min, xy_max]`` lies inside it."""
-        lo = np.floor((np.asarray(xy_min, float) - self.origin_xy) / self.resolution).astype(int)
-        hi = np.floor((np.asarray(xy_max, float) - self.origin_xy) / self.resolution).astype(int)
+        pads = _growth(self.origin_xy, self.shape, xy_min, xy_max, self.resolution, self.chunk)
+        if not any(pads):
+            return
+        pl, pb, pr, pt = pads
         h, w = self.values.shape
-        pad_left = max(0, -lo[0])
-        pad_bottom = max(0, -lo[1])
-        pad_right = max(0, hi[0] - (w - 1))
-        pad_top = max(0, hi[1] - (h - 1))
-        if pad_left or pad_bottom or pad_right or pad_top:
-            ch = self.chunk
-            pl = pad_left + ch if pad_left else 0
-            pb = pad_bottom + ch if pad_bottom else 0
-            pr = pad_right + ch if pad_right else 0
-            pt = pad_top + ch if pad_top else 0
+        buf = self._buffer
+        if buf is not None and (
+            self._view[0] >= pb
+            and self._view[1] >= pl
+            and self._view[0] + h + pt <= buf.shape[0]
+            and self._view[1] + w + pr <= buf.shape[1]
+        ):
+            # reserved: the grown grid is a larger window of the same zero-initialised buffer
+            r0, c0 = self._view[0] - pb, self._view[1] - pl
+            self._view = (r0, c0)
+            self.values = buf[r0 : r0 + h + pb + pt, c0 : c0 + w + pl + pr]
+        else:
             self.values = np.pad(self.values, ((pb, pt), (pl, pr)))
-            self.origin_xy = self.origin_xy - np.array([pl, pb]) * self.resolution
+            self._buffer = None
+        self.origin_xy = self.origin_xy - np.array([pl, pb]) * self.resolution
 
-    def integrate(self, pose: ArrayLike, scan: LaserScan) -> None:
-        """Update the grid with ``scan`` taken at sensor pose ``pose`` (3,) [m, m, rad]."""
-        p = np.asarray(pose, dtype=np.float64)
+    def reserve(self, poses: ArrayLike, scans: Sequence[LaserScan]) -> None:
+        """Allocate at once the grid that integrating ``scans`` at ``poses`` (N, 3) will grow
+        to, so that growing exposes zero cells of it instead of copying the grid each time.
+
+        The grid's shape and origin after every scan are exactly those without reserving (the
+        same growth steps are computed in advance); only the memory is allocated once, which
+        keeps a large map from holding its old and new copies at every growth step.
+        """
+        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        if len(scans) != p.shape[0]:
+            raise ConfigurationError(
+                f"poses: expected one per scan ({len(scans)}), got {p.shape[0]}"
+            )
+        origin = self.origin_xy.copy()
+        h, w = self.shape
+        top = left = 0  # cells added below row 0 / left of column 0 of the current grid
+        for pose, scan in zip(p, scans, strict=True):
+            reach = self._reach(scan)
+            pl, pb, pr, pt = _growth(
+                origin, (h, w), pose[:2] - reach, pose[:2] + reach, self.resolution, self.chunk
+            )
+            if pl or pb or pr or pt:
+                origin = origin - np.array([pl, pb]) * self.resolution
+                h, w = h + pb + pt, w + pl + pr
+                top, left = top + pb, left + pl
+        if (h, w) == self.shape:
+            return
+        buf = np.zeros((h, w), dtype=np.float32)
+        h0, w0 = self.shape
+        buf[top : top + h0, left : left + w0] = self.values
+        self._buffer = buf
+        self._view = (top, left)
+        self.values = buf[top : top + h0, left : left + w0]
+
+    def _reach(self, scan: LaserScan) -> float:
+        """Half-width [m] of the square around the sensor that ``scan`` can change."""
         reach = 0.0
         r = scan.ranges[scan.valid_mask]
         if r.size:
             reach = min(self.model.max_range, float(r.max()))
         if self.model.no_return_range > 0 and np.any(scan.no_return_mask):
             reach = max(reach, self.model.no_return_range)
-        reach += 2 * self.resolution
+        return reach + 2 * self.resolution
+
+    def integrate(self, pose: ArrayLike, scan: LaserScan) -> None:
+        """Update the grid with ``scan`` taken at sensor pose ``pose`` (3,) [m, m, rad]."""
+        p = np.asarray(pose, dtype=np.float64)
+        reach = self._reach(scan)
         self.ensure_contains(p[:2] - reach, p[:2] + reach)
         res = self.resolution
         o = self.origin_xy
@@ -307,14 +354,7 @@ class LogOddsGrid:
 
     def occupancy_percent(self) -> NDArray[np.int8]:
         """``(H, W)`` occupancy 0..100 (rounded), computed in float32 (half the memory)."""
-        v = self.values.astype(np.float32, copy=True)
-        np.clip(v, -30.0, 30.0, out=v)  # an unclamped grid's sums: no overflow in exp
-        np.negative(v, out=v)
-        np.exp(v, out=v)
-        v += np.float32(1.0)
-        np.divide(np.float32(100.0), v, out=v)
-        np.rint(v, out=v)
-        return v.astype(np.int8)
+        return _occupancy_percent(self.values)
 
     def known_mask(self) -> NDArray[np.bool_]:
         """``(H, W)`` True where the cell was observed (log-odds not 0)."""
@@ -330,20 +370,20 @@ class LogOddsGrid:
         """The grid as an :class:`OccupancyGrid`: unknown -1 where never observed, else 0..100.
 
         With ``crop_margin`` (cells), the result is cropped to the observed cells' bounding
-        box plus that margin.
+        box plus that margin (the crop is chosen first and only its cells are converted).
         """
-        occ = self.occupancy_percent()
-        known = self.known_mask()
-        occ[~known] = -1
+        v = self.values
         origin = self.origin_xy.copy()
-        if crop_margin is not None and known.any():
-            rows = np.flatnonzero(known.any(axis=1))
-            cols = np.flatnonzero(known.any(axis=0))
-            m = int(crop_margin)
-            r0, r1 = max(rows[0] - m, 0), min(rows[-1] + m + 1, occ.shape[0])
-            c0, c1 = max(cols[0] - m, 0), min(cols[-1] + m + 1, occ.shape[1])
-            occ = occ[r0:r1, c0:c1]
-            origin = origin + np.array([c0, r0]) * self.resolution
+        if crop_margin is not None:
+            rows = np.flatnonzero(v.any(axis=1))
+            if rows.size:
+                cols = np.flatnonzero(v.any(axis=0))
+                m = int(crop_margin)
+                r0, r1 = max(rows[0] - m, 0), min(rows[-1] + m + 1, v.shape[0])
+                c0, c1 = max(cols[0] - m, 0), min(cols[-1] + m + 1, v.shape[1])
+                v = v[r0:r1, c0:c1]
+                origin = origin + np.array([c0, r0]) * self.resolution
+        occ = _occupancy_percent(v, unknown=-1)
         return OccupancyGrid(
             occ,
             self.resolution,
@@ -351,3 +391,55 @@ class LogOddsGrid:
             occupied_thresh,
             free_thresh,
         )
+
+
+#: Cells converted at once by :func:`_occupancy_percent` (bounds its float32 temporaries).
+_BLOCK_CELLS = 1 << 20
+
+
+def _occupancy_percent(values: NDArray[np.float32], unknown: int | None = None) -> NDArray[np.int8]:
+    """``(H, W)`` occupancy 0..100 of log-odds ``values (H, W)``, rounded, computed in float32
+    a block of rows at a time; cells at exactly 0 (never observed) get ``unknown`` if given."""
+    h, w = values.shape
+    out = np.empty((h, w), dtype=np.int8)
+    step = max(1, _BLOCK_CELLS // max(w, 1))
+    for a in range(0, h, step):
+        blk = values[a : a + step]
+        v = blk.astype(np.float32, copy=True)
+        np.clip(v, -30.0, 30.0, out=v)  # an unclamped grid's sums: no overflow in exp
+        np.negative(v, out=v)
+        np.exp(v, out=v)
+        v += np.float32(1.0)
+        np.divide(np.float32(100.0), v, out=v)
+        np.rint(v, out=v)
+        o = out[a : a + step]
+        o[...] = v.astype(np.int8)
+        if unknown is not None:
+            o[blk == 0] = unknown
+    return out
+
+
+def _growth(
+    origin_xy: FloatArray,
+    shape: tuple[int, int],
+    xy_min: ArrayLike,
+    xy_max: ArrayLike,
+    resolution: float,
+    chunk: int,
+) -> tuple[int, int, int, int]:
+    """Cells ``(left, bottom, right, top)`` a grid of ``shape (H, W)`` with its cell (0, 0) at
+    ``origin_xy (2,)`` [m] grows by to hold the world box ``[xy_min, xy_max]`` (``chunk`` more
+    on every side that grows; all 0 when the box is inside)."""
+    lo = np.floor((np.asarray(xy_min, float) - origin_xy) / resolution).astype(int)
+    hi = np.floor((np.asarray(xy_max, float) - origin_xy) / resolution).astype(int)
+    h, w = shape
+    pad_left = max(0, -lo[0])
+    pad_bottom = max(0, -lo[1])
+    pad_right = max(0, hi[0] - (w - 1))
+    pad_top = max(0, hi[1] - (h - 1))
+    return (
+        int(pad_left + chunk if pad_left else 0),
+        int(pad_bottom + chunk if pad_bottom else 0),
+        int(pad_right + chunk if pad_right else 0),
+        int(pad_top + chunk if pad_top else 0),
+    )

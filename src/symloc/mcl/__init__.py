@@ -2,22 +2,49 @@
 
 A NumPy port of nav2_amcl's filter with its parameter names and defaults, vectorised over
 particles and beams, with its known weaknesses fixed (see :mod:`symloc.mcl.amcl`).
+
+The names below are imported from their modules on first use, so that importing one module of
+the package (SLAM's map error uses :mod:`symloc.mcl.scan_to_map`) does not load the filter
+and its compiled kernels (numba).
 """
 
 from __future__ import annotations
 
-from symloc.mcl.amcl import Amcl, AmclResult, NotInitializedError
-from symloc.mcl.clustering import ClusterStats, Hypothesis, cluster_particles
-from symloc.mcl.confidence import (
-    Confidence,
-    ConfidenceConfig,
-    ConfidenceJudge,
-    ScanConsistency,
-    assess,
-    scan_consistency,
-)
-from symloc.mcl.params import AmclParams
-from symloc.mcl.rival_search import RivalReport, find_rival
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from symloc.mcl.amcl import Amcl, AmclResult, NotInitializedError
+    from symloc.mcl.clustering import ClusterStats, Hypothesis, cluster_particles
+    from symloc.mcl.confidence import (
+        Confidence,
+        ConfidenceConfig,
+        ConfidenceJudge,
+        ScanConsistency,
+        assess,
+        scan_consistency,
+    )
+    from symloc.mcl.params import AmclParams
+    from symloc.mcl.rival_search import RivalReport, find_rival
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "Amcl": "symloc.mcl.amcl",
+    "AmclResult": "symloc.mcl.amcl",
+    "NotInitializedError": "symloc.mcl.amcl",
+    "ClusterStats": "symloc.mcl.clustering",
+    "Hypothesis": "symloc.mcl.clustering",
+    "cluster_particles": "symloc.mcl.clustering",
+    "Confidence": "symloc.mcl.confidence",
+    "ConfidenceConfig": "symloc.mcl.confidence",
+    "ConfidenceJudge": "symloc.mcl.confidence",
+    "ScanConsistency": "symloc.mcl.confidence",
+    "assess": "symloc.mcl.confidence",
+    "scan_consistency": "symloc.mcl.confidence",
+    "AmclParams": "symloc.mcl.params",
+    "RivalReport": "symloc.mcl.rival_search",
+    "find_rival": "symloc.mcl.rival_search",
+}
 
 __all__ = [
     "Amcl",
@@ -36,3 +63,17 @@ __all__ = [
     "find_rival",
     "scan_consistency",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module when the name is first used (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

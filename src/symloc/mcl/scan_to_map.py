@@ -44,7 +44,6 @@ from numpy.typing import ArrayLike, NDArray
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
-from symloc.mcl import kernels
 
 __all__ = ["ScanMatch", "ScanMatchConfig", "match_scan_to_map", "scan_points"]
 
@@ -79,6 +78,10 @@ class ScanMatchConfig:
         the curvature of the cost over steps of this size, not at the optimum. A map whose
         cost only ripples (a rasterised circle, a corridor's repeated doors) has curvature at
         every ripple but no information at the scale that matters.
+    compiled : bool
+        Look the distances up in the compiled kernels (:mod:`symloc.mcl.kernels`, numba);
+        False runs the same expressions in NumPy (the same numbers, bit for bit, more slowly)
+        and never imports numba, whose JIT costs a process ~120 MB (SLAM's map error).
     """
 
     sigma: float = 0.03
@@ -90,6 +93,7 @@ class ScanMatchConfig:
     iterations: int = 12
     secant_position: float = 0.1
     secant_heading: float = math.radians(5.0)
+    compiled: bool = True
 
     def __post_init__(self) -> None:
         for name in (
@@ -149,13 +153,18 @@ def scan_points(ranges: ArrayLike, angles: ArrayLike, laser_pose: ArrayLike) -> 
     return np.column_stack([lp[0] + c * x - s * y, lp[1] + s * x + c * y])
 
 
-def _bilinear(field: DistanceField, pts: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _bilinear(
+    field: DistanceField, pts: FloatArray, compiled: bool = True
+) -> tuple[FloatArray, FloatArray]:
     """Distance [m] and its gradient (N, 2) at world points (N, 2), bilinear between cell
-    centres; off the map: ``max_dist`` with zero gradient."""
+    centres; off the map: ``max_dist`` with zero gradient (``compiled``: see
+    :class:`ScanMatchConfig`)."""
     grid = field.grid
     res = grid.resolution
     o = grid.origin
-    if o[2] == 0.0:  # compiled, the same expressions
+    if o[2] == 0.0 and compiled:  # compiled, the same expressions
+        from symloc.mcl import kernels  # here: numba is imported only if it is used
+
         x = np.ascontiguousarray(pts[:, 0])
         y = np.ascontiguousarray(pts[:, 1])
         n = x.shape[0]
@@ -208,7 +217,9 @@ def _cost(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatc
     second difference along a step ``u`` is ``u^T Omega u`` for a map of straight walls."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     o = field.grid.origin
-    if o[2] == 0.0:  # compiled: the same expressions and NumPy's summation order
+    if o[2] == 0.0 and cfg.compiled:  # compiled: the same expressions and NumPy's summation order
+        from symloc.mcl import kernels
+
         h2, w2 = field.padded.shape
         p = np.ascontiguousarray(pts)
         total = kernels.squared_distance_sum(
@@ -218,7 +229,7 @@ def _cost(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatc
         return float(0.5 * total * cfg.information_scale / (cfg.sigma * cfg.sigma))
     x = c * pts[:, 0] - s * pts[:, 1] + pose[0]
     y = s * pts[:, 0] + c * pts[:, 1] + pose[1]
-    d = _bilinear(field, np.column_stack([x, y]))[0]
+    d = _bilinear(field, np.column_stack([x, y]), compiled=False)[0]
     return float(0.5 * np.sum(d * d) * cfg.information_scale / (cfg.sigma * cfg.sigma))
 
 
@@ -258,7 +269,7 @@ def _secant_information(
     here = np.column_stack(
         [c * pts[:, 0] - s * pts[:, 1] + pose[0], s * pts[:, 0] + c * pts[:, 1] + pose[1]]
     )
-    pts = pts[np.abs(_bilinear(field, here)[0]) <= cfg.inlier_distance]
+    pts = pts[np.abs(_bilinear(field, here, cfg.compiled)[0]) <= cfg.inlier_distance]
     if pts.shape[0] == 0:
         return np.zeros((3, 3))
     c0 = _cost(field, pts, pose, cfg)
@@ -335,7 +346,7 @@ def match_scan_to_map(
         c, s = math.cos(p[2]), math.sin(p[2])
         rx = c * pts[:, 0] - s * pts[:, 1]
         ry = s * pts[:, 0] + c * pts[:, 1]
-        d, grad = _bilinear(field, np.column_stack([rx + p[0], ry + p[1]]))
+        d, grad = _bilinear(field, np.column_stack([rx + p[0], ry + p[1]]), cfg.compiled)
         absd = np.abs(d)
         use = absd < cfg.outlier_distance
         w = np.where(use, np.minimum(1.0, cfg.huber / np.maximum(absd, 1e-12)), 0.0)

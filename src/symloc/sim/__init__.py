@@ -13,25 +13,57 @@ wheel slip), :mod:`~symloc.sim.camera` (``Camera``, ``CameraConditions``),
 :mod:`~symloc.sim.textures` and :mod:`~symloc.sim.poster` (the pool of wall textures),
 :mod:`~symloc.sim.regimes` (the named sensor regimes ``ideal``, ``realistic``, ``heavy`` with
 their sources).
+
+The names below are imported from their modules on first use, so that importing one light module
+of the package (:mod:`~symloc.sim.odometry_noise` for SLAM on a log) does not load the lidar,
+the rooms, the world files and the textures (OpenCV, numba through the symmetry features).
 """
 
 from __future__ import annotations
 
-from symloc.sim.lidar import (
-    LDS01,
-    PAPER_15M,
-    PRESETS,
-    RPLIDAR_A2,
-    LidarFaults,
-    LidarPreset,
-    SimulatedLidar,
-    simulate_scan,
-)
-from symloc.sim.raycast import raycast
-from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig, WheelSlip
-from symloc.sim.rooms import ROOM_NAMES, Room, build_room
-from symloc.sim.world import World
-from symloc.sim.world_file import WorldSpec, load_world_file, save_world_file
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from symloc.sim.lidar import (
+        LDS01,
+        PAPER_15M,
+        PRESETS,
+        RPLIDAR_A2,
+        LidarFaults,
+        LidarPreset,
+        SimulatedLidar,
+        simulate_scan,
+    )
+    from symloc.sim.raycast import raycast
+    from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig, WheelSlip
+    from symloc.sim.rooms import ROOM_NAMES, Room, build_room
+    from symloc.sim.world import World
+    from symloc.sim.world_file import WorldSpec, load_world_file, save_world_file
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    **dict.fromkeys(
+        (
+            "LDS01",
+            "PAPER_15M",
+            "PRESETS",
+            "RPLIDAR_A2",
+            "LidarFaults",
+            "LidarPreset",
+            "SimulatedLidar",
+            "simulate_scan",
+        ),
+        "symloc.sim.lidar",
+    ),
+    "raycast": "symloc.sim.raycast",
+    **dict.fromkeys(
+        ("DiffDriveRobot", "OdometryNoise", "RobotConfig", "WheelSlip"), "symloc.sim.robot"
+    ),
+    **dict.fromkeys(("ROOM_NAMES", "Room", "build_room"), "symloc.sim.rooms"),
+    "World": "symloc.sim.world",
+    **dict.fromkeys(("WorldSpec", "load_world_file", "save_world_file"), "symloc.sim.world_file"),
+}
 
 __all__ = [
     "LDS01",
@@ -55,3 +87,17 @@ __all__ = [
     "save_world_file",
     "simulate_scan",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module when the name is first used (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

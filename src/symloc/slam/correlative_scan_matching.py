@@ -299,6 +299,41 @@ def _squared_distance(occupied: NDArray[np.bool_], reach: int) -> NDArray[np.flo
     return out
 
 
+#: Table values gathered at once by the coarse level of :func:`match_scan` (headings x points x
+#: blocks x blocks): a wide search (60 degrees, 4 m) gathers ~30 million, 120 MB of float32
+#: and as much again for its mask, so the headings are scored in groups within this budget.
+_GATHER_BUDGET = 1 << 21
+
+
+def _coarse_scores(
+    coarse: NDArray[np.float32],
+    cells: NDArray[np.intp],
+    inside: NDArray[np.bool_],
+    offs: NDArray[np.intp],
+    n_pts: int,
+) -> FloatArray:
+    """Coarse scores ``(K, nb, nb)``: per heading and block, the mean over the ``N`` points of
+    the coarse table at the point's cell ``cells (K, N, 2)`` (row, col) shifted by the block
+    offsets ``offs (nb,)`` [cells]; points not ``inside (K, N)`` count 0.
+
+    Computed for groups of headings whose gathered values stay within ``_GATHER_BUDGET``
+    (each heading's sum runs over the points in the same order, so the result does not
+    depend on the grouping).
+    """
+    k_all, n = inside.shape
+    nb = offs.size
+    group = max(1, _GATHER_BUDGET // max(n * nb * nb, 1))
+    out = np.empty((k_all, nb, nb), dtype=np.float64)
+    for k0 in range(0, k_all, group):
+        sl = slice(k0, k0 + group)
+        rr = cells[sl, :, 0, None, None] + offs[None, None, :, None]
+        cc = cells[sl, :, 1, None, None] + offs[None, None, None, :]
+        vals = coarse[rr, cc]
+        vals[~inside[sl]] = 0.0
+        out[sl] = vals.sum(axis=1) / n_pts
+    return out
+
+
 def _rotate(points: FloatArray, theta: FloatArray) -> FloatArray:
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
     x = c * points[None, :, 0] - s * points[None, :, 1]
@@ -396,11 +431,7 @@ def match_scan(
 
     cb = _closest(offs)
     block_prior = np.exp(-tw * (cb[:, None] ** 2 + cb[None, :] ** 2))
-    # coarse scores (K, nb, nb)
-    rr = cells[:, :, 0, None, None] + offs[None, None, :, None]
-    cc = cells[:, :, 1, None, None] + offs[None, None, None, :]
-    valid_pt = inside[:, :, None, None]
-    coarse_scores = (np.where(valid_pt, coarse[rr, cc], 0.0).sum(axis=1) / n_pts).astype(np.float64)
+    coarse_scores = _coarse_scores(coarse, cells, inside, offs, n_pts)
     bounds = coarse_scores * ang_prior[:, None, None] * block_prior[None, :, :]
     order = np.argsort(bounds, axis=None)[::-1]
     flat_bounds = bounds.ravel()[order]

@@ -17,7 +17,8 @@ height 1 along the mean of its points. A scan is refined on it by
 bilinear table), from its current pose.
 
 Memory: the density grid covers the map's bounding box (``max_cells`` at most; a larger map is
-not refined and the result says so).
+not refined and the result says so); building it holds three float32 grids of that size at
+most, and splatting a band of rows at a time adds two float64 buffers of a million cells.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from scipy import ndimage
 from symloc.geometry import compose
 from symloc.slam.correlative_scan_matching import LikelihoodTable
 
-__all__ = ["density_table", "nodes_in_map", "splat_points"]
+__all__ = ["add_splat", "density_table", "nodes_in_map", "splat_points"]
 
 FloatArray = NDArray[np.float64]
 
@@ -45,18 +46,43 @@ def splat_points(
     Cell ``(r, c)`` has its centre at ``origin_xy + ((c, r) + 0.5) * resolution``; each point
     adds weight 1 shared among its four nearest cell centres (points outside are dropped).
     """
-    h, w = shape
+    out = np.zeros(shape, dtype=np.float32)
+    add_splat(out, points, origin_xy, resolution)
+    return out
+
+
+#: Grid cells splatted at once by :func:`add_splat` (two float64 buffers of this size).
+_BAND_CELLS = 1 << 20
+
+
+def add_splat(
+    counts: NDArray[np.float32], points: FloatArray, origin_xy: FloatArray, resolution: float
+) -> None:
+    """Add the bilinear splat of ``points`` (M, 2) [m] to ``counts`` (H, W) in place.
+
+    Each cell gets, in float64, its four corner sums in the order (0, 0), (1, 0), (0, 1),
+    (1, 1), each summed over the points in their order, then rounded to float32 and added:
+    what adding a full (H, W) float64 splat gives, computed a band of rows at a time so that
+    the float64 buffers hold ``_BAND_CELLS`` cells, not the whole grid.
+    """
+    h, w = counts.shape
     u = (points - origin_xy) / resolution - 0.5
     i0 = np.floor(u).astype(np.intp)
     f = u - i0
-    out = np.zeros(h * w, dtype=np.float64)
-    for dc, dr in ((0, 0), (1, 0), (0, 1), (1, 1)):
-        c = i0[:, 0] + dc
-        r = i0[:, 1] + dr
-        wgt = (f[:, 0] if dc else 1.0 - f[:, 0]) * (f[:, 1] if dr else 1.0 - f[:, 1])
-        ok = (c >= 0) & (c < w) & (r >= 0) & (r < h)
-        out += np.bincount(r[ok] * w + c[ok], weights=wgt[ok], minlength=h * w)
-    return out.reshape(h, w).astype(np.float32)
+    del u
+    out = counts.reshape(-1)
+    rows = max(1, _BAND_CELLS // max(w, 1))
+    for r_lo in range(0, h, rows):
+        r_hi = min(r_lo + rows, h)
+        acc = np.zeros((r_hi - r_lo) * w, dtype=np.float64)
+        for dc, dr in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            c = i0[:, 0] + dc
+            r = i0[:, 1] + dr
+            sel = np.flatnonzero((c >= 0) & (c < w) & (r >= r_lo) & (r < r_hi))
+            fs = f[sel]
+            wgt = (fs[:, 0] if dc else 1.0 - fs[:, 0]) * (fs[:, 1] if dr else 1.0 - fs[:, 1])
+            acc += np.bincount((r[sel] - r_lo) * w + c[sel], weights=wgt, minlength=acc.size)
+        out[r_lo * w : r_hi * w] += acc.astype(np.float32)
 
 
 def density_table(
@@ -95,20 +121,24 @@ def density_table(
     for pts in point_sets():
         batch.append(pts)
         n += pts.shape[0]
-        if n >= 500_000:  # one splat per batch: bounded temporaries, few passes over the grid
-            counts += splat_points(np.concatenate(batch), origin, resolution, (h, w))
+        if n >= 500_000:  # one splat per batch: bounded temporaries
+            add_splat(counts, np.concatenate(batch), origin, resolution)
             batch, n = [], 0
     if n:
-        counts += splat_points(np.concatenate(batch), origin, resolution, (h, w))
+        add_splat(counts, np.concatenate(batch), origin, resolution)
+    del batch
     blurred = ndimage.gaussian_filter(counts, sigma / resolution, mode="constant")
+    del counts
     size = 2 * math.ceil(3.0 * sigma / resolution) + 1
     peak = ndimage.maximum_filter(blurred, size=size, mode="constant")
     # the blurred weight of one isolated point at its own cell, for the noise floor
     one = float(1.0 / (2.0 * math.pi * (sigma / resolution) ** 2))
-    keep = peak >= min_weight * one
-    values = np.zeros_like(blurred)
-    np.divide(blurred, peak, out=values, where=keep)
-    return LikelihoodTable(values, resolution, origin)
+    drop = peak < min_weight * one
+    # the ridge-normalised density, in place of the blurred weight (three grids at the peak)
+    np.divide(blurred, peak, out=blurred, where=~drop)
+    del peak
+    blurred[drop] = 0.0
+    return LikelihoodTable(blurred, resolution, origin)
 
 
 def nodes_in_map(poses: FloatArray, point_sets: Iterable[FloatArray]) -> Iterator[FloatArray]:

@@ -44,6 +44,7 @@ import time
 from collections import OrderedDict, deque
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -64,11 +65,13 @@ from symloc.slam.degeneracy import (
     scan_information,
 )
 from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
-from symloc.slam.map_error import MapError, estimate_map_error
 from symloc.slam.map_refinement import density_table, nodes_in_map
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
+
+if TYPE_CHECKING:  # imported where used: it brings the localizer's compiled kernels
+    from symloc.slam.map_error import MapError
 
 __all__ = ["SlamParams", "SlamResult", "run_slam", "scan_points"]
 
@@ -992,6 +995,11 @@ def run_slam(
     run.verifier.finish()
     run.optimize(run.node_scans[-1], len(run.node_scans) - 1)
     timings["optimize"] += time.perf_counter() - t2
+    # the submaps (two active grids) and their cached tables are done with: free them before
+    # the refinement's density grid and the final map
+    n_submaps = len(run.active.submaps)
+    run.active.submaps.clear()
+    run.cache.order.clear()
     t_ref = time.perf_counter()
     if not run.refine_to_map():
         _LOG.warning(
@@ -1010,10 +1018,6 @@ def run_slam(
     poses = compose(node_poses[owner], relative(local[nodes[owner]], local))
     timings["optimize"] += time.perf_counter() - t2
 
-    # the submaps and their tables are done with: free them before the final map
-    n_submaps = len(run.active.submaps)
-    run.active.submaps.clear()
-    run.cache.order.clear()
     t3 = time.perf_counter()
     model = InverseSensorModel(
         p_hit=prm.submap.model.p_hit,
@@ -1024,13 +1028,19 @@ def run_slam(
         no_return_range=prm.submap.model.no_return_range,
     )
     grid = LogOddsGrid(prm.map_resolution, model, poses[0, :2], clamp=prm.map_clamp)
+    grid.reserve(poses, scans)  # one allocation, not a copy per growth step
     for i in range(n):
         grid.integrate(poses[i], scans[i])
     occ = grid.to_occupancy_grid(crop_margin=10)
+    del grid  # the log-odds (4 bytes a cell) are not needed past the occupancy grid
     timings["map"] = time.perf_counter() - t3
     map_error = None
     if prm.map_error and occ.data.size <= prm.refine_max_cells:
         t4 = time.perf_counter()
+        # imported here: the map error aligns scans as the localizer does (numba kernels,
+        # OpenCV, scikit-image, ~90 MB), which the rest of SLAM does not need
+        from symloc.slam.map_error import estimate_map_error
+
         map_error = estimate_map_error(occ, [scans[int(i)] for i in nodes], poses[nodes])
         if map_error is not None:
             origin = np.asarray(occ.origin, dtype=np.float64).copy()
