@@ -66,6 +66,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ndtri
 
+from symloc.bench.provenance import RunClock, machine
+from symloc.bench.results_file import write_results
 from symloc.geometry import compose, inverse, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.mcl import Amcl, AmclParams
@@ -562,7 +564,10 @@ def carried(r: RunResult, odom: FloatArray) -> FloatArray:
     return out
 
 
-def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
+def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
+    """Run the end-to-end benchmark; print its table and return its rows (one per log and
+    side: medians over the rounds, ``global`` rows for the large map's global localization)."""
+    rows: list[dict[str, Any]] = []
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
     problems = (
@@ -618,6 +623,23 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
             cpu, peak, err, p95, nu = med[side]
             rc = f"{cpu / med['C++'][0]:7.2f}" if "C++" in med else "      -"
             re_ = f"{err / med['C++'][2]:7.2f}" if "C++" in med else "      -"
+            rows.append(
+                {
+                    "log": name,
+                    "cells": cells,
+                    "side": side,
+                    "cpu_s": float(cpu),
+                    "peak_mib": float(peak),
+                    "error_mean_m": float(err),
+                    "error_p95_m": float(p95),
+                    "updates": int(nu),
+                    "cpu_ratio": float(cpu / med["C++"][0]) if "C++" in med else None,
+                    "error_ratio": float(err / med["C++"][2]) if "C++" in med else None,
+                    "load": float(np.median(loads)),
+                    "judge_cpu_s": float(np.median(judged[0])) if side == "symloc" else None,
+                    "rival_searches": float(np.median(judged[1])) if side == "symloc" else None,
+                }
+            )
             print(
                 f"{name:>10} {cells:>11} {side:>7} | {cpu:7.2f} {peak:8.1f} {err:7.3f} {p95:6.3f}"
                 f" {nu:7.0f} | {rc} {re_} | {np.median(loads):.2f}"
@@ -647,11 +669,21 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> None:
                     else peer_cmd(cmd, gp, args.seed)
                 )
                 r = run_timed(c)
+                rows.append(
+                    {
+                        "log": "large (global)",
+                        "side": side,
+                        "particles": args.global_particles,
+                        "cpu_s": r.cpu_s,
+                        "peak_mib": r.peak_mib,
+                    }
+                )
                 print(
                     f"# global localization on the large map, {args.global_particles} particles,"
                     f" 30 scans: {side} cpu {r.cpu_s:.2f} s, peak {r.peak_mib:.1f} MiB"
                     f" (load {load()})"
                 )
+    return rows
 
 
 def main() -> int:
@@ -674,6 +706,14 @@ def main() -> int:
         help="end to end: symloc's filter alone, without the confidence verdict and its rival"
         " search (by default each update is also judged, as the localizer and the node do)",
     )
+    ap.add_argument(
+        "--results",
+        default=None,
+        metavar="PATH",
+        help="end to end (--carmen/--large): also write a results file (the README's: "
+        "docs/results/bench_amcl_carmen.json) with the rows, command, commit, date, machine "
+        "and load; python -m symloc.readme re-renders the README from it",
+    )
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
@@ -684,7 +724,30 @@ def main() -> int:
     print(f"# load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}; {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory(prefix="symloc-bench-amcl-") as d:
         if args.carmen or args.large:
-            carmen_bench(args, Path(d))
+            clock = RunClock()
+            rows = carmen_bench(args, Path(d))
+            if args.results:
+                settings = {
+                    k: getattr(args, k)
+                    for k in ("seed", "rounds", "logs", "large", "global_particles", "judge")
+                }
+                settings["peer"] = (
+                    "the noetic amcl core (benchmarks/peers/amcl_core)" if (args.peer) else None
+                )
+                clock.stop()
+                written = write_results(
+                    args.results,
+                    command=shlex.join(["python", *sys.argv]),
+                    commit=clock.revision,
+                    date=clock.finished or clock.started,
+                    machine=machine(),
+                    load=clock.load(),
+                    settings=settings,
+                    figures={"rows": rows},
+                    workers=1,
+                    wall_s=None if clock.wall_s is None else round(clock.wall_s, 1),
+                )
+                print(f"wrote {written}")
         else:
             update_bench(args, Path(d))
     return 0
