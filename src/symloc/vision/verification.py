@@ -75,11 +75,7 @@ class VerificationSettings:
     Attributes
     ----------
     max_distance : float
-        Expected keyframes lie within this distance [m] of the hypothesis, > 0. Chosen on the
-        dev split (84 trials, seeds 0-1 of seven families): 1 m left furnished and large
-        regular rooms with no keyframe to compare (64 correct, 4.0 s median to the first claim),
-        2 m 67 correct and 2.3 s, 3 m 68 but one confident lie (a regular 9-gon's copy verified
-        against a far keyframe): farther views verify more, and wrongly sooner.
+        Expected keyframes lie within this distance [m] of the hypothesis, > 0.
     max_heading_difference : float
         ... and look within this angle [rad] of its heading, in (0, pi].
     max_keyframes : int
@@ -106,7 +102,7 @@ class VerificationSettings:
         inliers of every other hypothesis' best fit, >= 1.
     """
 
-    max_distance: float = 2.0
+    max_distance: float = 1.0
     max_heading_difference: float = math.radians(40.0)
     max_keyframes: int = 4
     min_keypoints: int = 100
