@@ -21,8 +21,9 @@ the rooms, the world files and the textures (OpenCV, numba through the symmetry 
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+import lazy_loader
 
 if TYPE_CHECKING:
     from symloc.sim.lidar import (
@@ -89,15 +90,13 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Import a public name's module when the name is first used (PEP 562)."""
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+def _submodule_attributes() -> dict[str, list[str]]:
+    """:data:`_EXPORTS` as lazy_loader wants it: submodule (relative) -> its public names."""
+    out: dict[str, list[str]] = {}
+    for name, module in _EXPORTS.items():
+        out.setdefault(module.rsplit(".", 1)[-1], []).append(name)
+    return out
 
 
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+# PEP 562 through scientific-python's lazy_loader (as scikit-image does)
+__getattr__, __dir__, _ = lazy_loader.attach(__name__, submod_attrs=_submodule_attributes())
