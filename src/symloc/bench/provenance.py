@@ -35,23 +35,15 @@ def command_line(argv: Sequence[str], program: str = "symloc") -> str:
 def commit(where: Path = _SOURCE) -> str:
     """The git commit of the checkout that holds ``where`` (short hash, ``+dirty`` when the work
     tree has changes), or ``"unknown (not a git checkout)"`` for an installed copy."""
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", *args], cwd=where, capture_output=True, text=True, check=True, timeout=10
+        ).stdout.strip()
+
     try:
-        head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=where,
-            capture_output=True,
-            text=True,
-            check=True,
-            timeout=10,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=where,
-            capture_output=True,
-            text=True,
-            check=True,
-            timeout=10,
-        ).stdout.strip()
+        head = git("rev-parse", "--short", "HEAD")
+        dirty = git("status", "--porcelain", "--untracked-files=no")
     except (OSError, subprocess.SubprocessError) as err:
         log.debug("no git commit for %s: %s", where, err)
         return "unknown (not a git checkout)"
