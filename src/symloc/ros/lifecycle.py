@@ -412,7 +412,8 @@ class LocalizationNode(LifecycleNode):
         self._timer_handles = []
         if self._bond is not None:
             self._bond.breakup()
-            self._broken_bonds.append(self._bond)
+            # the closed ones are done: a node cycled active/inactive keeps no list of them
+            self._broken_bonds = [b for b in self._broken_bonds if not b.closed] + [self._bond]
             self._bond = None
 
     def _release(self) -> None:
