@@ -28,23 +28,20 @@ if TYPE_CHECKING:
     from symloc.mcl.params import AmclParams
     from symloc.mcl.rival_search import RivalReport, find_rival
 
-#: Public name -> the module that defines it.
-_EXPORTS = {
-    "Amcl": "symloc.mcl.amcl",
-    "AmclResult": "symloc.mcl.amcl",
-    "NotInitializedError": "symloc.mcl.amcl",
-    "ClusterStats": "symloc.mcl.clustering",
-    "Hypothesis": "symloc.mcl.clustering",
-    "cluster_particles": "symloc.mcl.clustering",
-    "Confidence": "symloc.mcl.confidence",
-    "ConfidenceConfig": "symloc.mcl.confidence",
-    "ConfidenceJudge": "symloc.mcl.confidence",
-    "ScanConsistency": "symloc.mcl.confidence",
-    "assess": "symloc.mcl.confidence",
-    "scan_consistency": "symloc.mcl.confidence",
-    "AmclParams": "symloc.mcl.params",
-    "RivalReport": "symloc.mcl.rival_search",
-    "find_rival": "symloc.mcl.rival_search",
+#: Submodule -> the public names it defines (imported on first use).
+_SUBMODULE_ATTRS = {
+    "amcl": ["Amcl", "AmclResult", "NotInitializedError"],
+    "clustering": ["ClusterStats", "Hypothesis", "cluster_particles"],
+    "confidence": [
+        "Confidence",
+        "ConfidenceConfig",
+        "ConfidenceJudge",
+        "ScanConsistency",
+        "assess",
+        "scan_consistency",
+    ],
+    "params": ["AmclParams"],
+    "rival_search": ["RivalReport", "find_rival"],
 }
 
 __all__ = [
@@ -66,13 +63,5 @@ __all__ = [
 ]
 
 
-def _submodule_attributes() -> dict[str, list[str]]:
-    """:data:`_EXPORTS` as lazy_loader wants it: submodule (relative) -> its public names."""
-    out: dict[str, list[str]] = {}
-    for name, module in _EXPORTS.items():
-        out.setdefault(module.rsplit(".", 1)[-1], []).append(name)
-    return out
-
-
 # PEP 562 through scientific-python's lazy_loader (as scikit-image does)
-__getattr__, __dir__, _ = lazy_loader.attach(__name__, submod_attrs=_submodule_attributes())
+__getattr__, __dir__, _ = lazy_loader.attach(__name__, submod_attrs=_SUBMODULE_ATTRS)

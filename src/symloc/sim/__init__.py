@@ -42,28 +42,23 @@ if TYPE_CHECKING:
     from symloc.sim.world import World
     from symloc.sim.world_file import WorldSpec, load_world_file, save_world_file
 
-#: Public name -> the module that defines it.
-_EXPORTS = {
-    **dict.fromkeys(
-        (
-            "LDS01",
-            "PAPER_15M",
-            "PRESETS",
-            "RPLIDAR_A2",
-            "LidarFaults",
-            "LidarPreset",
-            "SimulatedLidar",
-            "simulate_scan",
-        ),
-        "symloc.sim.lidar",
-    ),
-    "raycast": "symloc.sim.raycast",
-    **dict.fromkeys(
-        ("DiffDriveRobot", "OdometryNoise", "RobotConfig", "WheelSlip"), "symloc.sim.robot"
-    ),
-    **dict.fromkeys(("ROOM_NAMES", "Room", "build_room"), "symloc.sim.rooms"),
-    "World": "symloc.sim.world",
-    **dict.fromkeys(("WorldSpec", "load_world_file", "save_world_file"), "symloc.sim.world_file"),
+#: Submodule -> the public names it defines (imported on first use).
+_SUBMODULE_ATTRS = {
+    "lidar": [
+        "LDS01",
+        "PAPER_15M",
+        "PRESETS",
+        "RPLIDAR_A2",
+        "LidarFaults",
+        "LidarPreset",
+        "SimulatedLidar",
+        "simulate_scan",
+    ],
+    "raycast": ["raycast"],
+    "robot": ["DiffDriveRobot", "OdometryNoise", "RobotConfig", "WheelSlip"],
+    "rooms": ["ROOM_NAMES", "Room", "build_room"],
+    "world": ["World"],
+    "world_file": ["WorldSpec", "load_world_file", "save_world_file"],
 }
 
 __all__ = [
@@ -90,13 +85,5 @@ __all__ = [
 ]
 
 
-def _submodule_attributes() -> dict[str, list[str]]:
-    """:data:`_EXPORTS` as lazy_loader wants it: submodule (relative) -> its public names."""
-    out: dict[str, list[str]] = {}
-    for name, module in _EXPORTS.items():
-        out.setdefault(module.rsplit(".", 1)[-1], []).append(name)
-    return out
-
-
 # PEP 562 through scientific-python's lazy_loader (as scikit-image does)
-__getattr__, __dir__, _ = lazy_loader.attach(__name__, submod_attrs=_submodule_attributes())
+__getattr__, __dir__, _ = lazy_loader.attach(__name__, submod_attrs=_SUBMODULE_ATTRS)
