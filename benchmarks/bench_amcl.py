@@ -66,8 +66,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ndtri
 
-from symloc.bench.provenance import RunClock, machine
-from symloc.bench.results_file import write_results
+from symloc.bench.provenance import RunClock
+from symloc.bench.results_file import write_run_results
 from symloc.geometry import compose, inverse, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.mcl import Amcl, AmclParams
@@ -732,20 +732,16 @@ def main() -> int:
                     for k in ("seed", "rounds", "logs", "large", "global_particles", "judge")
                 }
                 settings["peer"] = (
-                    "the noetic amcl core (benchmarks/peers/amcl_core)" if (args.peer) else None
+                    "the noetic amcl core (benchmarks/peers/amcl_core)" if args.peer else None
                 )
-                clock.stop()
-                written = write_results(
+                written = write_run_results(
                     args.results,
-                    command=shlex.join(["python", *sys.argv]),
-                    commit=clock.revision,
-                    date=clock.finished or clock.started,
-                    machine=machine(),
-                    load=clock.load(),
+                    argv=sys.argv,
+                    clock=clock,
                     settings=settings,
                     figures={"rows": rows},
+                    program="python",
                     workers=1,
-                    wall_s=None if clock.wall_s is None else round(clock.wall_s, 1),
                 )
                 print(f"wrote {written}")
         else:

@@ -179,17 +179,19 @@ def write_run_results(
     clock: RunClock,
     settings: Mapping[str, Any],
     figures: Mapping[str, Any],
+    program: str = "symloc",
     **extra: Any,
 ) -> Path:
     """Write the results file of a run of this process: the command from ``argv`` (the words
-    after ``symloc``), the commit when the ``clock`` started, the date it stopped, this machine
-    and the load around the run, and its wall time."""
+    after ``program``: ``symloc`` for the CLI, ``python`` for a benchmark script given its own
+    ``sys.argv``), the commit when the ``clock`` started, the date it stopped, this machine and
+    the load around the run, and its wall time."""
     from symloc.bench.provenance import command_line, machine
 
     clock.stop()
     return write_results(
         path,
-        command=command_line(argv),
+        command=command_line(argv, program),
         commit=clock.revision,
         date=clock.finished or clock.started,
         machine=machine(),
