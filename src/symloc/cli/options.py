@@ -503,6 +503,21 @@ def add_json(parser: argparse._ActionsContainer) -> None:
     )
 
 
+def add_results(parser: argparse._ActionsContainer, example: str, *, note: str = "") -> None:
+    """``--results PATH``: also write the run's results file (:mod:`symloc.bench.results_file`:
+    its figures with the command, commit, date, machine and load); ``example`` is where the
+    README's lives (``docs/results/NAME.json``), ``note`` anything more for the help."""
+    parser.add_argument(
+        "--results",
+        type=output_file,
+        default=None,
+        metavar="PATH",
+        help=f"also write the run's results file here (the README's: {example}){note}: the "
+        "figures with the command, commit, date, machine and load; python -m symloc.readme "
+        "re-renders the README from it",
+    )
+
+
 def add_lidar(parser: argparse._ActionsContainer, *, help: str = "simulated lidar") -> None:
     """``--lidar NAME``: one lidar preset, default ``rplidar_a2``."""
     parser.add_argument(

@@ -21,21 +21,6 @@ def add_common_arguments(parser: Any, name: str) -> None:
     options.add_out(parser, f"experiment {name}", what="figures")
 
 
-def add_results_argument(parser: Any, example: str) -> None:
-    """Add ``--results PATH``: a results file of the run (``example``: the README's, e.g.
-    ``docs/results/table2.json``) holding its figures with the command, commit, date, machine
-    and load (:func:`symloc.bench.results_file.write_run_results`)."""
-    parser.add_argument(
-        "--results",
-        type=options.output_file,
-        default=None,
-        metavar="PATH",
-        help=f"also write a results file here (the README's: {example}): the figures with the "
-        "command, commit, date, machine and load; python -m symloc.readme re-renders the "
-        "README from it",
-    )
-
-
 def print_config(name: str, config: Mapping[str, Any]) -> None:
     """Print an experiment's name, seed and configuration so a run can be reproduced."""
     print(f"# symloc experiment {name}")

@@ -32,7 +32,6 @@ from symloc.cli import options
 from symloc.errors import ConfigurationError
 from symloc.experiments._common import (
     add_common_arguments,
-    add_results_argument,
     print_config,
     write_json,
 )
@@ -51,7 +50,7 @@ def register(subparsers: Any) -> None:
         "slam", help="laser SLAM: simulated rooms and the CARMEN logs (ATE, RPE, loops, speed)"
     )
     add_common_arguments(parser, "slam")
-    add_results_argument(parser, "docs/results/experiment_slam.json")
+    options.add_results(parser, "docs/results/experiment_slam.json")
     parser.add_argument(
         "--worlds", nargs="*", default=list(SIM_WORLDS), help="simulated worlds (none: skip)"
     )

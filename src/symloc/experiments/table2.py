@@ -8,7 +8,6 @@ from typing import Any
 from symloc.cli import options
 from symloc.experiments._common import (
     add_common_arguments,
-    add_results_argument,
     print_config,
     write_json,
 )
@@ -35,7 +34,7 @@ def register(subparsers: Any) -> None:
         "--side", type=options.room_side, default=3.0, help="square side [m] (paper: 3)"
     )
     options.add_lidars(parser, help="simulated lidars (the README's table: rplidar_a2 lds01)")
-    add_results_argument(parser, "docs/results/table2.json")
+    options.add_results(parser, "docs/results/table2.json")
     parser.set_defaults(func=run)
 
 

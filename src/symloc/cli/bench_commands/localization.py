@@ -109,15 +109,10 @@ def register(subparsers: Any) -> None:
         help="seconds driven after the first claim (20)",
     )
     add_sweep_arguments(parser, "bench localization")
-    parser.add_argument(
-        "--results",
-        type=options.output_file,
-        default=None,
-        metavar="PATH",
-        help="also write the run's results file here (docs/results/NAME.json for a README "
-        "figure; always written as bench_localization.results.json under --out): the summary "
-        "with the command, commit, date, machine and load; python -m symloc.readme re-renders "
-        "the README from it",
+    options.add_results(
+        parser,
+        "docs/results/bench_localization_test_realistic.json",
+        note="; always written as bench_localization.results.json under --out",
     )
     parser.set_defaults(func=run)
 

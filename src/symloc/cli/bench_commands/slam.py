@@ -79,15 +79,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--timeout", type=options.positive_float, default=3600.0, help="per process [s]")
     add_sweep_arguments(p, "bench slam")
-    p.add_argument(
-        "--results",
-        type=options.output_file,
-        default=None,
-        metavar="PATH",
-        help="also write the run's results file here (docs/results/NAME.json for a README "
-        "figure): the per-log summary and the targets with the command, commit, date, machine "
-        "and load; python -m symloc.readme re-renders the README from it",
-    )
+    options.add_results(p, "docs/results/bench_slam_realistic.json")
     p.set_defaults(func=run)
 
 
