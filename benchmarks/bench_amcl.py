@@ -64,14 +64,12 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import ndtri
 
-from symloc.bench.provenance import RunClock
-from symloc.bench.results_file import write_run_results
 from symloc.geometry import compose, inverse, wrap_angle
 from symloc.grid import OccupancyGrid
 from symloc.mcl import Amcl, AmclParams
 from symloc.mcl.beam_model import raycast_grid
+from symloc.mcl.kld_sampling import pf_z_quantile
 from symloc.odometry import OdometryReading
 from symloc.scan import LaserScan
 
@@ -123,7 +121,7 @@ def write_problem(path: Path, pr: Problem) -> None:
                 p.min_particles,
                 p.max_particles,
                 p.pf_err,
-                float(ndtri(p.pf_z)),
+                pf_z_quantile(p.pf_z),
                 p.recovery_alpha_slow,
                 p.recovery_alpha_fast,
                 p.update_min_d,
@@ -162,7 +160,9 @@ def read_problem(path: Path) -> Problem:
     mean_cov = take("<6di")
     occ = np.frombuffer(buf, np.int8, w * h, off).reshape(h, w)
     off += w * h
-    data = np.where(occ == 1, 100, np.where(occ == -1, 0, -1)).astype(np.int8)
+    data = np.full((h, w), -1, np.int8)
+    data[occ == 1] = 100
+    data[occ == -1] = 0
     grid = OccupancyGrid(data, res, (ox - res / 2, oy - res / 2, 0.0))
     z_hit, z_rand, sigma, maxd, a1, a2, a3, a4, a5 = v[:9]
     min_p, max_p = v[9:11]
@@ -724,6 +724,10 @@ def main() -> int:
     print(f"# load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}; {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory(prefix="symloc-bench-amcl-") as d:
         if args.carmen or args.large:
+            # the parent's alone: the worker process imports only what a symloc user's does
+            from symloc.bench.provenance import RunClock
+            from symloc.bench.results_file import write_run_results
+
             clock = RunClock()
             rows = carmen_bench(args, Path(d))
             if args.results:

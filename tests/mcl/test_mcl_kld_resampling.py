@@ -1,6 +1,8 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -23,6 +25,23 @@ def test_pf_z_is_a_quantile():
     assert pf_z_quantile(0.5 + 1e-12) == pytest.approx(0.0, abs=1e-6)
     with pytest.raises(ConfigurationError, match="pf_z"):
         pf_z_quantile(1.0)
+
+
+def test_pf_z_quantile_is_scipys_ndtri():
+    from scipy.special import ndtri
+
+    assert pf_z_quantile(0.99) == float(ndtri(0.99))  # nav2's default: the same double
+    for p in np.linspace(0.5, 1.0, 1001)[1:-1]:
+        assert pf_z_quantile(float(p)) == pytest.approx(float(ndtri(p)), rel=2e-15)
+
+
+def test_the_filter_does_not_import_scipy_special():
+    code = (
+        "import sys, symloc.mcl.amcl, symloc.mcl.confidence;"
+        " print('scipy.special' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
 
 
 @pytest.mark.parametrize("k", [2, 3, 10, 50, 200, 1000])
