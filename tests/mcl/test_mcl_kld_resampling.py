@@ -37,8 +37,7 @@ def test_pf_z_quantile_is_scipys_ndtri():
 
 def test_the_filter_does_not_import_scipy_special():
     code = (
-        "import sys, symloc.mcl.amcl, symloc.mcl.confidence;"
-        " print('scipy.special' in sys.modules)"
+        "import sys, symloc.mcl.amcl, symloc.mcl.confidence; print('scipy.special' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
