@@ -226,8 +226,11 @@ def worker(path: Path, seed: int, *, judge: bool = True) -> int:
     With ``judge`` each filter result is also judged by a
     :class:`~symloc.mcl.confidence.ConfidenceJudge` (the confidence verdict with its rival
     search, what the localizer, the node and ``symloc experiment amcl-carmen`` run per scan);
-    without it only the filter runs, as the peer does.
+    without it only the filter runs, as the peer does. Reports whether the per-scan kernels
+    ran from their ahead-of-time build (:mod:`symloc.mcl.aot`; ``python -m
+    symloc.mcl.aot_build``) or from numba's JIT.
     """
+    from symloc.mcl import kernels
     from symloc.mcl.confidence import ConfidenceJudge
 
     base = vm_hwm_mib("VmRSS")  # the interpreter and the libraries, before any work
@@ -268,6 +271,7 @@ def worker(path: Path, seed: int, *, judge: bool = True) -> int:
         f" read_cpu {t_read:.6f} vmhwm_mib {vm_hwm_mib():.1f} base_mib {base:.1f}"
         f" judge_cpu {t_judge:.6f} rival_searches"
         f" {0 if judge_of is None else judge_of.n_rival_searches} confident {n_confident}"
+        f" aot_kernels {int(kernels.endpoint_table_sum.ahead_of_time)}"
     )
     return 0
 
@@ -564,6 +568,13 @@ def carried(r: RunResult, odom: FloatArray) -> FloatArray:
     return out
 
 
+def kernels_label(ahead: list[float]) -> str:
+    """How symloc's per-scan kernels ran over the rounds (the workers' ``aot_kernels`` flags)."""
+    if min(ahead) > 0.5:
+        return "ahead of time"
+    return "numba JIT" if max(ahead) < 0.5 else "mixed"
+
+
 def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
     """Run the end-to-end benchmark; print its table and return its rows (one per log and
     side: medians over the rounds, ``global`` rows for the large map's global localization)."""
@@ -594,6 +605,7 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
         res: dict[str, list[tuple[float, float, float, float, float]]] = {s: [] for s, _ in sides}
         loads = []
         judged: tuple[list[float], list[float]] = ([], [])
+        ahead: list[float] = []
         for rnd in range(args.rounds):
             for side, cmd in sides:
                 c = (
@@ -606,6 +618,7 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
                 if cmd is None:
                     judged[0].append(r.summary.get("judge_cpu", 0.0))
                     judged[1].append(r.summary.get("rival_searches", 0.0))
+                    ahead.append(r.summary.get("aot_kernels", 0.0))
                 est = carried(r, pr.odom)
                 err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
                 res[side].append(
@@ -638,6 +651,7 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
                     "load": float(np.median(loads)),
                     "judge_cpu_s": float(np.median(judged[0])) if side == "symloc" else None,
                     "rival_searches": float(np.median(judged[1])) if side == "symloc" else None,
+                    "kernels": kernels_label(ahead) if side == "symloc" else None,
                 }
             )
             print(
@@ -649,6 +663,7 @@ def carmen_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
                     if side == "symloc" and args.judge
                     else ""
                 )
+                + (f" | kernels {rows[-1]['kernels']}" if side == "symloc" else "")
             )
         if name == "large" and args.global_particles:
             g = Problem(

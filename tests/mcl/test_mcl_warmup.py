@@ -9,18 +9,19 @@ from mcl_fixtures import asymmetric_room, synthetic_scan
 from symloc.features import split_kernels
 from symloc.geometry import compose
 from symloc.grid.fields import MapFields
-from symloc.mcl import Amcl, AmclParams, ConfidenceJudge, global_search, kernels
+from symloc.mcl import Amcl, AmclParams, ConfidenceJudge, aot, global_search, kernels
 from symloc.mcl.warmup import warm_up
 from symloc.odometry import OdometryReading
 from symloc.symmetry import judge_symmetry
 
 
 def _signatures() -> dict[str, int]:
-    """Compiled signatures of every numba kernel of the filter and the global search."""
+    """Signatures ready to run of every kernel of the filter and the global search: numba's
+    compiled ones, and the ahead-of-time build's (symloc.mcl.aot) when there is one."""
     out = {}
     for mod in (kernels, global_search, split_kernels):
         for name, obj in vars(mod).items():
-            if isinstance(obj, numba.core.registry.CPUDispatcher):
+            if isinstance(obj, (numba.core.registry.CPUDispatcher, aot.Kernel)):
                 out[f"{mod.__name__}.{name}"] = len(obj.signatures)
     return out
 

@@ -88,7 +88,7 @@ from symloc.grid.fields import MapFields
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.grid.precomputation import MAX_DEPTH, PrecomputationGrids
 from symloc.mcl import kernels
-from symloc.mcl.kernels import _jit
+from symloc.mcl.kernels import numba_jit as _jit
 from symloc.scan import LaserScan
 
 __all__ = [

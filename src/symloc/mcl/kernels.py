@@ -11,6 +11,11 @@ Each kernel repeats, operation for operation, the NumPy expression it replaces (
 float32 rounding of end points, the same truncation to cells, float64 sums of float32 table
 values in particle order), so the results are bit-identical to the vectorised code; the tests
 check that on random inputs against the pure-Python definitions kept here as ``*_py``.
+
+Each kernel is a :class:`symloc.mcl.aot.Kernel`: the kernels of the per-scan path run from
+their ahead-of-time build when one was made (``python -m symloc.mcl.aot_build``; then a tracking
+process does not load numba at all), numba's JIT otherwise; numba is imported on the first
+call that needs it.
 """
 
 from __future__ import annotations
@@ -20,11 +25,12 @@ import os
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, cast
+from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
+
+from symloc.mcl.aot import Kernel
 
 __all__ = ["endpoint_table_sum", "n_threads", "split_over_threads"]
 
@@ -77,8 +83,43 @@ def split_over_threads(n: int, pairs: int, run: Callable[[int, int], None]) -> N
         f.result()
 
 
-def _jit(fn: Callable[..., Any]) -> Callable[..., Any]:
-    return cast(Callable[..., Any], numba.njit(cache=True, nogil=True, error_model="numpy")(fn))
+#: Kernels that other kernels call: numba resolves such a name when it compiles the caller, so
+#: once numba is loaded these module names are its dispatchers (:func:`jit_callees`).
+_CALLEES = ("np_mod", "_find_jit", "_leaf_sum", "pairwise_sum", "bilinear")
+_callees_bound = False
+
+
+def numba_jit(fn: Callable[..., Any]) -> Any:
+    """numba's dispatcher of ``fn`` with the kernels' options (cached on disk, GIL released,
+    NumPy's error model), made now (imports numba): for compiled loops off the per-scan path
+    that call one another (the global search's)."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def _make_jit(fn: Callable[..., Any]) -> Any:
+    dispatcher = numba_jit(fn)
+    jit_callees()
+    return dispatcher
+
+
+def jit_callees() -> None:
+    """Bind the names of the kernels that other kernels call to numba's dispatchers (before
+    numba compiles a caller; imports numba)."""
+    global _callees_bound
+    if _callees_bound:
+        return
+    _callees_bound = True
+    g = globals()
+    for name in _CALLEES:
+        k = g[name]
+        if isinstance(k, Kernel):
+            g[name] = k.dispatcher
+
+
+def _jit(fn: Callable[..., Any]) -> Kernel:
+    return Kernel(fn, _make_jit)
 
 
 def endpoint_table_sum_py(
