@@ -24,7 +24,6 @@ from pathlib import Path
 from typing import Any
 
 from symloc.errors import ConfigurationError
-from symloc.files.bounded import MAX_PARAMS_FILE_BYTES, load_yaml_bounded, read_text_bounded
 
 __all__ = ["LASER_MODELS", "MAX_PARTICLES", "MOTION_MODELS", "PARTICLE_MEMORY", "AmclParams"]
 
@@ -261,6 +260,13 @@ class AmclParams:
         ``source`` is a path to a YAML file or the YAML text itself. Also accepts the
         ``/**/amcl`` or namespaced keys (``robot1/amcl``) nav2 launch files use.
         """
+        # here, not at the top: a process that only tracks does not load PyYAML
+        from symloc.files.bounded import (
+            MAX_PARAMS_FILE_BYTES,
+            load_yaml_bounded,
+            read_text_bounded,
+        )
+
         text: str
         if isinstance(source, Path) or (
             isinstance(source, str) and "\n" not in source and source.endswith((".yaml", ".yml"))
