@@ -61,6 +61,9 @@ __all__ = [
     "register",
     "run",
     "tracking",
+    "tracking_odometry",
+    "tracking_params",
+    "tracking_stream",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -117,6 +120,50 @@ def noisy_odometry(
     for i in range(n):  # chaining is sequential by nature (T scans, not particles)
         out[i + 1] = rot_trans_rot_to_pose(out[i], r1n[i], trn[i], r2n[i])
     return out
+
+
+def tracking_params(
+    alpha: float = 0.01,
+    *,
+    laser_model: str = "likelihood_field_prob",
+    particles: int = 2000,
+) -> Any:
+    """The AMCL parameters of this experiment's tracking: nav2's defaults except
+    ``laser_model``, ``alpha1..4 = alpha`` (the variances the odometry noise is drawn with),
+    ``max_particles = particles`` (``min_particles`` at most 500) and a laser max range of
+    49.9 m (the logs' 50 m readings are no-returns). ``symloc replay`` with
+    ``src/symloc/ros/examples/carmen_params.yaml`` builds the same localizer settings
+    (:func:`carmen_settings`; a test holds the two together)."""
+    from symloc.mcl import AmclParams
+
+    return AmclParams(
+        laser_model_type=laser_model,
+        alpha1=alpha,
+        alpha2=alpha,
+        alpha3=alpha,
+        alpha4=alpha,
+        laser_max_range=49.9,
+        max_particles=particles,
+        min_particles=min(500, particles),
+    )
+
+
+def tracking_stream(name: str, seed: int, position: int = 0) -> np.random.Generator:
+    """The random stream of log ``name``'s tracking run with ``--seed seed``: independent per
+    log and task, so one log's numbers do not depend on the others. A log outside
+    :data:`LOG_NAMES` is numbered after them by its ``position`` in ``--logs`` (0 when it is
+    run alone)."""
+    idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + position
+    return np.random.default_rng([seed, idx, 0])
+
+
+def tracking_odometry(name: str, truth: FloatArray, alpha: float, seed: int) -> FloatArray:
+    """The odometry poses (T, 3) [m, m, rad] this experiment's tracking feeds AMCL on log
+    ``name`` run alone with ``--seed seed`` and ``--odom-alpha alpha``: the corrected poses
+    ``truth`` (T, 3) with rot-trans-rot noise of variances ``alpha`` (:func:`noisy_odometry`),
+    the first draw of :func:`tracking_stream`. ``symloc ros carmen-to-bag --odom-alpha`` writes
+    these, so that a replay of the bag sees the experiment's own odometry."""
+    return noisy_odometry(truth, (alpha,) * 4, tracking_stream(name, seed))
 
 
 def _errors(est: FloatArray, truth: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -494,26 +541,15 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the experiment on each log; print, write JSON and the figure."""
     from symloc.io.carmen import read_carmen
-    from symloc.mcl import AmclParams
 
     paths = carmen_log_paths(args.logs, args.data)
     folder = next(iter(paths.values())).parent
     a = args.odom_alpha
     alphas = (a, a, a, a)
-    base = AmclParams(
-        laser_model_type=args.laser_model,
-        alpha1=a,
-        alpha2=a,
-        alpha3=a,
-        alpha4=a,
-        laser_max_range=49.9,
-    )
-    track_p = base.replace(
-        max_particles=args.tracking_particles, min_particles=min(500, args.tracking_particles)
-    )
-    glob_p = base.replace(
-        max_particles=args.global_particles,
-        min_particles=min(500, args.global_particles),
+    track_p = tracking_params(a, laser_model=args.laser_model, particles=args.tracking_particles)
+    glob_p = tracking_params(
+        a, laser_model=args.laser_model, particles=args.global_particles
+    ).replace(
         recovery_alpha_slow=0.001,
         recovery_alpha_fast=0.1,
         laser_likelihood_exponent=args.global_exponent,
@@ -541,8 +577,8 @@ def run(args: argparse.Namespace) -> int:
     global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others
+        rng_track = tracking_stream(name, args.seed, len(results))
         idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
-        rng_track = np.random.default_rng([args.seed, idx, 0])
         rng_global = np.random.default_rng([args.seed, idx, 1])
         path = paths[name]
         log = read_carmen(path)
