@@ -110,3 +110,31 @@ def test_replay_tracks_on_the_experiments_odometry(tmp_path: Path) -> None:
     assert err.mean() < 0.1, err.mean()
     assert err.max() < 0.5, err.max()
     assert not any("kidnapped" in s for s in res.steps), res.steps
+
+
+def test_a_log_without_time_gets_stamps_by_its_motion(tmp_path: Path) -> None:
+    """orebro's stamps are all 0 (csail's one truncated value): written as they are, the
+    odometry moved at infinite speed between scans and replay rejected it ("odom: jump")."""
+    from symloc.io.rosbag_carmen import MIN_INTERVAL, NOMINAL_SPEED, motion_stamps
+    from symloc.ros.replay import replay_bag
+
+    log = tmp_path / "timeless-corrected.log"
+    lines = []
+    for i in range(12):
+        ranges = " ".join(f"{2.0 + 0.001 * j:.3f}" for j in range(180))
+        pose = f"{0.4 * i:.2f} 0 {0.3 * (i % 2):.2f}"
+        lines.append(f"FLASER 180 {ranges} {pose} {pose} 0 host 0")
+    log.write_text("\n".join(lines) + "\n")
+    notes: list[str] = []
+    carmen_to_bag(log, tmp_path / "bag", notes=notes)
+    assert len(notes) == 1
+    assert "stamps do not measure time" in notes[0]
+    stamps = np.array([m.stamp for m in read_bag(tmp_path / "bag") if m.kind == "scan"])
+    poses = read_carmen(log).laser_poses
+    np.testing.assert_allclose(stamps, motion_stamps(poses))
+    assert np.all(np.diff(stamps) >= MIN_INTERVAL)
+    assert np.diff(stamps)[0] == pytest.approx(0.4 / NOMINAL_SPEED)
+    res = replay_bag(tmp_path / "bag", NodeParams(), grid=build_map(read_carmen(log)))
+    assert not any(k.startswith("odom") for k in res.dropped), res.dropped
+    assert res.recovered.get("odometry reset", 0) == 0
+    assert len(res.trajectory) == 12

@@ -160,9 +160,17 @@ def _carmen_to_bag(args: argparse.Namespace) -> int:
             f"# /odom: the corrected poses with the odometry noise of experiment amcl-carmen"
             f" --logs {name} --odom-alpha {args.odom_alpha:g} --seed {args.seed}"
         )
+    notes: list[str] = []
     counts = carmen_to_bag(
-        args.log, bag, fmt=args.format, initial_pose=not args.no_initial_pose, odometry=odometry
+        args.log,
+        bag,
+        fmt=args.format,
+        initial_pose=not args.no_initial_pose,
+        odometry=odometry,
+        notes=notes,
     )
+    for note in notes:
+        print(f"note: {note}")
     for topic, n in sorted(counts.items()):
         print(f"  {topic}: {n} messages")
     print(f"wrote {bag}")
