@@ -127,13 +127,14 @@ def _errors(tum: Path, stamps: np.ndarray, truth: np.ndarray) -> dict[str, float
 
 
 def _map_file(npz: Path, yaml: Path) -> Path:
-    """The experiment's cached map (``amcl_carmen_map_<log>.npz``) as a map file."""
+    """The experiment's cached map (``amcl_carmen_map_<log>.npz``) as a map file, in raw mode
+    (the grid round-trips exactly; trinary would turn cells between the thresholds unknown)."""
     from symloc.grid import OccupancyGrid
     from symloc.grid.map_io import save_map
 
     z = np.load(npz)
     grid = OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
-    return save_map(grid, yaml)
+    return save_map(grid, yaml, mode="raw")
 
 
 def _dropped(replay_out: str) -> float | None:
