@@ -148,7 +148,7 @@ def _carmen_to_bag(args: argparse.Namespace) -> int:
     options.refuse_overwriting_inputs({"log": args.log}, {"--out": bag})
     odometry = None
     if args.odom_alpha > 0.0:
-        from symloc.experiments.amcl_carmen import tracking_odometry
+        from symloc.bench.carmen_tracking import tracking_odometry
         from symloc.geometry import wrap_angle
         from symloc.io.carmen import read_carmen
 
