@@ -51,6 +51,7 @@ from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.files.atomic import atomic_path
 from symloc.geometry import compose, inverse, wrap_angle
+from symloc.io.rosbag_carmen import START_COVARIANCE
 from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [
@@ -224,7 +225,7 @@ def symloc_claims(
     field = surface_distance_field(data.grid)
     loc = build_localizer(data.grid, carmen_settings(params), rng=rng)
     if known_start:
-        loc.set_pose(data.truth[start], np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2]))
+        loc.set_pose(data.truth[start], START_COVARIANCE)
     else:
         loc.reset_global()
     n = stop - start

@@ -95,7 +95,8 @@ def register(subparsers: Any) -> None:
     conv.add_argument(
         "--no-initial-pose",
         action="store_true",
-        help="do not write /initialpose (the first corrected pose, nav2's default covariance);"
+        help="do not write /initialpose (the first corrected pose, 5 cm / 3 deg std as"
+        " experiment amcl-carmen starts symloc's localizer);"
         " a replay then localizes globally",
     )
     conv.add_argument(
