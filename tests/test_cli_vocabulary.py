@@ -45,7 +45,6 @@ NOT_STOCHASTIC = {
     ("places", "remove"),
     ("ros", "node"),  # the seed is a node parameter (params.yaml)
     ("ros", "check-params"),
-    ("ros", "carmen-to-bag"),
     ("ros", "setup"),  # builds interface packages: nothing random
     ("vocab", "convert"),
     ("vocab", "info"),

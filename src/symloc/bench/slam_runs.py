@@ -25,7 +25,7 @@ from symloc.bench.slam_metrics import AteResult, MapAgreement, RpeResult, ate, m
 from symloc.errors import ConfigurationError, DataFormatError
 from symloc.geometry import compose
 from symloc.grid.occupancy_grid import OccupancyGrid
-from symloc.io.carmen import CarmenLog, read_carmen
+from symloc.io.carmen import CarmenLog, read_carmen, stamps_usable
 from symloc.sim.odometry_noise import ODOMETRY_REGIMES, OdometryRegime, regime_odometry
 from symloc.slam.slam import SlamParams, SlamResult, run_slam
 
@@ -222,9 +222,7 @@ def log_duration(stamps: FloatArray) -> float | None:
     Usable: at least 90 % of consecutive stamps increase (orebro's are all 0 and csail's are
     truncated to six significant digits, so neither gives a duration).
     """
-    if stamps.size < 2:
-        return None
-    if float(np.mean(np.diff(stamps) > 0)) < 0.9:
+    if not stamps_usable(stamps):
         return None
     return float(stamps[-1] - stamps[0])
 

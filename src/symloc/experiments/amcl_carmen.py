@@ -44,12 +44,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
+from symloc.bench.carmen_tracking import noisy_odometry, tracking_odometry, tracking_stream
 from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
 from symloc.bench.shared_data import carmen_log_paths, find_carmen_dir
 from symloc.cli import options
 from symloc.experiments._common import add_common_arguments, print_config, write_json
 from symloc.files.atomic import atomic_path
 from symloc.geometry import compose, inverse, wrap_angle
+from symloc.io.rosbag_carmen import START_COVARIANCE
 from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [
@@ -61,6 +63,9 @@ __all__ = [
     "register",
     "run",
     "tracking",
+    "tracking_odometry",
+    "tracking_params",
+    "tracking_stream",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -90,33 +95,30 @@ def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> 
     return grid
 
 
-def noisy_odometry(
-    poses: FloatArray, alphas: tuple[float, float, float, float], rng: np.random.Generator
-) -> FloatArray:
-    """Odometry poses ``(T, 3)`` from the true poses ``(T, 3)`` with rot-trans-rot noise.
+def tracking_params(
+    alpha: float = 0.01,
+    *,
+    laser_model: str = "likelihood_field_prob",
+    particles: int = 2000,
+) -> Any:
+    """The AMCL parameters of this experiment's tracking: nav2's defaults except
+    ``laser_model``, ``alpha1..4 = alpha`` (the variances the odometry noise is drawn with),
+    ``max_particles = particles`` (``min_particles`` at most 500) and a laser max range of
+    49.9 m (the logs' 50 m readings are no-returns). ``symloc replay`` with
+    ``src/symloc/ros/examples/carmen_params.yaml`` builds the same localizer settings
+    (:func:`carmen_settings`; a test holds the two together)."""
+    from symloc.mcl import AmclParams
 
-    Each increment's ``rot1, trans, rot2`` gets Gaussian noise of variance
-    ``alpha1 rot^2 + alpha2 trans^2`` (rotations) and ``alpha3 trans^2 + alpha4 (rot1^2 +
-    rot2^2)`` (translation), and the noisy increments are chained from the first pose. As in
-    nav2's motion model, a rotation's noise uses ``min(|rot|, pi - |rot|)`` so that a backward
-    step (``rot1`` near pi) is as noisy as a forward one.
-    """
-    from symloc.odometry import rot_trans_rot, rot_trans_rot_to_pose
-
-    a1, a2, a3, a4 = alphas
-    r1, tr, r2 = rot_trans_rot(poses[:-1], poses[1:])
-    n = r1.size
-    e = rng.standard_normal((3, n))
-    q1 = np.minimum(np.abs(r1), np.pi - np.abs(r1))
-    q2 = np.minimum(np.abs(r2), np.pi - np.abs(r2))
-    r1n = r1 + e[0] * np.sqrt(a1 * q1**2 + a2 * tr**2)
-    trn = tr + e[1] * np.sqrt(a3 * tr**2 + a4 * (q1**2 + q2**2))
-    r2n = r2 + e[2] * np.sqrt(a1 * q2**2 + a2 * tr**2)
-    out = np.empty_like(poses)
-    out[0] = poses[0]
-    for i in range(n):  # chaining is sequential by nature (T scans, not particles)
-        out[i + 1] = rot_trans_rot_to_pose(out[i], r1n[i], trn[i], r2n[i])
-    return out
+    return AmclParams(
+        laser_model_type=laser_model,
+        alpha1=alpha,
+        alpha2=alpha,
+        alpha3=alpha,
+        alpha4=alpha,
+        laser_max_range=49.9,
+        max_particles=particles,
+        min_particles=min(500, particles),
+    )
 
 
 def _errors(est: FloatArray, truth: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -223,7 +225,7 @@ def symloc_claims(
     field = surface_distance_field(data.grid)
     loc = build_localizer(data.grid, carmen_settings(params), rng=rng)
     if known_start:
-        loc.set_pose(data.truth[start], np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2]))
+        loc.set_pose(data.truth[start], START_COVARIANCE)
     else:
         loc.reset_global()
     n = stop - start
@@ -494,26 +496,15 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the experiment on each log; print, write JSON and the figure."""
     from symloc.io.carmen import read_carmen
-    from symloc.mcl import AmclParams
 
     paths = carmen_log_paths(args.logs, args.data)
     folder = next(iter(paths.values())).parent
     a = args.odom_alpha
     alphas = (a, a, a, a)
-    base = AmclParams(
-        laser_model_type=args.laser_model,
-        alpha1=a,
-        alpha2=a,
-        alpha3=a,
-        alpha4=a,
-        laser_max_range=49.9,
-    )
-    track_p = base.replace(
-        max_particles=args.tracking_particles, min_particles=min(500, args.tracking_particles)
-    )
-    glob_p = base.replace(
-        max_particles=args.global_particles,
-        min_particles=min(500, args.global_particles),
+    track_p = tracking_params(a, laser_model=args.laser_model, particles=args.tracking_particles)
+    glob_p = tracking_params(
+        a, laser_model=args.laser_model, particles=args.global_particles
+    ).replace(
         recovery_alpha_slow=0.001,
         recovery_alpha_fast=0.1,
         laser_likelihood_exponent=args.global_exponent,
@@ -541,8 +532,8 @@ def run(args: argparse.Namespace) -> int:
     global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others
+        rng_track = tracking_stream(name, args.seed, len(results))
         idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
-        rng_track = np.random.default_rng([args.seed, idx, 0])
         rng_global = np.random.default_rng([args.seed, idx, 1])
         path = paths[name]
         log = read_carmen(path)

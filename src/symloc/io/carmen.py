@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import DataFormatError
 from symloc.scan import LaserScan
@@ -49,6 +49,7 @@ __all__ = [
     "carmen_beam_geometry",
     "iter_carmen",
     "read_carmen",
+    "stamps_usable",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -208,6 +209,16 @@ class CarmenLog:
         if len(self.scans) < 2:
             return 0.0
         return float(self.scans[-1].stamp - self.scans[0].stamp)
+
+
+def stamps_usable(stamps: ArrayLike) -> bool:
+    """Whether a log's scan stamps [s] measure time: at least 90 % of consecutive stamps
+    increase (orebro's are all 0 and csail's are truncated to six significant digits, so
+    neither does). Fewer than two stamps: False."""
+    t = np.asarray(stamps, dtype=np.float64).reshape(-1)
+    if t.size < 2:
+        return False
+    return float(np.mean(np.diff(t) > 0)) >= 0.9
 
 
 def _floats(tokens: list[str], what: str, lineno: int) -> FloatArray:

@@ -1,12 +1,12 @@
 """Convert a CARMEN laser log into a ROS bag (``symloc ros carmen-to-bag``).
 
 Each ``FLASER`` message becomes a ``/scan`` (sensor_msgs/LaserScan, frame ``laser``), an
-``/odom`` (nav_msgs/Odometry, the odometry pose recorded with the scan, ``odom`` ->
-``base_link``) and a ``/ground_truth`` (nav_msgs/Odometry in the ``map`` frame: the log's
+``/odom`` (nav_msgs/Odometry, the odometry pose recorded with the scan, or one given per scan,
+``odom`` -> ``base_link``) and a ``/ground_truth`` (nav_msgs/Odometry in the ``map`` frame: the log's
 corrected laser pose, the reference trajectory of the "corrected" Radish logs). Before the first
 scan it writes an ``/initialpose`` (geometry_msgs/PoseWithCovarianceStamped, ``map`` frame) at
-the first corrected pose with nav2_amcl's default initial covariance (0.5 m std, 15 deg std),
-as an operator gives it with RViz's 2D Pose Estimate: a map built from the same log (``symloc
+the first corrected pose with the covariance :data:`START_COVARIANCE` (5 cm, 3 deg std), as
+``symloc experiment amcl-carmen`` starts symloc's localizer: a map built from the same log (``symloc
 map build --carmen``, ``symloc replay --build-map``) starts at that pose, so the replay tracks
 from there, as ``symloc experiment amcl-carmen`` does. So real logs can be replayed through the
 same bag path a ROS user's recordings take.
@@ -14,26 +14,56 @@ same bag path a ROS user's recordings take.
 The bag keeps what the logs hold: a scan every 0.05-40 s where the robot moved (the corrected
 logs keep only those), pauses of up to tens of seconds, the odometry only at the scans (the
 ``ODOM`` lines of these logs carry stamps from another clock and are not written), and stamps
-that go backwards now and then (intel). Every message's log time is its stamp.
+that go backwards now and then (intel). Every message's log time is its stamp. A log without
+usable stamps (:func:`symloc.io.carmen.stamps_usable`: orebro's are all 0, csail's truncated
+to the same value) is given time by its motion (:func:`motion_stamps`), and said so: with one
+stamp for every scan, the odometry would move at infinite speed between them and a replay
+would reject it.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from symloc.errors import DataFormatError
-from symloc.io.carmen import read_carmen
+from symloc.errors import ConfigurationError, DataFormatError
+from symloc.io.carmen import read_carmen, stamps_usable
 from symloc.io.rosbag import BagFormat, BagWriter
 from symloc.odometry import OdometryReading
 
 #: nav2_amcl's default initial covariance: x, y variance [m^2] and yaw variance [rad^2].
 INITIAL_COVARIANCE = np.diag([0.5**2, 0.5**2, (math.pi / 12.0) ** 2])
+#: The covariance of a start at a log's first corrected pose (5 cm, 3 deg std; x, y variance
+#: [m^2], yaw variance [rad^2]): what ``symloc experiment amcl-carmen`` gives symloc's localizer
+#: and carmen-to-bag writes on ``/initialpose``. The corrected pose is the reference itself, not
+#: an operator's click; from nav2's default (0.5 m, 15 deg) AMCL's first estimate on fhw was
+#: 0.56 m off, the claim gate gave the pose up and after 60 scans took a scan that fits the
+#: map poorly (17-28 % of beams) for a kidnapping: AMCL reset to global, 26 m mean error.
+START_COVARIANCE = np.diag([0.05**2, 0.05**2, math.radians(3.0) ** 2])
 
-__all__ = ["INITIAL_COVARIANCE", "carmen_to_bag"]
+#: Speed [m/s] and turn rate [rad/s] at which a log without usable stamps is given time.
+NOMINAL_SPEED = 0.5
+NOMINAL_TURN_RATE = math.pi / 2
+#: The shortest interval [s] between two scans of such a log.
+MIN_INTERVAL = 0.1
+
+__all__ = [
+    "INITIAL_COVARIANCE",
+    "MIN_INTERVAL",
+    "NOMINAL_SPEED",
+    "NOMINAL_TURN_RATE",
+    "START_COVARIANCE",
+    "carmen_to_bag",
+    "motion_stamps",
+]
+
+FloatArray = NDArray[np.float64]
+logger = logging.getLogger(__name__)
 
 
 def carmen_to_bag(
@@ -43,9 +73,22 @@ def carmen_to_bag(
     fmt: BagFormat = "ros2",
     range_max: float = 50.0,
     initial_pose: bool = True,
+    odometry: ArrayLike | None = None,
+    notes: list[str] | None = None,
+    initial_covariance: ArrayLike = START_COVARIANCE,
 ) -> Counter[str]:
     """Write the scans, odometry and corrected poses of CARMEN ``log`` as a bag at ``out``;
-    with ``initial_pose`` also the first corrected pose on ``/initialpose``.
+    with ``initial_pose`` also the first corrected pose on ``/initialpose``, with
+    ``initial_covariance`` (3, 3) [m^2, rad^2] (:data:`INITIAL_COVARIANCE` for nav2's default).
+
+    ``odometry`` (N, 3) x [m], y [m], theta [rad], one pose per scan: written on ``/odom``
+    instead of the log's own odometry (the corrected logs' odometry is their corrected poses:
+    a replay of it tracks with perfect odometry; ``symloc ros carmen-to-bag --odom-alpha``
+    passes the noisy odometry of ``symloc experiment amcl-carmen`` here).
+
+    ``notes``, a list, receives a line for what the bag does not take from the log as it is
+    (stamps given by the motion when the log has none); without it the line is logged as a
+    warning.
 
     Returns the number of messages written per topic.
 
@@ -54,6 +97,8 @@ def carmen_to_bag(
     DataFormatError
         The log is malformed (from :func:`symloc.io.carmen.read_carmen`), holds no ``FLASER``
         scan (nothing is written), or ``out`` exists.
+    ConfigurationError
+        ``odometry`` is not one finite pose per scan of the log.
     """
     data = read_carmen(log, range_max=range_max)
     if not data.scans:
@@ -69,13 +114,57 @@ def carmen_to_bag(
             f"{log}: no FLASER scan in it (read {len(data.odometry)} ODOM, skipped {seen});"
             " not a CARMEN laser log? No bag written"
         )
+    odom = _odometry(odometry, data.odom_poses, log)
+    stamps = data.stamps
+    if not stamps_usable(stamps):
+        stamps = motion_stamps(data.laser_poses, max(float(stamps[0]), 0.0))
+        note = (
+            f"{log}: the scans' stamps do not measure time (fewer than 90 % increase); the bag"
+            f" stamps them by the motion at {NOMINAL_SPEED:g} m/s and"
+            f" {math.degrees(NOMINAL_TURN_RATE):g} deg/s, at least {MIN_INTERVAL:g} s apart"
+            f" ({stamps[-1] - stamps[0]:.1f} s in all)"
+        )
+        if notes is None:
+            logger.warning(note)
+        else:
+            notes.append(note)
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with BagWriter(out, fmt) as bag:
         if initial_pose:
             first = data.scans[0]
-            bag.write_initialpose(first.laser_pose, INITIAL_COVARIANCE, first.stamp)
-        for s in data.scans:
-            bag.write_odometry(OdometryReading(s.odom_pose, s.stamp))
-            bag.write_scan(s.scan.with_ranges(s.scan.ranges, stamp=s.stamp))
-            bag.write_truth(s.laser_pose, s.stamp)
+            bag.write_initialpose(first.laser_pose, initial_covariance, float(stamps[0]))
+        for s, pose, t in zip(data.scans, odom, stamps.tolist(), strict=True):
+            bag.write_odometry(OdometryReading(pose, t))
+            bag.write_scan(s.scan.with_ranges(s.scan.ranges, stamp=t))
+            bag.write_truth(s.laser_pose, t)
     return bag.counts
+
+
+def _odometry(given: ArrayLike | None, own: FloatArray, log: str | Path) -> FloatArray:
+    """The odometry poses (N, 3) to write: ``given`` checked against the log's N scans, or the
+    log's ``own``."""
+    if given is None:
+        return own
+    try:
+        odom = np.asarray(given, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ConfigurationError(f"odometry: expected (N, 3) numbers, got {given!r}") from err
+    if odom.shape != own.shape or not np.all(np.isfinite(odom)):
+        raise ConfigurationError(
+            f"odometry: expected {own.shape[0]} finite poses x, y, theta (one per scan of {log}),"
+            f" got an array of shape {odom.shape}"
+        )
+    return odom
+
+
+def motion_stamps(poses: ArrayLike, start: float = 0.0) -> FloatArray:
+    """Stamps [s] (N,) for scans taken at ``poses`` (N, 3) x [m], y [m], theta [rad] by a robot
+    that drives at :data:`NOMINAL_SPEED` and turns at :data:`NOMINAL_TURN_RATE` (whichever
+    takes longer between two scans, and at least :data:`MIN_INTERVAL`), from ``start`` [s]."""
+    p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+    if p.shape[0] == 0:
+        return np.zeros(0)
+    step = np.hypot(*np.diff(p[:, :2], axis=0).T) / NOMINAL_SPEED
+    turn = np.abs(np.angle(np.exp(1j * np.diff(p[:, 2])))) / NOMINAL_TURN_RATE
+    dt = np.maximum(np.maximum(step, turn), MIN_INTERVAL)
+    return np.asarray(start + np.concatenate([[0.0], np.cumsum(dt)]), dtype=np.float64)

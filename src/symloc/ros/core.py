@@ -140,8 +140,9 @@ class Outputs:
     capture: dict[str, Any] | None = None
     axis_pose: dict[str, Any] | None = None
     used: bool = True
-    #: The tracker's best pose (3,) at this scan, earned or not (for logs such as
-    #: ``replay_scans.tum``; never published as a pose).
+    #: The tracker's best pose (3,) at this scan, earned or not, carried by odometry from its
+    #: last filter update to the scan (for logs such as ``replay_scans.tum``; never published
+    #: as a pose).
     best_estimate: FloatArray | None = None
     #: tf2_msgs/TFMessage fields with ``map -> odom`` (None: nothing to broadcast)
     tf: dict[str, Any] | None = None
@@ -211,6 +212,9 @@ class NodeCore:
         self._confirmed: tuple[FloatArray, FloatArray, FloatArray] | None = None
         #: the pose kept across a rebuild, applied at the next step (:meth:`_reseed`)
         self._pending_seed: _Seed | None = None
+        #: the odometry pose at the tracker's last filter update: its estimate is the robot's
+        #: pose then, carried by odometry to later scans (:meth:`_best_estimate`)
+        self._update_odom: FloatArray | None = None
 
     # ------------------------------------------------------------------ bookkeeping
 
@@ -858,6 +862,9 @@ class NodeCore:
             self.drop("scan: rejected by the localizer", f"{type(err).__name__}: {err}")
             self._localizer_failed()
             return self.unused_scan(scan.stamp)
+        last = self.localizer.last_result
+        if last is None or getattr(last, "updated", True):
+            self._update_odom = np.asarray(odom.pose, dtype=np.float64).copy()
         self._failures = 0
         self._unused = 0
         self._beams.used(len(scan))
@@ -956,7 +963,7 @@ class NodeCore:
                 recovered=self.recovered,
             ),
             candidates=candidates_to_fields(est, stamp=stamp, frame_id=p.global_frame_id),
-            best_estimate=self._best_estimate(),
+            best_estimate=self._best_estimate(np.asarray(odom.pose, dtype=np.float64)),
         )
         out.tf = self.map_odom.step(est, stamp, odom.pose, holds=self._holds_pose())
         self._add_map_to_odom(out, stamp)
@@ -995,12 +1002,21 @@ class NodeCore:
                 out.capture = header_fields(stamp, frame)
         return out
 
-    def _best_estimate(self) -> FloatArray | None:
+    def _best_estimate(self, odom: FloatArray) -> FloatArray | None:
+        """The tracker's estimate as the robot's pose at the scan whose odometry pose is
+        ``odom`` (3,): a filter that did not update at this scan (the robot moved less than
+        ``update_min_d`` / ``update_min_a``) holds its estimate at its last update, so the
+        estimate is carried by the odometry since then, as nav2's ``map -> odom`` places the
+        robot between updates. None when there is no finite estimate."""
         last = None if self.localizer is None else self.localizer.last_result
         if last is None:
             return None
         arr = np.asarray(last.estimate, dtype=np.float64).reshape(-1)
-        return arr.copy() if arr.shape == (3,) and np.all(np.isfinite(arr)) else None
+        if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+            return None
+        if not getattr(last, "updated", True) and self._update_odom is not None:
+            return self._carry(arr, self._update_odom, odom)
+        return arr.copy()
 
     def _particles(self) -> FloatArray | None:
         last = None if self.localizer is None else self.localizer.last_result

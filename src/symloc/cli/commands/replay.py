@@ -2,7 +2,8 @@
 
 Into ``--out DIR``: ``replay.tum`` (the poses the localizer earned, status tracking: what a
 robot would act on), ``replay_scans.tum`` (AMCL's best estimate at every scan, earned or not,
-so evo sees the whole run), ``replay_scans.csv`` (every scan's status, estimate and reason) and
+carried by odometry from the filter's last update, so evo sees the whole run),
+``replay_scans.csv`` (every scan's status, estimate and reason) and
 ``replay.png``. A run that never earned a pose says why and exits with code 3.
 """
 

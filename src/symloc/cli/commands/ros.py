@@ -95,9 +95,20 @@ def register(subparsers: Any) -> None:
     conv.add_argument(
         "--no-initial-pose",
         action="store_true",
-        help="do not write /initialpose (the first corrected pose, nav2's default covariance);"
+        help="do not write /initialpose (the first corrected pose, 5 cm / 3 deg std as"
+        " experiment amcl-carmen starts symloc's localizer);"
         " a replay then localizes globally",
     )
+    conv.add_argument(
+        "--odom-alpha",
+        type=options.nonnegative_float,
+        default=0.0,
+        help="write on /odom the noisy odometry that 'symloc experiment amcl-carmen"
+        " --odom-alpha A --seed N' tracks with on this log run alone (rot-trans-rot noise of"
+        " variances alpha1..4 = A on the corrected poses); default 0: the log's own odometry"
+        " (in the corrected logs, the corrected poses themselves)",
+    )
+    options.add_seed(conv)
     conv.set_defaults(func=_carmen_to_bag)
     check = sub.add_parser(
         "check-params",
@@ -136,7 +147,31 @@ def _carmen_to_bag(args: argparse.Namespace) -> int:
     stem = args.log.name.removesuffix(".gz").removesuffix(".log")
     bag = Path(args.out) / (stem + (".bag" if args.format == "ros1" else ""))
     options.refuse_overwriting_inputs({"log": args.log}, {"--out": bag})
-    counts = carmen_to_bag(args.log, bag, fmt=args.format, initial_pose=not args.no_initial_pose)
+    odometry = None
+    if args.odom_alpha > 0.0:
+        from symloc.bench.carmen_tracking import tracking_odometry
+        from symloc.geometry import wrap_angle
+        from symloc.io.carmen import read_carmen
+
+        truth = read_carmen(args.log).laser_poses.copy()
+        truth[:, 2] = wrap_angle(truth[:, 2])
+        name = stem.removesuffix("-corrected")
+        odometry = tracking_odometry(name, truth, args.odom_alpha, args.seed)
+        print(
+            f"# /odom: the corrected poses with the odometry noise of experiment amcl-carmen"
+            f" --logs {name} --odom-alpha {args.odom_alpha:g} --seed {args.seed}"
+        )
+    notes: list[str] = []
+    counts = carmen_to_bag(
+        args.log,
+        bag,
+        fmt=args.format,
+        initial_pose=not args.no_initial_pose,
+        odometry=odometry,
+        notes=notes,
+    )
+    for note in notes:
+        print(f"note: {note}")
     for topic, n in sorted(counts.items()):
         print(f"  {topic}: {n} messages")
     print(f"wrote {bag}")
