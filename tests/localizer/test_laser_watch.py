@@ -109,10 +109,10 @@ class _KeyframesOutOfView:
     def keyframe_count(self) -> int:
         return 5
 
-    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+    def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         return np.zeros(len(poses), np.int64)
 
-    def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
+    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
         raise AssertionError("no image is asked for: no keyframe is in view")
 
 

@@ -250,6 +250,7 @@ class CorridorKeyframes:
 
     truth: np.ndarray = field(default_factory=lambda: TRUTH.copy())
     shown: list[np.ndarray] = field(default_factory=list)
+    reaches: list[float] = field(default_factory=list)
     facing: float = TRUTH[2]
     #: keyframes expected by every pose (the view planner never turns the robot)
     everywhere: bool = False
@@ -257,7 +258,7 @@ class CorridorKeyframes:
     def keyframe_count(self) -> int:
         return 20
 
-    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+    def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         """The corridor was mapped both ways: keyframes along the axis, either way."""
         th = np.asarray(poses, float).reshape(-1, 3)[:, 2]
         if self.everywhere:
@@ -266,9 +267,10 @@ class CorridorKeyframes:
         along = (off <= math.radians(40)) | (off >= math.pi - math.radians(40))
         return along.astype(np.int64) * 2
 
-    def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
+    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
         poses = np.asarray(poses, float)
         self.shown.append(poses.copy())
+        self.reaches.append(reach)
         checks = []
         for p in poses:
             right = abs(float(wrap_angle(p[2] - self.facing))) < math.radians(10)
@@ -333,6 +335,10 @@ def test_in_a_corridor_the_camera_decides_the_heading_and_the_position_stays_ope
     assert shown[:, 0].min() == pytest.approx(2.0, abs=0.1)
     assert shown[:, 0].max() == pytest.approx(18.0, abs=0.1)
     assert {round(float(wrap_angle(h - TRUTH[2])), 3) for h in shown[:, 2]} == {0.0, 3.142}
+    # the truth lies between two samples: each one's keyframes reach half the spacing further
+    spacing = float(np.max(np.abs(np.diff(np.sort(shown[: len(shown) // 2, 0])))))
+    assert kf.reaches[0] == pytest.approx(0.5 * spacing)
+    assert kf.reaches[0] > 0.0
     assert est.status is Status.AXIS
     assert est.pose is None  # nothing claimed
     assert est.covariance is None

@@ -43,11 +43,11 @@ class FakeKeyframes:
     def keyframe_count(self) -> int:
         return self.count
 
-    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+    def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         """Every pose sees ``count`` keyframes in every direction (no view planning)."""
         return np.full(len(np.asarray(poses).reshape(-1, 3)), self.count, np.int64)
 
-    def verify(self, poses: np.ndarray, image: np.ndarray) -> Verification:
+    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         i = self.answer.pop(0) if self.answer else None
         pose = None if i is None else np.asarray(poses[i], float)
@@ -182,7 +182,7 @@ def test_turns_then_gives_up_and_rests() -> None:
 class DirectionalKeyframes(FakeKeyframes):
     """Keyframes that only a camera looking along ``+y`` (heading pi/2, within 40 deg) sees."""
 
-    def expected_counts(self, poses: np.ndarray) -> np.ndarray:
+    def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         th = np.asarray(poses, float).reshape(-1, 3)[:, 2]
         off = np.abs((th - math.pi / 2 + math.pi) % (2 * math.pi) - math.pi)
         return (off <= math.radians(40.0)).astype(np.int64) * 2
@@ -219,7 +219,7 @@ def test_turns_to_where_the_keyframes_are_before_the_image() -> None:
 def test_no_keyframe_in_any_direction_gives_up_without_an_image() -> None:
     fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
     kf = DirectionalKeyframes()
-    kf.expected_counts = lambda poses: np.zeros(len(poses), np.int64)  # type: ignore[method-assign]
+    kf.expected_counts = lambda poses, reach=0.0: np.zeros(len(poses), np.int64)  # type: ignore[method-assign]
     loc, _ = _localizer(FakeProposer([TRUE, COPY]), kf, fits)
     est = _step(loc)
     assert est.status is Status.LOST

@@ -539,3 +539,52 @@ def test_decision_at_a_place_without_heading_reference_claims_no_pose():
     assert final.pose is None
     assert "no reliable heading reference" in final.reason
     assert tracker.seeded == []
+
+
+def test_a_centre_decision_too_imprecise_to_claim_starts_the_claim_chain() -> None:
+    """The camera chose the copy at the centre, but the laser cannot set the pose within the
+    tolerance yet (a corridor's axis): AMCL is reseeded there and the claim chain starts at
+    it, nothing is published now, and the pose is published once a scan confirms it."""
+    import logging
+
+    from symloc.grid.fields import surface_distance_field
+    from symloc.localizer import deciding
+    from symloc.localizer.centering import CentreFilter
+    from symloc.localizer.claim import ClaimGate, Verdict
+    from symloc.localizer.context import Context, Inputs, Record, Visit
+    from symloc.localizer.notes import Notes
+    from symloc.localizer.rules import Streak
+    from symloc.localizer.types import Decision, DecisionStatus, TrackerResult
+    from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
+    from symloc.sim.rasterize import world_to_grid
+    from symloc.sim.rooms import hallway
+
+    room = hallway(20.0, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    gate = ClaimGate(surface_distance_field(grid), (0.01, 0.01, 0.01, 0.01))
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0], centre[1], 0.0])
+    near = RPLIDAR_A2.with_(range_max=6.0)  # the corridor's ends out of reach from its middle
+    tracker = FakeTracker(default=_result([truth], [1.0]))
+    notes = Notes(logging.getLogger("test"))
+    ctx = Context(tracker, FakeStore(), LocalizerConfig(), gate, None, [], [], notes, Record())
+    place = Place(1, centre, heading0=0.0, m=2, order=2, gv_distance=10.0)
+    order = SymmetryOrder.finite(2)
+    visit = Visit(order, 10.0, "rectangle", centre, CentreFilter(), place, Streak(3))
+    decision = Decision(DecisionStatus.DECIDED, 0, 0.0, 0.9)
+    scan = simulate_scan(room.world, truth, near, 0)
+    result = TrackerResult(estimate=truth, covariance=np.eye(3) * 1e-4, hypotheses=())
+    inp = Inputs(result, SquareJudge()(truth), scan, None, np.zeros(3))
+    done = deciding.reseed(ctx, inp, visit, place, decision)
+    assert done.outcome is deciding.Reseeded.WITHHELD
+    assert done.estimate is not None
+    assert done.estimate.status is Status.AMBIGUOUS  # nothing published now
+    assert done.estimate.pose is None
+    assert "published once a scan confirms it" in done.estimate.reason
+    assert len(tracker.seeded) == 1  # AMCL reseeded at the decided pose
+    assert gate.has_chain  # the claim chain starts there: the copy is chosen
+    # driven 8.5 m along the corridor, its end near: the same chain is now confirmed
+    moved = truth + np.array([8.5, 0.0, 0.0])
+    claim = gate.check(np.array([8.5, 0.0, 0.0]), simulate_scan(room.world, moved, near, 1))
+    assert claim.verdict is Verdict.CLAIM, claim.reason
+    assert math.hypot(*(claim.pose[:2] - moved[:2])) < 0.1

@@ -22,10 +22,10 @@ class _KeyframePlaces(MemoryPlaces):
     def keyframe_count(self) -> int:
         return 3
 
-    def expected_counts(self, poses: Any) -> Any:
+    def expected_counts(self, poses: Any, reach: float = 0.0) -> Any:
         raise AssertionError("not called while building")
 
-    def verify(self, poses: Any, image: Any) -> Any:
+    def verify(self, poses: Any, image: Any, reach: float = 0.0) -> Any:
         raise AssertionError("not called while building")
 
 

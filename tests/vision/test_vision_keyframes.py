@@ -493,3 +493,21 @@ def test_expected_counts_are_the_lengths_of_the_expected_keyframes() -> None:
     assert counts.tolist() == lengths
     assert max(lengths) > 0
     assert expected_counts(poses, np.zeros((0, 3)), s).tolist() == [0] * 40
+
+
+def test_a_store_reaches_further_for_hypotheses_sampled_along_a_line(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from symloc.localizer.vision_store import VisionPlaceStore
+
+    kf = replace(_random_keyframe(0), pose=np.array([1.3, 0.0, 0.0]))
+    with VisualMap(tmp_path / "vm.sqlite") as vm:
+        vm.add_keyframes([kf])
+        store = VisionPlaceStore(vm, vocabulary=None, intrinsics=np.eye(3))
+        here = np.zeros((1, 3))
+        assert store.verification.max_distance == 1.0
+        assert store.expected_counts(here).tolist() == [0]  # 1.3 m away: beyond 1 m
+        assert store.expected_counts(here, reach=0.5).tolist() == [1]
+        assert store.verification.max_distance == 1.0  # the store's own settings unchanged
+        with pytest.raises(ConfigurationError, match="reach"):
+            store.expected_counts(here, reach=-0.1)

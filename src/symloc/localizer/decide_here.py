@@ -163,6 +163,13 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
     return Hypotheses(aligned, fits, survivors, complete, reason)
 
 
+def _spacing(samples: FloatArray) -> float:
+    """Largest distance [m] between consecutive poses of ``samples`` (M, 3) (0 for one)."""
+    if samples.shape[0] < 2:
+        return 0.0
+    return float(np.max(np.hypot(*np.diff(samples[:, :2], axis=0).T)))
+
+
 def _open_copies(ctx: Context, inp: Inputs, poses: FloatArray, fits: FloatArray) -> int:
     """How many of the hypotheses ``poses`` (K, 3) (aligned, best first, with ``fits`` (K,))
     to keep so that every rotated copy of the best (about a map symmetry or the known place
@@ -273,6 +280,9 @@ class DecideHere:
     rest_after: int = 0
     back: OnAxis | None = None
     classes: tuple[AxisClass, AxisClass] | None = None
+    #: [m] how far each hypothesis shown to the camera stands for (half the spacing of the
+    #: poses sampled along an axis; 0 for hypotheses the laser aligned one by one)
+    reach: float = 0.0
     #: each image's decided heading class, as the map-from-odometry rotation it implies [rad]
     #: (the camera's map heading minus the odometry heading, unchanged by turns in place)
     axis_votes: list[float] = field(default_factory=list)
@@ -392,9 +402,12 @@ class DecideHere:
                 ctx, inp, f"{count} poses along an axis explain the scan and no keyframes"
             )
         shown = [c.fitted.samples(cfg.axis_spacing, cfg.axis_max_hypotheses) for c in classes]
+        # the true pose lies anywhere between two samples: each sample's expected keyframes
+        # reach half the spacing further (the view planner and the camera alike)
+        reach = 0.5 * max(_spacing(s) for s in shown)
         turn = None
         if not self.camera_done:
-            turn = self._choose_view(ctx, inp, np.vstack(shown), keyframes)
+            turn = self._choose_view(ctx, inp, np.vstack(shown), keyframes, reach)
         if self.camera_done:
             return self._give_up(
                 ctx, inp, f"{count} poses along an axis explain the scan and {self.camera_done}"
@@ -404,6 +417,7 @@ class DecideHere:
         self.poses = np.vstack(shown)
         self.labels = np.repeat(np.arange(2, dtype=np.int64), [len(s) for s in shown])
         self.classes = classes
+        self.reach = reach
         self.odom0, self.waited = inp.odom_pose.copy(), 0
         self.views += 1
         self.seen.append(float(inp.odom_pose[2]))
@@ -418,17 +432,27 @@ class DecideHere:
         return self._wait(ctx, inp, request, why), self
 
     def _choose_view(
-        self, ctx: Context, inp: Inputs, poses: FloatArray, keyframes: KeyframeStore
+        self,
+        ctx: Context,
+        inp: Inputs,
+        poses: FloatArray,
+        keyframes: KeyframeStore,
+        reach: float = 0.0,
     ) -> Step | None:
         """None when the image is to be taken here; else the step that turns the robot to
         where more hypotheses of ``poses`` (K, 3) expect keyframes (or away from a heading
-        already imaged). When no heading left shows any a keyframe, the camera is done here
-        (``camera_done`` says why) and None is returned."""
+        already imaged; ``reach`` [m] as in :meth:`KeyframeStore.expected_counts`). When no
+        heading left shows any a keyframe, the camera is done here (``camera_done`` says why)
+        and None is returned."""
         cfg = ctx.config
         heading = float(inp.odom_pose[2])
+
+        def expected(p: FloatArray) -> NDArray[np.int64]:
+            return keyframes.expected_counts(p, reach)
+
         plan = plan_turn(
             poses,
-            keyframes.expected_counts,
+            expected,
             seen=[float(angle_diff(h, heading)) for h in self.seen],
             spacing=cfg.decide_turn,
         )
@@ -436,7 +460,7 @@ class DecideHere:
             where = "in any direction" if not self.seen else "in a direction not yet seen"
             self.camera_done = f"no keyframe to compare them with {where}"
             return None
-        here = int(np.count_nonzero(keyframes.expected_counts(poses) > 0))
+        here = int(np.count_nonzero(expected(poses) > 0))
         seen_here = any(abs(float(angle_diff(h, heading))) <= cfg.decide_turn for h in self.seen)
         if seen_here or here < plan.covered:
             return self._turn_to(ctx, inp, poses, plan.turn, plan.covered)
@@ -581,7 +605,7 @@ class DecideHere:
         counts.images += 1
         moved = relative(self.odom0, inp.odom_pose)
         carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
-        answer = ctx.keyframes.verify(carried, image)
+        answer = ctx.keyframes.verify(carried, image, self.reach if self.classes else 0.0)
         ctx.record.last_camera_check = (carried, answer)
         if self.classes is not None and self.labels is not None:
             vote = vote_heading(carried, self.labels, answer, cfg.axis_min_inliers)
@@ -710,6 +734,7 @@ class DecideHere:
         the robot to a heading not yet imaged (or the path gives up)."""
         ctx.note(f"deciding here: {why}")
         self.poses, self.odom0, self.classes, self.labels = None, None, None, None
+        self.reach = 0.0
         if self.views >= ctx.config.decide_views:
             # the camera is done: the laser proposes once more and watches the survivors as
             # the robot moves (or the path gives up)

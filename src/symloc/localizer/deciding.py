@@ -81,13 +81,15 @@ class Reseeded(enum.Enum):
     """How a reseed at a decided pose ended."""
 
     REJECTED = "rejected"  # the laser contradicts the decided pose: try the next direction
-    WITHHELD = "withheld"  # AMCL reseeded, but the pose is not certain enough to claim
+    WITHHELD = "withheld"  # AMCL reseeded, the claim chain starts there, nothing published
+    # until a scan confirms the pose precisely enough
     CLAIMED = "claimed"  # AMCL reseeded and the pose is published
 
 
 @dataclass(frozen=True, eq=False)
 class Reseed:
-    """:func:`reseed`'s answer: how it ended, the estimate to publish (CLAIMED), or why."""
+    """:func:`reseed`'s answer: how it ended, the estimate to publish (CLAIMED: tracking;
+    WITHHELD: ambiguous, the decided pose its one hypothesis), or why."""
 
     outcome: Reseeded
     estimate: Estimate | None = None
@@ -130,14 +132,26 @@ def reseed(ctx: Context, inp: Inputs, visit: Visit, place: Place, dec: Decision)
         f" (offset {math.degrees(dec.offset):+.1f} deg); AMCL reseeded"
     )
     if claim is not None and gate is not None:
-        if claim.verdict is Verdict.WITHHELD:
-            return Reseed(
-                Reseeded.WITHHELD,
-                why="undetermined: the decided pose is not certain enough for the tolerance "
-                f"({claim.reason.removeprefix('claim withheld: ')}); pose not claimed",
-            )
+        # the camera chose the copy: the claim chain starts at the decided pose whether or not
+        # it is precise enough to publish yet (the gate publishes it once a scan confirms it
+        # within the tolerance, as after deciding where the robot stands)
         gate.anchor(pose, cov, inp.odom_pose)
         gate.confirmed(claim, inp.odom_pose)
+        if claim.verdict is Verdict.WITHHELD:
+            why = (
+                f"{reason}, but {claim.reason.removeprefix('claim withheld: ')}: pose "
+                "published once a scan confirms it"
+            )
+            ctx.note(why)
+            return Reseed(
+                Reseeded.WITHHELD,
+                Estimate(
+                    status=Status.AMBIGUOUS,
+                    hypotheses=(Hypothesis(pose=pose, weight=1.0),),
+                    reason=why,
+                ),
+                why=why,
+            )
     estimate = Estimate(
         status=Status.TRACKING,
         pose=pose,

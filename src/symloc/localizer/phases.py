@@ -476,8 +476,6 @@ class Capture:
         done = deciding.reseed(ctx, inp, visit, choice.place, choice.decision)
         if done.outcome is deciding.Reseeded.REJECTED:
             return next_attempt(ctx, inp, visit, done.why)
-        if done.outcome is deciding.Reseeded.WITHHELD:
-            return settle(ctx, inp, visit, done.why)
         assert done.estimate is not None
         return done.estimate, Tracking(restart(ctx))
 

@@ -432,11 +432,15 @@ class KeyframeStore(Protocol):
     def keyframe_count(self) -> int:
         """How many keyframes the visual map holds (0: the camera cannot decide here)."""
 
-    def expected_counts(self, poses: FloatArray) -> NDArray[np.int64]:
+    def expected_counts(self, poses: FloatArray, reach: float = 0.0) -> NDArray[np.int64]:
         """How many keyframes a camera at each pose of ``poses`` (P, 3) (map frame) should be
-        seeing, (P,): 0 where an image there cannot verify anything (view planning)."""
+        seeing, (P,): 0 where an image there cannot verify anything (view planning).
+        ``reach`` [m]: each pose stands for the poses up to this far from it (hypotheses
+        sampled along a line), so its keyframes may lie that much further away."""
 
-    def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
+    def verify(
+        self, poses: FloatArray, image: NDArray[np.uint8], reach: float = 0.0
+    ) -> Verification:
         """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
         taken) against the keyframes it predicts the camera sees; name the single one verified
-        with margin, or none."""
+        with margin, or none. ``reach`` [m] as in :meth:`expected_counts`."""

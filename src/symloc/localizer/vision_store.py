@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import check_positive
+from symloc.errors import ConfigurationError
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import UNANCHORED_LABEL
 from symloc.vision.verification import (
@@ -185,10 +187,20 @@ class VisionPlaceStore:
         """Keyframes in the visual map (:class:`~symloc.localizer.types.KeyframeStore`)."""
         return int(self.visual_map.keyframe_count())
 
-    def expected_counts(self, poses: FloatArray) -> NDArray[np.int64]:
+    def expected_counts(self, poses: FloatArray, reach: float = 0.0) -> NDArray[np.int64]:
         """Keyframes each pose of ``poses`` (P, 3) should see, (P,)
-        (:func:`symloc.vision.verification.expected_counts` with :attr:`verification`)."""
-        return expected_counts(poses, self._keyframe_poses(), self.verification)
+        (:func:`symloc.vision.verification.expected_counts` with :attr:`verification`, its
+        ``max_distance`` lengthened by ``reach`` [m])."""
+        return expected_counts(poses, self._keyframe_poses(), self._reaching(reach))
+
+    def _reaching(self, reach: float) -> VerificationSettings:
+        """:attr:`verification` with expected keyframes up to ``reach`` [m] further away."""
+        if not (math.isfinite(reach) and reach >= 0.0):
+            raise ConfigurationError(f"reach: expected a distance >= 0 m, got {reach!r}")
+        if reach == 0.0:
+            return self.verification
+        cfg = self.verification
+        return replace(cfg, max_distance=cfg.max_distance + reach)
 
     def _keyframe_poses(self) -> FloatArray:
         """The keyframes' map poses (N, 3), read once per keyframe count."""
@@ -199,16 +211,19 @@ class VisionPlaceStore:
             )
         return self._kf_poses
 
-    def verify(self, poses: FloatArray, image: NDArray[np.uint8]) -> Verification:
+    def verify(
+        self, poses: FloatArray, image: NDArray[np.uint8], reach: float = 0.0
+    ) -> Verification:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
-        ``image`` with this store's vocabulary, camera and :attr:`verification` settings."""
+        ``image`` with this store's vocabulary, camera and :attr:`verification` settings (the
+        expected keyframes up to ``reach`` [m] further away)."""
         dec = verify_hypotheses(
             np.asarray(poses, dtype=np.float64).reshape(-1, 3),
             image,
             self.visual_map,
             self.vocabulary,
             self.intrinsics,
-            self.verification,
+            self._reaching(reach),
             extractor=self.extractor,
             dist_coeffs=self.dist_coeffs,
         )
