@@ -163,6 +163,13 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
     return Hypotheses(aligned, fits, survivors, complete, reason)
 
 
+def _listed(numbers: list[int]) -> str:
+    """``hypothesis 3`` / ``hypotheses 2, 5 and 7`` (1-based numbers), for reasons."""
+    if len(numbers) == 1:
+        return f"hypothesis {numbers[0]}"
+    return "hypotheses " + ", ".join(map(str, numbers[:-1])) + f" and {numbers[-1]}"
+
+
 def _spacing(samples: FloatArray) -> float:
     """Largest distance [m] between consecutive poses of ``samples`` (M, 3) (0 for one)."""
     if samples.shape[0] < 2:
@@ -638,6 +645,17 @@ class DecideHere:
                 index, pose_or_none, verdict = together.index, together.pose, together.reason
         if index is None or pose_or_none is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
+        unchecked = [i + 1 for i, c in enumerate(answer.checks) if c.status == "unknown"]
+        if unchecked:
+            # every hypothesis shown survived the laser; one the image could not check (no
+            # keyframe looks where it says the camera looks) may be the truth, and the verified
+            # one a look-alike (a repeated texture): the camera decides only among the checked
+            return self._look_elsewhere(
+                ctx,
+                inp,
+                f"image {self.views}: hypothesis {index + 1} verified, but the image could not "
+                f"check {_listed(unchecked)}, which the laser leaves open",
+            )
         counts.verified += 1
         pose = np.asarray(pose_or_none, dtype=np.float64)
         if self.back is not None and abs(float(angle_diff(pose[2], self.back.heading))) > (
