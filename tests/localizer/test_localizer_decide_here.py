@@ -12,7 +12,7 @@ from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _r
 from symloc.errors import ConfigurationError
 from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
 from symloc.localizer.settings import LocalizerSettings, leaf_paths
-from symloc.localizer.types import Proposal, Verification
+from symloc.localizer.types import HypothesisVerdict, Proposal, Verification
 from symloc.localizer.vision_store import single_verified
 from symloc.odometry import OdometryReading
 from symloc.vision.verification import HypothesisCheck, VerificationDecision
@@ -136,6 +136,38 @@ def test_the_camera_picks_one_of_several() -> None:
     np.testing.assert_allclose(tracker.seeded[-1], COPY)
     assert loc.phase == "tracking"
     assert loc.decide_counts.claimed == 1
+
+
+@dataclass
+class UncheckedKeyframes(FakeKeyframes):
+    """The image verifies the copy (a look-alike view) and cannot check the true pose: no
+    keyframe looks where the true pose says the camera looks."""
+
+    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+        self.shown.append(np.asarray(poses, float).copy())
+        copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
+        checks = tuple(
+            HypothesisVerdict("verified", 104, 0.0) if i == copy else HypothesisVerdict("unknown", 0)
+            for i in range(len(poses))
+        )
+        return Verification(copy, np.asarray(poses[copy], float), "scripted", {}, checks, 2.0, 0.26)
+
+
+def test_a_hypothesis_the_image_could_not_check_blocks_the_decision() -> None:
+    # the laser prefers the truth (98 against 92 % of the beams) but both survive it
+    fits = {(1.0, 0.5): 0.98, (3.0, 1.5): 0.92}
+    kf = UncheckedKeyframes()
+    loc, tracker = _localizer(FakeProposer([TRUE, COPY]), kf, fits)
+    est = _step(loc)
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    est = _step(loc, image=IMAGE)
+    assert len(kf.shown) == 1
+    assert est.status is not Status.TRACKING  # the copy is not claimed
+    assert est.pose is None
+    assert all(np.hypot(*(s[:2] - COPY[:2])) > 0.1 for s in tracker.seeded)
+    assert loc.decide_counts.claimed == 0
+    assert any("could not check hypothesis 1" in n for n in loc.log)
 
 
 def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:
