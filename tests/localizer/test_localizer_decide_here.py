@@ -147,7 +147,9 @@ class UncheckedKeyframes(FakeKeyframes):
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
         checks = tuple(
-            HypothesisVerdict("verified", 104, 0.0) if i == copy else HypothesisVerdict("unknown", 0)
+            HypothesisVerdict("verified", 104, 0.0)
+            if i == copy
+            else HypothesisVerdict("unknown", 0)
             for i in range(len(poses))
         )
         return Verification(copy, np.asarray(poses[copy], float), "scripted", {}, checks, 2.0, 0.26)
@@ -167,7 +169,7 @@ def test_a_hypothesis_the_image_could_not_check_blocks_the_decision() -> None:
     assert est.pose is None
     assert all(np.hypot(*(s[:2] - COPY[:2])) > 0.1 for s in tracker.seeded)
     assert loc.decide_counts.claimed == 0
-    assert any("could not check hypothesis 1" in n for n in loc.log)
+    assert any("could check hypothesis 1" in n for n in loc.log)
 
 
 def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:

@@ -68,11 +68,20 @@ from symloc.symmetry.order import SymmetryOrder
 from .axis_heading import vote_heading
 from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
 from .claim import Claim, Verdict
+from .config import LocalizerConfig
 from .context import Context, Inputs, cov_from_std, lost, reseed_tracker
 from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .laser_watch import LaserWatch, WatchVerdict
 from .phases import Centering, Lost, Phase, Step, Tracking, restart
-from .types import Estimate, Hypothesis, KeyframeStore, Request, RequestKind, Status
+from .types import (
+    Estimate,
+    Hypothesis,
+    KeyframeStore,
+    Request,
+    RequestKind,
+    Status,
+    Verification,
+)
 from .verified_together import one_pose_verified
 from .view_planning import plan_turn
 
@@ -161,6 +170,44 @@ def propose(ctx: Context, inp: Inputs) -> Hypotheses:
     survivors = int(np.count_nonzero(fits >= fits[0] - cfg.decide_laser_margin))
     survivors = max(survivors, _open_copies(ctx, inp, aligned, fits))
     return Hypotheses(aligned, fits, survivors, complete, reason)
+
+
+@dataclass(frozen=True, eq=False)
+class Checked:
+    """One image's verdict on one hypothesis: its map ``pose`` (3,) when the image was taken,
+    the odometry pose ``odom`` (3,) then, and whether the image contradicted it."""
+
+    pose: FloatArray
+    odom: FloatArray
+    contradicted: bool
+
+
+def checked_by(poses: FloatArray, odom: FloatArray, answer: Verification) -> list[Checked]:
+    """The verdicts of ``answer`` on the hypotheses ``poses`` (K, 3) the image checked
+    (verified or contradicted; not those it could not check), at odometry pose ``odom``."""
+    return [
+        Checked(poses[i].copy(), np.asarray(odom, dtype=np.float64).copy(), c.status != "verified")
+        for i, c in enumerate(answer.checks)
+        if c.status in ("verified", "contradicted")
+    ]
+
+
+def contradicted_before(
+    checked: list[Checked], pose: FloatArray, odom: FloatArray, cfg: LocalizerConfig
+) -> bool:
+    """True when an earlier image contradicted the hypothesis ``pose`` (3,) (map frame, at
+    odometry pose ``odom``): a checked pose carried by the odometry since then lies within
+    ``symmetry_position_tol`` and ``symmetry_angle_tol`` of it."""
+    for c in checked:
+        if not c.contradicted:
+            continue
+        now = np.asarray(compose(c.pose, relative(c.odom, odom)), dtype=np.float64)
+        if (
+            math.hypot(now[0] - pose[0], now[1] - pose[1]) <= cfg.symmetry_position_tol
+            and abs(float(angle_diff(now[2], pose[2]))) <= cfg.symmetry_angle_tol
+        ):
+            return True
+    return False
 
 
 def _listed(numbers: list[int]) -> str:
@@ -297,6 +344,8 @@ class DecideHere:
     #: the survivors watched by the laser as the robot moves (no keyframes to show them to,
     #: or the camera decided nothing)
     watch: LaserWatch | None = None
+    #: what the images of this episode said about each hypothesis they checked
+    checked: list[Checked] = field(default_factory=list)
     #: why the camera is done here (its views used up, no keyframe in view): the laser's
     #: proposals go to the watch from then on; empty while the camera may still decide
     camera_done: str = ""
@@ -645,17 +694,25 @@ class DecideHere:
                 index, pose_or_none, verdict = together.index, together.pose, together.reason
         if index is None or pose_or_none is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
-        unchecked = [i + 1 for i, c in enumerate(answer.checks) if c.status == "unknown"]
-        if unchecked:
-            # every hypothesis shown survived the laser; one the image could not check (no
-            # keyframe looks where it says the camera looks) may be the truth, and the verified
-            # one a look-alike (a repeated texture): the camera decides only among the checked
-            return self._look_elsewhere(
-                ctx,
-                inp,
-                f"image {self.views}: hypothesis {index + 1} verified, but the image could not "
-                f"check {_listed(unchecked)}, which the laser leaves open",
-            )
+        if self.classes is None:
+            self.checked.extend(checked_by(carried, inp.odom_pose, answer))
+            unchecked = [
+                i + 1
+                for i, c in enumerate(answer.checks)
+                if c.status == "unknown"
+                and not contradicted_before(self.checked, carried[i], inp.odom_pose, cfg)
+            ]
+            if unchecked:
+                # every hypothesis shown survived the laser; one no image of this episode
+                # could check (no keyframe looks where it says the camera looks) may be the
+                # truth, and the verified one a look-alike (a repeated texture): the camera
+                # decides only among hypotheses it checked, in this view or an earlier one
+                return self._look_elsewhere(
+                    ctx,
+                    inp,
+                    f"image {self.views}: hypothesis {index + 1} verified, but no image could "
+                    f"check {_listed(unchecked)}, which the laser leaves open",
+                )
         counts.verified += 1
         pose = np.asarray(pose_or_none, dtype=np.float64)
         if self.back is not None and abs(float(angle_diff(pose[2], self.back.heading))) > (
