@@ -10,7 +10,9 @@ import pytest
 from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _result
 
 from symloc.errors import ConfigurationError
+from symloc.geometry import compose, relative
 from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
+from symloc.localizer.decide_here import checked_by, contradicted_before
 from symloc.localizer.settings import LocalizerSettings, leaf_paths
 from symloc.localizer.types import HypothesisVerdict, Proposal, Verification
 from symloc.localizer.vision_store import single_verified
@@ -170,6 +172,27 @@ def test_a_hypothesis_the_image_could_not_check_blocks_the_decision() -> None:
     assert all(np.hypot(*(s[:2] - COPY[:2])) > 0.1 for s in tracker.seeded)
     assert loc.decide_counts.claimed == 0
     assert any("could check hypothesis 1" in n for n in loc.log)
+
+
+def test_a_hypothesis_an_earlier_image_contradicted_is_remembered() -> None:
+    cfg = LocalizerConfig()
+    odom0 = np.array([0.0, 0.0, 0.0])
+    checks = (HypothesisVerdict("unknown", 0), HypothesisVerdict("contradicted", 3, 0.0))
+    answer = Verification(None, None, "scripted", {}, checks, 2.0, 0.26)
+    seen = checked_by(np.array([TRUE, COPY]), odom0, answer)
+    assert len(seen) == 1  # the unchecked hypothesis leaves no trace
+    assert seen[0].contradicted
+    # the robot turned 60 deg on the spot: the copy, carried, is still the one contradicted
+    odom1 = np.array([0.0, 0.0, math.radians(60.0)])
+    copy_now = np.asarray(compose(COPY, relative(odom0, odom1)))
+    true_now = np.asarray(compose(TRUE, relative(odom0, odom1)))
+    assert contradicted_before(seen, copy_now, odom1, cfg)
+    assert not contradicted_before(seen, true_now, odom1, cfg)
+    assert not contradicted_before(seen, COPY, odom1, cfg)  # not where the copy went
+    verified = Verification(
+        0, TRUE, "scripted", {}, (HypothesisVerdict("verified", 90, 0.0),), 2.0, 0.26
+    )
+    assert not checked_by(TRUE[None, :], odom0, verified)[0].contradicted
 
 
 def test_hypotheses_are_carried_by_odometry_to_the_image() -> None:
