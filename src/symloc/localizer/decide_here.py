@@ -198,9 +198,15 @@ def contradicted_before(
     """True when an earlier image contradicted the hypothesis ``pose`` (3,) (map frame, at
     odometry pose ``odom``): a checked pose carried by the odometry since then lies within
     ``symmetry_position_tol`` and ``symmetry_angle_tol`` of it."""
+    return checked_before([c for c in checked if c.contradicted], pose, odom, cfg)
+
+
+def checked_before(
+    checked: list[Checked], pose: FloatArray, odom: FloatArray, cfg: LocalizerConfig
+) -> bool:
+    """True when an earlier image of ``checked`` checked the hypothesis ``pose`` (3,) (as
+    :func:`contradicted_before`, whatever it said)."""
     for c in checked:
-        if not c.contradicted:
-            continue
         now = np.asarray(compose(c.pose, relative(c.odom, odom)), dtype=np.float64)
         if (
             math.hypot(now[0] - pose[0], now[1] - pose[1]) <= cfg.symmetry_position_tol
@@ -506,8 +512,13 @@ class DecideHere:
         def expected(p: FloatArray) -> NDArray[np.int64]:
             return keyframes.expected_counts(p, reach)
 
+        # look first where the hypotheses no image has checked yet expect keyframes: a
+        # decision waits for them (see :meth:`_verify`)
+        pending = np.array(
+            [not checked_before(self.checked, p, inp.odom_pose, cfg) for p in poses], dtype=bool
+        )
         plan = plan_turn(
-            poses,
+            poses[pending] if 0 < np.count_nonzero(pending) < len(poses) else poses,
             expected,
             seen=[float(angle_diff(h, heading)) for h in self.seen],
             spacing=cfg.decide_turn,
