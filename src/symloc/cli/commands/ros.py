@@ -14,6 +14,7 @@ __all__ = ["register"]
 def register(subparsers: Any) -> None:
     """Add the ``ros`` sub-command group."""
     from symloc.sim.odometry_noise import ODOMETRY_REGIMES
+
     p: argparse.ArgumentParser = subparsers.add_parser(
         "ros", help="ROS 2 integration (rclpy node)", description="ROS 2 integration."
     )
