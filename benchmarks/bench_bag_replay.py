@@ -3,14 +3,20 @@
 For each log, as a user with a recording would run it:
 
 1. ``symloc ros carmen-to-bag LOG --out DIR`` (scans, odometry, ground truth, an initial pose);
-2. ``symloc map build --carmen LOG`` (the reference map and its ATE, printed by the command);
+2. ``symloc map build --carmen LOG --seed N`` (the reference map and its ATE, printed by the
+   command; SLAM on the log's scans with the "realistic" odometry noise drawn from seed N);
 3. ``symloc replay BAG --map <that map> --params src/symloc/ros/examples/carmen_params.yaml``:
    the scans dropped (the command's ``dropped`` line) and the error of every scan's estimate
    (``replay_scans.tum``) against the log's corrected poses, both in the map frame as it is
    and after a 2-D rigid fit (a map built by SLAM has its own frame), over all scans and over
    the scans replay published as tracking (``replay.tum``);
 4. ``symloc replay BAG --build-map``: the ATE of the trajectory SLAM wrote beside the map
-   (``<map>_trajectory.tum``) against the corrected poses.
+   (``<map>_trajectory.tum``) against the corrected poses. This bag's odometry is the log's own
+   (the corrected poses, perfect odometry), not what step 2 maps with, so the two ATEs differ
+   by their input; for the issue's comparison:
+7. ``symloc ros carmen-to-bag LOG --odometry realistic --seed N``: a bag with step 2's odometry,
+   and ``symloc replay`` of it ``--build-map``: its ATE against step 2's (same log, scans and
+   odometry; what is left is the bag itself: ROS stores ranges and angles as float32).
 
 Step 3 is not the experiment the issue compares with: its map is SLAM's (its own error, an
 ATE of several centimetres, is in every pose measured against the corrected poses) and the
@@ -33,7 +39,8 @@ bag's ground truth (the corrected poses) by their stamps, in order among repeate
 go backwards now and then; a log without usable stamps is stamped by its motion in the bag). Rows are appended to
 ``<out>/bench_bag_replay.partial.jsonl`` as each log finishes.
 
-Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seed N]``
+Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seed N]
+[--build-map-only]``
 """
 
 from __future__ import annotations
@@ -195,18 +202,60 @@ def same_as_experiment(
     }
 
 
-def bench_log(name: str, carmen: Path, out: Path, seed: int = 0) -> dict[str, Any]:
-    """One log through the commands of the module docstring."""
+def _build_map_ate(bag: Path, work: Path, tag: str) -> float | None:
+    """``symloc replay BAG --build-map``: the ATE [m] (RMSE after a rigid fit) of the trajectory
+    SLAM wrote beside the map against the bag's ground truth (the corrected poses)."""
+    stamps, truth = _bag_reference(bag)
+    _run(["replay", str(bag), "--build-map", str(work / tag / "map.yaml")], work / f"{tag}.txt")
+    traj = work / tag / "map_trajectory.tum"
+    return _errors(traj, stamps, truth).get("rmse_aligned") if traj.is_file() else None
+
+
+def same_input_as_map_build(name: str, log_path: Path, work: Path, seed: int) -> dict[str, Any]:
+    """Step 2 and 7 of the module docstring: ``map build --carmen LOG --seed N`` (its ATE as
+    it prints it) and ``replay --build-map`` on a bag carrying the odometry that command maps
+    with (``carmen-to-bag --odometry realistic --seed N``)."""
+    built = _run(
+        ["map", "build", "--carmen", str(log_path), "--seed", str(seed), "--out",
+         str(work / "map")],
+        work / "map.txt",
+    )  # fmt: skip
+    ate = re.search(r"ATE RMSE ([0-9.]+) m", built)
+    _run(
+        ["ros", "carmen-to-bag", str(log_path), "--out", str(work / "bag_mb"), "--odometry",
+         "realistic", "--seed", str(seed)],
+        work / "bag_mb.txt",
+    )  # fmt: skip
+    bm = _build_map_ate(work / "bag_mb" / f"{name}-corrected", work, "bagmap_mb")
+    mb = float(ate.group(1)) if ate else None
+    return {
+        "map_build_ate": mb,
+        "build_map_ate": bm,
+        "difference": None if bm is None or mb is None else bm - mb,
+    }
+
+
+def bench_log(
+    name: str, carmen: Path, out: Path, seed: int = 0, build_map_only: bool = False
+) -> dict[str, Any]:
+    """One log through the commands of the module docstring (``build_map_only``: steps 1, 2, 4
+    and 7)."""
     log_path = carmen / f"{name}-corrected.log.gz"
     work = out / name
     work.mkdir(parents=True, exist_ok=True)
     _run(["ros", "carmen-to-bag", str(log_path), "--out", str(work / "bag")], work / "bag.txt")
     bag = work / "bag" / f"{name}-corrected"
     stamps, truth = _bag_reference(bag)
-    built = _run(
-        ["map", "build", "--carmen", str(log_path), "--out", str(work / "map")], work / "map.txt"
-    )
-    ate = re.search(r"ATE RMSE ([0-9.]+) m", built)
+    same = same_input_as_map_build(name, log_path, work, seed)
+    row: dict[str, Any] = {
+        "log": name,
+        "scans": len(stamps),
+        "map_build_ate": same["map_build_ate"],
+        "build_map_ate": _build_map_ate(bag, work, "bagmap"),
+        "same_input_as_map_build": same,
+    }
+    if build_map_only:
+        return row
     replay = _run(
         [
             "replay", str(bag), "--map", str(work / "map" / "map.yaml"),
@@ -214,31 +263,12 @@ def bench_log(name: str, carmen: Path, out: Path, seed: int = 0) -> dict[str, An
         ],
         work / "replay.txt",
     )  # fmt: skip
-    bagmap = _run(
-        [
-            "replay",
-            str(bag),
-            "--build-map",
-            str(work / "bagmap" / "map.yaml"),
-            "--out",
-            str(work / "bm"),
-        ],
-        work / "bagmap.txt",
+    row.update(
+        dropped_share=_dropped(replay),
+        replay_all=_errors(work / "replay" / "replay_scans.tum", stamps, truth),
+        replay_tracked=_errors(work / "replay" / "replay.tum", stamps, truth),
+        same_as_experiment=same_as_experiment(name, log_path, carmen, work, seed),
     )
-    del bagmap
-    traj = work / "bagmap" / "map_trajectory.tum"
-    row: dict[str, Any] = {
-        "log": name,
-        "scans": len(stamps),
-        "dropped_share": _dropped(replay),
-        "map_build_ate": float(ate.group(1)) if ate else None,
-        "replay_all": _errors(work / "replay" / "replay_scans.tum", stamps, truth),
-        "replay_tracked": _errors(work / "replay" / "replay.tum", stamps, truth),
-        "build_map_ate": _errors(traj, stamps, truth).get("rmse_aligned")
-        if traj.is_file()
-        else None,
-        "same_as_experiment": same_as_experiment(name, log_path, carmen, work, seed),
-    }
     return row
 
 
@@ -248,7 +278,15 @@ def main() -> int:
     parser.add_argument("--carmen", type=Path, default=None, help="folder of the CARMEN logs")
     parser.add_argument("--out", type=Path, default=Path("bench_bag_replay_out"))
     parser.add_argument(
-        "--seed", type=int, default=0, help="experiment amcl-carmen's seed (its odometry noise)"
+        "--seed",
+        type=int,
+        default=0,
+        help="the odometry noise's seed: of experiment amcl-carmen and of map build --carmen",
+    )
+    parser.add_argument(
+        "--build-map-only",
+        action="store_true",
+        help="only --build-map against map build --carmen (steps 1, 2, 4, 7)",
     )
     args = parser.parse_args()
     carmen = args.carmen or find_carmen_dir()
@@ -261,10 +299,29 @@ def main() -> int:
     rows = []
     for name in args.logs:
         print(f"# {name}")
-        row = bench_log(name, carmen, args.out, args.seed)
+        row = bench_log(name, carmen, args.out, args.seed, args.build_map_only)
         rows.append(row)
         with partial.open("a") as fh:
             fh.write(json.dumps(row) + "\n")
+    print(
+        f"\n--build-map against map build --carmen on the same log and odometry (map build's,"
+        f" realistic, seed {args.seed}; target: |difference| <= 0.02 m); --build-map on the"
+        " log's own odometry (the corrected poses) for comparison:"
+    )
+    print(
+        f"{'log':<14}{'--build-map ATE [m]':>20}{'map build ATE [m]':>19}{'difference [m]':>16}"
+        f"{'own odometry [m]':>18}"
+    )
+    nan = float("nan")
+    for r in rows:
+        m = r["same_input_as_map_build"]
+        print(
+            f"{r['log']:<14}{m['build_map_ate'] or nan:>20.3f}{m['map_build_ate'] or nan:>19.3f}"
+            f"{m['difference'] if m['difference'] is not None else nan:>+16.3f}"
+            f"{r['build_map_ate'] or nan:>18.3f}"
+        )
+    if args.build_map_only:
+        return 0
     print(
         "\nOn the experiment's map and odometry (the issue's comparison; targets: |difference|"
         " <= 0.02 m, dropped < 1 %):"
@@ -285,14 +342,14 @@ def main() -> int:
     )
     print(
         f"{'log':<14}{'dropped':>9}{'replay mean (map frame / fitted) [m]':>40}"
-        f"{'tracked mean [m]':>18}{'--build-map ATE':>17}{'map build ATE':>15}"
+        f"{'tracked mean [m]':>18}{'--build-map ATE (own odometry)':>32}"
     )
     for r in rows:
         a, t = r["replay_all"], r["replay_tracked"]
         print(
             f"{r['log']:<14}{100 * (r['dropped_share'] or 0):>8.2f}%"
             f"{a['mean']:>28.3f} / {a['mean_aligned']:<9.3f}{t['mean']:>18.3f}"
-            f"{r['build_map_ate'] or float('nan'):>17.3f}{r['map_build_ate'] or float('nan'):>15.3f}"
+            f"{r['build_map_ate'] or float('nan'):>32.3f}"
         )
     return 0
 

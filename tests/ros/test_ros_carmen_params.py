@@ -70,6 +70,28 @@ def test_carmen_to_bag_writes_the_experiments_odometry(tmp_path: Path) -> None:
     assert np.abs(odom[1:, :2] - truth[1:, :2]).max() > 1e-4  # noisy, not the log's own
 
 
+def test_carmen_to_bag_writes_the_odometry_map_build_maps_with(tmp_path: Path) -> None:
+    """``--odometry realistic --seed N``: on /odom the odometry ``map build --carmen --odometry
+    realistic --seed N`` gives SLAM (before, the bag carried the log's own odometry, the
+    corrected poses, so ``replay --build-map`` and ``map build --carmen`` mapped one log from
+    different odometry and their ATEs were not comparable: issue 28)."""
+    from symloc.bench.slam_runs import carmen_odometry, odometry_seed, run_carmen
+
+    log = _carmen(tmp_path / "tiny-corrected.log")
+    argv = ["ros", "carmen-to-bag", str(log), "--odometry", "realistic", "--seed", "3"]
+    assert main([*argv, "--out", str(tmp_path / "bag")]) == 0
+    odom = _odometry(tmp_path / "bag" / "tiny-corrected")
+    data = read_carmen(log)
+    want = carmen_odometry(data, "realistic", np.random.default_rng(odometry_seed("tiny", 3)))
+    built = run_carmen(log, odometry="realistic", rng=3, progress=False).odometry
+    np.testing.assert_array_equal(built, want)
+    np.testing.assert_allclose(odom[:, :2], want[:, :2], atol=1e-9)
+    np.testing.assert_allclose(wrap_angle(odom[:, 2] - want[:, 2]), 0.0, atol=1e-9)
+    assert np.abs(odom[1:, :2] - data.laser_poses[1:, :2]).max() > 1e-4  # not the log's own
+    assert main([*argv, "--odom-alpha", "0.01", "--out", str(tmp_path / "both")]) != 0
+    assert not (tmp_path / "both").exists()
+
+
 def test_carmen_to_bag_refuses_odometry_of_another_length(tmp_path: Path) -> None:
     log = _carmen(tmp_path / "tiny-corrected.log")
     with pytest.raises(

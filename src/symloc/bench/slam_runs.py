@@ -37,6 +37,7 @@ __all__ = [
     "log_duration",
     "log_name",
     "log_odometry",
+    "map_build_odometry",
     "odometry_seed",
     "run_carmen",
     "run_simulated",
@@ -255,6 +256,17 @@ def _noise_rng(name: str, rng: np.random.Generator | int | None) -> np.random.Ge
     return as_rng(rng)
 
 
+def map_build_odometry(
+    log: CarmenLog, name: str, odometry: str | OdometryRegime, seed: int
+) -> FloatArray:
+    """The odometry ``(N, 3)`` that ``symloc map build --carmen LOG --odometry R --seed N`` (and
+    :func:`run_carmen` with an int ``rng``) gives SLAM for log ``name``: :func:`carmen_odometry`
+    drawn from :func:`odometry_seed` (``name``, ``seed``). ``symloc ros carmen-to-bag --odometry
+    R --seed N`` writes it on ``/odom``, so ``symloc replay --build-map`` maps the bag from the
+    same input as ``map build --carmen`` maps the log."""
+    return carmen_odometry(log, odometry, _noise_rng(name, int(seed)), name=name)
+
+
 def run_carmen(
     path: str | Path,
     *,
@@ -277,7 +289,10 @@ def run_carmen(
             "least 2"
         )
     reference = log.laser_poses
-    odom = carmen_odometry(log, odometry, _noise_rng(name, rng), name=name)
+    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
+        odom = map_build_odometry(log, name, odometry, int(rng))
+    else:
+        odom = carmen_odometry(log, odometry, as_rng(rng), name=name)
     scans = [s.scan for s in log.scans]
     result = run_slam(scans, odom, params, progress=progress, desc=name)
     duration = log_duration(log.stamps)

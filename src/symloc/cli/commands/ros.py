@@ -13,6 +13,8 @@ __all__ = ["register"]
 
 def register(subparsers: Any) -> None:
     """Add the ``ros`` sub-command group."""
+    from symloc.sim.odometry_noise import ODOMETRY_REGIMES
+
     p: argparse.ArgumentParser = subparsers.add_parser(
         "ros", help="ROS 2 integration (rclpy node)", description="ROS 2 integration."
     )
@@ -108,6 +110,15 @@ def register(subparsers: Any) -> None:
         " variances alpha1..4 = A on the corrected poses); default 0: the log's own odometry"
         " (in the corrected logs, the corrected poses themselves)",
     )
+    conv.add_argument(
+        "--odometry",
+        choices=("log", *ODOMETRY_REGIMES),
+        default="log",
+        help="write on /odom the odometry 'symloc map build --carmen LOG --odometry R --seed N'"
+        " gives SLAM (a simulated regime on the corrected increments, drawn from the log's"
+        " noise stream), so 'symloc replay --build-map' maps the bag from the same input;"
+        " default log: the log's own odometry",
+    )
     options.add_seed(conv)
     conv.set_defaults(func=_carmen_to_bag)
     check = sub.add_parser(
@@ -142,12 +153,29 @@ def _setup(args: argparse.Namespace) -> int:
 
 
 def _carmen_to_bag(args: argparse.Namespace) -> int:
+    from symloc.errors import ConfigurationError
     from symloc.io.rosbag_carmen import carmen_to_bag
 
     stem = args.log.name.removesuffix(".gz").removesuffix(".log")
     bag = Path(args.out) / (stem + (".bag" if args.format == "ros1" else ""))
     options.refuse_overwriting_inputs({"log": args.log}, {"--out": bag})
     odometry = None
+    if args.odom_alpha > 0.0 and args.odometry != "log":
+        raise ConfigurationError(
+            f"--odom-alpha {args.odom_alpha:g} and --odometry {args.odometry}: two odometry"
+            " streams asked for; give one (--odom-alpha: experiment amcl-carmen's, --odometry:"
+            " map build --carmen's)"
+        )
+    if args.odometry != "log":
+        from symloc.bench.slam_runs import log_name, map_build_odometry
+        from symloc.io.carmen import read_carmen
+
+        name = log_name(args.log)
+        odometry = map_build_odometry(read_carmen(args.log), name, args.odometry, args.seed)
+        print(
+            f"# /odom: the odometry of map build --carmen {args.log} --odometry {args.odometry}"
+            f" --seed {args.seed} (noise stream SeedSequence([seed, crc32({name!r})]))"
+        )
     if args.odom_alpha > 0.0:
         from symloc.bench.carmen_tracking import tracking_odometry
         from symloc.geometry import wrap_angle
