@@ -330,6 +330,8 @@ class DecideHere:
     name: ClassVar[str] = "decide_here"
     why: str
     poses: FloatArray | None = None
+    #: the share of beams each of :attr:`poses` explains (the laser's ranking of them)
+    fits: FloatArray | None = None
     odom0: FloatArray | None = None
     views: int = 0
     seen: list[float] = field(default_factory=list)
@@ -429,6 +431,7 @@ class DecideHere:
         if turn is not None:
             return turn
         self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
+        self.fits = hyp.fits[: len(poses)].copy()
         self.views += 1
         self.seen.append(float(inp.odom_pose[2]))
         ctx.note(
@@ -707,22 +710,25 @@ class DecideHere:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
         if self.classes is None:
             self.checked.extend(checked_by(carried, inp.odom_pose, answer))
+            fits = self.fits
             unchecked = [
                 i + 1
                 for i, c in enumerate(answer.checks)
                 if c.status == "unknown"
                 and not contradicted_before(self.checked, carried[i], inp.odom_pose, cfg)
+                and (fits is None or fits[i] >= fits[index])
             ]
             if unchecked:
                 # every hypothesis shown survived the laser; one no image of this episode
                 # could check (no keyframe looks where it says the camera looks) may be the
-                # truth, and the verified one a look-alike (a repeated texture): the camera
-                # decides only among hypotheses it checked, in this view or an earlier one
+                # truth, and the verified one a look-alike (a repeated texture). Between the
+                # two only the laser has spoken: the camera cannot overrule it in favour of
+                # a pose the laser ranks no higher than the unchecked one
                 return self._look_elsewhere(
                     ctx,
                     inp,
                     f"image {self.views}: hypothesis {index + 1} verified, but no image could "
-                    f"check {_listed(unchecked)}, which the laser leaves open",
+                    f"check {_listed(unchecked)}, which the laser ranks at least as high",
                 )
         counts.verified += 1
         pose = np.asarray(pose_or_none, dtype=np.float64)
@@ -820,7 +826,7 @@ class DecideHere:
         the robot to a heading not yet imaged (or the path gives up)."""
         ctx.note(f"deciding here: {why}")
         self.poses, self.odom0, self.classes, self.labels = None, None, None, None
-        self.reach = 0.0
+        self.reach, self.fits = 0.0, None
         if self.views >= ctx.config.decide_views:
             # the camera is done: the laser proposes once more and watches the survivors as
             # the robot moves (or the path gives up)
