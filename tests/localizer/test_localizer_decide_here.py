@@ -174,6 +174,19 @@ def test_a_hypothesis_the_image_could_not_check_blocks_the_decision() -> None:
     assert any("could check hypothesis 1" in n for n in loc.log)
 
 
+def test_an_unchecked_hypothesis_the_laser_ranks_lower_does_not_block() -> None:
+    # the laser prefers the verified pose (98 against 92 % of the beams): the camera agrees
+    fits = {(1.0, 0.5): 0.92, (3.0, 1.5): 0.98}
+    kf = UncheckedKeyframes()
+    loc, tracker = _localizer(FakeProposer([COPY, TRUE]), kf, fits)
+    est = _step(loc)
+    est = _step(loc, image=IMAGE)
+    assert est.status is Status.TRACKING
+    np.testing.assert_allclose(est.pose, COPY)
+    np.testing.assert_allclose(tracker.seeded[-1], COPY)
+    assert loc.decide_counts.claimed == 1
+
+
 def test_a_hypothesis_an_earlier_image_contradicted_is_remembered() -> None:
     cfg = LocalizerConfig()
     odom0 = np.array([0.0, 0.0, 0.0])
