@@ -21,9 +21,16 @@ copies open) the localizer first tries to decide without driving anywhere:
    several that are one pose (:mod:`~symloc.localizer.verified_together`: neighbouring
    samples of a round room's family, which the laser sets within the tolerance of each other
    from the camera's heading): the laser sets the pose from it (:meth:`ClaimGate.confirm`),
-   AMCL is reseeded there, and the pose is published only if the gate claims it. Otherwise
-   the robot looks elsewhere the same way, up to ``decide_views`` images; where no heading
-   shows a keyframe to any hypothesis, no image is taken.
+   AMCL is reseeded there, and the pose is published only if the gate claims it. The camera
+   cannot overrule the laser about a hypothesis no image checked: a survivor that no image of
+   this episode could check (no keyframe where it says the camera looks; none contradicted
+   it, carried by odometry from an earlier view, :func:`contradicted_before`) blocks the
+   decision when the laser ranks it at least as high as the verified one (the verified one
+   may be a look-alike: a repeated texture), and the next view turns first to where such
+   hypotheses expect keyframes. Otherwise the robot looks elsewhere the same way, up to
+   ``decide_views`` images; where no heading shows a keyframe to any hypothesis, no image is
+   taken. Along an axis each sampled hypothesis stands for the stretch around it: its
+   expected keyframes reach half the spacing further (``KeyframeStore.verify``'s ``reach``).
    **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
    hypothesis, or its ``decide_views`` used up; the search complete, the scan not judged
    symmetric, no known place where the robot stands), the laser watches the survivors as the
