@@ -66,7 +66,7 @@ def test_the_headline_block_is_rendered_from_its_results_file() -> None:
 
 def test_a_hand_edited_figure_fails_the_check(copy: Path) -> None:
     text = copy.read_text(encoding="utf-8")
-    rendered = "(190 of 280; Wilson 95 % 62-73 %)"
+    rendered = "(189 of 280; Wilson 95 % 62-73 %)"
     assert text.count(rendered) == 1  # in the rendered bullet, not in the template
     copy.write_text(text.replace(rendered, "(191 of 280; Wilson 95 % 62-73 %)"), "utf-8")
     ok, report = check(copy)
@@ -163,8 +163,8 @@ def test_write_results_refuses_missing_provenance_and_round_trips(tmp_path: Path
 def test_the_command_checks_and_says_so(copy: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--readme", str(copy), "--check"]) == 0
     text = copy.read_text(encoding="utf-8")
-    copy.write_text(text.replace("(190 of 280;", "(189 of 280;"), "utf-8")
+    copy.write_text(text.replace("(189 of 280;", "(188 of 280;"), "utf-8")
     assert main(["--readme", str(copy), "--check"]) == 1
     assert "python -m symloc.readme" in capsys.readouterr().out
     assert main(["--readme", str(copy)]) == 0
-    assert "(190 of 280;" in copy.read_text(encoding="utf-8")
+    assert "(189 of 280;" in copy.read_text(encoding="utf-8")
