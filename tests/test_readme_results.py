@@ -74,15 +74,21 @@ def test_a_hand_edited_figure_fails_the_check(copy: Path) -> None:
     assert "191 of 280" in report  # the diff shows the edited line
 
 
-def test_a_changed_results_file_fails_the_check_and_render_repairs_it(copy: Path) -> None:
-    path = copy.parent / "docs" / "results" / f"{HEADLINE}.json"
+def _one_trial_to_undetermined(copy: Path, name: str, family: str, method: str, grade: str) -> None:
+    """In the copy's results file ``name``, move one trial of ``family`` / ``method`` from
+    ``grade`` to undetermined."""
+    path = copy.parent / "docs" / "results" / f"{name}.json"
     doc = json.loads(path.read_text(encoding="utf-8"))
     row = next(
-        r for r in doc["figures"]["summary"] if r["family"] == "all" and r["method"] == "amcl"
+        r for r in doc["figures"]["summary"] if r["family"] == family and r["method"] == method
     )
-    row["confident_wrong"] -= 1
+    row[grade] -= 1
     row["undetermined"] += 1
     path.write_text(dumps(doc) + "\n", encoding="utf-8")
+
+
+def test_a_changed_results_file_fails_the_check_and_render_repairs_it(copy: Path) -> None:
+    _one_trial_to_undetermined(copy, HEADLINE, "all", "amcl", "confident_wrong")
     ok, report = check(copy)
     assert not ok
     assert "Plain AMCL: 71 of 280" in report
@@ -115,14 +121,8 @@ def test_a_results_file_no_block_renders_is_reported(copy: Path) -> None:
 
 
 def test_a_sentence_naming_families_fails_when_they_change(copy: Path) -> None:
-    path = copy.parent / "docs" / "results" / "bench_localization_seed1000002_realistic.json"
-    doc = json.loads(path.read_text(encoding="utf-8"))
-    row = next(
-        r for r in doc["figures"]["summary"] if r["family"] == "kite" and r["method"] == "symloc"
-    )
-    row["correct"] -= 1
-    row["undetermined"] += 1
-    path.write_text(dumps(doc) + "\n", encoding="utf-8")
+    name = "bench_localization_seed1000002_realistic"
+    _one_trial_to_undetermined(copy, name, "kite", "symloc", "correct")
     ok, report = check(copy)
     assert not ok
     assert "rewrite the sentence" in report
