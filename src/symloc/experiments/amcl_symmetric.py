@@ -40,7 +40,12 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 from symloc.sim.rooms import ROOM_NAMES
 
 __all__ = ["TrialResult", "classify", "register", "run", "run_room", "symmetric_images"]
@@ -340,6 +345,12 @@ def register(subparsers: Any) -> None:
         choices=["likelihood_field", "likelihood_field_prob", "beam"],
         help="nav2 laser_model_type (default nav2's likelihood_field)",
     )
+    options.add_results(
+        parser,
+        "docs/results/amcl_symmetric.json",
+        note="; with --laser-model likelihood_field_prob: "
+        "docs/results/amcl_symmetric_likelihood_field_prob.json",
+    )
     parser.set_defaults(func=run)
 
 
@@ -360,24 +371,26 @@ def run(args: argparse.Namespace) -> int:
             ),
         )
     )
-    print_config(
-        "amcl-symmetric",
-        {
-            "seed": args.seed,
-            "trials": args.trials,
-            "rooms": ", ".join(options.room_names(args.rooms, DEFAULT_ROOMS)),
-            "gv_distance_m": args.gv,
-            "path": f"{args.duration:g} s random drive at 0.3 m/s, scans at 2 Hz",
-            "lidar": args.lidar,
-            "odometry noise alphas": args.odom_alpha,
-            "amcl": f"nav2 defaults except max/min particles {params.max_particles}/"
-            f"{params.min_particles}, {params.laser_model_type}, alpha1..4 = {params.alpha1}",
-            "correct": "within 0.3 m and 10 deg",
-            "confident": "symloc.mcl.confidence defaults (dominant tight hypothesis, scan"
-            " consistency, 3-update hysteresis, no rival place); legacy columns: std < 0.3 m"
-            " and < 15 deg of the cluster (cov only) / of the whole set (nav2)",
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "trials": args.trials,
+        "rooms": ", ".join(options.room_names(args.rooms, DEFAULT_ROOMS)),
+        "gv_distance_m": args.gv,
+        "path": f"{args.duration:g} s random drive at 0.3 m/s, scans at 2 Hz",
+        "lidar": args.lidar,
+        "odometry noise alphas": args.odom_alpha,
+        "amcl": f"nav2 defaults except max/min particles {params.max_particles}/"
+        f"{params.min_particles}, {params.laser_model_type}, alpha1..4 = {params.alpha1}",
+        "laser_model_type": params.laser_model_type,
+        "correct": "within 0.3 m and 10 deg",
+        "confident": "symloc.mcl.confidence defaults (dominant tight hypothesis, scan"
+        " consistency, 3-update hysteresis, no rival place); legacy columns: std < 0.3 m"
+        " and < 15 deg of the cluster (cov only) / of the whole set (nav2)",
+    }
+    print_config("amcl-symmetric", config)
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     rng = np.random.default_rng(args.seed)
     summaries = []
     examples = {}
@@ -434,4 +447,5 @@ def run(args: argparse.Namespace) -> int:
             "rooms": summaries,
         },
     )
+    write_results_file(args, clock, config, {"rooms": summaries})
     return 0

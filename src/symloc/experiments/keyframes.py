@@ -8,7 +8,12 @@ import math
 from typing import Any
 
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 
 __all__ = ["register", "run"]
 
@@ -23,22 +28,23 @@ def register(subparsers: Any) -> None:
         "--m", type=options.directions, default=4, help="images per place (default 4)"
     )
     options.add_angle(parser, "--step-deg", default=5.0, help="keyframe step", dest="step")
+    options.add_results(parser, "docs/results/keyframes.json")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from symloc.bench.keyframes import run_keyframes
+    from symloc.bench.provenance import RunClock
 
-    print_config(
-        "keyframes",
-        {
-            "seed": args.seed,
-            "M": args.m,
-            "keyframe step": f"{math.degrees(args.step):g} deg",
-            "scene": "one full turn at the centre of a 3 m square in the textured lab, 640x480",
-            "stored per image": "ORB keypoints + descriptors + BoW vector (+ PNG image)",
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "M": args.m,
+        "keyframe step": f"{math.degrees(args.step):g} deg",
+        "scene": "one full turn at the centre of a 3 m square in the textured lab, 640x480",
+        "stored per image": "ORB keypoints + descriptors + BoW vector (+ PNG image)",
+    }
+    print_config("keyframes", config)
+    clock = RunClock()
     results = run_keyframes(m=args.m, step_deg=math.degrees(args.step), rng=args.seed)
     print(
         f"\n{'policy':<26}{'images':>8}{'features':>10}{'bytes (features)':>18}{'bytes (+PNG)':>14}"
@@ -58,4 +64,6 @@ def run(args: argparse.Namespace) -> int:
     path = keyframes_figure(results, args.out / "keyframes.png")
     print(f"wrote {path}")
     write_json(args.json, {"seed": args.seed, "policies": [r.to_dict() for r in results]})
+    policies = [{k: v for k, v in r.to_dict().items() if k != "angles_deg"} for r in results]
+    write_results_file(args, clock, config, {"policies": policies})
     return 0

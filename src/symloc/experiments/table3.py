@@ -8,7 +8,12 @@ import math
 from typing import Any
 
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 
 __all__ = ["register", "run"]
 
@@ -37,24 +42,25 @@ def register(subparsers: Any) -> None:
         parser, "--heading-deg", default=5.0, help="largest heading error", dest="max_heading"
     )
     parser.add_argument("--vocabulary", default=None, help="vocabulary file (default: shipped)")
+    options.add_results(parser, "docs/results/table3.json")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from symloc.bench.provenance import RunClock
     from symloc.bench.table3 import run_table3
     from symloc.vision.vocabulary import Vocabulary
 
     voc = Vocabulary.load(args.vocabulary) if args.vocabulary else None
-    print_config(
-        "table3",
-        {
-            "seed": args.seed,
-            "trials per direction": args.trials,
-            "room": f"square {args.side:g} m inside a 12-segment lab (textured, then untextured)",
-            "robot spread": f"uniform in a {args.radius_mm:g} mm disc, heading +-{math.degrees(args.max_heading):g} deg",
-            "vocabulary": args.vocabulary or "shipped default (k=10, L=5, TF-IDF, L1)",
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "trials per direction": args.trials,
+        "room": f"square {args.side:g} m inside a 12-segment lab (textured, then untextured)",
+        "robot spread": f"uniform in a {args.radius_mm:g} mm disc, heading +-{math.degrees(args.max_heading):g} deg",
+        "vocabulary": args.vocabulary or "shipped default (k=10, L=5, TF-IDF, L1)",
+    }
+    print_config("table3", config)
+    clock = RunClock()
     res = run_table3(
         trials=args.trials,
         side=args.side,
@@ -113,4 +119,5 @@ def run(args: argparse.Namespace) -> int:
         path = matches_figure(res.example_query, res.stored_images, args.out / "table3_matches.png")
         print(f"wrote {path} (the paper's Figure 13)")
     write_json(args.json, {"seed": args.seed, "paper_similarity": PAPER_SIMILARITY, **d})
+    write_results_file(args, clock, config, {"paper_similarity": PAPER_SIMILARITY, **d})
     return 0
