@@ -29,6 +29,15 @@ from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 from typing import Any
 
+from symloc.bench.experiment_results import (
+    AmclSymmetricFigures,
+    ExperimentFigures,
+    KeyframesFigures,
+    Table1Figures,
+    Table3Figures,
+    expect,
+    span,
+)
 from symloc.bench.localization_results import (
     LocalizationFigures,
     percent,
@@ -40,7 +49,11 @@ from symloc.bench.slam_results import SlamFigures
 
 __all__ = [
     "RESULTS_DIR",
+    "amcl_symmetric",
     "check",
+    "expect",
+    "experiment",
+    "keyframes",
     "localization",
     "main",
     "percent",
@@ -48,6 +61,9 @@ __all__ = [
     "results",
     "results_dir",
     "slam",
+    "span",
+    "table1",
+    "table3",
     "wilson_upper",
 ]
 
@@ -79,6 +95,31 @@ def localization(name: str) -> LocalizationFigures:
 def slam(name: str) -> SlamFigures:
     """The figures of a ``bench slam`` results file."""
     return SlamFigures(results(name))
+
+
+def experiment(name: str) -> ExperimentFigures:
+    """Any ``symloc experiment ... --results`` file: its provenance in words."""
+    return ExperimentFigures(results(name))
+
+
+def table1(name: str = "table1") -> Table1Figures:
+    """The figures of a ``symloc experiment table1`` results file."""
+    return Table1Figures(results(name))
+
+
+def table3(name: str = "table3") -> Table3Figures:
+    """The figures of a ``symloc experiment table3`` results file."""
+    return Table3Figures(results(name))
+
+
+def amcl_symmetric(name: str = "amcl_symmetric") -> AmclSymmetricFigures:
+    """The figures of a ``symloc experiment amcl-symmetric`` results file."""
+    return AmclSymmetricFigures(results(name))
+
+
+def keyframes(name: str = "keyframes") -> KeyframesFigures:
+    """The figures of a ``symloc experiment keyframes`` results file."""
+    return KeyframesFigures(results(name))
 
 
 def _cog(argv: Sequence[str]) -> tuple[int, str]:

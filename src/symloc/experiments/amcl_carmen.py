@@ -48,7 +48,12 @@ from symloc.bench.carmen_tracking import noisy_odometry, tracking_odometry, trac
 from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
 from symloc.bench.shared_data import carmen_log_paths, find_carmen_dir
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 from symloc.files.atomic import atomic_path
 from symloc.geometry import compose, inverse, wrap_angle
 from symloc.io.rosbag_carmen import START_COVARIANCE
@@ -490,6 +495,7 @@ def register(subparsers: Any) -> None:
         help="laser_likelihood_exponent for global localization (1 = nav2's likelihood)",
     )
     parser.add_argument("--skip-global", action="store_true", help="tracking only")
+    options.add_results(parser, "docs/results/amcl_carmen.json")
     parser.set_defaults(func=run)
 
 
@@ -509,24 +515,25 @@ def run(args: argparse.Namespace) -> int:
         recovery_alpha_fast=0.1,
         laser_likelihood_exponent=args.global_exponent,
     )
-    print_config(
-        "amcl-carmen",
-        {
-            "seed": args.seed,
-            "data": folder,
-            "logs": ", ".join(args.logs),
-            "map": "log-odds grid at 0.05 m from the corrected poses",
-            "odometry": f"corrected increments + rot-trans-rot noise, alpha1..4 = {a}",
-            "amcl": f"nav2 defaults except {args.laser_model}, alpha1..4 = {a},"
-            f" tracking {track_p.max_particles}/{track_p.min_particles} particles,"
-            f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1,"
-            f" global likelihood exponent {glob_p.laser_likelihood_exponent}",
-            "global": f"{args.starts} starts x up to {args.window} scans; converged = within"
-            " 0.3 m / 10 deg to the end; confident = symloc.mcl.confidence defaults"
-            " (dominant tight hypothesis, scan consistency, 3-update hysteresis, no rival"
-            " place); wrong = error > 1 m or 30 deg",
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "data": str(folder),
+        "logs": ", ".join(args.logs),
+        "map": "log-odds grid at 0.05 m from the corrected poses",
+        "odometry": f"corrected increments + rot-trans-rot noise, alpha1..4 = {a}",
+        "amcl": f"nav2 defaults except {args.laser_model}, alpha1..4 = {a},"
+        f" tracking {track_p.max_particles}/{track_p.min_particles} particles,"
+        f" global {glob_p.max_particles}/{glob_p.min_particles} + recovery 0.001/0.1,"
+        f" global likelihood exponent {glob_p.laser_likelihood_exponent}",
+        "global": f"{args.starts} starts x up to {args.window} scans; converged = within"
+        " 0.3 m / 10 deg to the end; confident = symloc.mcl.confidence defaults"
+        " (dominant tight hypothesis, scan consistency, 3-update hysteresis, no rival"
+        " place); wrong = error > 1 m or 30 deg",
+    }
+    print_config("amcl-carmen", config)
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     results: list[dict[str, Any]] = []
     fig_logs: list[dict[str, Any]] = []
     global_traces: list[dict[str, Any]] = []
@@ -608,4 +615,5 @@ def run(args: argparse.Namespace) -> int:
         fig = amcl_global_confidence_figure(global_traces, args.out / "amcl_carmen_global.png")
         print(f"wrote {fig}")
     write_json(args.json, {"seed": args.seed, "logs": results})
+    write_results_file(args, clock, config, {"logs": results})
     return 0

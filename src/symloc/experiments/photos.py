@@ -9,7 +9,12 @@ import math
 from typing import Any
 
 from symloc.cli import options
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 
 __all__ = ["register", "run"]
 
@@ -53,6 +58,7 @@ def register(subparsers: Any) -> None:
         help="heading offset from a rotation+zoom fit to the inliers (default) or from the "
         "8-DOF homography",
     )
+    options.add_results(parser, "docs/results/photos.json")
     parser.set_defaults(func=run)
 
 
@@ -64,20 +70,21 @@ def run(args: argparse.Namespace) -> int:
 
     voc = Vocabulary.load(args.vocabulary) if args.vocabulary else default_vocabulary()
     cfg = OrientationConfig(geometric_fallback=not args.bow_only, offset_from=args.offset_from)
-    print_config(
-        "photos",
-        {
-            "seed": args.seed,
-            "photos (directions 1..4)": ", ".join(args.photos),
-            "vocabulary": args.vocabulary or "shipped default (not trained on these photos)",
-            "camera": "640x480, f=500 px (hfov 65.2 deg)",
-            "trials per direction and case": args.trials,
-            "max yaw": f"{math.degrees(args.max_yaw):g} deg",
-            "conditions": ", ".join(args.conditions),
-            "decision": "BoW first, no geometric fallback" if args.bow_only else "BoW + geometry",
-            "heading offset from": args.offset_from,
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "photos (directions 1..4)": ", ".join(args.photos),
+        "vocabulary": args.vocabulary or "shipped default (not trained on these photos)",
+        "camera": "640x480, f=500 px (hfov 65.2 deg)",
+        "trials per direction and case": args.trials,
+        "max yaw": f"{math.degrees(args.max_yaw):g} deg",
+        "conditions": ", ".join(args.conditions),
+        "decision": "BoW first, no geometric fallback" if args.bow_only else "BoW + geometry",
+        "heading offset from": args.offset_from,
+    }
+    print_config("photos", config)
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     res = run_photos(
         voc,
         photos=args.photos,
@@ -130,4 +137,5 @@ def run(args: argparse.Namespace) -> int:
             **res.to_dict(),
         },
     )
+    write_results_file(args, clock, config, res.to_dict())
     return 0

@@ -38,7 +38,12 @@ from symloc._checks import as_rng
 from symloc.bench.shared_data import CARMEN_LOGS, carmen_log_paths, find_carmen_dir
 from symloc.cli import options
 from symloc.errors import ConfigurationError
-from symloc.experiments._common import add_common_arguments, print_config, write_json
+from symloc.experiments._common import (
+    add_common_arguments,
+    print_config,
+    write_json,
+    write_results_file,
+)
 
 __all__ = [
     "CARMEN_LOGS",
@@ -278,18 +283,19 @@ def _run(args: argparse.Namespace) -> int:
     data = next(iter(carmen_log_paths(args.logs, args.data).values())).parent
     if args.stride < 1 or args.examples < 0 or not (args.range_sigma > 0):
         raise ConfigurationError("--stride must be >= 1, --examples >= 0, --range-sigma > 0")
-    print_config(
-        "symmetry-carmen",
-        {
-            "seed": args.seed,
-            "data": data,
-            "logs": " ".join(args.logs),
-            "stride": args.stride,
-            "range_sigma [m]": args.range_sigma,
-            "k_sigma": 5.0,
-            "examples per log": args.examples,
-        },
-    )
+    config = {
+        "seed": args.seed,
+        "data": str(data),
+        "logs": " ".join(args.logs),
+        "stride": args.stride,
+        "range_sigma [m]": args.range_sigma,
+        "k_sigma": 5.0,
+        "examples per log": args.examples,
+    }
+    print_config("symmetry-carmen", config)
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     result = run_symmetry_carmen(
         Path(data), args.logs, range_sigma=args.range_sigma, stride=args.stride
     )
@@ -331,6 +337,20 @@ def _run(args: argparse.Namespace) -> int:
         "n_judged": total,
         **result,
     }
+    write_results_file(
+        args,
+        clock,
+        config,
+        {
+            "symmetric_strict": n_strict,
+            "symmetric_partial": n_sym,
+            "n_judged": total,
+            "logs": {
+                name: {k: v for k, v in res.items() if k != "symmetric_indices"}
+                for name, res in result["logs"].items()
+            },
+        },
+    )
     if not args.no_figure:
         rng = as_rng(args.seed)
         args.out.mkdir(parents=True, exist_ok=True)
@@ -369,4 +389,5 @@ def register(subparsers: Any) -> None:
         help="symmetric scans per log in the figure",
     )
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figures")
+    options.add_results(parser, "docs/results/symmetry_carmen.json")
     parser.set_defaults(func=_run)

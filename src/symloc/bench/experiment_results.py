@@ -1,0 +1,159 @@
+"""The figures of the paper experiments' results files, as the README quotes them.
+
+``symloc experiment table1 | table3 | amcl-symmetric | keyframes --results PATH`` write a results
+file (:mod:`symloc.bench.results_file`); the classes here read its ``figures`` and give the
+phrases the README's blocks print (:mod:`symloc.readme`): counts as ``"40-50/50"``, the run as
+``"6 s wall, commit 19e1cc4, 2026-11-28"``. :func:`expect` checks a figure a sentence states in
+words (``"never a wrong claim"``) and raises :class:`FiguresChangedError` when the results file
+says otherwise, so the sentence cannot go stale either.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+from symloc.bench.localization_results import FiguresChangedError
+
+__all__ = [
+    "AmclSymmetricFigures",
+    "ExperimentFigures",
+    "KeyframesFigures",
+    "Table1Figures",
+    "Table3Figures",
+    "expect",
+    "span",
+]
+
+log = logging.getLogger(__name__)
+
+
+def expect(what: str, found: Any, stated: Any) -> str:
+    """Check that a README sentence's figure ``stated`` is what the results file has
+    (``found``); raises :class:`FiguresChangedError` naming ``what`` otherwise. Returns ``""``
+    so a block can call it inline."""
+    if found != stated:
+        raise FiguresChangedError(
+            f"the README states {stated!r} for {what}; the results file has {found!r}: "
+            "rewrite the sentence"
+        )
+    return ""
+
+
+def span(values: Iterable[int], of: int | None = None) -> str:
+    """``"40-50"`` (or ``"50"`` when all are equal), with ``"/of"`` appended when given."""
+    vals = sorted(int(v) for v in values)
+    if not vals:
+        raise FiguresChangedError("no values to quote: the results file has no such cells")
+    text = f"{vals[0]}" if vals[0] == vals[-1] else f"{vals[0]}-{vals[-1]}"
+    return f"{text}/{of}" if of is not None else text
+
+
+class ExperimentFigures:
+    """A results file of ``symloc experiment NAME --results``: its provenance in words."""
+
+    def __init__(self, doc: Mapping[str, Any]) -> None:
+        self.doc = doc
+        self.figures: Mapping[str, Any] = doc["figures"]
+        self.settings: Mapping[str, Any] = doc["settings"]
+
+    def __getitem__(self, key: str) -> Any:
+        return self.doc[key]
+
+    def run(self, machine: bool = False) -> str:
+        """``"6 s wall, commit 19e1cc4, 2026-11-28"``; with ``machine`` the machine and its load
+        follow in parentheses."""
+        from symloc.bench.results_file import describe_load, describe_machine
+
+        d = self.doc
+        wall = d.get("wall_s")
+        head = f"{wall:.0f} s wall" if wall is not None else "run"
+        text = f"{head}, commit {d['commit']}, {d['date'][:10]}"
+        if machine:
+            text += f" ({describe_machine(d['machine'])}; {describe_load(d['load'])})"
+        return text
+
+
+class Table1Figures(ExperimentFigures):
+    """``symloc experiment table1``: correct recognitions per (shape, G-V, sensor, method,
+    centroid) cell, and false positives on asymmetric rooms."""
+
+    def cells(self, **match: Any) -> list[Mapping[str, Any]]:
+        """The cells whose fields equal ``match`` (e.g. ``sensor="lds01", gv=3.0``)."""
+        out = [c for c in self.figures["cells"] if all(c[k] == v for k, v in match.items())]
+        if not out:
+            raise FiguresChangedError(f"table1: no cell with {match}")
+        return out
+
+    def correct(self, **match: Any) -> list[int]:
+        return [int(c["correct"]) for c in self.cells(**match)]
+
+    def counts(self, **match: Any) -> str:
+        """The correct recognitions of the matching cells: ``"40-50/50"``."""
+        cells = self.cells(**match)
+        return span((c["correct"] for c in cells), int(cells[0]["trials"]))
+
+    def all_full(self, **match: Any) -> bool:
+        """Every matching cell correct in all its trials."""
+        return all(c["correct"] == c["trials"] for c in self.cells(**match))
+
+    def wrong(self, **match: Any) -> int:
+        """Verdicts that are neither correct nor "unknown" in the matching cells."""
+        return sum(c["trials"] - c["correct"] - c["unknown"] for c in self.cells(**match))
+
+    def false_positives(self) -> tuple[int, int]:
+        """``(false positives, scans)`` of the area centroid on the asymmetric rooms."""
+        fp = self.figures["false_positives"]
+        return int(fp["count"]), int(fp["trials"])
+
+
+class Table3Figures(ExperimentFigures):
+    """``symloc experiment table3``: the BoW similarity matrix and the orientation decisions."""
+
+    def _matrix(self) -> list[list[float]]:
+        return [list(row) for row in self.figures["similarity"]]
+
+    def diagonal(self) -> tuple[float, float]:
+        m = self._matrix()
+        vals = [m[i][i] for i in range(len(m))]
+        return min(vals), max(vals)
+
+    def off_diagonal(self) -> tuple[float, float]:
+        m = self._matrix()
+        vals = [m[i][j] for i in range(len(m)) for j in range(len(m)) if i != j]
+        return min(vals), max(vals)
+
+    def ratio(self) -> tuple[float, float]:
+        """Each row's diagonal over its largest off-diagonal value: ``(min, max)`` over rows."""
+        m = self._matrix()
+        rows = [m[i][i] / max(m[i][j] for j in range(len(m)) if j != i) for i in range(len(m))]
+        return min(rows), max(rows)
+
+    def counts(self, which: str = "counts") -> Mapping[str, int]:
+        """``counts`` (textured lab), ``untextured`` or ``untextured_sensitive_orb``."""
+        return self.figures[which]
+
+
+class AmclSymmetricFigures(ExperimentFigures):
+    """``symloc experiment amcl-symmetric``: plain AMCL's end state per room."""
+
+    def room(self, name: str) -> Mapping[str, Any]:
+        for r in self.figures["rooms"]:
+            if r["room"] == name:
+                return r
+        raise FiguresChangedError(f"amcl-symmetric: no room {name!r} in the results file")
+
+    def rooms(self) -> Sequence[Mapping[str, Any]]:
+        return self.figures["rooms"]
+
+
+class KeyframesFigures(ExperimentFigures):
+    """``symloc experiment keyframes``: images and bytes stored per policy."""
+
+    def policies(self) -> Sequence[Mapping[str, Any]]:
+        return self.figures["policies"]
+
+    def ratio(self, key: str = "bytes_features") -> float:
+        a, b = self.policies()[0], self.policies()[1]
+        return float(b[key]) / float(a[key])
