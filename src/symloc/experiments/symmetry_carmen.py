@@ -346,7 +346,7 @@ def _run(args: argparse.Namespace) -> int:
             "symmetric_partial": n_sym,
             "n_judged": total,
             "logs": {
-                name: {k: v for k, v in res.items() if k != "symmetric_indices"}
+                name: {k: v for k, v in res.items() if not k.endswith("_indices") and k != "path"}
                 for name, res in result["logs"].items()
             },
         },
