@@ -168,3 +168,69 @@ def test_the_command_checks_and_says_so(copy: Path, capsys: pytest.CaptureFixtur
     assert "python -m symloc.readme" in capsys.readouterr().out
     assert main(["--readme", str(copy)]) == 0
     assert "(189 of 280;" in copy.read_text(encoding="utf-8")
+
+
+def _edit_table1(copy: Path, edit) -> None:  # type: ignore[no-untyped-def]
+    """Apply ``edit(cells)`` to the ``cells`` of the copy's docs/results/table1.json."""
+    path = copy.parent / "docs" / "results" / "table1.json"
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    edit(doc["figures"]["cells"])
+    path.write_text(dumps(doc) + "\n", encoding="utf-8")
+
+
+def _cell(cells: list, **match: object) -> dict:  # type: ignore[type-arg]
+    return next(c for c in cells if all(c[k] == v for k, v in match.items()))
+
+
+def test_a_changed_table1_cell_fails_the_check_and_render_repairs_it(copy: Path) -> None:
+    """The paper table's Table 1 cell is rendered, not typed: one triangle scan fewer at 7 m
+    changes '50/50 in all 15 cells'."""
+
+    def one_fewer(cells: list) -> None:  # type: ignore[type-arg]
+        c = _cell(
+            cells, sensor="paper_15m", shape="triangle", gv=7.0, method="judge", centroid="area"
+        )
+        c |= {"correct": c["correct"] - 1, "unknown": c["unknown"] + 1}
+
+    assert "**50/50 in all 15 cells**" in copy.read_text(encoding="utf-8")
+    _edit_table1(copy, one_fewer)
+    ok, report = check(copy)
+    assert not ok
+    assert "49-50/50 in the 15 cells" in report
+    render(copy)
+    assert check(copy)[0]
+    assert "**49-50/50 in the 15 cells**" in copy.read_text(encoding="utf-8")
+
+
+def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) -> None:
+    """'LDS-01 ... never a wrong claim' is checked against the cells: a verdict neither correct
+    nor unknown makes the check ask for the sentence to be rewritten."""
+
+    def one_wrong(cells: list) -> None:  # type: ignore[type-arg]
+        c = _cell(cells, sensor="lds01", shape="square", gv=5.0, method="judge", centroid="area")
+        c["unknown"] -= 1
+
+    _edit_table1(copy, one_wrong)
+    ok, report = check(copy)
+    assert not ok
+    assert "rewrite the sentence" in report
+    assert "never a wrong claim" in report
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "table1",
+        "table3",
+        "amcl_symmetric",
+        "keyframes",
+        "photos",
+        "bench_localization_test_realistic_1854f5b",
+    ],
+)
+def test_each_new_results_file_is_needed_by_the_readme(copy: Path, name: str) -> None:
+    """Removing a results file the README renders from fails the check (no stale text stays)."""
+    (copy.parent / "docs" / "results" / f"{name}.json").unlink()
+    ok, report = check(copy)
+    assert not ok
+    assert f"{name}.json" in report

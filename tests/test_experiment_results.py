@@ -1,0 +1,76 @@
+"""``symloc experiment ... --results``: the README's paper table is rendered from these files.
+
+Each command's results file must load (provenance present), record the command as typed and
+the seed, and hold the figures the README's block reads (:mod:`symloc.bench.experiment_results`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from symloc.bench.experiment_results import (
+    AmclSymmetricFigures,
+    FiguresChangedError,
+    KeyframesFigures,
+    Table1Figures,
+    expect,
+    span,
+)
+from symloc.bench.results_file import load_results
+from symloc.cli.main import main
+
+
+def _run(tmp_path: Path, argv: list[str]) -> dict:
+    results = tmp_path / "docs" / "results.json"
+    argv = [*argv, "--out", str(tmp_path / "out"), "--results", str(results)]
+    assert main(argv) == 0
+    doc = load_results(results)
+    assert doc["command"] == "symloc " + " ".join(argv)
+    assert doc["settings"]["seed"] == 0
+    assert doc["wall_s"] >= 0
+    return doc
+
+
+def test_table1_writes_its_cells_and_false_positives(tmp_path: Path) -> None:
+    argv = ["experiment", "table1", "--lidar", "paper_15m", "--positions", "1"]
+    doc = _run(tmp_path, [*argv, "--fp-per-room", "1", "--no-figure"])
+    t1 = Table1Figures(doc)
+    # 5 shapes x 3 G-V distances x 2 methods x 2 centroids, one position each
+    assert len(t1.cells()) == 60
+    assert len(t1.cells(method="judge", centroid="area")) == 15
+    assert t1.counts(method="judge", centroid="area").endswith("/1")
+    fp, scans = t1.false_positives()
+    assert scans == 17
+    assert 0 <= fp <= scans
+    assert "positions" not in doc["figures"]  # the per-position lists stay in --json
+
+
+def test_keyframes_writes_both_policies(tmp_path: Path) -> None:
+    doc = _run(tmp_path, ["experiment", "keyframes"])
+    kf = KeyframesFigures(doc)
+    four, every5 = kf.policies()
+    assert (four["count"], every5["count"]) == (4, 72)
+    assert kf.ratio() == every5["bytes_features"] / four["bytes_features"] > 1
+
+
+def test_amcl_symmetric_writes_one_row_per_room(tmp_path: Path) -> None:
+    argv = ["experiment", "amcl-symmetric", "--trials", "1", "--rooms", "square"]
+    doc = _run(tmp_path, [*argv, "--duration", "3"])
+    sq = AmclSymmetricFigures(doc).room("square")
+    assert sq["trials"] == 1
+    assert sq["correct"] + sq["symmetric_copy"] + sq["not_converged"] == 1
+    assert doc["settings"]["laser_model_type"] == "likelihood_field"
+    with pytest.raises(FiguresChangedError, match="no room 'pentagon'"):
+        AmclSymmetricFigures(doc).room("pentagon")
+
+
+def test_span_and_expect() -> None:
+    assert span([50, 40, 49], 50) == "40-50/50"
+    assert span([50, 50]) == "50"
+    with pytest.raises(FiguresChangedError):
+        span([])
+    assert expect("a figure", 0, 0) == ""
+    with pytest.raises(FiguresChangedError, match="rewrite the sentence"):
+        expect("LDS-01 wrong verdicts", 1, 0)
