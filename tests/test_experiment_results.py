@@ -6,6 +6,7 @@ the seed, and hold the figures the README's block reads (:mod:`symloc.bench.expe
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -74,3 +75,34 @@ def test_span_and_expect() -> None:
     assert expect("a figure", 0, 0) == ""
     with pytest.raises(FiguresChangedError, match="rewrite the sentence"):
         expect("LDS-01 wrong verdicts", 1, 0)
+
+
+def test_table3_writes_its_matrix_and_counts(tmp_path: Path) -> None:
+    from symloc.bench.experiment_results import Table3Figures
+
+    doc = _run(tmp_path, ["experiment", "table3", "--trials", "1"])
+    t3 = Table3Figures(doc)
+    assert len(t3.figures["similarity"]) == 4
+    lo, hi = t3.diagonal()
+    assert 0 < lo <= hi
+    assert t3.counts()["trials"] == 4
+    assert t3.counts("untextured")["trials"] == 4
+
+
+def _shared_carmen() -> Path:
+    env = os.environ.get("SYMLOC_SHARED_DATA")
+    base = Path(env) if env else Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    return base / "carmen"
+
+
+@pytest.mark.skipif(
+    not (_shared_carmen() / "aces-corrected.log.gz").is_file(),
+    reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
+)
+def test_symmetry_carmen_writes_counts_without_index_lists(tmp_path: Path) -> None:
+    argv = ["experiment", "symmetry-carmen", "--data", str(_shared_carmen()), "--logs", "aces"]
+    doc = _run(tmp_path, [*argv, "--stride", "50", "--no-figure"])
+    aces = doc["figures"]["logs"]["aces"]
+    assert doc["figures"]["n_judged"] == aces["n_judged"] == 9
+    assert doc["figures"]["symmetric_strict"] == 0
+    assert not any(k.endswith("_indices") for k in aces)
