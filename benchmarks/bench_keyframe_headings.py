@@ -11,7 +11,8 @@ mean (the part no relative measurement can fix: the gauge) and the wall time of 
 and of the whole mapping.
 
 Run: ``python benchmarks/bench_keyframe_headings.py [--worlds circle:0 circle:1 ...]
-[--json PATH]`` (each world maps for 20-450 s).
+[--json PATH] [--results docs/results/bench_keyframe_headings.json]`` (each world maps for
+20-450 s); ``--results`` writes the results file the README's row is rendered from.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import argparse
 import json
 import math
 import re
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -44,6 +46,10 @@ def _stats(err_deg: np.ndarray) -> dict[str, float]:
     }
 
 
+SEED = 0
+"""The scenario's seed (sensors, exploration) for every world."""
+
+
 def run_world(family: str, seed: int) -> dict[str, Any]:
     """Map one world with aligned keyframe headings; the errors before and after [deg]."""
     ref = WorldRef("generated", family, seed)
@@ -53,7 +59,7 @@ def run_world(family: str, seed: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         scen = build_scenario(
             room,
-            rng=0,
+            rng=SEED,
             workdir=Path(tmp),
             map_source="slam",
             explore_laps=1.0,
@@ -88,7 +94,28 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--worlds", nargs="+", default=list(WORLDS), help="family:seed ...")
     parser.add_argument("--json", type=Path, default=None, help="write the rows here")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write the run's results file here (the README's: "
+        "docs/results/bench_keyframe_headings.json): the rows with the command, commit, date, "
+        "machine and load",
+    )
     args = parser.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    settings = {
+        "seed": SEED,
+        "worlds": " ".join(args.worlds),
+        "scenario": "build_scenario(map_source='slam', explore_laps=1.0, regime='realistic', "
+        "keyframes=True, align_headings=True)",
+    }
+    print("# bench_keyframe_headings")
+    for key, value in settings.items():
+        print(f"#   {key}: {value}")
+    clock = RunClock()
     rows = []
     print(
         f"{'world':<13}{'N':>4}  {'before mean/p95/max [deg]':>26}  "
@@ -109,6 +136,19 @@ def main() -> None:
         )
     if args.json is not None:
         args.json.write_text(json.dumps(rows, indent=1))
+    if args.results is not None:
+        from symloc.bench.results_file import write_run_results
+
+        written = write_run_results(
+            args.results,
+            argv=sys.argv,
+            clock=clock,
+            settings=settings,
+            figures={"rows": rows},
+            program="python",
+            workers=1,
+        )
+        print(f"wrote {written}")
 
 
 if __name__ == "__main__":
