@@ -225,6 +225,9 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "amcl_symmetric",
         "keyframes",
         "photos",
+        "amcl_carmen",
+        "symmetry_carmen",
+        "bench_keyframe_headings",
         "bench_localization_test_realistic_1854f5b",
     ],
 )
