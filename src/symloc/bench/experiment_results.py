@@ -132,27 +132,30 @@ class Table3Figures(ExperimentFigures):
 
     def counts(self, which: str = "counts") -> Mapping[str, int]:
         """``counts`` (textured lab), ``untextured`` or ``untextured_sensitive_orb``."""
-        return self.figures[which]
+        counts: Mapping[str, int] = self.figures[which]
+        return counts
 
 
 class AmclSymmetricFigures(ExperimentFigures):
     """``symloc experiment amcl-symmetric``: plain AMCL's end state per room."""
 
     def room(self, name: str) -> Mapping[str, Any]:
-        for r in self.figures["rooms"]:
+        for r in self.rooms():
             if r["room"] == name:
                 return r
         raise FiguresChangedError(f"amcl-symmetric: no room {name!r} in the results file")
 
     def rooms(self) -> Sequence[Mapping[str, Any]]:
-        return self.figures["rooms"]
+        rooms: Sequence[Mapping[str, Any]] = self.figures["rooms"]
+        return rooms
 
 
 class KeyframesFigures(ExperimentFigures):
     """``symloc experiment keyframes``: images and bytes stored per policy."""
 
     def policies(self) -> Sequence[Mapping[str, Any]]:
-        return self.figures["policies"]
+        policies: Sequence[Mapping[str, Any]] = self.figures["policies"]
+        return policies
 
     def ratio(self, key: str = "bytes_features") -> float:
         a, b = self.policies()[0], self.policies()[1]
