@@ -106,3 +106,17 @@ def test_symmetry_carmen_writes_counts_without_index_lists(tmp_path: Path) -> No
     assert doc["figures"]["n_judged"] == aces["n_judged"] == 9
     assert doc["figures"]["symmetric_strict"] == 0
     assert not any(k.endswith("_indices") for k in aces)
+
+
+@pytest.mark.skipif(
+    not (_shared_carmen() / "aces-corrected.log.gz").is_file(),
+    reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
+)
+def test_amcl_carmen_writes_the_tracking_figures(tmp_path: Path) -> None:
+    argv = ["experiment", "amcl-carmen", "--data", str(_shared_carmen()), "--logs", "aces"]
+    doc = _run(tmp_path, [*argv, "--skip-global"])
+    (aces,) = doc["figures"]["logs"]
+    assert aces["log"] == "aces"
+    assert "global" not in aces  # --skip-global
+    assert 0 < aces["tracking"]["mean_error_m"] < 1.0
+    assert doc["settings"]["logs"] == "aces"
