@@ -21,10 +21,10 @@ from symloc._checks import as_rng, check_positive
 from symloc.errors import ConfigurationError, WorldError
 from symloc.geometry import angle_diff
 from symloc.scan import LaserScan
+from symloc.sim.free_space import FreeSpace
 from symloc.sim.lidar import PAPER_15M, LidarPreset, simulate_scan
 from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
-from symloc.sim.free_space import FreeSpace
 from symloc.sim.rooms import Room
 
 __all__ = ["ExplorationRun", "exploration_path", "free_route", "simulate_exploration"]
@@ -81,7 +81,7 @@ def exploration_path(room: Room, margin: float = 0.5) -> FloatArray:
 
 def _line_free(free: FreeSpace, a: FloatArray, b: FloatArray) -> bool:
     """Whether every cell the segment ``a -> b`` [m] crosses (sampled at half a cell) is free."""
-    n = max(2, int(math.ceil(float(np.hypot(*(b - a))) / (0.5 * free.resolution))) + 1)
+    n = max(2, math.ceil(float(np.hypot(*(b - a))) / (0.5 * free.resolution)) + 1)
     t = np.linspace(0.0, 1.0, n)[:, None]
     row, col = free.cells(a + t * (b - a))
     h, w = free.free.shape
@@ -133,7 +133,7 @@ def free_route(room: Room, clearance: float) -> Callable[[FloatArray, FloatArray
         rg, cg = snap(g)
         if free.labels[ra, ca] != free.labels[rg, cg]:
             return np.zeros((0, 2))
-        cells, _ = route_through_array(cost, (ra, ca), (rg, cg), fully_connected=True)
+        cells, _ = route_through_array(cost, (ra, ca), (rg, cg), fully_connected=True)  # type: ignore[no-untyped-call]
         pts = np.array([centre(r, c) for r, c in cells])
         end = g if _line_free(free, pts[-1], g) else pts[-1]
         pts = np.vstack([pts, end[None]])
