@@ -372,3 +372,30 @@ def test_a_scaled_map_withholds_claims_far_from_its_centre() -> None:
         surface_distance_field(grid), ALPHAS, ClaimConfig(map_std_xy=0.01), scale_centre=centre
     )
     assert plain.confirm(far, cov, simulate_scan(room.world, far, RPLIDAR_A2, 0)).ok
+
+
+def test_a_round_maps_rotation_is_in_the_published_covariance(l_room):
+    """About a round map's centre the map's rotation is the mapping gyro's: the heading std
+    and, away from the centre, the position std along the wall carry it."""
+    field = surface_distance_field(l_room[1])
+    cfg = ClaimConfig(map_rotation_std=math.radians(2.0))
+    plain = ClaimGate(field, ALPHAS, cfg)
+    round_ = ClaimGate(field, ALPHAS, cfg, rotation_centre=(1.0, 1.0))
+    pose = np.array([4.0, 1.0, 0.3])  # 3 m from the centre, along +x
+    base, extra = plain.map_error(pose), round_.map_error(pose) - plain.map_error(pose)
+    assert np.isclose(extra[2, 2], math.radians(2.0) ** 2)
+    assert np.isclose(extra[1, 1], (3.0 * math.radians(2.0)) ** 2)  # along the wall
+    assert np.isclose(extra[0, 0], 0.0)  # across it: a turn about the centre does not move it
+    assert np.isclose(extra[1, 2], 3.0 * math.radians(2.0) ** 2)
+    off = dataclasses.replace(cfg, map_rotation_std=0.0)
+    assert np.allclose(
+        ClaimGate(field, ALPHAS, off, rotation_centre=(1.0, 1.0)).map_error(pose), base
+    )
+    # the gate's heading bound (1.25 deg) cannot be met on a round map with a 2 deg rotation
+    assert math.sqrt(base[2, 2] + extra[2, 2]) > cfg.max_std_theta
+
+
+@pytest.mark.parametrize("bad", [-0.1, math.inf, 4.0])
+def test_map_rotation_std_is_checked(bad):
+    with pytest.raises(ConfigurationError, match="map_rotation_std"):
+        ClaimConfig(map_rotation_std=bad)

@@ -223,3 +223,29 @@ def test_window_counts_by_fft_equal_the_direct_counts(monkeypatch: pytest.Monkey
     assert np.array_equal(ms._window_counts(hits, cells, size), direct)
     monkeypatch.setattr(ms, "DIRECT_WINDOW_WORK", 0)
     assert np.array_equal(ms._window_counts(hits, cells, size), direct)
+
+
+def _polygon(n: int, radius: float, centre=(0.0, 0.0), turn: float = 0.0):
+    a = turn + 2.0 * np.pi * np.arange(n + 1) / n
+    p = np.column_stack([np.cos(a), np.sin(a)]) * radius + np.asarray(centre)
+    return [(tuple(p[i]), tuple(p[i + 1])) for i in range(n)]
+
+
+@pytest.mark.parametrize(
+    ("sides", "radius", "round_"),
+    [(96, 3.0, True), (9, 2.0, False), (12, 3.0, False), (4, 3.0, False)],
+)
+def test_a_circle_is_round_and_a_polygon_is_not(sides, radius, round_):
+    centre = (0.4, -0.3)
+    grid = _walls(_polygon(sides, radius, centre, turn=0.1), -4.0, 4.0)
+    found = map_symmetry.round_centre(grid, map_symmetries(grid))
+    if round_:
+        assert found is not None
+        assert np.hypot(*(found - centre)) < 0.05
+    else:
+        assert found is None
+
+
+def test_a_circle_with_a_box_inside_is_still_round():
+    grid = _walls(_polygon(96, 3.0) + _box(1.0, 0.2, 1.3, 0.5), -4.0, 4.0)
+    assert map_symmetry.round_centre(grid, map_symmetries(grid)) is not None

@@ -11,6 +11,7 @@ every ``scan_period`` seconds, with the true pose and the noisy odometry at that
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,12 +21,13 @@ from symloc._checks import as_rng, check_positive
 from symloc.errors import ConfigurationError, WorldError
 from symloc.geometry import angle_diff
 from symloc.scan import LaserScan
+from symloc.sim.free_space import FreeSpace
 from symloc.sim.lidar import PAPER_15M, LidarPreset, simulate_scan
 from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room
 
-__all__ = ["ExplorationRun", "exploration_path", "simulate_exploration"]
+__all__ = ["ExplorationRun", "exploration_path", "free_route", "simulate_exploration"]
 
 FloatArray = NDArray[np.float64]
 
@@ -75,6 +77,81 @@ def exploration_path(room: Room, margin: float = 0.5) -> FloatArray:
     if not np.all(room.contains(path)):
         raise WorldError(f"exploration_path: margin {m} m puts the path outside room {room.name!r}")
     return np.asarray(path, dtype=np.float64)
+
+
+def _line_free(free: FreeSpace, a: FloatArray, b: FloatArray) -> bool:
+    """Whether every cell the segment ``a -> b`` [m] crosses (sampled at half a cell) is free."""
+    n = max(2, math.ceil(float(np.hypot(*(b - a))) / (0.5 * free.resolution)) + 1)
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    row, col = free.cells(a + t * (b - a))
+    h, w = free.free.shape
+    inside = (row >= 0) & (row < h) & (col >= 0) & (col < w)
+    return bool(np.all(inside) and np.all(free.free[row, col]))
+
+
+def free_route(room: Room, clearance: float) -> Callable[[FloatArray, FloatArray], FloatArray]:
+    """A route planner through ``room`` for a robot kept ``clearance`` [m] from every obstacle.
+
+    Returns ``route(start, goal)``: waypoints ``(K, 2)`` [m] ending at ``goal`` (``start`` not
+    included), ``(1, 2)`` when the straight segment is clear, the corners of the shortest
+    8-connected path through the free cells (:func:`skimage.graph.route_through_array`,
+    shortened by line of sight) when it is not, and ``(0, 2)`` when no free path joins them.
+    A start or goal in a blocked cell (a waypoint inside furniture, a robot scraping a wall) is
+    moved to the nearest free cell first, which then also ends the route.
+
+    The teleoperator of a mapping trip steers around what stands in the way; driving straight
+    at each waypoint left the far side of furniture, and most of a corridor past a box,
+    unmapped.
+    """
+    from scipy import ndimage
+    from skimage.graph import route_through_array
+
+    free = room.free_space(clearance)
+    grid = free.free
+    h, w = grid.shape
+    # index of the nearest free cell, for starts and goals in blocked cells
+    _, (near_r, near_c) = ndimage.distance_transform_edt(~grid, return_indices=True)
+    cost = np.where(grid, 1.0, np.inf)
+
+    def centre(r: int, c: int) -> FloatArray:
+        return free.origin + (np.array([c, r], dtype=np.float64) + 0.5) * free.resolution
+
+    def snap(p: FloatArray) -> tuple[int, int]:
+        row, col = free.cells(p[None])
+        r = int(np.clip(row[0], 0, h - 1))
+        c = int(np.clip(col[0], 0, w - 1))
+        return int(near_r[r, c]), int(near_c[r, c])
+
+    def route(start: FloatArray, goal: FloatArray) -> FloatArray:
+        a = np.asarray(start, dtype=np.float64)[:2]
+        g = np.asarray(goal, dtype=np.float64)[:2]
+        if not grid.any():
+            return np.zeros((0, 2))
+        if _line_free(free, a, g):
+            return g[None].copy()
+        ra, ca = snap(a)
+        rg, cg = snap(g)
+        if free.labels[ra, ca] != free.labels[rg, cg]:
+            return np.zeros((0, 2))
+        cells, _ = route_through_array(cost, (ra, ca), (rg, cg), fully_connected=True)  # type: ignore[no-untyped-call]
+        pts = np.array([centre(r, c) for r, c in cells])
+        end = g if _line_free(free, pts[-1], g) else pts[-1]
+        pts = np.vstack([pts, end[None]])
+        # line-of-sight shortening: from each kept point, jump to the farthest visible one
+        out: list[FloatArray] = []
+        here = a if _line_free(free, a, pts[0]) else pts[0]
+        if here is pts[0]:
+            out.append(pts[0])
+        i = 0
+        while i < pts.shape[0] - 1:
+            j = pts.shape[0] - 1
+            while j > i + 1 and not _line_free(free, here, pts[j]):
+                j -= 1
+            out.append(pts[j])
+            here, i = pts[j], j
+        return np.asarray(out, dtype=np.float64)
+
+    return route
 
 
 def simulate_exploration(

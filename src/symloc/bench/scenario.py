@@ -59,7 +59,7 @@ from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
 
 from .episode import Episode, RobotBody, drive_waypoints, run_episode
-from .exploration import exploration_path
+from .exploration import exploration_path, free_route
 from .explore import ExploreDrive
 from .mapping_trip import KeyframeRecorder, MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
@@ -542,7 +542,11 @@ def _map_with_slam(
         except WorldError as err:
             scen.notes.append(f"mapping stage: no exploration drive ({err})")
         else:
-            refused = drive_waypoints(robot, path, laps=explore_laps, dt=dt, on_step=scan_rec)
+            # steered around what stands in the way, a hand's width clear of it
+            route = free_route(scen.room, scen.hardware.robot_config.radius + 0.15)
+            refused = drive_waypoints(
+                robot, path, laps=explore_laps, dt=dt, on_step=scan_rec, route=route
+            )
             scen.notes.append(
                 f"mapping stage: drove {explore_laps:g} lap(s) along the room outline"
                 + (f" ({refused} waypoints unreachable)" if refused else "")

@@ -27,7 +27,12 @@ from symloc.localizer.adapters import (
 )
 from symloc.localizer.claim import ClaimConfig, ClaimGate
 from symloc.localizer.localizer import Localizer
-from symloc.localizer.map_symmetry import PARTIAL_OVERLAP, MapSymmetry, map_symmetries
+from symloc.localizer.map_symmetry import (
+    PARTIAL_OVERLAP,
+    MapSymmetry,
+    map_symmetries,
+    round_centre,
+)
 from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.settings import LocalizerSettings
 from symloc.localizer.types import KeyframeStore, PlaceStore
@@ -103,6 +108,7 @@ def build_localizer(
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     decide = settings.localizer.decide_here
+    symmetries = grid_symmetries(grid)
     proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser) if decide else None
     return Localizer(
         AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
@@ -111,12 +117,13 @@ def build_localizer(
         settings.localizer,
         scorer=GridScorer(fields, laser_pose=laser),
         known_places=known,
-        map_symmetries=grid_symmetries(grid),
+        map_symmetries=symmetries,
         claim_gate=ClaimGate(
             fields.surface(),
             config=_with_map_error(settings.claim, map_std_xy),
             laser_pose=laser,
             scale_centre=free_centroid(grid),
+            rotation_centre=round_centre(grid, symmetries),
         ),
         laser_pose=laser,
         proposer=proposer,
