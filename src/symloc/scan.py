@@ -362,8 +362,9 @@ def message_precision(scan: LaserScan) -> LaserScan:
         scan.time_increment,
         scan.scan_time,
     )
-    ranges = scan.ranges.astype(MESSAGE_FLOAT)
-    inten = None if scan.intensities is None else scan.intensities.astype(MESSAGE_FLOAT)
+    with np.errstate(over="ignore"):  # a range beyond float32 becomes inf: no return, as in a bag
+        ranges = scan.ranges.astype(MESSAGE_FLOAT)
+        inten = None if scan.intensities is None else scan.intensities.astype(MESSAGE_FLOAT)
     with np.errstate(invalid="ignore"):
         same = (
             all(_at_message_float(v) == v for v in scalars)

@@ -52,7 +52,7 @@ from tqdm import tqdm
 
 from symloc._checks import check_array, check_positive
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, inverse, relative
+from symloc.geometry import compose, inverse, relative, wrap_angle
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.scan import LaserScan, message_precision
@@ -962,10 +962,12 @@ def slam_input(
 
     - each scan at the precision of sensor_msgs/LaserScan (:func:`symloc.scan.message_precision`:
       ranges, angles and range limits rounded to float32; a scan from a bag is unchanged);
-    - the odometry headings rounded to a grid of :data:`ODOMETRY_HEADING_STEP` rad (a heading
-      read from a quaternion differs from the one written by up to 5e-16 rad; the two round
-      to the same grid value unless they straddle a grid boundary, a chance of about 1e-6 per
-      heading); positions as given (nav_msgs carries them as float64).
+    - the odometry headings wrapped to (-pi, pi] (a quaternion does) and rounded to a grid of
+      :data:`ODOMETRY_HEADING_STEP` rad (a heading read from a quaternion differs from the one
+      written by up to 5e-16 rad; the two round to the same grid value unless they straddle a
+      grid boundary, a chance of about 1e-6 per heading); positions as given (nav_msgs
+      carries them as float64). SLAM uses only the odometry's increments, wrapped, so
+      neither changes what it reads beyond 1e-9 rad.
 
     Parameters
     ----------
@@ -979,10 +981,11 @@ def slam_input(
     scans : list of LaserScan
         The N scans at message precision.
     odometry : ndarray of shape (N, 3)
-        A copy with the headings on the grid.
+        A copy, its headings [rad] wrapped and on the grid.
     """
     odom = np.array(check_array(odometry, "odometry", shape=(None, 3)), dtype=np.float64)
-    odom[:, 2] = np.round(odom[:, 2] / ODOMETRY_HEADING_STEP) * ODOMETRY_HEADING_STEP
+    step = ODOMETRY_HEADING_STEP
+    odom[:, 2] = np.round(np.asarray(wrap_angle(odom[:, 2])) / step) * step
     return [message_precision(s) for s in scans], odom
 
 
