@@ -16,7 +16,10 @@ For each log, as a user with a recording would run it:
    by their input; for the issue's comparison:
 7. ``symloc ros carmen-to-bag LOG --odometry realistic --seed N``: a bag with step 2's odometry,
    and ``symloc replay`` of it ``--build-map``: its ATE against step 2's (same log, scans and
-   odometry; what is left is the bag itself: ROS stores ranges and angles as float32).
+   odometry; SLAM's input is the same bit for bit on both paths since SLAM takes its scans at
+   sensor_msgs/LaserScan's float32 precision, :func:`symloc.slam.slam.slam_input`, and the bag
+   stamps intel's four backward scans after their predecessors; ``python
+   benchmarks/slam_input_parity.py`` compares the two inputs).
 
 Step 3 is not the experiment the issue compares with: its map is SLAM's (its own error, an
 ATE of several centimetres, is in every pose measured against the corrected poses) and the
@@ -39,8 +42,9 @@ bag's ground truth (the corrected poses) by their stamps, in order among repeate
 go backwards now and then; a log without usable stamps is stamped by its motion in the bag). Rows are appended to
 ``<out>/bench_bag_replay.partial.jsonl`` as each log finishes.
 
-Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seed N]
-[--build-map-only]``
+Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seeds N ...]
+[--build-map-only] [--no-own-odometry]`` (several seeds: every log with the first seed, then
+with the next; a seed other than 0 works in ``<out>/<log>_seed<N>``).
 """
 
 from __future__ import annotations
@@ -236,12 +240,18 @@ def same_input_as_map_build(name: str, log_path: Path, work: Path, seed: int) ->
 
 
 def bench_log(
-    name: str, carmen: Path, out: Path, seed: int = 0, build_map_only: bool = False
+    name: str,
+    carmen: Path,
+    out: Path,
+    seed: int = 0,
+    build_map_only: bool = False,
+    own_odometry: bool = True,
 ) -> dict[str, Any]:
     """One log through the commands of the module docstring (``build_map_only``: steps 1, 2, 4
-    and 7)."""
+    and 7; without ``own_odometry`` step 4 is skipped, its ATE None)."""
+    t0 = time.perf_counter()
     log_path = carmen / f"{name}-corrected.log.gz"
-    work = out / name
+    work = out / (name if seed == 0 else f"{name}_seed{seed}")
     work.mkdir(parents=True, exist_ok=True)
     _run(["ros", "carmen-to-bag", str(log_path), "--out", str(work / "bag")], work / "bag.txt")
     bag = work / "bag" / f"{name}-corrected"
@@ -249,12 +259,14 @@ def bench_log(
     same = same_input_as_map_build(name, log_path, work, seed)
     row: dict[str, Any] = {
         "log": name,
+        "seed": seed,
         "scans": len(stamps),
         "map_build_ate": same["map_build_ate"],
-        "build_map_ate": _build_map_ate(bag, work, "bagmap"),
+        "build_map_ate": _build_map_ate(bag, work, "bagmap") if own_odometry else None,
         "same_input_as_map_build": same,
     }
     if build_map_only:
+        row["wall_s"] = time.perf_counter() - t0
         return row
     replay = _run(
         [
@@ -279,14 +291,23 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("bench_bag_replay_out"))
     parser.add_argument(
         "--seed",
+        "--seeds",
+        dest="seeds",
         type=int,
-        default=0,
-        help="the odometry noise's seed: of experiment amcl-carmen and of map build --carmen",
+        nargs="+",
+        default=[0],
+        help="the odometry noise's seed(s): of experiment amcl-carmen and of map build --carmen"
+        " (several: every log with each, seed by seed)",
     )
     parser.add_argument(
         "--build-map-only",
         action="store_true",
         help="only --build-map against map build --carmen (steps 1, 2, 4, 7)",
+    )
+    parser.add_argument(
+        "--no-own-odometry",
+        action="store_true",
+        help="skip step 4 (--build-map on the log's own odometry; one SLAM run per log less)",
     )
     args = parser.parse_args()
     carmen = args.carmen or find_carmen_dir()
@@ -297,27 +318,31 @@ def main() -> int:
     partial = args.out / "bench_bag_replay.partial.jsonl"
     print(f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name}")
     rows = []
-    for name in args.logs:
-        print(f"# {name}")
-        row = bench_log(name, carmen, args.out, args.seed, args.build_map_only)
-        rows.append(row)
-        with partial.open("a") as fh:
-            fh.write(json.dumps(row) + "\n")
+    for seed in args.seeds:
+        for name in args.logs:
+            print(f"# {name} seed {seed}", flush=True)
+            row = bench_log(
+                name, carmen, args.out, seed, args.build_map_only, not args.no_own_odometry
+            )
+            rows.append(row)
+            with partial.open("a") as fh:
+                fh.write(json.dumps(row) + "\n")
     print(
         f"\n--build-map against map build --carmen on the same log and odometry (map build's,"
-        f" realistic, seed {args.seed}; target: |difference| <= 0.02 m); --build-map on the"
+        f" realistic, seeds {args.seeds}; target: |difference| <= 0.02 m); --build-map on the"
         " log's own odometry (the corrected poses) for comparison:"
     )
     print(
-        f"{'log':<14}{'--build-map ATE [m]':>20}{'map build ATE [m]':>19}{'difference [m]':>16}"
-        f"{'own odometry [m]':>18}"
+        f"{'log':<14}{'seed':>5}{'--build-map ATE [m]':>20}{'map build ATE [m]':>19}"
+        f"{'difference [m]':>16}{'own odometry [m]':>18}"
     )
     nan = float("nan")
     for r in rows:
         m = r["same_input_as_map_build"]
         print(
-            f"{r['log']:<14}{m['build_map_ate'] or nan:>20.3f}{m['map_build_ate'] or nan:>19.3f}"
-            f"{m['difference'] if m['difference'] is not None else nan:>+16.3f}"
+            f"{r['log']:<14}{r['seed']:>5}{m['build_map_ate'] or nan:>20.3f}"
+            f"{m['map_build_ate'] or nan:>19.3f}"
+            f"{m['difference'] if m['difference'] is not None else nan:>+16.4f}"
             f"{r['build_map_ate'] or nan:>18.3f}"
         )
     if args.build_map_only:

@@ -222,3 +222,51 @@ def test_scans_of_one_geometry_share_their_read_only_angles() -> None:
     assert not a.angles.flags.writeable
     assert c.angles is not a.angles
     np.testing.assert_array_equal(a.angles, -1.5 + 0.01 * np.arange(300))
+
+
+def test_message_precision_is_what_a_bag_gives_back(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A scan rounded to sensor_msgs/LaserScan's float32 is, bit for bit, the scan a bag gives
+    back; rounding again changes nothing (the same object comes back)."""
+    from symloc.io.rosbag import BagWriter, read_bag
+    from symloc.scan import message_precision
+
+    rng = np.random.default_rng(5)
+    scan = LaserScan(
+        -np.pi / 2,
+        np.pi / 180,
+        0.0,
+        50.0,
+        np.round(rng.uniform(0.5, 49.0, 181), 3),  # a CARMEN log's millimetres, as float64
+        intensities=rng.uniform(0, 1, 181),
+        stamp=1_000_000_000.123456,
+        time_increment=1e-4 / 3,
+        scan_time=0.1 / 3,
+    )
+    rounded = message_precision(scan)
+    assert not np.array_equal(rounded.ranges, scan.ranges)  # float64 millimetres move
+    np.testing.assert_array_equal(rounded.ranges, scan.ranges.astype(np.float32))
+    assert rounded.angle_min == float(np.float32(-np.pi / 2)) != scan.angle_min
+    assert message_precision(rounded) is rounded
+    with BagWriter(tmp_path / "b") as w:
+        w.write_scan(scan)
+    (back,) = [m.value for m in read_bag(tmp_path / "b") if m.kind == "scan"]
+    assert message_precision(back) is back  # a bag's scan is already at message precision
+    for name in (
+        "angle_min", "angle_increment", "range_min", "range_max", "time_increment", "scan_time"
+    ):  # fmt: skip
+        assert getattr(back, name) == getattr(rounded, name), name
+    np.testing.assert_array_equal(back.ranges, rounded.ranges)
+    np.testing.assert_array_equal(back.angles, rounded.angles)
+    np.testing.assert_array_equal(back.intensities, rounded.intensities)
+    assert rounded.stamp == scan.stamp
+    assert rounded.frame_id == scan.frame_id
+
+
+def test_message_precision_keeps_values_beyond_float32_finite() -> None:
+    from symloc.scan import message_precision
+
+    scan = LaserScan(0.0, 1e-3, 0.0, 1e300, np.array([np.nan, np.inf, 1.0, 1e39]))
+    out = message_precision(scan)
+    assert out.range_max == float(np.finfo(np.float32).max)
+    assert np.isnan(out.ranges[0])
+    np.testing.assert_array_equal(out.ranges[1:], [np.inf, 1.0, np.inf])

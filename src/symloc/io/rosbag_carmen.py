@@ -12,13 +12,18 @@ from there, as ``symloc experiment amcl-carmen`` does. So real logs can be repla
 same bag path a ROS user's recordings take.
 
 The bag keeps what the logs hold: a scan every 0.05-40 s where the robot moved (the corrected
-logs keep only those), pauses of up to tens of seconds, the odometry only at the scans (the
-``ODOM`` lines of these logs carry stamps from another clock and are not written), and stamps
-that go backwards now and then (intel). Every message's log time is its stamp. A log without
-usable stamps (:func:`symloc.io.carmen.stamps_usable`: orebro's are all 0, csail's truncated
-to the same value) is given time by its motion (:func:`motion_stamps`), and said so: with one
-stamp for every scan, the odometry would move at infinite speed between them and a replay
-would reject it.
+logs keep only those), pauses of up to tens of seconds, and the odometry only at the scans (the
+``ODOM`` lines of these logs carry stamps from another clock and are not written). Every
+message's log time is its stamp. A log without usable stamps
+(:func:`symloc.io.carmen.stamps_usable`: orebro's are all 0, csail's truncated to the same
+value) is given time by its motion (:func:`motion_stamps`), and said so: with one stamp for
+every scan, the odometry would move at infinite speed between them and a replay would reject
+it. A scan stamped at or before the scan above it in the log (intel's four clock glitches, 0.05
+to 0.86 s back) is stamped after it by its motion (:func:`ordered_stamps`), and said so: the
+log's order is the order the robot took them (its corrected poses turn smoothly in that
+order), and a bag consumer takes a scan stamped before the previous one for an outlier
+(``symloc replay --build-map`` would map without it, where ``symloc map build --carmen``
+maps with it: issue 28 wants one input on both paths).
 """
 
 from __future__ import annotations
@@ -60,6 +65,7 @@ __all__ = [
     "START_COVARIANCE",
     "carmen_to_bag",
     "motion_stamps",
+    "ordered_stamps",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -128,6 +134,18 @@ def carmen_to_bag(
             logger.warning(note)
         else:
             notes.append(note)
+    stamps, moved = ordered_stamps(stamps, data.laser_poses)
+    if moved:
+        note = (
+            f"{log}: {moved} scan(s) stamped at or before the scan above them in the log (clock"
+            " glitches; the log's order is the robot's) are stamped after it by the motion"
+            f" between them ({NOMINAL_SPEED:g} m/s, {math.degrees(NOMINAL_TURN_RATE):g} deg/s,"
+            f" at least {MIN_INTERVAL:g} s)"
+        )
+        if notes is None:
+            logger.warning(note)
+        else:
+            notes.append(note)
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     with BagWriter(out, fmt) as bag:
         if initial_pose:
@@ -157,6 +175,15 @@ def _odometry(given: ArrayLike | None, own: FloatArray, log: str | Path) -> Floa
     return odom
 
 
+def _motion_intervals(p: FloatArray) -> FloatArray:
+    """(N - 1,) [s]: the time a robot driving at :data:`NOMINAL_SPEED` and turning at
+    :data:`NOMINAL_TURN_RATE` takes between consecutive poses of ``p`` (N, 3) (whichever is
+    longer, and at least :data:`MIN_INTERVAL`)."""
+    step = np.hypot(*np.diff(p[:, :2], axis=0).T) / NOMINAL_SPEED
+    turn = np.abs(np.angle(np.exp(1j * np.diff(p[:, 2])))) / NOMINAL_TURN_RATE
+    return np.asarray(np.maximum(np.maximum(step, turn), MIN_INTERVAL), dtype=np.float64)
+
+
 def motion_stamps(poses: ArrayLike, start: float = 0.0) -> FloatArray:
     """Stamps [s] (N,) for scans taken at ``poses`` (N, 3) x [m], y [m], theta [rad] by a robot
     that drives at :data:`NOMINAL_SPEED` and turns at :data:`NOMINAL_TURN_RATE` (whichever
@@ -164,7 +191,34 @@ def motion_stamps(poses: ArrayLike, start: float = 0.0) -> FloatArray:
     p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
     if p.shape[0] == 0:
         return np.zeros(0)
-    step = np.hypot(*np.diff(p[:, :2], axis=0).T) / NOMINAL_SPEED
-    turn = np.abs(np.angle(np.exp(1j * np.diff(p[:, 2])))) / NOMINAL_TURN_RATE
-    dt = np.maximum(np.maximum(step, turn), MIN_INTERVAL)
+    dt = _motion_intervals(p)
     return np.asarray(start + np.concatenate([[0.0], np.cumsum(dt)]), dtype=np.float64)
+
+
+def ordered_stamps(stamps: ArrayLike, poses: ArrayLike) -> tuple[FloatArray, int]:
+    """``stamps`` (N,) [s] with each stamp at or before the previous (as written here) moved
+    after it by the motion between their ``poses`` (N, 3) (:func:`motion_stamps`' interval),
+    and how many were moved. Stamps that increase are kept as they are; a scan written just
+    after a moved one keeps its own stamp when that is later.
+
+    Examples
+    --------
+    >>> t, n = ordered_stamps([0.0, 1.0, 0.9, 2.0], [[0, 0, 0], [1, 0, 0], [1.1, 0, 0], [2, 0, 0]])
+    >>> [round(float(v), 6) for v in t], n
+    ([0.0, 1.0, 1.2, 2.0], 1)
+    """
+    t = np.array(stamps, dtype=np.float64).reshape(-1)
+    p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+    if p.shape[0] != t.size:
+        raise ConfigurationError(
+            f"poses: expected {t.size} poses (one per stamp), got {p.shape[0]}"
+        )
+    if t.size < 2 or bool(np.all(np.diff(t) > 0)):
+        return t, 0
+    dt = _motion_intervals(p)
+    moved = 0
+    for i in range(1, t.size):
+        if t[i] <= t[i - 1]:
+            t[i] = t[i - 1] + dt[i - 1]
+            moved += 1
+    return t, moved

@@ -18,7 +18,7 @@ from symloc.slam.degeneracy import MatchConstraint, analyse_match, fuse
 from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierParams
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
-from symloc.slam.slam import SlamParams, SlamResult, run_slam
+from symloc.slam.slam import SlamParams, SlamResult, run_slam, slam_input
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
 
 __all__ = [
@@ -44,4 +44,5 @@ __all__ = [
     "match_scan",
     "refine_pose",
     "run_slam",
+    "slam_input",
 ]

@@ -52,10 +52,10 @@ from tqdm import tqdm
 
 from symloc._checks import check_array, check_positive
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, inverse, relative
+from symloc.geometry import compose, inverse, relative, wrap_angle
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
-from symloc.scan import LaserScan
+from symloc.scan import LaserScan, message_precision
 from symloc.slam.correlative_scan_matching import CsmParams, match_scan, refine_pose
 from symloc.slam.degeneracy import (
     UNCONSTRAINED_SIGMA,
@@ -73,7 +73,14 @@ from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
 if TYPE_CHECKING:  # imported where used: it brings the localizer's compiled kernels
     from symloc.slam.map_error import MapError
 
-__all__ = ["SlamParams", "SlamResult", "run_slam", "scan_points"]
+__all__ = [
+    "ODOMETRY_HEADING_STEP",
+    "SlamParams",
+    "SlamResult",
+    "run_slam",
+    "scan_points",
+    "slam_input",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -937,6 +944,51 @@ def _warnings(run: _Run, rejected: list[tuple[int, int, str]]) -> list[str]:
     return out
 
 
+#: Grid [rad] that SLAM's odometry headings are rounded to (2^-30 rad, about 1e-9 rad): far
+#: below any odometry's error, far above the 5e-16 rad that a heading moves when it goes
+#: through a quaternion (a nav_msgs/Odometry in a bag) and back.
+ODOMETRY_HEADING_STEP = 2.0**-30
+
+
+def slam_input(
+    scans: Sequence[LaserScan], odometry: ArrayLike
+) -> tuple[list[LaserScan], FloatArray]:
+    """SLAM's input as :func:`run_slam` takes it, whatever the scans and odometry came from.
+
+    A CARMEN log read as text, the same log written to a ROS bag and read back, and a live
+    topic must give SLAM one input: SLAM's loop-closure decisions turn on perturbations of
+    1e-7 (issue 28: acapulco's ATE 0.158 m from float64 ranges, 0.250 m from the same ranges
+    in float32). So:
+
+    - each scan at the precision of sensor_msgs/LaserScan (:func:`symloc.scan.message_precision`:
+      ranges, angles and range limits rounded to float32; a scan from a bag is unchanged);
+    - the odometry headings wrapped to (-pi, pi] (a quaternion does) and rounded to a grid of
+      :data:`ODOMETRY_HEADING_STEP` rad (a heading read from a quaternion differs from the one
+      written by up to 5e-16 rad; the two round to the same grid value unless they straddle a
+      grid boundary, a chance of about 1e-6 per heading); positions as given (nav_msgs
+      carries them as float64). SLAM uses only the odometry's increments, wrapped, so
+      neither changes what it reads beyond 1e-9 rad.
+
+    Parameters
+    ----------
+    scans : sequence of LaserScan
+        N scans, ranges [m] and angles [rad].
+    odometry : array of shape (N, 3)
+        x [m], y [m], theta [rad] at each scan.
+
+    Returns
+    -------
+    scans : list of LaserScan
+        The N scans at message precision.
+    odometry : ndarray of shape (N, 3)
+        A copy, its headings [rad] wrapped and on the grid.
+    """
+    odom = np.array(check_array(odometry, "odometry", shape=(None, 3)), dtype=np.float64)
+    step = ODOMETRY_HEADING_STEP
+    odom[:, 2] = np.round(np.asarray(wrap_angle(odom[:, 2])) / step) * step
+    return [message_precision(s) for s in scans], odom
+
+
 def run_slam(
     scans: Sequence[LaserScan],
     odometry: ArrayLike,
@@ -950,10 +1002,11 @@ def run_slam(
     Parameters
     ----------
     scans : sequence of LaserScan
-        In time order; the sensor frame is the robot frame.
+        In time order; the sensor frame is the robot frame. Taken at the precision of
+        sensor_msgs/LaserScan (float32, :func:`slam_input`).
     odometry : array of shape (N, 3)
         Odometry pose at each scan (only increments are used; the first one fixes the map
-        frame).
+        frame); headings rounded to :data:`ODOMETRY_HEADING_STEP` (:func:`slam_input`).
     params : SlamParams, optional
     progress : bool
         Show a tqdm bar on stderr.
@@ -967,6 +1020,7 @@ def run_slam(
     n = len(scans)
     if n == 0 or odom.shape[0] != n:
         raise ConfigurationError(f"odometry: expected one pose per scan ({n}), got {odom.shape[0]}")
+    scans, odom = slam_input(scans, odom)
     t_start = time.perf_counter()
     cpu_start = time.process_time()
     run = _Run(scans, odom, prm)
