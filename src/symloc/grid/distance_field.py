@@ -281,8 +281,15 @@ def grown_padded_distances(
             f"pad: expected at least ceil(max_dist / resolution) + 1 cells, got {pad}"
         )
     hg, wg = h + 2 * pad, w + 2 * pad
-    out = np.full((hg + 2, wg + 2), max_dist, dtype=np.float32)
-    out[1 + pad : 1 + pad + h, 1 + pad : 1 + pad + w] = own[1:-1, 1:-1]
+    # the map's values copied, the margins (and the border) set to max_dist: every cell
+    # written once (a full fill first would write the map's part twice)
+    out = np.empty((hg + 2, wg + 2), dtype=np.float32)
+    r0, r1, c0, c1 = 1 + pad, 1 + pad + h, 1 + pad, 1 + pad + w
+    out[:r0, :] = max_dist
+    out[r1:, :] = max_dist
+    out[r0:r1, :c0] = max_dist
+    out[r0:r1, c1:] = max_dist
+    out[r0:r1, c0:c1] = own[1:-1, 1:-1]
     band = 2 * pad  # strip width in the grown frame: the margin and as much of the map
 
     def strip(r0: int, r1: int, c0: int, c1: int) -> NDArray[np.float32]:
