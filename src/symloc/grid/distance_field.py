@@ -187,18 +187,23 @@ def _per_level(
     inv = np.float32(1.0 / resolution)
     values = fn(levels)
     out = np.empty(src.size, dtype=np.float32)
-    for a in range(0, src.size, _TABLE_BLOCK):
-        d = src[a : a + _TABLE_BLOCK]
+    for a in range(0, src.size, _LEVEL_BLOCK):
+        d = src[a : a + _LEVEL_BLOCK]
         k = d * inv
         np.multiply(k, k, out=k)
         np.rint(k, out=k)
         np.minimum(k, np.float32(k_cap), out=k)
-        ki = k.astype(np.int32)
+        ki = k.astype(np.intp)
         ki[d >= top] = k_cap  # the clip's cells (the border among them)
-        if not np.array_equal(levels[ki], d):
+        # indices within 0..k_cap by construction: "clip" skips take's bounds checks
+        if not np.array_equal(np.take(levels, ki, mode="clip"), d):
             return None
-        np.take(values, ki, out=out[a : a + _TABLE_BLOCK])
+        np.take(values, ki, mode="clip", out=out[a : a + _LEVEL_BLOCK])
     return out
+
+
+#: Cells per block of :func:`_per_level` (its temporaries stay in the cache and are reused).
+_LEVEL_BLOCK = 1 << 17
 
 
 def _metres_by_squared_cells(k_max: int, resolution: float, max_dist: float) -> NDArray[np.float32]:
@@ -245,13 +250,14 @@ def _padded_distances(
     k_cap = int(np.ceil(max_dist / resolution)) ** 2 + 2
     lut = _metres_by_squared_cells(k_cap, resolution, max_dist)
     cap = np.float32(np.sqrt(k_cap))
-    rows = max(1, _TABLE_BLOCK // max(1, w))
+    rows = max(1, _LEVEL_BLOCK // max(1, w))  # small blocks: temporaries in the cache
     for a in range(1, h + 1, rows):
         blk = padded[a : min(a + rows, h + 1), 1:-1]
         np.minimum(blk, cap, out=blk)
         np.multiply(blk, blk, out=blk)
         np.rint(blk, out=blk)
-        blk[...] = lut[blk.astype(np.intp)]
+        # indices within 0..k_cap (the minimum above): "clip" skips take's bounds checks
+        blk[...] = np.take(lut, blk.astype(np.intp), mode="clip")
     padded[[0, -1], :] = max_dist
     padded[:, [0, -1]] = max_dist
     return padded
