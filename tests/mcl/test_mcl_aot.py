@@ -213,3 +213,24 @@ def test_a_build_that_does_not_import_falls_back_to_the_jit(
     with caplog.at_level(logging.INFO, logger="symloc.mcl.aot"):
         assert aot.load() is None
     assert any("does not load (ImportError" in r.getMessage() for r in caplog.records)
+
+
+@pytest.mark.parametrize("editable", [True, False])
+def test_an_editable_install_byte_compiles_the_sources(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, editable: bool
+) -> None:
+    from setuptools import Distribution
+
+    setup_py = _setup_module()
+    pkg = tmp_path / "src" / "symloc" / "sub"
+    pkg.mkdir(parents=True)
+    (pkg / "mod.py").write_text("X = 1\n")
+    monkeypatch.setattr(setup_py, "HERE", tmp_path)
+    dist = Distribution({"name": "symloc"})
+    cmd = setup_py.CompilingBuildPy(dist)
+    cmd.editable_mode = editable
+    cmd.build_lib = str(tmp_path / "lib")
+    cmd.ensure_finalized()
+    cmd.run()
+    compiled = list((pkg / "__pycache__").glob("mod.*.pyc"))
+    assert len(compiled) == (1 if editable else 0)
