@@ -142,3 +142,48 @@ def test_surface_field_identical_to_scipy_definition(seed, res):
     np.testing.assert_array_equal(
         surface_distance_field(g, 1.0).padded, _scipy_padded(centre, res, 1.0)
     )
+
+
+def _cell_by_cell(df, kind):
+    """The table computed cell by cell (no shortcut through the transform's levels)."""
+    import symloc.grid.distance_field as dfm
+
+    keep = dfm._per_level
+    dfm._per_level = lambda *a: None
+    try:
+        df._tables.clear()
+        return df.table(kind, 0.9, 0.1, 0.2, 12.0).copy()
+    finally:
+        dfm._per_level = keep
+        df._tables.clear()
+
+
+@pytest.mark.parametrize(("max_dist", "res"), [(2.0, 0.05), (0.8, 0.1), (0.33, 0.07)])
+def test_tables_from_the_levels_equal_the_cell_by_cell_tables(max_dist, res):
+    import symloc.grid.distance_field as dfm
+
+    rng = np.random.default_rng(4)
+    d = np.zeros((90, 70), np.int8)
+    d[rng.random(d.shape) < 0.01] = 100
+    df = distance_field(OccupancyGrid(d, res), max_dist)
+    src = df.padded.ravel()
+    for kind in ("pz", "pz3", "logpz"):
+        fast = dfm._per_level(src, res, max_dist, lambda v: v * np.float32(2.0))
+        assert fast is not None  # every value is one of the transform's levels
+        np.testing.assert_array_equal(fast, src * np.float32(2.0))
+        want = _cell_by_cell(df, kind)
+        got = df.table(kind, 0.9, 0.1, 0.2, 12.0)
+        assert got.view(np.uint32).tolist() == want.view(np.uint32).tolist()  # bit for bit
+
+
+def test_a_value_that_is_no_level_is_computed_cell_by_cell():
+    import symloc.grid.distance_field as dfm
+
+    df = distance_field(_grid([(5, 5)]), 2.0)
+    odd = dfm.DistanceField(df.grid, 2.0, df.padded + np.float32(0.013))
+    assert dfm._per_level(odd.padded.ravel(), 0.1, 2.0, lambda v: v) is None
+    got = odd.table("logpz", 0.5, 0.5, 0.2, 10.0)
+    want = np.log(
+        0.5 * np.exp(-(odd.padded.ravel().astype(np.float64) ** 2) / (2 * 0.04)) + 0.05
+    ).astype(np.float32)
+    np.testing.assert_array_equal(got, want)

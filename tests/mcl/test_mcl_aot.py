@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
+import logging
 import shutil
 import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 import pytest
@@ -23,14 +26,49 @@ def _per_scan() -> list[aot.Kernel]:
     return [getattr(kernels, name) for name in aot.SIGNATURES]
 
 
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _setup_module() -> ModuleType:
+    """The package's setup.py, imported (its ``setup()`` call runs only as ``__main__``)."""
+    spec = importlib.util.spec_from_file_location("symloc_setup_py", ROOT / "setup.py")
+    assert spec is not None
+    assert spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _build_ext(tmp: Path, extensions: list[Any]) -> Any:
+    """setup.py's build_ext command over ``extensions``, writing under ``tmp``, run."""
+    from setuptools import Distribution
+
+    setup_py = _setup_module()
+    dist = Distribution({"name": "symloc", "ext_modules": extensions})
+    dist.cmdclass["build_ext"] = setup_py.OptionalBuildExt
+    cmd = dist.get_command_obj("build_ext")
+    cmd.build_lib = str(tmp / "lib")
+    cmd.build_temp = str(tmp / "temp")
+    cmd.ensure_finalized()
+    cmd.run()
+    return cmd
+
+
 @pytest.fixture(scope="module")
 def built(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ModuleType]:
-    """A build in a temporary folder, imported from there."""
+    """A build made as the install makes it (setup.py's build_ext over
+    :func:`symloc.mcl.aot_build.extension`) in a temporary folder, imported from there."""
     if importlib.util.find_spec("numba.pycc") is None:  # pragma: no cover - a later numba
         pytest.skip("numba.pycc is not available")
     if shutil.which("cc") is None and shutil.which("gcc") is None:  # pragma: no cover
         pytest.skip("no C compiler")
-    path = aot_build.build(tmp_path_factory.mktemp("aot"))
+    tmp = tmp_path_factory.mktemp("aot")
+    cmd = _build_ext(tmp, [aot_build.extension()])
+    outputs = cmd.get_outputs()
+    assert len(outputs) == 1
+    path = Path(outputs[0])
+    assert path.parent == tmp / "lib" / "symloc" / "mcl"  # where the package loads it from
+    assert path.name.startswith(aot.module_name() + ".")
     spec = importlib.util.spec_from_file_location(aot.module_name(), path)
     assert spec is not None
     assert spec.loader is not None
@@ -128,3 +166,71 @@ def test_with_a_build_a_tracking_process_never_loads_numba() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "False"]
+
+
+def test_a_failed_build_does_not_fail_the_install(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from setuptools import Extension
+
+    broken = Extension("symloc.mcl._kernels_aot_broken", sources=[])
+
+    def prepare(cmd: Any) -> None:
+        raise RuntimeError("no compiler here")
+
+    broken.prepare = prepare  # type: ignore[attr-defined]
+    cmd = _build_ext(tmp_path, [broken])  # does not raise
+    assert cmd.extensions == []
+    assert cmd.get_outputs() == []
+    assert "the kernels' ahead-of-time build failed (RuntimeError: no compiler here)" in (
+        capsys.readouterr().err
+    )
+
+
+def test_without_a_build_the_jit_is_used_and_said_once(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    monkeypatch.setattr(aot, "_LOADED", [])
+    monkeypatch.setattr(aot, "module_name", lambda: "_kernels_aot_000000000000")
+    with caplog.at_level(logging.INFO, logger="symloc.mcl.aot"):
+        assert aot.load() is None
+        assert aot.load() is None
+    lines = [r.getMessage() for r in caplog.records if r.name == "symloc.mcl.aot"]
+    assert len(lines) == 1
+    assert "no ahead-of-time build" in lines[0]
+    assert "numba's JIT" in lines[0]
+
+
+def test_a_build_that_does_not_import_falls_back_to_the_jit(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    def broken(name: str) -> ModuleType:
+        raise ImportError(f"{name}: numpy.core.multiarray failed to import")
+
+    monkeypatch.setattr(aot, "_LOADED", [])
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: object())
+    monkeypatch.setattr(importlib, "import_module", broken)
+    with caplog.at_level(logging.INFO, logger="symloc.mcl.aot"):
+        assert aot.load() is None
+    assert any("does not load (ImportError" in r.getMessage() for r in caplog.records)
+
+
+@pytest.mark.parametrize("editable", [True, False])
+def test_an_editable_install_byte_compiles_the_sources(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, editable: bool
+) -> None:
+    from setuptools import Distribution
+
+    setup_py = _setup_module()
+    pkg = tmp_path / "src" / "symloc" / "sub"
+    pkg.mkdir(parents=True)
+    (pkg / "mod.py").write_text("X = 1\n")
+    monkeypatch.setattr(setup_py, "HERE", tmp_path)
+    dist = Distribution({"name": "symloc"})
+    cmd = setup_py.CompilingBuildPy(dist)
+    cmd.editable_mode = editable
+    cmd.build_lib = str(tmp_path / "lib")
+    cmd.ensure_finalized()
+    cmd.run()
+    compiled = list((pkg / "__pycache__").glob("mod.*.pyc"))
+    assert len(compiled) == (1 if editable else 0)

@@ -185,6 +185,30 @@ def test_find_rival_same_with_and_without_early_exit(monkeypatch: pytest.MonkeyP
     np.testing.assert_array_equal(fast.rival_pose, slow.rival_pose)
 
 
+def test_match_scores_with_runs_of_one_heading_and_non_finite_poses() -> None:
+    # the kernel holds the cosine and sine of the last heading: runs of one heading (a
+    # lattice block), changes inside a block and NaN headings between equal ones
+    from symloc.mcl import rival_search
+
+    rng = np.random.default_rng(5)
+    _, field = _field(rng)
+    heads = np.repeat(rng.uniform(-4, 4, 40), rng.integers(1, 60, 40))
+    n = heads.size
+    poses = np.column_stack([rng.uniform(-1, 3, n), rng.uniform(-1, 2.5, n), heads])
+    poses[rng.random(n) < 0.02, 2] = np.nan
+    poses[rng.random(n) < 0.01, 0] = np.inf
+    pts = rng.uniform(-2, 2, (25, 2))
+    got = rival_search.match_scores(field, poses, pts, 0.2)
+    r = np.hypot(pts[:, 0], pts[:, 1])
+    a = np.arctan2(pts[:, 1], pts[:, 0])
+    ok = np.all(np.isfinite(poses), axis=1)
+    idx = endpoint_flat_indices(field, field.grid_frame_poses(poses[ok]), r, a)
+    want = np.count_nonzero(field.padded.ravel()[idx] <= np.float32(0.2), axis=1) / 25
+    np.testing.assert_array_equal(got[ok], want)
+    off = field.max_dist <= np.float32(0.2)  # a non-finite pose reads the off-map value
+    np.testing.assert_array_equal(got[~ok], np.full(int((~ok).sum()), 1.0 if off else 0.0))
+
+
 def test_match_scores_with_tolerances_beyond_the_clip() -> None:
     from symloc.mcl import rival_search
 

@@ -205,3 +205,82 @@ def test_a_search_stops_once_too_many_places_look_alike() -> None:
     far = np.hypot(*(early.rival_pose[:2] - est[:2])) > 0.7
     turned = abs(np.angle(np.exp(1j * (early.rival_pose[2] - est[2])))) > np.radians(24.0)
     assert far or turned  # beyond the lattice-relaxed distance or angle of a rival
+
+
+def _all_steps(
+    field: rs.DistanceField, pts: np.ndarray, est: np.ndarray, **kw: float
+) -> tuple[list[int], rs.RivalReport]:
+    """The pairs every slice of a search yields, and its report."""
+    steps = rs.rival_search_steps(field, pts, est, tol=0.1, chunk_pairs=30_000, **kw)
+    yields = []
+    while True:
+        try:
+            yields.append(next(steps))
+        except StopIteration as done:
+            return yields, done.value
+
+
+def test_the_heading_groups_above_the_lattice_change_no_report_and_score_fewer_poses(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # two identical rooms (a rival), an asymmetric room (unique) and nine offices cut short
+    # by max_candidates (the early exit counts the same candidates): with and without the
+    # level above the lattice, the same slices and the same reports
+    data = np.full((60, 130), -1, np.int8)
+    for c0 in (5, 70):
+        data[5:55, c0 : c0 + 55] = 0
+        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
+        data[5:55, c0] = data[5:55, c0 + 54] = 100
+        data[20:24, c0 + 10 : c0 + 30] = 100
+    cases: list[tuple[OccupancyGrid, np.ndarray, dict[str, float]]] = [
+        (OccupancyGrid(data, 0.05), np.array([1.5, 1.5, 0.3]), {}),
+        (asymmetric_room(), np.array([5.0, 3.0, 0.3]), {}),
+        (_offices(), np.array([1.2, 1.0, 0.2]), {"max_candidates": 300}),
+    ]
+    scored = {"poses": 0}
+    plain_scores = rs._Scorer.scores
+
+    def counting(self: rs._Scorer, local: np.ndarray, at_least: float | None = None) -> np.ndarray:
+        scored["poses"] += local.shape[0]
+        return plain_scores(self, local, at_least)
+
+    monkeypatch.setattr(rs._Scorer, "scores", counting)
+    ambiguous = []
+    for grid, est, kw in cases:
+        field = rs.padded_field(grid, 2.0)
+        pts = _evidence(grid, est, 5)
+        scored["poses"] = 0
+        grouped = _all_steps(field, pts, est, **kw)
+        with_groups = scored["poses"]
+        with monkeypatch.context() as mp:
+            mp.setattr(rs, "_GROUP", 1)
+            scored["poses"] = 0
+            plain = _all_steps(field, pts, est, **kw)
+            without = scored["poses"]
+        assert grouped[0] == plain[0]  # the same slices: a budget spreads it the same way
+        a, b = grouped[1], plain[1]
+        assert (a.ambiguous, a.estimate_score, a.rival_score) == (
+            b.ambiguous,
+            b.estimate_score,
+            b.rival_score,
+        )
+        assert (a.n_candidates, a.n_points) == (b.n_candidates, b.n_points)
+        if b.rival_pose is None:
+            assert a.rival_pose is None
+        else:
+            np.testing.assert_array_equal(a.rival_pose, b.rival_pose)
+        assert with_groups < without  # the level above the lattice left poses out
+        ambiguous.append(a.ambiguous)
+    assert ambiguous == [True, False, True]
+
+
+def test_the_heading_groups_cover_the_lattice() -> None:
+    heads = -np.pi + (np.arange(7) + 0.5) * (2 * np.pi / 7)
+    groups = rs._heading_groups(heads, 3)
+    starts = [i for i, g in enumerate(groups) if g is not None]
+    assert starts == [0, 3, 6]
+    for i in starts:
+        centre, spread = groups[i]  # type: ignore[misc]
+        members = heads[i : i + 3]
+        assert np.max(np.abs(members - centre)) == pytest.approx(spread)
+    assert groups[6] == (heads[6], 0.0)  # a last group of one

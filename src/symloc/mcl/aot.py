@@ -5,14 +5,16 @@ but loading even a cached kernel costs a process about 0.7 s of CPU before its f
 numba's import (0.13 s), the typing and lowering registries its first call loads (0.3 s, among
 them scipy.linalg for numba's BLAS check) and, at exit, the interpreter's collections over the
 ~80,000 objects these leave behind (0.2-0.3 s); on the smaller CARMEN logs that is the C++
-amcl core's whole run. ``python -m symloc.mcl.aot_build`` (once per install, like ``symloc ros
-setup``; it needs numba and a C compiler) compiles the kernels of the per-scan path -- the
-laser step, KLD-sampling's stop, clustering, motion sampling and the rival search's scoring --
-with numba's ahead-of-time compiler (:mod:`numba.pycc`) into an extension module beside this
-file, from the same Python definitions, for this machine's CPU (``target_cpu = "host"``, as
-numba's JIT), the GIL released as the JIT kernels do. :class:`Kernel` then calls it when the
-arguments have the types it was built for, and numba's JIT kernel otherwise, which loads numba
-on first use.
+amcl core's whole run. The install (``pip install .`` or ``pip install -e .``: the package's
+``setup.py``, see :mod:`symloc.mcl.aot_build`; it needs a C compiler, and an install without
+one goes on without it) compiles the kernels of the per-scan path -- the laser step,
+KLD-sampling's stop, clustering, motion sampling and the rival search's scoring -- with
+numba's ahead-of-time compiler (:mod:`numba.pycc`) into an extension module beside this file,
+from the same Python definitions, for this machine's CPU (``target_cpu = "host"``, as numba's
+JIT), the GIL released as the JIT kernels do. :class:`Kernel` then calls it when the arguments
+have the types it was built for, and numba's JIT kernel otherwise, which loads numba on first
+use. Without a build (or one that does not import) :func:`load` logs one line and every
+kernel runs through numba's JIT.
 
 The module's name carries a hash of the kernels' source and signatures
 (:func:`module_name`): after an edit of :mod:`symloc.mcl.kernels` a stale build is not loaded
@@ -116,15 +118,33 @@ _LOADED: list[ModuleType | None] = []
 
 
 def load() -> ModuleType | None:
-    """The extension built for the current kernels, imported once; None if it was not built
-    (or ``SYMLOC_AOT=0``)."""
+    """The extension built for the current kernels, imported once; None if it was not built,
+    cannot be imported (both logged once, at INFO: the kernels then run through numba's JIT)
+    or ``SYMLOC_AOT=0``."""
     if not _LOADED:
         mod = None
         if os.environ.get("SYMLOC_AOT", "1") != "0":
             full = f"{__package__}.{module_name()}"
-            if importlib.util.find_spec(full) is not None:
-                mod = importlib.import_module(full)
-                _LOG.debug("per-scan kernels from %s", mod.__file__)
+            try:
+                if importlib.util.find_spec(full) is None:
+                    _LOG.info(
+                        "per-scan kernels: no ahead-of-time build for this source (%s; made at"
+                        " install when a C compiler is there, or by python -m"
+                        " symloc.mcl.aot_build): numba's JIT",
+                        full,
+                    )
+                else:
+                    mod = importlib.import_module(full)
+                    _LOG.debug("per-scan kernels from %s", mod.__file__)
+            except Exception as exc:  # a broken build falls back to the JIT
+                _LOG.info(
+                    "per-scan kernels: the ahead-of-time build %s does not load (%s: %s):"
+                    " numba's JIT",
+                    full,
+                    type(exc).__name__,
+                    exc,
+                )
+                mod = None
         _LOADED.append(mod)
     return _LOADED[0]
 

@@ -538,14 +538,21 @@ def count_within_py(
     cnt = np.empty(_CBLOCK, dtype=np.int64)
     idx = np.empty(_CBLOCK, dtype=np.int64)
     cell = np.empty(_CBLOCK, dtype=np.uint32)
+    last_th = math.nan  # the heading whose cosine and sine are held (NaN: none yet)
+    last_c = one
+    last_s = zero
     for b0 in range(start, stop, _CBLOCK):
         m = min(_CBLOCK, stop - b0)
         for k in range(m):
             th = poses[b0 + k, 2]
             px = np.float32(poses[b0 + k, 0] * inv_res)
             py = np.float32(poses[b0 + k, 1] * inv_res)
-            ck = np.float32(math.cos(th))
-            sk = np.float32(math.sin(th))
+            if th != last_th:  # a lattice's block shares one heading: one cosine and sine
+                last_th = th
+                last_c = np.float32(math.cos(th))
+                last_s = np.float32(math.sin(th))
+            ck = last_c
+            sk = last_s
             if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(ck)):
                 px = np.float32(-1e30)
                 py = np.float32(-1e30)

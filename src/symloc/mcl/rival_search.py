@@ -31,7 +31,14 @@ their true distance to the nearest wall and the bound holds.
 
 Before the coarse lattice, positions that no heading can make reach the threshold are left
 out (:func:`_may_reach`: a position farther from every obstacle than the points that must pass
-reach); the candidates are the same.
+reach); the candidates are the same. Above the lattice, its headings are taken three at a
+time: each position is first scored at the middle heading of the three with a tolerance wider
+by what a turn to the outer ones can move a point (:func:`_group_slack`), and only the
+positions that reach the threshold there are scored at the three headings. A lattice pose that
+reaches it implies its group does, so the candidates, their order and the report are the
+same; about a fifth of the lattice's scoring is saved (the CARMEN logs' searches). The slices
+still yield the lattice's pose-point pairs (a budget spreads a search over the same updates);
+the level above adds at most a third to them.
 
 Cost: (free area / step^2) x (2 pi / angle_step) x M look-ups, e.g. 500 m^2 at 0.3 m, 6 deg
 and 80 points = 27 M look-ups, a tenth of a second to a second; it grows with the map's free
@@ -246,6 +253,36 @@ def _may_reach(
     return out
 
 
+#: Consecutive lattice headings grouped under one pose of the level above the lattice.
+_GROUP = 3
+
+
+def _heading_groups(heads: NDArray[np.floating], size: int) -> list[tuple[float, float] | None]:
+    """The lattice headings ``heads`` in groups of ``size`` consecutive ones: at each group's
+    first heading its ``(centre, spread)`` [rad] (the middle of its first and last heading,
+    and the largest turn of a member from it), None at the others."""
+    out: list[tuple[float, float] | None] = [None] * heads.size
+    for g0 in range(0, heads.size, max(1, size)):
+        members = heads[g0 : g0 + max(1, size)]
+        centre = 0.5 * (float(members[0]) + float(members[-1]))
+        out[g0] = (centre, float(np.max(np.abs(members - centre))))
+    return out
+
+
+def _group_slack(rng_pts: FloatArray, spread: float, res: float) -> FloatArray:
+    """How much farther [m] than at a pose turned by at most ``spread`` [rad] a point at range
+    ``rng_pts`` may read its distance at the group's centre heading: the end point moves by
+    at most ``range * spread``; the two end points' cells' centres are each within half a
+    cell diagonal of them (``sqrt(2) res`` for both); the distance field is 1-Lipschitz
+    between cell centres. A little more for the float32 arithmetic of the end points and the
+    tolerances (about 1e-3 cells), so that the level above the lattice never rejects a
+    position one of its headings would keep."""
+    slack: FloatArray = (
+        rng_pts * spread * (1.0 + 1e-6) + math.sqrt(2.0) * res * 1.01 + 1e-4 * (1.0 + rng_pts)
+    )
+    return slack
+
+
 def _unproven(cp: FloatArray, cs: FloatArray, est_score: float, n_cand: int, m: int) -> RivalReport:
     """The ambiguous report when too many candidates ``cp (C, 3)`` (upper bounds ``cs (C,)``)
     are left to prove uniqueness: the best-bounded one as the rival."""
@@ -448,13 +485,34 @@ def rival_search_steps(
     local = None
     if coarse is not None and field.grid.origin[2] == 0.0:
         local = field.grid_frame_poses(np.column_stack([xy, np.zeros(xy.shape[0])]))
-    for h in heads:
+    # The heading groups' level above the lattice (see _heading_groups): per position, may
+    # any heading of the current group reach the threshold? Only those positions are scored.
+    grouped = coarse is not None and local is not None and _GROUP > 1
+    groups = _heading_groups(heads, _GROUP) if grouped else None
+    group_ok = np.ones(xy.shape[0], dtype=np.bool_)
+    wide: _Scorer | None = None
+    centre = 0.0
+    for hi, h in enumerate(heads):
+        first = groups is not None and groups[hi] is not None
+        if first:
+            centre, spread = groups[hi]  # type: ignore[index, misc]
+            wide = _Scorer(field, pts, loose + _group_slack(rng_pts, spread, res))
         for s0 in range(0, xy.shape[0], block):
             part = xy[s0 : s0 + block]
             if coarse is not None and local is not None:
                 lp = local[s0 : s0 + block]
-                lp[:, 2] = h
-                sc = coarse.scores(lp, threshold)
+                if wide is None:
+                    lp[:, 2] = h
+                    sc = coarse.scores(lp, threshold)
+                else:
+                    if first:
+                        lp[:, 2] = centre
+                        group_ok[s0 : s0 + block] = wide.scores(lp, threshold) >= threshold
+                    ok = group_ok[s0 : s0 + block]
+                    lp[:, 2] = h
+                    sc = np.full(part.shape[0], -np.inf)
+                    if ok.any():
+                        sc[ok] = coarse.scores(lp[ok], threshold)
             else:
                 poses = np.column_stack([part, np.full(part.shape[0], h)])
                 sc = match_scores(field, poses, pts, loose, at_least=threshold)
