@@ -280,8 +280,8 @@ def drive_waypoints(
 ) -> int:
     """Drive ``body`` through ``waypoints`` (V, 2) [m], ``laps`` times round, from the nearest.
 
-    Turn on the spot towards each waypoint, then drive straight to it (open loop in the true
-    pose, as a teleoperator would); with ``route(position, waypoint)`` (e.g.
+    Turn on the spot towards each waypoint, then drive to it, steering at it on the true pose
+    as a teleoperator would; with ``route(position, waypoint)`` (e.g.
     :func:`symloc.bench.exploration.free_route`), through the points ``(K, 2)`` it returns
     instead, each in turn (none: the waypoint cannot be reached). ``on_step(true_pose)`` is
     called after every step of ``dt`` [s] (e.g. to record a scan). A waypoint the robot cannot
@@ -314,8 +314,8 @@ def _drive_straight(
     turn_rate: float,
     on_step: Callable[[FloatArray], Any] | None,
 ) -> bool:
-    """Turn on the spot towards ``goal`` (2,) [m], then drive straight to it; False when a
-    motion was refused (an obstacle in the way)."""
+    """Turn on the spot towards ``goal`` (2,) [m], then drive to it, turning at each step
+    towards it; False when a motion was refused (an obstacle in the way)."""
     pose = body.pose
     turn = float(wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - pose[2]))
     for _ in range(max(1, math.ceil(abs(turn) / (turn_rate * dt)))):

@@ -139,9 +139,10 @@ def free_route(room: Room, clearance: float) -> Callable[[FloatArray, FloatArray
         pts = np.vstack([pts, end[None]])
         # line-of-sight shortening: from each kept point, jump to the farthest visible one
         out: list[FloatArray] = []
-        here = a if _line_free(free, a, pts[0]) else pts[0]
-        if here is pts[0]:
-            out.append(pts[0])
+        here = a
+        if not _line_free(free, a, pts[0]):  # the robot stands in a blocked cell: out first
+            here = pts[0]
+            out.append(here)
         i = 0
         while i < pts.shape[0] - 1:
             j = pts.shape[0] - 1
