@@ -16,10 +16,11 @@ For each log, as a user with a recording would run it:
    by their input; for the issue's comparison:
 7. ``symloc ros carmen-to-bag LOG --odometry realistic --seed N``: a bag with step 2's odometry,
    and ``symloc replay`` of it ``--build-map``: its ATE against step 2's (same log, scans and
-   odometry; SLAM's input is the same bit for bit on both paths since SLAM takes its scans at
-   sensor_msgs/LaserScan's float32 precision, :func:`symloc.slam.slam.slam_input`, and the bag
-   stamps intel's four backward scans after their predecessors; ``python
-   benchmarks/slam_input_parity.py`` compares the two inputs).
+   odometry; SLAM's input is the same bit for bit on both paths since the CARMEN reader gives
+   scans at sensor_msgs/LaserScan's float32 precision, :func:`symloc.slam.slam.slam_input`
+   rounds odometry headings to a grid finer than 1e-9 rad, and the bag stamps intel's four
+   backward scans after their predecessors; ``python benchmarks/slam_input_parity.py``
+   compares the two inputs).
 
 Step 3 is not the experiment the issue compares with: its map is SLAM's (its own error, an
 ATE of several centimetres, is in every pose measured against the corrected poses) and the

@@ -1,15 +1,15 @@
 """Benchmark: SLAM on a log's scans as read, as a bag holds them, and moved by 1e-7 (issue 28, 29).
 
-A ROS bag stores a LaserScan's ranges and angles as float32; ``map build --carmen`` reads the
-log's text as float64. Before SLAM took its input at the messages' precision
-(:func:`symloc.slam.slam.slam_input`) that rounding alone flipped loop-closure decisions
+A ROS bag stores a LaserScan's ranges and angles as float32; ``map build --carmen`` used to
+read the log's text as float64, and that rounding alone flipped loop-closure decisions
 (acapulco, seed 0: 0.158 m and 86 loop closures from float64, 0.250 m, 82, DOUBTFUL from
-float32). This runs SLAM on one log with the odometry ``map build --carmen --seed N`` gives it:
+float32). The CARMEN reader now gives float32 scans (:func:`symloc.scan.message_precision`).
+This runs SLAM on one log with the odometry ``map build --carmen --seed N`` gives it:
 
 - ``as read``: the log's scans as :func:`symloc.io.carmen.read_carmen` gives them;
 - ``as in a bag``: the same scans rounded to float32 as a bag holds them (ranges,
-  ``angle_min``, ``angle_increment``, range limits): now the same result as ``as read``, bit
-  for bit, since SLAM rounds both alike;
+  ``angle_min``, ``angle_increment``, range limits): the same result as ``as read``, bit for
+  bit, since the reader rounds alike;
 - ``+1 ulp``: every finite range moved up by one float32 step (2^-24 of itself, 0.06-3 um):
   a perturbation that survives the rounding, of the size the rounding used to make. Its ATE
   against ``as read`` is SLAM's own sensitivity to the last digit of its input (issue 29's

@@ -9,7 +9,8 @@ For each log and seed this builds SLAM's input on both paths, without running SL
   back by :func:`symloc.ros.replay.pair_scans_offline` as ``--build-map`` reads it.
 
 Each path's input then goes through :func:`symloc.slam.slam.slam_input` (what ``run_slam``
-does to it first), and every field SLAM could see is compared: the number and order of scans
+does to it first: odometry headings on a grid; the CARMEN reader already gives scans at the
+bag's float32 precision), and every field SLAM could see is compared: the number and order of scans
 (matched by stamp), ranges, beam angles, ``angle_min``/``angle_increment``, ``range_min``/
 ``range_max``, ``time_increment``/``scan_time``, stamps, frame and odometry. ``--raw`` compares
 the inputs as each path hands them to ``run_slam`` (before :func:`slam_input`). It prints one

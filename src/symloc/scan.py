@@ -12,7 +12,7 @@ clockwise from the sensor's +x axis.
 Precision: sensor_msgs/LaserScan carries its ranges, angles, range limits and times as float32;
 :class:`LaserScan` holds float64. :func:`message_precision` rounds a scan to what the message
 can carry, so a scan read from a text log and the same scan read back from a bag are one scan
-(SLAM takes its input that way, :func:`symloc.slam.slam.slam_input`).
+(:func:`symloc.io.carmen.read_carmen` reads a log's scans that way).
 """
 
 from __future__ import annotations
@@ -362,14 +362,15 @@ def message_precision(scan: LaserScan) -> LaserScan:
         scan.time_increment,
         scan.scan_time,
     )
+    given = scan.intensities
     with np.errstate(over="ignore"):  # a range beyond float32 becomes inf: no return, as in a bag
         ranges = scan.ranges.astype(MESSAGE_FLOAT)
-        inten = None if scan.intensities is None else scan.intensities.astype(MESSAGE_FLOAT)
+        inten = None if given is None else given.astype(MESSAGE_FLOAT)
     with np.errstate(invalid="ignore"):
         same = (
             all(_at_message_float(v) == v for v in scalars)
             and np.array_equal(ranges, scan.ranges, equal_nan=True)
-            and (inten is None or np.array_equal(inten, scan.intensities, equal_nan=True))
+            and (inten is None or given is None or np.array_equal(inten, given, equal_nan=True))
         )
     if same:
         return scan

@@ -1,10 +1,12 @@
 """SLAM's input is one whether a CARMEN log is read as text or through its ROS bag (issue 28).
 
-``symloc map build --carmen`` gives SLAM the log's scans in float64 and its odometry headings as
-drawn; ``symloc replay BAG --build-map`` gives it the same scans as sensor_msgs/LaserScan holds
-them (float32) and the headings after a round trip through a quaternion (5e-16 rad off), and
-used to drop the scans whose stamps go backwards. SLAM's decisions turn on such perturbations,
-so :func:`symloc.slam.slam.slam_input` takes both at the messages' precision.
+``symloc map build --carmen`` used to give SLAM the log's scans in float64 and its odometry
+headings as drawn; ``symloc replay BAG --build-map`` gives it the same scans as
+sensor_msgs/LaserScan holds them (float32) and the headings after a round trip through a
+quaternion (5e-16 rad off), and used to drop the scans whose stamps go backwards. SLAM's
+decisions turn on such perturbations, so the CARMEN reader gives scans at float32 precision,
+:func:`symloc.slam.slam.slam_input` rounds the headings to a grid and ``carmen-to-bag`` stamps
+a backward scan after its predecessor.
 """
 
 from __future__ import annotations
@@ -53,8 +55,10 @@ def test_a_carmen_log_and_its_bag_give_slam_one_input(tmp_path: Path) -> None:
     assert len(got.scans) == len(log.scans) == 40
     assert got.dropped == {}
     carmen_scans = [s.scan for s in log.scans]
-    # as handed over, the two paths differ: float64 millimetres against float32
-    assert not np.array_equal(carmen_scans[3].ranges, got.scans[3].ranges)
+    # the log's millimetres as float64 would not be the bag's float32 values
+    text = np.array((log_path.read_text().splitlines()[3]).split()[2:183], dtype=np.float64)
+    assert not np.array_equal(text, got.scans[3].ranges)
+    np.testing.assert_array_equal(text.astype(np.float32), carmen_scans[3].ranges)
     a_scans, a_odom = slam_input(carmen_scans, odom)
     b_scans, b_odom = slam_input(got.scans, got.laser_odometry)
     np.testing.assert_array_equal(a_odom, b_odom)

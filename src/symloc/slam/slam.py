@@ -55,7 +55,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import compose, inverse, relative, wrap_angle
 from symloc.grid.log_odds import InverseSensorModel, LogOddsGrid
 from symloc.grid.occupancy_grid import OccupancyGrid
-from symloc.scan import LaserScan, message_precision
+from symloc.scan import LaserScan
 from symloc.slam.correlative_scan_matching import CsmParams, match_scan, refine_pose
 from symloc.slam.degeneracy import (
     UNCONSTRAINED_SIGMA,
@@ -953,40 +953,38 @@ ODOMETRY_HEADING_STEP = 2.0**-30
 def slam_input(
     scans: Sequence[LaserScan], odometry: ArrayLike
 ) -> tuple[list[LaserScan], FloatArray]:
-    """SLAM's input as :func:`run_slam` takes it, whatever the scans and odometry came from.
+    """SLAM's input as :func:`run_slam` takes it, whatever the odometry came from.
 
-    A CARMEN log read as text, the same log written to a ROS bag and read back, and a live
-    topic must give SLAM one input: SLAM's loop-closure decisions turn on perturbations of
-    1e-7 (issue 28: acapulco's ATE 0.158 m from float64 ranges, 0.250 m from the same ranges
-    in float32). So:
-
-    - each scan at the precision of sensor_msgs/LaserScan (:func:`symloc.scan.message_precision`:
-      ranges, angles and range limits rounded to float32; a scan from a bag is unchanged);
-    - the odometry headings wrapped to (-pi, pi] (a quaternion does) and rounded to a grid of
-      :data:`ODOMETRY_HEADING_STEP` rad (a heading read from a quaternion differs from the one
-      written by up to 5e-16 rad; the two round to the same grid value unless they straddle a
-      grid boundary, a chance of about 1e-6 per heading); positions as given (nav_msgs
-      carries them as float64). SLAM uses only the odometry's increments, wrapped, so
-      neither changes what it reads beyond 1e-9 rad.
+    A CARMEN log read as text and the same log written to a ROS bag and read back must give
+    SLAM one input: SLAM's loop-closure decisions turn on perturbations far below any sensor's
+    error (issue 28: on acapulco the ATE went from 0.158 m to 0.250 m when the scans were
+    rounded to float32, and csail's tipped again on headings 5e-16 rad apart). The scans are
+    taken as given: a log's reader gives them at sensor_msgs/LaserScan's float32 precision, as a
+    bag does (:func:`symloc.scan.message_precision`, :func:`symloc.io.carmen.read_carmen`). The
+    odometry headings are wrapped to (-pi, pi] (a quaternion does) and rounded to a grid of
+    :data:`ODOMETRY_HEADING_STEP` rad: a heading read back from the quaternion of a
+    nav_msgs/Odometry differs from the one written by up to 5e-16 rad, and the two round to the
+    same grid value unless they straddle a grid boundary (a chance of about 1e-6 per heading).
+    Positions are kept (nav_msgs carries them as float64). SLAM reads only the odometry's
+    increments, wrapped, so this moves what it reads by at most 1e-9 rad.
 
     Parameters
     ----------
     scans : sequence of LaserScan
-        N scans, ranges [m] and angles [rad].
+        N scans, ranges [m] and angles [rad]; returned as a list, unchanged.
     odometry : array of shape (N, 3)
         x [m], y [m], theta [rad] at each scan.
 
     Returns
     -------
     scans : list of LaserScan
-        The N scans at message precision.
     odometry : ndarray of shape (N, 3)
         A copy, its headings [rad] wrapped and on the grid.
     """
     odom = np.array(check_array(odometry, "odometry", shape=(None, 3)), dtype=np.float64)
     step = ODOMETRY_HEADING_STEP
     odom[:, 2] = np.round(np.asarray(wrap_angle(odom[:, 2])) / step) * step
-    return [message_precision(s) for s in scans], odom
+    return list(scans), odom
 
 
 def run_slam(
@@ -1002,8 +1000,7 @@ def run_slam(
     Parameters
     ----------
     scans : sequence of LaserScan
-        In time order; the sensor frame is the robot frame. Taken at the precision of
-        sensor_msgs/LaserScan (float32, :func:`slam_input`).
+        In time order; the sensor frame is the robot frame.
     odometry : array of shape (N, 3)
         Odometry pose at each scan (only increments are used; the first one fixes the map
         frame); headings rounded to :data:`ODOMETRY_HEADING_STEP` (:func:`slam_input`).
