@@ -217,6 +217,10 @@ def run_demo(
         rng=rng,
         workdir=workdir,
         explore_laps=1.0 if isinstance(room, Room) else 0.0,
+        # the demo's room and seed were chosen with the straight-line driver (its default room
+        # has no waypoint that driver misses): the steering one draws another map and another
+        # plain-AMCL run, and the README's table and story are of these
+        explore_route=False,
         keyframes=None if room == LONG_HALLWAY else True,
     )
     name = scen.room.name

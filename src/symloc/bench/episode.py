@@ -280,10 +280,11 @@ def drive_waypoints(
 ) -> int:
     """Drive ``body`` through ``waypoints`` (V, 2) [m], ``laps`` times round, from the nearest.
 
-    Turn on the spot towards each waypoint, then drive to it, steering at it on the true pose
-    as a teleoperator would; with ``route(position, waypoint)`` (e.g.
+    Turn on the spot towards each waypoint, then drive straight to it (open loop in the true
+    pose); with ``route(position, waypoint)`` (e.g.
     :func:`symloc.bench.exploration.free_route`), through the points ``(K, 2)`` it returns
-    instead, each in turn (none: the waypoint cannot be reached). ``on_step(true_pose)`` is
+    instead, each in turn (none: the waypoint cannot be reached), steering at each on the true
+    pose as a teleoperator would. ``on_step(true_pose)`` is
     called after every step of ``dt`` [s] (e.g. to record a scan). A waypoint the robot cannot
     reach because a motion is refused (an obstacle) or no route leads there is skipped; returns
     how many were skipped.
@@ -300,7 +301,7 @@ def drive_waypoints(
             skipped += 1
             continue
         for goal in via:
-            if not _drive_straight(body, goal, dt, speed, turn_rate, on_step):
+            if not _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None):
                 skipped += 1
                 break
     return skipped
@@ -313,9 +314,11 @@ def _drive_straight(
     speed: float,
     turn_rate: float,
     on_step: Callable[[FloatArray], Any] | None,
+    steer: bool = True,
 ) -> bool:
     """Turn on the spot towards ``goal`` (2,) [m], then drive to it, turning at each step
-    towards it; False when a motion was refused (an obstacle in the way)."""
+    towards it (``steer``; else straight on, open loop); False when a motion was refused (an
+    obstacle in the way)."""
     pose = body.pose
     turn = float(wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - pose[2]))
     for _ in range(max(1, math.ceil(abs(turn) / (turn_rate * dt)))):
@@ -334,7 +337,7 @@ def _drive_straight(
             break
         d = min(speed * dt, left)
         off = float(wrap_angle(math.atan2(goal[1] - before[1], goal[0] - before[0]) - before[2]))
-        w = float(np.clip(off / dt, -turn_rate, turn_rate)) if left > 0.05 else 0.0
+        w = float(np.clip(off / dt, -turn_rate, turn_rate)) if steer and left > 0.05 else 0.0
         body.drive(d / dt, w, dt)
         if on_step is not None:
             on_step(body.pose)

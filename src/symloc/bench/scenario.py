@@ -292,6 +292,7 @@ def build_scenario(
     regime: str = "ideal",
     keyframes: KeyframeSettings | bool | None = None,
     align_headings: HeadingAlignmentSettings | bool = False,
+    explore_route: bool = True,
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -299,7 +300,10 @@ def build_scenario(
     :data:`DEFAULT_GV` inside the textured lab), ``"hallway_40m"``, or a ready
     :class:`~symloc.sim.rooms.Room` (e.g. from a world file or the world generator).
     ``explore_laps`` > 0 adds a drive along the room's outline after the mapping stage, so that
-    SLAM sees rooms that the trip to the centre does not (concave rooms, furniture).
+    SLAM sees rooms that the trip to the centre does not (concave rooms, furniture); with
+    ``explore_route`` the driver steers around what stands in the way
+    (:func:`~symloc.bench.exploration.free_route`), else it drives straight at each waypoint
+    and skips the ones it cannot reach.
     ``regime`` names the sensors of the mapping robot (:func:`symloc.bench.sensors.sensor_setup`).
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
@@ -424,6 +428,7 @@ def build_scenario(
             dt,
             spec,
             explore_laps=explore_laps,
+            explore_route=explore_route,
             keyframes=kf_settings,
             align=align,
         )
@@ -451,6 +456,7 @@ def _map_with_slam(
     gyro: Any = None,
     *,
     explore_laps: float = 0.0,
+    explore_route: bool = True,
     keyframes: KeyframeSettings | None = None,
     align: HeadingAlignmentSettings | None = None,
 ) -> MappedPlace | None:
@@ -543,7 +549,8 @@ def _map_with_slam(
             scen.notes.append(f"mapping stage: no exploration drive ({err})")
         else:
             # steered around what stands in the way, a hand's width clear of it
-            route = free_route(scen.room, scen.hardware.robot_config.radius + 0.15)
+            radius = scen.hardware.robot_config.radius
+            route = free_route(scen.room, radius + 0.15) if explore_route else None
             refused = drive_waypoints(
                 robot, path, laps=explore_laps, dt=dt, on_step=scan_rec, route=route
             )
