@@ -21,6 +21,18 @@ def asymmetric_room() -> OccupancyGrid:
     return OccupancyGrid(d, RES)
 
 
+def twin_rooms() -> OccupancyGrid:
+    """Two identical 2.7 m rooms side by side, each with the same bar inside, in unknown
+    space: a pose in one has a rival in the other."""
+    data = np.full((60, 130), -1, np.int8)
+    for c0 in (5, 70):
+        data[5:55, c0 : c0 + 55] = 0
+        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
+        data[5:55, c0] = data[5:55, c0 + 54] = 100
+        data[20:24, c0 + 10 : c0 + 30] = 100
+    return OccupancyGrid(data, RES)
+
+
 def synthetic_scan(
     grid: OccupancyGrid, pose: np.ndarray, rng: np.random.Generator, n: int = 180
 ) -> LaserScan:

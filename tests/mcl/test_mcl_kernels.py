@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mcl_fixtures import twin_rooms
 
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import distance_field
@@ -154,13 +155,7 @@ def test_find_rival_same_with_and_without_early_exit(monkeypatch: pytest.MonkeyP
     from symloc.mcl import rival_search
 
     # two identical rooms side by side: a rival exists
-    data = np.full((60, 130), -1, np.int8)
-    for c0 in (5, 70):
-        data[5:55, c0 : c0 + 55] = 0
-        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
-        data[5:55, c0] = data[5:55, c0 + 54] = 100
-        data[20:24, c0 + 10 : c0 + 30] = 100
-    grid = OccupancyGrid(data, 0.05)
+    grid = twin_rooms()
     field = rival_search.padded_field(grid, 0.6)
     est = np.array([1.5, 1.5, 0.3])
     ang = np.linspace(-np.pi, np.pi, 90, endpoint=False)

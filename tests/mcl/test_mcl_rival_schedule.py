@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mcl_fixtures import asymmetric_room, synthetic_scan
+from mcl_fixtures import asymmetric_room, synthetic_scan, twin_rooms
 
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
@@ -72,13 +72,7 @@ def test_positions_left_out_before_the_lattice_change_no_report(
 ) -> None:
     # two identical rooms side by side, and an asymmetric one: with and without the
     # heading-free test of the positions, the same reports
-    data = np.full((60, 130), -1, np.int8)
-    for c0 in (5, 70):
-        data[5:55, c0 : c0 + 55] = 0
-        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
-        data[5:55, c0] = data[5:55, c0 + 54] = 100
-        data[20:24, c0 + 10 : c0 + 30] = 100
-    cases = [(OccupancyGrid(data, 0.05), np.array([1.5, 1.5, 0.3]))]
+    cases = [(twin_rooms(), np.array([1.5, 1.5, 0.3]))]
     cases.append((asymmetric_room(), np.array([5.0, 3.0, 0.3])))
     for grid, est in cases:
         field = rs.padded_field(grid, 2.0)
@@ -226,14 +220,8 @@ def test_the_heading_groups_above_the_lattice_change_no_report_and_score_fewer_p
     # two identical rooms (a rival), an asymmetric room (unique) and nine offices cut short
     # by max_candidates (the early exit counts the same candidates): with and without the
     # level above the lattice, the same slices and the same reports
-    data = np.full((60, 130), -1, np.int8)
-    for c0 in (5, 70):
-        data[5:55, c0 : c0 + 55] = 0
-        data[5, c0 : c0 + 55] = data[54, c0 : c0 + 55] = 100
-        data[5:55, c0] = data[5:55, c0 + 54] = 100
-        data[20:24, c0 + 10 : c0 + 30] = 100
     cases: list[tuple[OccupancyGrid, np.ndarray, dict[str, float]]] = [
-        (OccupancyGrid(data, 0.05), np.array([1.5, 1.5, 0.3]), {}),
+        (twin_rooms(), np.array([1.5, 1.5, 0.3]), {}),
         (asymmetric_room(), np.array([5.0, 3.0, 0.3]), {}),
         (_offices(), np.array([1.2, 1.0, 0.2]), {"max_candidates": 300}),
     ]
