@@ -6,7 +6,6 @@ the seed, and hold the figures the README's block reads (:mod:`symloc.bench.expe
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
@@ -20,6 +19,7 @@ from symloc.bench.experiment_results import (
     span,
 )
 from symloc.bench.results_file import load_results
+from symloc.bench.shared_data import carmen_log_file, find_carmen_dir
 from symloc.cli.main import main
 
 
@@ -89,18 +89,16 @@ def test_table3_writes_its_matrix_and_counts(tmp_path: Path) -> None:
     assert t3.counts("untextured")["trials"] == 4
 
 
-def _shared_carmen() -> Path:
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    base = Path(env) if env else Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    return base / "carmen"
+CARMEN = find_carmen_dir()  # $SYMLOC_SHARED_DATA/carmen or ../shared/data/carmen
+HAS_ACES = CARMEN is not None and carmen_log_file(CARMEN, "aces").is_file()
 
 
 @pytest.mark.skipif(
-    not (_shared_carmen() / "aces-corrected.log.gz").is_file(),
+    not HAS_ACES,
     reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
 )
 def test_symmetry_carmen_writes_counts_without_index_lists(tmp_path: Path) -> None:
-    argv = ["experiment", "symmetry-carmen", "--data", str(_shared_carmen()), "--logs", "aces"]
+    argv = ["experiment", "symmetry-carmen", "--data", str(CARMEN), "--logs", "aces"]
     doc = _run(tmp_path, [*argv, "--stride", "50", "--no-figure"])
     aces = doc["figures"]["logs"]["aces"]
     assert doc["figures"]["n_judged"] == aces["n_judged"] == 9
@@ -109,11 +107,11 @@ def test_symmetry_carmen_writes_counts_without_index_lists(tmp_path: Path) -> No
 
 
 @pytest.mark.skipif(
-    not (_shared_carmen() / "aces-corrected.log.gz").is_file(),
+    not HAS_ACES,
     reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
 )
 def test_amcl_carmen_writes_the_tracking_figures(tmp_path: Path) -> None:
-    argv = ["experiment", "amcl-carmen", "--data", str(_shared_carmen()), "--logs", "aces"]
+    argv = ["experiment", "amcl-carmen", "--data", str(CARMEN), "--logs", "aces"]
     doc = _run(tmp_path, [*argv, "--skip-global"])
     (aces,) = doc["figures"]["logs"]
     assert aces["log"] == "aces"

@@ -5,12 +5,12 @@ from __future__ import annotations
 import gzip
 import json
 import math
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from symloc.bench.shared_data import carmen_log_file, find_carmen_dir
 from symloc.cli.main import main
 from symloc.errors import ConfigurationError
 from symloc.experiments.symmetry_carmen import reason_tag, run_symmetry_carmen
@@ -140,18 +140,16 @@ def test_experiment_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     )
 
 
-def _shared_carmen() -> Path:
-    env = os.environ.get("SYMLOC_SHARED_DATA")
-    base = Path(env) if env else Path(__file__).resolve().parents[2] / ".." / "shared" / "data"
-    return base / "carmen"
+CARMEN = find_carmen_dir()  # $SYMLOC_SHARED_DATA/carmen or ../shared/data/carmen
+HAS_INTEL = CARMEN is not None and carmen_log_file(CARMEN, "intel").is_file()
 
 
 @pytest.mark.skipif(
-    not (_shared_carmen() / "intel-corrected.log.gz").is_file(),
+    not HAS_INTEL,
     reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
 )
 def test_real_intel_log_every_20th_scan_never_claims_symmetry_strictly() -> None:
-    res = run_symmetry_carmen(_shared_carmen(), ["intel"], stride=20, progress=False)
+    res = run_symmetry_carmen(CARMEN, ["intel"], stride=20, progress=False)
     intel = res["logs"]["intel"]
     assert intel["n_judged"] == 46
     # 180-degree scans: the strict judgement must not claim anything
