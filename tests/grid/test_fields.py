@@ -18,7 +18,7 @@ from symloc.grid import OccupancyGrid
 from symloc.grid.distance_field import compute_distance_field, compute_surface_distance_field
 from symloc.grid.fields import MapFields, distance_field, surface_distance_field
 from symloc.localizer.adapters import AmclTracker, GridScorer
-from symloc.localizer.build import grid_symmetries
+from symloc.localizer.build import grid_round_centre, grid_symmetries
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
 from symloc.mcl import Amcl, AmclParams, ConfidenceJudge
@@ -207,6 +207,13 @@ def test_the_map_symmetries_are_computed_once_per_map_and_kept_with_its_fields()
     MapFields.of(g).clear()
     assert grid_symmetries(g) is not first  # cleared with the fields
     assert MapFields.of(g).n_computed["map_symmetries"] == 2
+
+
+def test_the_round_centre_is_computed_once_per_map():
+    g = asymmetric_room()
+    assert grid_round_centre(g) is None
+    assert grid_round_centre(g) is None
+    assert MapFields.of(g).n_computed["round_centre"] == 1
 
 
 def test_the_lean_obstacle_distance_equals_scipys_value_for_value():

@@ -58,6 +58,13 @@ def _with_partial(grid: OccupancyGrid) -> list[MapSymmetry]:
     return map_symmetries(grid, min_partial=PARTIAL_OVERLAP)
 
 
+def grid_round_centre(grid: OccupancyGrid) -> FloatArray | None:
+    """:func:`~symloc.localizer.map_symmetry.round_centre` of ``grid`` (None: not round),
+    computed once per map and kept with its other derived fields, as
+    :func:`grid_symmetries`."""
+    return MapFields.of(grid).derived("round_centre", lambda g: round_centre(g, grid_symmetries(g)))
+
+
 def build_localizer(
     grid: OccupancyGrid,
     settings: LocalizerSettings,
@@ -108,7 +115,6 @@ def build_localizer(
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     decide = settings.localizer.decide_here
-    symmetries = grid_symmetries(grid)
     proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser) if decide else None
     return Localizer(
         AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
@@ -117,13 +123,13 @@ def build_localizer(
         settings.localizer,
         scorer=GridScorer(fields, laser_pose=laser),
         known_places=known,
-        map_symmetries=symmetries,
+        map_symmetries=grid_symmetries(grid),
         claim_gate=ClaimGate(
             fields.surface(),
             config=_with_map_error(settings.claim, map_std_xy),
             laser_pose=laser,
             scale_centre=free_centroid(grid),
-            rotation_centre=round_centre(grid, symmetries),
+            rotation_centre=grid_round_centre(grid),
         ),
         laser_pose=laser,
         proposer=proposer,
