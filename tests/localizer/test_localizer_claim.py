@@ -399,3 +399,9 @@ def test_a_round_maps_rotation_is_in_the_published_covariance(l_room):
 def test_map_rotation_std_is_checked(bad):
     with pytest.raises(ConfigurationError, match="map_rotation_std"):
         ClaimConfig(map_rotation_std=bad)
+
+
+@pytest.mark.parametrize("bad", [(math.nan, 0.0), (0.0, math.inf)])
+def test_a_non_finite_rotation_centre_is_refused(l_room, bad):
+    with pytest.raises(ConfigurationError, match="rotation_centre"):
+        ClaimGate(surface_distance_field(l_room[1]), ALPHAS, rotation_centre=bad)

@@ -112,7 +112,7 @@ class ClaimConfig:
         error, and the scale term below carries what that estimate cannot see (2 cm before:
         on 84 dev trials of seven families, 1 cm with the scale term claimed in 64 where 2 cm
         without it claimed in 61, both never wrong, coverage 1.00). A round room's rotation
-        error is not in it: there the heading comes from the camera or a piece of furniture.
+        error is not in it: ``map_rotation_std`` below carries it.
     map_scale_std : float
         The map's scale error (std, a fraction: 0.01 is 1 %), 0 to leave it out. A lidar whose
         ranges read a little long or short builds, by laser SLAM, a map that is a scaled copy
