@@ -71,6 +71,7 @@ from symloc.mcl import Amcl, AmclParams
 from symloc.mcl.beam_model import raycast_grid
 from symloc.mcl.kld_sampling import pf_z_quantile
 from symloc.odometry import OdometryReading
+from symloc.runtime import PROCESS_ENV, configure_process
 from symloc.scan import LaserScan
 
 FloatArray = NDArray[np.float64]
@@ -733,6 +734,10 @@ def main() -> int:
     args = ap.parse_args()
     if args.worker:
         return worker(Path(args.worker), args.seed, judge=args.judge)
+    # symloc's workers start as the symloc command does (one BLAS thread, symloc.runtime);
+    # the peer's process does not link a BLAS
+    configure_process()
+    print(f"# symloc workers' environment: {dict(PROCESS_ENV)} (symloc.runtime)")
     if args.logs is None:  # every log in the folder
         folder = Path(args.carmen) if args.carmen else Path(".")
         args.logs = sorted(p.name.split("-corrected")[0] for p in folder.glob("*-corrected.log.gz"))

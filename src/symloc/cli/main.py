@@ -17,6 +17,7 @@ from types import ModuleType
 
 from symloc import __version__
 from symloc.errors import SymlocError
+from symloc.runtime import configure_process
 
 __all__ = ["build_parser", "discover", "main"]
 
@@ -51,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``symloc`` command; returns the process exit code."""
+    configure_process()  # before the commands import NumPy (see symloc.runtime)
     parser = build_parser()
     args = parser.parse_args(argv)
     # the command line as given, for the provenance of the results files a command writes

@@ -123,7 +123,14 @@ class OccupancyGrid:
     @property
     def free_mask(self) -> NDArray[np.bool_]:
         """``(H, W)`` True where 0 <= occupancy < free_thresh."""
-        return (self.data >= 0) & (self.data < self.free_thresh * 100.0)
+        return self.is_free(self.data)
+
+    def is_free(self, values: ArrayLike) -> NDArray[np.bool_]:
+        """:attr:`free_mask`'s test on some of this grid's occupancy ``values`` (any shape):
+        for a few cells or a sub-sampled view without the whole map's mask."""
+        v = np.asarray(values)
+        out: NDArray[np.bool_] = (v >= 0) & (v < self.free_thresh * 100.0)
+        return out
 
     @property
     def unknown_mask(self) -> NDArray[np.bool_]:

@@ -412,10 +412,7 @@ def scan_consistency(
     grid = field.grid
     cell = grid.world_to_cell(p[None, :2])
     # one cell's free test (grid.free_mask would build the whole map's mask on every scan)
-    free = False
-    if bool(grid.in_bounds(cell)[0]):
-        v = float(grid.data[cell[0, 0], cell[0, 1]])
-        free = 0.0 <= v < grid.free_thresh * 100.0
+    free = bool(grid.in_bounds(cell)[0]) and bool(grid.is_free(grid.data[cell[0, 0], cell[0, 1]]))
     r, a = beams.ranges[beams.hit], beams.angles[beams.hit]
     if r.size == 0:
         return ScanConsistency(0.0, 0, tol, free, np.zeros((0, 2)))

@@ -94,7 +94,7 @@ class FreeSpaceSampler:
                 k = 0
                 for r in range(0, g.height, rows):
                     d = g.data[r : r + rows]
-                    idx = np.flatnonzero((d >= 0) & (d < g.free_thresh * 100.0))
+                    idx = np.flatnonzero(g.is_free(d))
                     out[k : k + idx.size] = idx + r * g.width
                     k += idx.size
                 self._free_cells = out
@@ -102,7 +102,7 @@ class FreeSpaceSampler:
 
     def _free_flags(self, flat: NDArray[np.int8]) -> NDArray[np.bool_]:
         """Free (as :attr:`OccupancyGrid.free_mask`) flags of some of the grid's cells."""
-        return (flat >= 0) & (flat < self.grid.free_thresh * 100.0)
+        return self.grid.is_free(flat)
 
     def _block_starts(self) -> NDArray[np.int64]:
         """``(n_blocks + 1,)``: free cells before each block of :data:`FREE_BLOCK` cells of the

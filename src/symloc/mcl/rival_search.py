@@ -399,8 +399,8 @@ def coarse_lattice(grid: OccupancyGrid, stride: int) -> FloatArray:
     :class:`~symloc.grid.fields.MapFields`."""
 
     def compute(g: OccupancyGrid) -> FloatArray:
-        free = g.free_mask
-        rows, cols = np.nonzero(free[stride // 2 :: stride, stride // 2 :: stride])
+        # the free test on the lattice's cells only (the whole map's mask is stride^2 more)
+        rows, cols = np.nonzero(g.is_free(g.data[stride // 2 :: stride, stride // 2 :: stride]))
         cells = np.column_stack([rows * stride + stride // 2, cols * stride + stride // 2])
         xy: FloatArray = g.cell_to_world(cells)
         xy.setflags(write=False)
