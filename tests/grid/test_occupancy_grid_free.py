@@ -13,4 +13,5 @@ def test_is_free_matches_free_mask_on_any_block() -> None:
     assert np.array_equal(g.is_free(g.data), g.free_mask)
     assert g.free_mask.tolist() == [[False, True, True], [True, False, False], [False] * 3]
     assert np.array_equal(g.is_free(g.data[::2, ::2]), g.free_mask[::2, ::2])
-    assert bool(g.is_free(g.data[0, 1])) and not bool(g.is_free(g.data[1, 1]))
+    assert bool(g.is_free(g.data[0, 1]))
+    assert not bool(g.is_free(g.data[1, 1]))
