@@ -755,6 +755,7 @@ def main() -> int:
                     k: getattr(args, k)
                     for k in ("seed", "rounds", "logs", "large", "global_particles", "judge")
                 }
+                settings["symloc_env"] = dict(PROCESS_ENV)
                 settings["peer"] = (
                     "the noetic amcl core (benchmarks/peers/amcl_core)" if args.peer else None
                 )
