@@ -175,7 +175,10 @@ def test_a_partly_hidden_scan_waits_for_patience(l_room) -> None:
     assert tracker.relocalized == 0
     clear = simulate_scan(room.world, truth, RPLIDAR_A2, 99)
     standings = [gate.step(result, np.zeros(3), clear, tracker, print).standing for _ in range(2)]
-    assert standings == [Standing.HOLD, Standing.PUBLISH]  # resumed after resume_after scans
+    # resumed after resume_after scans, as a first claim: the caller checks the pose's copies
+    # and confirms it (the gate has not)
+    assert standings == [Standing.HOLD, Standing.FIRST]
+    assert not gate.suspended
 
 
 def test_anchor_reports_a_jump_of_the_filter(l_room) -> None:
@@ -321,6 +324,62 @@ def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_n
         robot.step(0.1, 0.3, 0.1)
     assert published == []
     assert any("rotated cop" in line or "symmetric" in line for line in loc.log)
+
+
+def test_a_robot_carried_to_the_half_turned_copy_is_not_resumed_there() -> None:
+    """Tracking in a rectangle from the operator's pose, the robot is carried to the half-turned
+    copy of where it was while someone blocks the lidar (claims suspended); the room then
+    looks exactly as it did from the carried pose. Resuming is checked against the map's
+    rotated copies like a first claim, so the carried pose, now half a turn wrong, is never
+    published (it was, before resumptions were checked)."""
+    from symloc.localizer.map_symmetry import map_symmetries
+    from symloc.sim.rooms import rectangle_room
+
+    room = rectangle_room(4.0, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    syms = map_symmetries(grid)
+    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 3)
+    loc = Localizer(
+        AmclTracker(amcl),
+        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
+        _NoPlaces(),
+        scorer=GridScorer(grid),
+        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
+        map_symmetries=syms,
+    )
+    centre = np.asarray(room.center, dtype=np.float64)
+    robot = DiffDriveRobot(
+        np.array([*(centre + np.array([-1.1, 0.4])), 0.4]),
+        RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)),
+        5,
+    )
+    loc.set_pose(robot.pose.copy(), COV)
+    rng = np.random.default_rng(9)
+    tracked_before = 0
+    wrong = []
+    for k in range(80):
+        if k == 30:  # carried to the copy of its pose turned half a turn about the centre
+            p = robot.pose
+            robot.teleport(np.array([*(2.0 * centre - p[:2]), p[2] + math.pi]))
+        scan = simulate_scan(room.world, robot.pose, RPLIDAR_A2, rng)
+        if k in (30, 31, 32):  # a person right in front of the lidar meanwhile
+            r = scan.ranges.copy()
+            r[: int(0.8 * r.size)] = 0.4
+            scan = scan.with_ranges(r)
+        est = loc.update(robot.odometry(), scan)
+        if est.pose is not None:
+            e = est.pose - robot.pose
+            off = math.hypot(e[0], e[1]) > 0.1 or abs(math.remainder(e[2], 2 * math.pi)) > 0.09
+            if k < 30:
+                tracked_before += 1
+            elif off:
+                wrong.append(k)
+        robot.step(0.0, 0.3, 0.1)  # turn on the spot
+    assert tracked_before >= 25  # the operator's pose was confirmed and published
+    assert any("claims suspended" in line for line in loc.log)
+    assert any("claims resumed" in line for line in loc.log)
+    assert wrong == []
+    assert any("symmetric" in line or "rotated cop" in line for line in loc.log)
 
 
 def test_the_map_scale_error_grows_with_the_distance_from_the_centre(l_room) -> None:

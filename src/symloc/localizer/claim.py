@@ -36,7 +36,8 @@ scan goes through :meth:`ClaimGate.check`:
 The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
 when the last confirmed pose, carried by odometry, is confirmed ``resume_after`` scans in a row
-(a person walked past), and after ``patience`` failing scans since the suspension (counted, not
+(a person walked past) and, like a first claim, no rotated copy of it explains the scan as well
+(a robot carried to a look-alike place fits the carried pose too), and after ``patience`` failing scans since the suspension (counted, not
 necessarily in a row) the pose is given up and the
 filter relocalizes globally (the robot was carried away). An operator's initial pose chose among
 symmetric copies, so while the filter stays on it no copy check is needed.
@@ -276,8 +277,9 @@ class Standing(enum.Enum):
     """What the localizer does with one scan while it tracks (:meth:`ClaimGate.step`)."""
 
     PUBLISH = "publish"  # the claim is confirmed: publish its pose
-    FIRST = "first"  # a first claim (no chain, not the operator's pose): check rotated copies,
-    # then publish it and call ClaimGate.confirmed
+    FIRST = "first"  # a first claim (no chain, not the operator's pose; or the tracked pose
+    # fitting again after a suspension): check rotated copies, then publish it and call
+    # ClaimGate.confirmed
     HOLD = "hold"  # publish nothing (withheld, or claims suspended); the pose is kept
     UNEARNED = "unearned"  # a pose the laser never confirmed is given up: the pose is lost
     RELOCALIZE = "relocalize"  # suspended for ``patience`` scans: the tracker was spread
@@ -461,8 +463,9 @@ class ClaimGate:
         """The claim at this scan while tracking (call :meth:`observe` first).
 
         A withdrawn claim or a jump of the filter suspends claims: they resume only when the
-        last confirmed pose, carried by odometry, fits the scan again (a person walked past);
-        after ``patience`` scans without that the pose is given up and ``tracker``
+        last confirmed pose, carried by odometry, fits the scan again (a person walked past),
+        and that scan's ruling is :attr:`Standing.FIRST` (the caller checks the pose's rotated
+        copies before it publishes and confirms it); after ``patience`` scans without that the pose is given up and ``tracker``
         relocalizes globally (the robot was carried away). While suspended, ``tracker`` is
         made to update at every scan. ``note`` hears of suspensions and resumptions.
         """
@@ -493,6 +496,7 @@ class ClaimGate:
 
     def _suspend(self, why: str, tracker: Tracker, note: Callable[[str], None]) -> None:
         self._suspended = True
+        self._operator = None  # the operator chose among copies before whatever this was
         self._patience.reset()
         self._resume.reset()
         self._gross.reset()
@@ -521,8 +525,11 @@ class ClaimGate:
                 tracker.initialize_pose(claim.pose, claim.covariance)
             self.anchor(claim.pose, claim.covariance, odom)
             note("claims resumed: the tracked pose fits the scan again")
-            self.confirmed(claim, odom)
-            return Ruling(Standing.PUBLISH, claim, claim.reason)
+            # The suspension was something the gate could not explain. A robot carried to a
+            # look-alike place (a near copy of the room turned half a turn) sees a scan that
+            # fits the carried pose as well as the truth's: the laser cannot tell, so the pose
+            # is checked against its copies like a first claim, and confirmed by the caller.
+            return Ruling(Standing.FIRST, claim, claim.reason)
         self._resume.miss()
         cfg = self.config
         fit = claim.match.inlier_fraction if claim.match is not None else math.nan
