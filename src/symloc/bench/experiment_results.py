@@ -18,6 +18,7 @@ from symloc.bench.localization_results import FiguresChangedError
 
 __all__ = [
     "AmclSymmetricFigures",
+    "BenchFigures",
     "ExperimentFigures",
     "KeyframesFigures",
     "Table1Figures",
@@ -73,6 +74,41 @@ class ExperimentFigures:
         if machine:
             text += f" ({describe_machine(d['machine'])}; {describe_load(d['load'])})"
         return text
+
+
+class BenchFigures(ExperimentFigures):
+    """A results file of a benchmark script (``python benchmarks/NAME.py ... --results PATH``)
+    whose ``figures`` hold a list of ``rows`` (one dict per measured line of its table)."""
+
+    def __init__(self, doc: Mapping[str, Any], name: str) -> None:
+        super().__init__(doc)
+        self.name = name
+
+    def source(self) -> str:
+        """The run in words for a README paragraph: ``"`python benchmarks/...`, commit 7a9cbc1,
+        2026-11-28, 2 cores, ...; load average 0.9 at the start, ...; results file
+        [docs/results/NAME.json](docs/results/NAME.json)"``."""
+        from symloc.bench.results_file import describe_load, describe_machine
+
+        d = self.doc
+        path = f"docs/results/{self.name}.json"
+        return (
+            f"`{d['command']}`, commit {d['commit']}, {d['date'][:10]}, "
+            f"{describe_machine(d['machine'])}; {describe_load(d['load'])}; "
+            f"results file [{path}]({path})"
+        )
+
+    def rows(self, **match: Any) -> list[Mapping[str, Any]]:
+        """The rows whose fields equal ``match``; raises :class:`FiguresChangedError` when
+        none does (the README names a row the benchmark no longer measures)."""
+        out = [r for r in self.figures["rows"] if all(r.get(k) == v for k, v in match.items())]
+        if not out:
+            raise FiguresChangedError(f"{self.name}: no row with {match}")
+        return out
+
+    def row(self, **match: Any) -> Mapping[str, Any]:
+        """The one row matching ``match`` (the first when several do)."""
+        return self.rows(**match)[0]
 
 
 class Table1Figures(ExperimentFigures):

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RunClock", "command_line", "commit", "machine", "utc_now"]
+__all__ = ["RunClock", "command_line", "commit", "cpus_allowed", "machine", "utc_now"]
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +48,16 @@ def commit(where: Path = _SOURCE) -> str:
         log.debug("no git commit for %s: %s", where, err)
         return "unknown (not a git checkout)"
     return f"{head}+dirty" if dirty else head
+
+
+def cpus_allowed() -> list[int] | None:
+    """The cores this process may run on (``taskset``, cgroups' cpusets) when they are fewer
+    than the machine's, else ``None`` (every core, or a system that does not say)."""
+    try:
+        allowed = sorted(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return None
+    return allowed if len(allowed) < (os.cpu_count() or len(allowed)) else None
 
 
 def utc_now() -> str:
