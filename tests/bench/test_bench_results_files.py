@@ -1,0 +1,74 @@
+"""Benchmark scripts' ``--results PATH``: a small run writes a results file that the README's
+blocks render from.
+
+Each test runs one script of ``benchmarks/`` in a child process with a tiny input, checks the
+file's provenance and rows, then puts it in place of the committed one in a copy of README.md
+and ``docs/results`` and renders the copy (:func:`symloc.readme.render`): the README's block
+must still render from a fresh file. No timing is asserted.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from symloc.bench.results_file import PROVENANCE, load_results
+
+pytest.importorskip("cogapp", reason="cogapp renders the README's blocks (the [test] extra)")
+
+from symloc.readme import render
+
+ROOT = Path(__file__).resolve().parents[2]
+
+pytestmark = pytest.mark.slow
+
+
+def run_bench(tmp_path: Path, script: str, *args: str) -> dict[str, Any]:
+    """Run ``benchmarks/SCRIPT`` with ``args`` and ``--results``; return the file, validated."""
+    out = tmp_path / "results.json"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), *filter(None, [env.get("PYTHONPATH")])])
+    proc = subprocess.run(
+        [sys.executable, f"benchmarks/{script}", *args, "--results", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    doc = load_results(out)
+    for key in PROVENANCE:
+        assert doc[key], key
+    assert doc["command"].split()[:2] in (["python", f"benchmarks/{script}"], ["taskset", "-c"])
+    return doc
+
+
+def renders_with(tmp_path: Path, name: str, doc_path: Path) -> str:
+    """Render a copy of the README with ``doc_path`` as ``docs/results/NAME.json``; returns
+    the rendered text."""
+    copy = tmp_path / "readme"
+    copy.mkdir()
+    shutil.copy(ROOT / "README.md", copy / "README.md")
+    shutil.copytree(ROOT / "docs" / "results", copy / "docs" / "results")
+    shutil.copy(doc_path, copy / "docs" / "results" / f"{name}.json")
+    render(copy / "README.md")
+    return (copy / "README.md").read_text(encoding="utf-8")
+
+
+def test_bench_symmetry_results(tmp_path: Path) -> None:
+    doc = run_bench(tmp_path, "bench_symmetry.py", "--repeats", "2", "--rounds", "1")
+    rows = doc["figures"]["rows"]
+    assert {(r["beams"], r["room"]) for r in rows if r["method"] == "judge_symmetry"} == {
+        (b, room) for b in (360, 800) for room in ("hexagon", "circle", "square+box")
+    }
+    assert all(r["cpu_ms"] > 0 for r in rows)
+    text = renders_with(tmp_path, "bench_symmetry", tmp_path / "results.json")
+    assert "--repeats 2 --rounds 1" in text
