@@ -72,3 +72,19 @@ def test_bench_symmetry_results(tmp_path: Path) -> None:
     assert all(r["cpu_ms"] > 0 for r in rows)
     text = renders_with(tmp_path, "bench_symmetry", tmp_path / "results.json")
     assert "--repeats 2 --rounds 1" in text
+
+
+def test_bench_vision_results(tmp_path: Path) -> None:
+    """With ``SYMLOC_DBOW3_DRIVER`` (benchmarks/peers/dbow3/build.sh's driver) the same-run rows
+    are measured too and the README's block renders; without it only the file is checked."""
+    driver = os.environ.get("SYMLOC_DBOW3_DRIVER")
+    peer = ["--dbow3", driver] if driver else []
+    doc = run_bench(tmp_path, "bench_vision.py", "--repeats", "2", "--clock", "cpu", *peer)
+    rows = doc["figures"]["rows"]
+    assert all(r["symloc_ms"] > 0 for r in rows)
+    assert any(r["dbow3"] == "stored" for r in rows)
+    if driver:
+        same = [r for r in rows if r["dbow3"] == "same run"]
+        assert len(same) == 3
+        assert all(r["bow_vectors_equal"] == r["images"] for r in same)
+        assert "--repeats 2" in renders_with(tmp_path, "bench_vision", tmp_path / "results.json")
