@@ -8,13 +8,27 @@
 # usage: benchmarks/peers/amcl_core/build.sh NAVIGATION/amcl OUT_DIR
 #   then: python benchmarks/bench_amcl.py --carmen ../shared/data/carmen --large \
 #         --peer OUT_DIR/amcl_driver
+#
+# FAIR=1 builds bench_amcl's --peer-fair instead: the same core with fair_resampler.patch
+# applied to a copy of its source in OUT_DIR/amcl-fair (pf.c's resampler finds each sample by
+# binary search in the cumulative weights instead of its linear scan: the same samples, in
+# O(N log N)), e.g. build.sh NAVIGATION/amcl OUT_FAIR; bench_amcl.py --peer-fair
+# OUT_FAIR/amcl_driver.
 set -euo pipefail
 AMCL=${1:?the amcl package folder of a navigation checkout}
 OUT=${2:?output folder}
 HERE=$(cd "$(dirname "$0")" && pwd)
-SRC="$AMCL/src/amcl"
 mkdir -p "$OUT"
+AMCL=$(cd "$AMCL" && pwd)
 cd "$OUT"
+if [ "${FAIR:-0}" = 1 ]; then
+  rm -rf amcl-fair
+  mkdir amcl-fair
+  cp -r "$AMCL/include" "$AMCL/src" amcl-fair/
+  patch -p1 -d amcl-fair < "$HERE/fair_resampler.patch"
+  AMCL="$PWD/amcl-fair"
+fi
+SRC="$AMCL/src/amcl"
 FLAGS=(-O2 -DNDEBUG -DHAVE_DRAND48 -I"$AMCL/include" -I"$AMCL/src/include")
 for f in map/map.c map/map_range.c pf/pf.c pf/pf_kdtree.c pf/pf_pdf.c pf/pf_vector.c pf/eig3.c; do
   cc "${FLAGS[@]}" -c "$SRC/$f" -o "$(basename "${f%.c}").o"
