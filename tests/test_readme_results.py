@@ -231,6 +231,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "bench_localization_test_realistic_15d826e",
         "bench_symmetry",
         "bench_vision",
+        "bench_amcl_update",
     ],
 )
 def test_each_new_results_file_is_needed_by_the_readme(copy: Path, name: str) -> None:

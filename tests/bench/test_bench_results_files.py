@@ -88,3 +88,19 @@ def test_bench_vision_results(tmp_path: Path) -> None:
         assert len(same) == 3
         assert all(r["bow_vectors_equal"] == r["images"] for r in same)
         assert "--repeats 2" in renders_with(tmp_path, "bench_vision", tmp_path / "results.json")
+
+
+def test_bench_amcl_update_results(tmp_path: Path) -> None:
+    """With ``SYMLOC_AMCL_PEER`` and ``SYMLOC_AMCL_PEER_FAIR`` (benchmarks/peers/amcl_core's
+    drivers) the peers run too and the README's block renders; without, symloc's rows only."""
+    stock, fair = os.environ.get("SYMLOC_AMCL_PEER"), os.environ.get("SYMLOC_AMCL_PEER_FAIR")
+    peers = ["--peer", stock, "--peer-fair", fair] if stock and fair else []
+    args = ["--sizes", "300", "600", "--updates", "3", "--rounds", "1", *peers]
+    doc = run_bench(tmp_path, "bench_amcl.py", *args)
+    rows = doc["figures"]["rows"]
+    assert {r["particles"] for r in rows} == {300, 600}
+    assert all(r["cpu_ms_per_update"] > 0 for r in rows)
+    if peers:
+        assert {r["side"] for r in rows} == {"symloc", "C++", "C++ fair"}
+        text = renders_with(tmp_path, "bench_amcl_update", tmp_path / "results.json")
+        assert "--sizes 300 600" in text
