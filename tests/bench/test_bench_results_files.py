@@ -104,3 +104,23 @@ def test_bench_amcl_update_results(tmp_path: Path) -> None:
         assert {r["side"] for r in rows} == {"symloc", "C++", "C++ fair"}
         text = renders_with(tmp_path, "bench_amcl_update", tmp_path / "results.json")
         assert "--sizes 300 600" in text
+
+
+def test_bench_fields_results(tmp_path: Path) -> None:
+    doc = run_bench(tmp_path, "bench_fields.py", "--rows", "300", "--cols", "240")
+    rows = doc["figures"]["rows"]
+    assert [r["field"] for r in rows] == ["distance", "surface"]
+    assert all(r["peak_mib"] >= r["before_mib"] > 0 for r in rows)
+    assert "--rows 300 --cols 240" in renders_with(
+        tmp_path, "bench_fields", tmp_path / "results.json"
+    )
+
+
+def test_bench_fields_replay_results(tmp_path: Path) -> None:
+    args = ["--replay", str(tmp_path / "big"), "--rows", "300", "--cols", "300", "--scans", "2"]
+    doc = run_bench(tmp_path, "bench_fields.py", *args)
+    (row,) = doc["figures"]["rows"]
+    assert row["exit_code"] in (0, 3)
+    assert row["peak_rss_mib"] > 0
+    assert set(row["sha256_16"]) == {"replay_scans.csv", "replay_scans.tum"}
+    assert "--scans 2" in renders_with(tmp_path, "bench_fields_replay", tmp_path / "results.json")
