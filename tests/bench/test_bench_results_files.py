@@ -124,3 +124,11 @@ def test_bench_fields_replay_results(tmp_path: Path) -> None:
     assert row["peak_rss_mib"] > 0
     assert set(row["sha256_16"]) == {"replay_scans.csv", "replay_scans.tum"}
     assert "--scans 2" in renders_with(tmp_path, "bench_fields_replay", tmp_path / "results.json")
+
+
+def test_bench_first_scan_results(tmp_path: Path) -> None:
+    doc = run_bench(tmp_path, "bench_first_scan.py", "--repeats", "1")
+    rows = doc["figures"]["rows"]
+    assert [r["cache"] for r in rows] == ["cold", "warm"]
+    assert all(r["first_wall_s"] > 0 and isinstance(r["aot_kernels"], bool) for r in rows)
+    assert "--repeats 1" in renders_with(tmp_path, "bench_first_scan", tmp_path / "results.json")
