@@ -132,3 +132,12 @@ def test_bench_first_scan_results(tmp_path: Path) -> None:
     assert [r["cache"] for r in rows] == ["cold", "warm"]
     assert all(r["first_wall_s"] > 0 and isinstance(r["aot_kernels"], bool) for r in rows)
     assert "--repeats 1" in renders_with(tmp_path, "bench_first_scan", tmp_path / "results.json")
+
+
+def test_bench_sim_results(tmp_path: Path) -> None:
+    doc = run_bench(tmp_path, "bench_sim.py", "--repeats", "2")
+    rows = doc["figures"]["rows"]
+    assert any(r["what"] == "camera render 640x480" for r in rows)
+    assert all(r["cpu_ms"] > 0 and r["target_ms"] > 0 for r in rows)
+    assert set(doc["figures"]["orb_keypoints"]) == {"textured lab", "plain lab"}
+    assert "--repeats 2" in renders_with(tmp_path, "bench_sim", tmp_path / "results.json")
