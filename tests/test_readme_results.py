@@ -236,6 +236,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "bench_fields_replay",
         "bench_first_scan",
         "bench_sim",
+        "bench_global_search",
     ],
 )
 def test_each_new_results_file_is_needed_by_the_readme(copy: Path, name: str) -> None:

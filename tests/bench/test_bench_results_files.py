@@ -141,3 +141,12 @@ def test_bench_sim_results(tmp_path: Path) -> None:
     assert all(r["cpu_ms"] > 0 and r["target_ms"] > 0 for r in rows)
     assert set(doc["figures"]["orb_keypoints"]) == {"textured lab", "plain lab"}
     assert "--repeats 2" in renders_with(tmp_path, "bench_sim", tmp_path / "results.json")
+
+
+def test_bench_global_search_results(tmp_path: Path) -> None:
+    doc = run_bench(tmp_path, "bench_global_search.py", "--scans", "2", "--maps", "room")
+    rows = doc["figures"]["rows"]
+    assert [r["map"] for r in rows] == ["room l10", "room square10+box"]
+    assert all(r["scans"] == 2 and r["cpu_ms_median"] > 0 for r in rows)
+    text = renders_with(tmp_path, "bench_global_search", tmp_path / "results.json")
+    assert "--scans 2 --maps room" in text
