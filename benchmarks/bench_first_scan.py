@@ -117,10 +117,25 @@ def main() -> int:
     from symloc.bench.provenance import RunClock
 
     clock = RunClock()
-    rows: list[dict[str, Any]] = []
+    with tempfile.TemporaryDirectory(prefix="symloc-bench-first-scan-") as tmp:
+        rows = measure(Path(tmp), args)
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {"seed": args.seed, "repeats": args.repeats, "warm_up": args.warm}
+        written = write_bench_results(
+            args.results, clock=clock, settings=settings, figures={"rows": rows}
+        )
+        _LOG.info("wrote %s", written)
+    return 0
+
+
+def measure(work: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Record the simulated run in ``work`` and time the node's start in fresh processes
+    (``args``: seed, repeats, warm); log the table and return its rows."""
     from symloc.bench.sim_record import record_sim_run
 
-    work = Path(tempfile.mkdtemp(prefix="symloc-bench-first-scan-"))
+    rows: list[dict[str, Any]] = []
     rec = record_sim_run(work / "run", seed=args.seed, max_time=10.0)
     _LOG.info(
         "# recorded %s; load %.2f; %d cores; %s",
@@ -142,7 +157,13 @@ def main() -> int:
     for case in ("cold", "warm"):
         for k in range(args.repeats if case == "warm" else 1):
             env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-            cmd = [sys.executable, __file__, "--child", str(rec.bag), str(rec.params_path)]
+            cmd = [
+                sys.executable,
+                str(Path(__file__).resolve()),
+                "--child",
+                str(rec.bag),
+                str(rec.params_path),
+            ]
             cmd += [] if args.warm else ["--no-warm-up"]
             out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
             r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -166,15 +187,7 @@ def main() -> int:
                     "aot_kernels": r["aot_kernels"],
                 }
             )
-    if args.results is not None:
-        from symloc.bench.results_file import write_bench_results
-
-        settings = {"seed": args.seed, "repeats": args.repeats, "warm_up": args.warm}
-        written = write_bench_results(
-            args.results, clock=clock, settings=settings, figures={"rows": rows}
-        )
-        _LOG.info("wrote %s", written)
-    return 0
+    return rows
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ Maps:
 
 (a) ``room``: a 10 m x 10 m L-shaped room and a 10 m square with one box (bench size, 0.05 m),
     realistic RPLIDAR A2 scans from ``symloc.sim`` at random free poses;
-(b) ``carmen``: each log of ``--carmen DIR`` (default ``../shared/data/carmen`` if present;
+(b) ``carmen``: each log of ``--carmen DIR`` (default ``$SYMLOC_SHARED_DATA/carmen`` or
+    ``../shared/data/carmen``, :func:`symloc.bench.shared_data.find_carmen_dir`;
     ``--logs``, default intel) mapped from its scans at the corrected poses as
     ``symloc experiment amcl-carmen`` does (log-odds, 5 cm), its own scans (every
     ``len // scans``-th) searched;
@@ -176,14 +177,12 @@ def main() -> int:
         grid, cases = room_cases(kind, args.scans, args.seed)
         rows.append(run(f"room {kind}", grid, cases, cfg, (0.2, math.radians(2.0))))
 
-    folder = (
-        Path(args.carmen)
-        if args.carmen
-        else Path(__file__).resolve().parents[2] / "shared/data/carmen"
-    )
+    from symloc.bench.shared_data import find_carmen_dir
+
+    folder = Path(args.carmen) if args.carmen else find_carmen_dir()
     if "carmen" not in args.maps:
         pass
-    elif folder.is_dir():
+    elif folder is not None and folder.is_dir():
         from symloc.experiments.amcl_carmen import build_map
         from symloc.io.carmen import read_carmen
 

@@ -10,6 +10,7 @@ says otherwise, so the sentence cannot go stale either.
 
 from __future__ import annotations
 
+import datetime as _dt
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -84,17 +85,35 @@ class BenchFigures(ExperimentFigures):
         super().__init__(doc)
         self.name = name
 
-    def source(self) -> str:
+    def interval(self) -> tuple[_dt.datetime, _dt.datetime] | None:
+        """When the run went on (UTC): its ``date`` (the end, to the second) minus its
+        ``wall_s``; ``None`` when the file has no time of day or no wall time."""
+        d = self.doc
+        if len(d["date"]) <= 10 or d.get("wall_s") is None:
+            return None
+        end = _dt.datetime.fromisoformat(d["date"].replace("Z", "+00:00"))
+        return end - _dt.timedelta(seconds=float(d["wall_s"])), end
+
+    def overlaps(self, other: BenchFigures) -> bool:
+        """Whether this run and ``other`` went on at the same time (to the second)."""
+        a, b = self.interval(), other.interval()
+        return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+
+    def source(self, beside: Sequence[BenchFigures] = ()) -> str:
         """The run in words for a README paragraph: ``"`python benchmarks/...`, commit 7a9cbc1,
         2026-11-28, 2 cores, ...; load average 0.9 at the start, ...; results file
-        [docs/results/NAME.json](docs/results/NAME.json)"``."""
+        [docs/results/NAME.json](docs/results/NAME.json)"``; each run of ``beside`` that went on
+        at the same time is named (``"while `python benchmarks/soak_node.py ...` ran"``)."""
         from symloc.bench.results_file import describe_load, describe_machine
 
         d = self.doc
         path = f"docs/results/{self.name}.json"
+        meanwhile = "".join(
+            f", while `{o['command']}` ran" for o in beside if o is not self and self.overlaps(o)
+        )
         return (
             f"`{d['command']}`, commit {d['commit']}, {d['date'][:10]}, "
-            f"{describe_machine(d['machine'])}; {describe_load(d['load'])}; "
+            f"{describe_machine(d['machine'])}; {describe_load(d['load'])}{meanwhile}; "
             f"results file [{path}]({path})"
         )
 
