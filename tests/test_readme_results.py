@@ -237,6 +237,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "bench_first_scan",
         "bench_sim",
         "bench_global_search",
+        "soak_node",
     ],
 )
 def test_each_new_results_file_is_needed_by_the_readme(copy: Path, name: str) -> None:

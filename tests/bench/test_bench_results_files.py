@@ -150,3 +150,13 @@ def test_bench_global_search_results(tmp_path: Path) -> None:
     assert all(r["scans"] == 2 and r["cpu_ms_median"] > 0 for r in rows)
     text = renders_with(tmp_path, "bench_global_search", tmp_path / "results.json")
     assert "--scans 2 --maps room" in text
+
+
+def test_soak_node_results(tmp_path: Path) -> None:
+    args = ["--minutes", "0.05", "--window", "0.025", "--map-change", "1"]
+    doc = run_bench(tmp_path, "soak_node.py", *args)
+    verdict = doc["figures"]["verdict"]
+    assert verdict["scans"] == sum(w["scans"] for w in doc["figures"]["rows"]) > 0
+    assert verdict["maps_sent"] >= 1
+    assert len(verdict["rss_mb_at_1min_max_end"]) == 3
+    assert "--map-change 1" in renders_with(tmp_path, "soak_node", tmp_path / "results.json")
