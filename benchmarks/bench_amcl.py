@@ -773,7 +773,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="symloc-bench-amcl-") as d:
         if args.carmen or args.large:
             # the parent's alone: the worker process imports only what a symloc user's does
-            from symloc.bench.provenance import RunClock
+            from symloc.bench.provenance import RunClock, peer_source
             from symloc.bench.results_file import write_run_results
 
             clock = RunClock()
@@ -784,7 +784,9 @@ def main() -> int:
                     for k in ("seed", "rounds", "logs", "large", "global_particles", "judge")
                 }
                 settings["peer"] = (
-                    "the noetic amcl core (benchmarks/peers/amcl_core)" if args.peer else None
+                    peer_source(args.peer, "the noetic amcl core (benchmarks/peers/amcl_core)")
+                    if args.peer
+                    else None
                 )
                 written = write_run_results(
                     args.results,
@@ -797,7 +799,7 @@ def main() -> int:
                 )
                 print(f"wrote {written}")
         else:
-            from symloc.bench.provenance import RunClock
+            from symloc.bench.provenance import RunClock, peer_source
             from symloc.bench.results_file import write_bench_results
 
             clock = RunClock()
@@ -805,10 +807,15 @@ def main() -> int:
             if args.results:
                 settings = {k: getattr(args, k) for k in ("seed", "rounds", "sizes", "updates")}
                 settings["peer"] = (
-                    "the noetic amcl core (benchmarks/peers/amcl_core)" if args.peer else None
+                    peer_source(args.peer, "the noetic amcl core (benchmarks/peers/amcl_core)")
+                    if args.peer
+                    else None
                 )
                 settings["peer_fair"] = (
-                    "the same core with fair_resampler.patch (build.sh with FAIR=1)"
+                    peer_source(
+                        args.peer_fair,
+                        "the same core with fair_resampler.patch (build.sh with FAIR=1)",
+                    )
                     if args.peer_fair
                     else None
                 )

@@ -364,15 +364,18 @@ def main() -> int:
         "case; the shipped one is trained; the machine load inflates every figure alike)"
     )
     if args.results is not None:
+        from symloc.bench.provenance import peer_source
         from symloc.bench.results_file import write_bench_results
 
         settings = {
             "repeats": r,
             "clock": args.clock,
             "seed": 0,
-            "dbow3": "the driver of benchmarks/peers/dbow3 (rmsalinas/DBow3)"
-            if args.dbow3
-            else None,
+            "dbow3": (
+                peer_source(args.dbow3, "the driver of benchmarks/peers/dbow3 (rmsalinas/DBow3)")
+                if args.dbow3
+                else None
+            ),
             "opencv": cv2.__version__,
             "numpy": np.__version__,
         }

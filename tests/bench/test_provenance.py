@@ -59,3 +59,13 @@ def test_a_pinned_benchmark_run_says_taskset(
         tmp_path / "r.json", clock=RunClock(), settings={"seed": 0}, figures={"rows": []}, argv=argv
     )
     assert load_results(path)["command"] == "python benchmarks/bench_x.py --seed 0"
+
+
+def test_peer_source_reads_the_build_note_beside_the_program(tmp_path: Path) -> None:
+    from symloc.bench.provenance import peer_source
+
+    (tmp_path / "driver").write_text("", encoding="utf-8")
+    assert peer_source(f"{tmp_path / 'driver'} --x", "stock") == "stock"
+    (tmp_path / "SOURCE.txt").write_text("ROS 1 amcl 1.17.3 core\n", encoding="utf-8")
+    assert peer_source(f"{tmp_path / 'driver'} --x", "stock") == "ROS 1 amcl 1.17.3 core"
+    assert peer_source("", "stock") == "stock"

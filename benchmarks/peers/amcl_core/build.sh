@@ -13,13 +13,15 @@
 # applied to a copy of its source in OUT_DIR/amcl-fair (pf.c's resampler finds each sample by
 # binary search in the cumulative weights instead of its linear scan: the same samples, in
 # O(N log N)), e.g. build.sh NAVIGATION/amcl OUT_FAIR; bench_amcl.py --peer-fair
-# OUT_FAIR/amcl_driver.
+# OUT_FAIR/amcl_driver. OUT_DIR/SOURCE.txt says what was built (bench_amcl's results file
+# quotes it).
 set -euo pipefail
 AMCL=${1:?the amcl package folder of a navigation checkout}
 OUT=${2:?output folder}
 HERE=$(cd "$(dirname "$0")" && pwd)
 mkdir -p "$OUT"
 AMCL=$(cd "$AMCL" && pwd)
+VERSION=$(sed -n 's:.*<version>\(.*\)</version>.*:\1:p' "$AMCL/package.xml" 2>/dev/null | head -n 1)
 cd "$OUT"
 if [ "${FAIR:-0}" = 1 ]; then
   rm -rf amcl-fair
@@ -37,4 +39,8 @@ for f in map/map_cspace.cpp sensors/amcl_sensor.cpp sensors/amcl_laser.cpp senso
   c++ "${FLAGS[@]}" -c "$SRC/$f" -o "$(basename "${f%.cpp}").o"
 done
 c++ "${FLAGS[@]}" "$HERE/driver.cpp" ./*.o -o amcl_driver -lm
+# what was built, for bench_amcl's results file
+WHAT="ROS 1 amcl ${VERSION:-version unknown} core"
+[ "${FAIR:-0}" = 1 ] && WHAT="$WHAT with fair_resampler.patch"
+echo "$WHAT (benchmarks/peers/amcl_core/build.sh)" > SOURCE.txt
 echo "built $OUT/amcl_driver"
