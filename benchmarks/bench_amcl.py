@@ -7,8 +7,12 @@ Two benchmarks, each driving symloc and (optionally) a peer on *identical input*
     on a 10 m room in a 400 x 400 map at 0.05 m, 60 beams, the differential motion model,
     every scan integrated, KLD-sampling on (``min_particles = N - 1``, so both sides do their
     adaptive-sampling work and keep about N particles), resampling every update. Per update:
-    CPU time [ms] (the process's, so both cores count when symloc uses them), the laser step
-    in ns per particle-beam, and the peak resident memory of the whole process [MiB].
+    CPU time [ms] (the process's, so both cores count when symloc uses them; both sides the
+    same span: symloc's ``Amcl.update``, the driver's whole handling of a scan -- motion,
+    sensor update, resampling, cluster statistics), the laser step in ns per particle-beam
+    (the peer's ``laser_cpu``, printed by the driver of ``benchmarks/peers/amcl_core``), and the
+    peak resident memory of the whole process [MiB]; ``--results`` writes the rows as a results
+    file (the README's: ``docs/results/bench_amcl_update.json``).
 ``--carmen DIR``
     End to end on real logs: for each CARMEN log in DIR (and ``--large``: a generated map of
     5,200 x 5,200 cells with a simulated drive) the map (log-odds, 5 cm), the scans and noisy
@@ -385,7 +389,11 @@ def update_problem(n: int, updates: int, seed: int) -> Problem:
     )
 
 
-def update_bench(args: argparse.Namespace, tmp: Path) -> None:
+def update_bench(args: argparse.Namespace, tmp: Path) -> list[dict[str, Any]]:
+    """Run the update benchmark; print its table and return its rows (one per particle count
+    and side: CPU ms per update, laser ns per particle-beam, peak and work MiB, mean particle
+    count, the ratios to the stock and the fair core, the median load average)."""
+    rows: list[dict[str, Any]] = []
     sides = [("symloc", None)]
     if args.peer:
         sides.append(("C++", args.peer))
@@ -421,10 +429,9 @@ def update_bench(args: argparse.Namespace, tmp: Path) -> None:
                 if cmd is None:
                     ms = 1000.0 * r.summary["update_cpu"] / (nu + 1)
                     las = math.nan
-                else:
-                    t = r.summary["action_cpu"] + r.summary["laser_cpu"] + r.summary["resample_cpu"]
-                    ms = 1000.0 * t / (nu + 1)
-                    las = 1e9 * r.summary["laser_cpu"] / ((nu + 1) * n * 60)
+                else:  # the same span as symloc's Amcl.update: the driver's update_cpu
+                    ms = 1000.0 * r.summary["update_cpu"] / (nu + 1)
+                    las = 1e9 * r.summary.get("laser_cpu", math.nan) / ((nu + 1) * n * 60)
                 work = r.peak_mib - r.summary.get("base_mib", 0.0)
                 per[name].append((ms, las, r.peak_mib, work, float(np.mean(r.n_particles))))
         med = {s: np.median(np.array(v), axis=0) for s, v in per.items()}
@@ -440,6 +447,26 @@ def update_bench(args: argparse.Namespace, tmp: Path) -> None:
                 f" | {rc} {rf}"
                 f" | {np.median(loads):.2f}"
             )
+            rows.append(
+                {
+                    "particles": n,
+                    "side": name,
+                    "updates": ups,
+                    "cpu_ms_per_update": round(float(ms), 4),
+                    "laser_ns_per_particle_beam": round(float(las), 3),
+                    "peak_mib": round(float(peak), 1),
+                    "work_mib": round(float(work), 1),
+                    "mean_particles": round(float(parts), 1),
+                    "cpu_ratio_stock": (
+                        round(float(ms / med["C++"][0]), 4) if "C++" in med else None
+                    ),
+                    "cpu_ratio_fair": (
+                        round(float(ms / med["C++ fair"][0]), 4) if "C++ fair" in med else None
+                    ),
+                    "load": round(float(np.median(loads)), 2),
+                }
+            )
+    return rows
 
 
 def laser_ns(n: int, seed: int) -> float:
@@ -726,9 +753,10 @@ def main() -> int:
         "--results",
         default=None,
         metavar="PATH",
-        help="end to end (--carmen/--large): also write a results file (the README's: "
-        "docs/results/bench_amcl_carmen.json) with the rows, command, commit, date, machine "
-        "and load; python -m symloc.readme re-renders the README from it",
+        help="also write a results file with the rows, command, commit, date, machine and "
+        "load (the README's: docs/results/bench_amcl_carmen.json end to end, --carmen/--large; "
+        "docs/results/bench_amcl_update.json for the update benchmark); python -m symloc.readme "
+        "re-renders the README from it",
     )
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -745,7 +773,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="symloc-bench-amcl-") as d:
         if args.carmen or args.large:
             # the parent's alone: the worker process imports only what a symloc user's does
-            from symloc.bench.provenance import RunClock
+            from symloc.bench.provenance import RunClock, peer_source
             from symloc.bench.results_file import write_run_results
 
             clock = RunClock()
@@ -757,7 +785,9 @@ def main() -> int:
                 }
                 settings["symloc_env"] = dict(PROCESS_ENV)
                 settings["peer"] = (
-                    "the noetic amcl core (benchmarks/peers/amcl_core)" if args.peer else None
+                    peer_source(args.peer, "the noetic amcl core (benchmarks/peers/amcl_core)")
+                    if args.peer
+                    else None
                 )
                 written = write_run_results(
                     args.results,
@@ -770,7 +800,30 @@ def main() -> int:
                 )
                 print(f"wrote {written}")
         else:
-            update_bench(args, Path(d))
+            from symloc.bench.provenance import RunClock, peer_source
+            from symloc.bench.results_file import write_bench_results
+
+            clock = RunClock()
+            rows = update_bench(args, Path(d))
+            if args.results:
+                settings = {k: getattr(args, k) for k in ("seed", "rounds", "sizes", "updates")}
+                settings["peer"] = (
+                    peer_source(args.peer, "the noetic amcl core (benchmarks/peers/amcl_core)")
+                    if args.peer
+                    else None
+                )
+                settings["peer_fair"] = (
+                    peer_source(
+                        args.peer_fair,
+                        "the same core with fair_resampler.patch (build.sh with FAIR=1)",
+                    )
+                    if args.peer_fair
+                    else None
+                )
+                written = write_bench_results(
+                    args.results, clock=clock, settings=settings, figures={"rows": rows}
+                )
+                print(f"wrote {written}")
     return 0
 
 

@@ -16,12 +16,17 @@ the SHA-256 of ``replay_scans.csv`` and ``replay_scans.tum`` (the same numbers b
 a memory change = the same results). ``--rows``/``--cols`` default to 8192 there.
 
     python benchmarks/bench_fields.py --replay /tmp/big [--rows 8192 --cols 8192] [--scans 20]
+
+``--results PATH`` also writes the figures as a results file with the command, commit, date,
+machine and load (the README's: ``docs/results/bench_fields.json`` for the fields,
+``docs/results/bench_fields_replay.json`` for ``--replay``).
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import math
 import os
 import resource
@@ -29,6 +34,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -60,6 +66,8 @@ def status_mib(field: str) -> float:
 
 
 def one(which: str, rows: int, cols: int, seed: int) -> None:
+    """In this (fresh) process: compute one field and print its CPU time and memory, then the
+    same as a JSON line for the parent."""
     grid = office_map(rows, cols, seed)
     base = status_mib("VmRSS")
     t0 = time.process_time()
@@ -68,9 +76,10 @@ def one(which: str, rows: int, cols: int, seed: int) -> None:
     else:
         surface_distance_field(grid, 1.0)
     cpu = time.process_time() - t0
-    print(
-        f"{which:>8} field | {cpu:6.2f} s CPU | peak {status_mib('VmHWM'):7.1f} MiB, before {base:6.1f} MiB"
-    )
+    peak = status_mib("VmHWM")
+    print(f"{which:>8} field | {cpu:6.2f} s CPU | peak {peak:7.1f} MiB, before {base:6.1f} MiB")
+    row = {"field": which, "cpu_s": round(cpu, 3), "peak_mib": round(peak, 1)}
+    print(json.dumps(row | {"before_mib": round(base, 1)}))
 
 
 def cast_scan(grid: OccupancyGrid, pose: np.ndarray, beams: int, max_range: float) -> np.ndarray:
@@ -88,8 +97,9 @@ def cast_scan(grid: OccupancyGrid, pose: np.ndarray, beams: int, max_range: floa
     return np.where(hit.any(axis=1), steps[first], max_range)
 
 
-def replay_peak(folder: Path, rows: int, cols: int, seed: int, scans: int) -> None:
-    """Write the map and bag into ``folder``, run ``symloc replay`` in a child, print its peak."""
+def replay_peak(folder: Path, rows: int, cols: int, seed: int, scans: int) -> dict[str, Any]:
+    """Write the map and bag into ``folder``, run ``symloc replay`` in a child, print its peak;
+    returns the figures (exit code, peak RSS [MiB], wall time [s], output digests)."""
     from symloc.grid.map_io import save_map
     from symloc.io.rosbag import BagWriter
     from symloc.odometry import OdometryReading
@@ -108,6 +118,7 @@ def replay_peak(folder: Path, rows: int, cols: int, seed: int, scans: int) -> No
                 w.write_odometry(OdometryReading(pose, t))
                 ranges = cast_scan(grid, pose, beams, 8.0)
                 w.write_scan(LaserScan(-math.pi, 2 * math.pi / beams, 0.1, 8.0, ranges, stamp=t))
+    occupied = int(np.count_nonzero(grid.data >= 50))
     del grid
     out = folder / "out"
     cmd = [sys.executable, "-m", "symloc.cli.main", "replay", str(bag), "--map", str(yaml)]
@@ -119,11 +130,22 @@ def replay_peak(folder: Path, rows: int, cols: int, seed: int, scans: int) -> No
     print(f"replay exit {proc.returncode}: {rows} x {cols} map, {scans} scans")
     if proc.returncode not in (0, 3):
         print(proc.stderr[-2000:])
+    digests = {}
     for name in ("replay_scans.csv", "replay_scans.tum"):
         f = out / name
         digest = hashlib.sha256(f.read_bytes()).hexdigest()[:16] if f.exists() else "missing"
+        digests[name] = digest
         print(f"  {name}: sha256 {digest}")
     print(f"  peak RSS {peak:.0f} MiB, wall {wall:.1f} s")
+    return {
+        "exit_code": proc.returncode,
+        "cells": [rows, cols],
+        "occupied_cells": occupied,
+        "scans": scans,
+        "peak_rss_mib": round(peak, 1),
+        "wall_s": round(wall, 2),
+        "sha256_16": digests,
+    }
 
 
 def main() -> int:
@@ -134,26 +156,53 @@ def main() -> int:
     ap.add_argument("--replay", type=Path, default=None, help="folder for the map, bag, output")
     ap.add_argument("--scans", type=int, default=20, help="scans in the --replay bag")
     ap.add_argument("--one", choices=["distance", "surface"], help=argparse.SUPPRESS)
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_fields.json, "
+        "docs/results/bench_fields_replay.json with --replay)",
+    )
     args = ap.parse_args()
     big = args.replay is not None
     args.rows = args.rows or (8192 if big else 6000)
     args.cols = args.cols or (8192 if big else 5000)
-    if big:
-        replay_peak(args.replay, args.rows, args.cols, args.seed, args.scans)
-        return 0
     if args.one:
         one(args.one, args.rows, args.cols, args.seed)
+        return 0
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
+    settings = {"rows": args.rows, "cols": args.cols, "seed": args.seed, "resolution_m": 0.05}
+    if big:
+        figures = replay_peak(args.replay, args.rows, args.cols, args.seed, args.scans)
+        if args.results is not None:
+            write(args.results, clock, settings, {"rows": [figures]})
         return 0
     load = " ".join(f"{v:.2f}" for v in os.getloadavg())
     print(
         f"# bench_fields seed={args.seed}: {args.rows} x {args.cols} cells"
         f" ({args.rows * args.cols / 1e6:.0f} M) at 0.05 m; load average {load}"
     )
+    rows = []
     for which in ("distance", "surface"):
         cmd = [sys.executable, __file__, "--one", which, "--rows", str(args.rows)]
         cmd += ["--cols", str(args.cols), "--seed", str(args.seed)]
-        subprocess.run(cmd, check=True)
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+        print(out.splitlines()[0], flush=True)
+        rows.append(json.loads(out.splitlines()[-1]))
+    if args.results is not None:
+        write(args.results, clock, settings, {"rows": rows})
     return 0
+
+
+def write(path: Path, clock: Any, settings: dict[str, Any], figures: dict[str, Any]) -> None:
+    """Write the results file ``path`` of this run (:func:`write_bench_results`)."""
+    from symloc.bench.results_file import write_bench_results
+
+    written = write_bench_results(path, clock=clock, settings=settings, figures=figures)
+    print(f"wrote {written}")
 
 
 if __name__ == "__main__":

@@ -16,7 +16,13 @@ Two cases: ``cold`` -- numba's on-disk cache empty (``NUMBA_CACHE_DIR`` a new fo
 install; every kernel is compiled in this process), then ``warm`` -- the same folder again (a
 second start: the kernels load from the cache).
 
-Run: ``python benchmarks/bench_first_scan.py [--seed 0] [--repeats 2] [--no-warm-up]``
+Each child also says whether symloc's per-scan kernels ran from their ahead-of-time build
+(:mod:`symloc.mcl.aot`) or numba's JIT. ``--results PATH`` writes every process's figures as a
+results file with the command, commit, date, machine and load (the README's:
+``docs/results/bench_first_scan.json``).
+
+Run: ``python benchmarks/bench_first_scan.py [--seed 0] [--repeats 2] [--no-warm-up]
+[--results PATH]``
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 _LOG = logging.getLogger("bench_first_scan")
 
@@ -69,6 +76,8 @@ def child(bag: Path, params_path: Path, *, warm: bool) -> int:
             core.add_odometry(m.value)
         elif m.kind == "image":
             core.add_image(m.value, m.stamp)
+    from symloc.mcl import kernels
+
     print(
         json.dumps(
             {
@@ -76,6 +85,7 @@ def child(bag: Path, params_path: Path, *, warm: bool) -> int:
                 "configure": [t_cfg, c_cfg],
                 "first": list(scans[0]),
                 "second": list(scans[1]),
+                "aot_kernels": bool(kernels.endpoint_table_sum.ahead_of_time),
             }
         )
     )
@@ -92,14 +102,40 @@ def main() -> int:
         action="store_false",
         help="configure without the kernels' warm-up (the node before it did one)",
     )
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_first_scan.json)",
+    )
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         return child(Path(args.child[0]), Path(args.child[1]), warm=args.warm)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
+    with tempfile.TemporaryDirectory(prefix="symloc-bench-first-scan-") as tmp:
+        rows = measure(Path(tmp), args)
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {"seed": args.seed, "repeats": args.repeats, "warm_up": args.warm}
+        written = write_bench_results(
+            args.results, clock=clock, settings=settings, figures={"rows": rows}
+        )
+        _LOG.info("wrote %s", written)
+    return 0
+
+
+def measure(work: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Record the simulated run in ``work`` and time the node's start in fresh processes
+    (``args``: seed, repeats, warm); log the table and return its rows."""
     from symloc.bench.sim_record import record_sim_run
 
-    work = Path(tempfile.mkdtemp(prefix="symloc-bench-first-scan-"))
+    rows: list[dict[str, Any]] = []
     rec = record_sim_run(work / "run", seed=args.seed, max_time=10.0)
     _LOG.info(
         "# recorded %s; load %.2f; %d cores; %s",
@@ -121,7 +157,13 @@ def main() -> int:
     for case in ("cold", "warm"):
         for k in range(args.repeats if case == "warm" else 1):
             env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-            cmd = [sys.executable, __file__, "--child", str(rec.bag), str(rec.params_path)]
+            cmd = [
+                sys.executable,
+                str(Path(__file__).resolve()),
+                "--child",
+                str(rec.bag),
+                str(rec.params_path),
+            ]
             cmd += [] if args.warm else ["--no-warm-up"]
             out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
             r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -133,7 +175,19 @@ def main() -> int:
                 *r["first"],
                 *r["second"],
             )
-    return 0
+            rows.append(
+                {
+                    "cache": case,
+                    "run": k,
+                    **{
+                        f"{what}_{clock_}_s": round(r[what][i], 4)
+                        for what in ("import", "configure", "first", "second")
+                        for i, clock_ in enumerate(("wall", "cpu"))
+                    },
+                    "aot_kernels": r["aot_kernels"],
+                }
+            )
+    return rows
 
 
 if __name__ == "__main__":

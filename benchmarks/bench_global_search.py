@@ -16,7 +16,8 @@ Maps:
 
 (a) ``room``: a 10 m x 10 m L-shaped room and a 10 m square with one box (bench size, 0.05 m),
     realistic RPLIDAR A2 scans from ``symloc.sim`` at random free poses;
-(b) ``carmen``: each log of ``--carmen DIR`` (default ``../shared/data/carmen`` if present;
+(b) ``carmen``: each log of ``--carmen DIR`` (default ``$SYMLOC_SHARED_DATA/carmen`` or
+    ``../shared/data/carmen``, :func:`symloc.bench.shared_data.find_carmen_dir`;
     ``--logs``, default intel) mapped from its scans at the corrected poses as
     ``symloc experiment amcl-carmen`` does (log-odds, 5 cm), its own scans (every
     ``len // scans``-th) searched;
@@ -26,8 +27,11 @@ Maps:
     ``max_seconds``) are what bound it: the map repeats itself every 20 m, so thousands of
     poses explain a scan.
 
+``--results PATH`` also writes one row per map (the figures above) as a results file with the
+command, commit, date, machine and load (the README's: ``docs/results/bench_global_search.json``).
+
 Run: ``PYTHONPATH=src python benchmarks/bench_global_search.py [--scans 20] [--carmen DIR]
-[--logs intel fr079] [--maps room carmen large] [--seed 0]``
+[--logs intel fr079] [--maps room carmen large] [--seed 0] [--results PATH]``
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ import tempfile
 import time
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -70,7 +75,9 @@ def run(
     cases: list[tuple[LaserScan, np.ndarray, np.ndarray | None]],
     cfg: GlobalSearchConfig,
     tol: tuple[float, float],
-) -> None:
+) -> dict[str, Any]:
+    """Search every case's scan on ``grid``; print the map's line and return it as a row
+    (times in ms, the precomputation in s)."""
     c0 = time.process_time()
     search = GlobalSearch(MapFields(grid), cfg)
     pre_cpu = time.process_time() - c0
@@ -98,6 +105,25 @@ def run(
     )
     if reasons:
         print(f"{'':<22} incomplete: {dict(Counter(reasons))}", flush=True)
+    return {
+        "map": name,
+        "cells": [grid.height, grid.width],
+        "precompute_cpu_s": round(pre_cpu, 3),
+        "pyramid_mib": round(mb, 1),
+        "scans": len(cases),
+        "cpu_ms_median": round(1e3 * float(np.median(cpu)), 2),
+        "wall_ms_median": round(1e3 * float(np.median(wall)), 2),
+        "cpu_ms_max": round(1e3 * max(cpu), 2),
+        "nodes_median": int(np.median(nodes)),
+        "distinct_median": float(np.median(ncand)),
+        "complete": int(sum(complete)),
+        "truth_found": int(sum(hit)),
+        "tolerance": [tol[0], round(math.degrees(tol[1]), 3)],
+        "headings": int(res.n_headings),
+        "incomplete": dict(Counter(reasons)),
+        "max_seconds": cfg.max_seconds,
+        "max_nodes": cfg.max_nodes,
+    }
 
 
 def room_cases(
@@ -128,7 +154,18 @@ def main() -> int:
     ap.add_argument("--maps", nargs="+", default=["room", "carmen", "large"])
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--large-depth", type=int, default=9, help="pyramid depth on the large map")
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_global_search.json)",
+    )
     args = ap.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
+    rows: list[dict[str, Any]] = []
     print(f"# seed {args.seed}, {args.scans} scans per map")
     cfg = GlobalSearchConfig()
     print(f"# {cfg}")
@@ -138,16 +175,14 @@ def main() -> int:
 
     for kind in ("l10", "square10+box") if "room" in args.maps else ():
         grid, cases = room_cases(kind, args.scans, args.seed)
-        run(f"room {kind}", grid, cases, cfg, (0.2, math.radians(2.0)))
+        rows.append(run(f"room {kind}", grid, cases, cfg, (0.2, math.radians(2.0))))
 
-    folder = (
-        Path(args.carmen)
-        if args.carmen
-        else Path(__file__).resolve().parents[2] / "shared/data/carmen"
-    )
+    from symloc.bench.shared_data import find_carmen_dir
+
+    folder = Path(args.carmen) if args.carmen else find_carmen_dir()
     if "carmen" not in args.maps:
         pass
-    elif folder.is_dir():
+    elif folder is not None and folder.is_dir():
         from symloc.experiments.amcl_carmen import build_map
         from symloc.io.carmen import read_carmen
 
@@ -162,7 +197,7 @@ def main() -> int:
                 every = max(1, len(log.scans) // args.scans)
                 picked = log.scans[::every][: args.scans]
                 cases = [(s.scan, np.asarray(s.laser_pose, dtype=np.float64), None) for s in picked]
-                run(f"carmen {name}", grid, cases, cfg, (0.3, math.radians(3.0)))
+                rows.append(run(f"carmen {name}", grid, cases, cfg, (0.3, math.radians(3.0))))
     else:
         print(f"# no CARMEN folder at {folder}: skipped")
 
@@ -172,13 +207,30 @@ def main() -> int:
         grid, truth, _, scans = large_world(args.seed)
         every = max(1, len(scans) // args.scans)
         cases = [(scans[i], truth[i], None) for i in range(0, len(scans), every)][: args.scans]
-        run(
-            f"large 260 m depth {args.large_depth}",
-            grid,
-            cases,
-            dataclasses.replace(cfg, depth=args.large_depth),
-            (0.2, math.radians(2.0)),
+        rows.append(
+            run(
+                f"large 260 m depth {args.large_depth}",
+                grid,
+                cases,
+                dataclasses.replace(cfg, depth=args.large_depth),
+                (0.2, math.radians(2.0)),
+            )
         )
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {
+            "scans": args.scans,
+            "seed": args.seed,
+            "maps": args.maps,
+            "logs": args.logs,
+            "large_depth": args.large_depth,
+            "config": dataclasses.asdict(cfg),
+        }
+        written = write_bench_results(
+            args.results, clock=clock, settings=settings, figures={"rows": rows}
+        )
+        print(f"wrote {written}")
     return 0
 
 

@@ -10,7 +10,10 @@ glass and one dark), one 640 x 480 camera image with ideal sensors and one with 
 cost of building one procedural wall texture. Prints medians in ms.
 Targets (issue 2 and issue 11): a scan under 1 ms, an image under 30-40 ms.
 
-Run: ``python benchmarks/bench_sim.py [--repeats R] [--seed S]``
+``--results PATH`` also writes the rows (and the ORB keypoint counts) as a results file with the
+command, commit, date, machine and load (the README's: ``docs/results/bench_sim.json``).
+
+Run: ``python benchmarks/bench_sim.py [--repeats R] [--seed S] [--results PATH]``
 """
 
 from __future__ import annotations
@@ -18,8 +21,11 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -55,7 +61,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=200, help="timed calls per figure")
     parser.add_argument("--seed", type=int, default=0, help="random seed (printed)")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_sim.json)",
+    )
     args = parser.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     rng = np.random.default_rng(args.seed)
     room = build_room("square", 1.5 * math.sqrt(2), furniture=4, rng=args.seed)
     world = room.world
@@ -66,7 +82,7 @@ def main() -> None:
     print(
         f"# world: {world.n_walls} wall segments, {world.n_circles} circles (square + 4 boxes + lab)"
     )
-    rows = []
+    rows: list[tuple[str, tuple[float, float], float]] = []
     for preset in (LDS01, RPLIDAR_A2):
         angles = preset.angles
         rows.append(
@@ -153,17 +169,38 @@ def main() -> None:
     for name, (wall, cpu), target in rows:
         flag = "" if wall < target else "  (wall over target)"
         print(f"{name:<42} {wall:>9.3f} {cpu:>9.3f} {target:>7.1f}{flag}")
-    orb_counts(args.seed)
+    orb = orb_counts(args.seed)
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        figures: dict[str, Any] = {
+            "rows": [
+                {"what": name, "wall_ms": round(w, 4), "cpu_ms": round(c, 4), "target_ms": t}
+                for name, (w, c), t in rows
+            ],
+            "orb_keypoints": orb,
+            "world": {"walls": int(world.n_walls), "circles": int(world.n_circles)},
+        }
+        written = write_bench_results(
+            args.results,
+            clock=clock,
+            settings={"seed": args.seed, "repeats": args.repeats},
+            figures=figures,
+            argv=sys.argv,
+        )
+        print(f"wrote {written}")
 
 
-def orb_counts(seed: int) -> None:
+def orb_counts(seed: int) -> dict[str, list[int]]:
     """ORB keypoints (cv2.ORB_create(500)) in camera images from the centre of the paper's
-    empty room, facing the four wall middles, with the textured and with the plain lab."""
+    empty room, facing the four wall middles, with the textured and with the plain lab;
+    returns them by lab (``"textured lab"``, ``"plain lab"``)."""
     import cv2
 
     orb = cv2.ORB_create(500)
     cam = Camera()
     print("# ORB keypoints of 500, camera at the room centre facing 0, 90, 180, -90 deg")
+    out: dict[str, list[int]] = {}
     for textured in (True, False):
         room = build_room("square", 1.5 * math.sqrt(2), textured=textured)
         counts = []
@@ -171,6 +208,8 @@ def orb_counts(seed: int) -> None:
             img = cam.render(room.world, [0.0, 0.0, th], seed)
             counts.append(len(orb.detect(cv2.cvtColor(img, cv2.COLOR_RGB2GRAY), None)))
         print(f"{'textured lab' if textured else 'plain lab':<42} {counts}")
+        out["textured lab" if textured else "plain lab"] = counts
+    return out
 
 
 if __name__ == "__main__":

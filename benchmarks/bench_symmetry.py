@@ -10,7 +10,11 @@ number of Python-level function calls (Python and C, NumPy's included) per judge
 does not depend on the machine's load: on a small scan the judgement's cost is mostly the
 per-call overhead of NumPy. Target (issues 3 and 30): under 1 ms on every scan.
 
-Run: ``python benchmarks/bench_symmetry.py [--repeats R] [--seed S] [--rounds N]``
+Run: ``python benchmarks/bench_symmetry.py [--repeats R] [--seed S] [--rounds N] [--results
+PATH]`` (``--results``: also write a results file, the README's is
+``docs/results/bench_symmetry.json``, with every row, the command, commit, date, machine and
+load; ``python -m symloc.readme`` renders the README's figures from it). The README's row runs
+it on one core: ``taskset -c 0 python benchmarks/bench_symmetry.py --seed 0``.
 """
 
 from __future__ import annotations
@@ -19,6 +23,8 @@ import argparse
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -107,7 +113,18 @@ def main() -> None:
     parser.add_argument(
         "--rounds", type=int, default=15, help="timed calls per scan for the worst-scan figure"
     )
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_symmetry.json)",
+    )
     args = parser.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
+    rows: list[dict[str, Any]] = []
     rng = np.random.default_rng(args.seed)
     print(f"# bench_symmetry seed={args.seed} repeats={args.repeats} rounds={args.rounds}")
     rooms = {
@@ -138,10 +155,44 @@ def main() -> None:
                 f"{beams:<26} {name:<11} {label:<22} {wall:>8.3f} {cpu:>8.3f} {calls:>7.0f}"
                 f" {worst:>9.3f}"
             )
+            rows.append(
+                {
+                    "lidar": preset.name,
+                    "beams": preset.n_beams,
+                    "room": name,
+                    "method": "judge_symmetry",
+                    "verdict": label,
+                    "wall_ms": round(wall, 4),
+                    "cpu_ms": round(cpu, 4),
+                    "calls": round(calls, 1),
+                    "worst_cpu_ms": round(worst, 4),
+                }
+            )
         wall, cpu = median_ms(_algorithm1_nth(scans, cfg), args.repeats)
         print(
             f"{beams:<26} {'square+box':<11} {'Algorithm 1 (paper)':<22} {wall:>8.3f} {cpu:>8.3f}"
         )
+        rows.append(
+            {
+                "lidar": preset.name,
+                "beams": preset.n_beams,
+                "room": "square+box",
+                "method": "algorithm1",
+                "wall_ms": round(wall, 4),
+                "cpu_ms": round(cpu, 4),
+            }
+        )
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {"seed": args.seed, "repeats": args.repeats, "rounds": args.rounds}
+        written = write_bench_results(
+            args.results,
+            clock=clock,
+            settings=settings,
+            figures={"rows": rows, "units": "ms per judgement (median; worst: per-scan median)"},
+        )
+        print(f"wrote {written}")
 
 
 if __name__ == "__main__":

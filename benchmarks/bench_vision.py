@@ -17,7 +17,13 @@ With ``--dbow3 CMD`` (the driver of ``benchmarks/peers/dbow3``, built from DBoW3
 transform is also measured against DBoW3 in the same run, on the same vocabularies and the
 descriptors of 12 of the photos, and the BoW vectors of the two are compared.
 
-Run: ``python benchmarks/bench_vision.py [--repeats R] [--clock wall|cpu] [--dbow3 CMD]``
+``--results PATH`` also writes every row (symloc's figure, the DBoW3 figure it is compared with
+and whether that was measured in this run or is the stored reference above) as a results file
+with the command, commit, date, machine and load (the README's:
+``docs/results/bench_vision.json``).
+
+Run: ``python benchmarks/bench_vision.py [--repeats R] [--clock wall|cpu] [--dbow3 CMD]
+[--results PATH]``
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -68,6 +75,10 @@ PHOTOS = (
 #: The clock of every figure: ``time.perf_counter`` (wall, default) or ``time.process_time``
 #: (this process's CPU time, which waiting for a core on a loaded machine does not inflate).
 CLOCK: Callable[[], float] = time.perf_counter
+
+#: Every printed row, for ``--results``: ``what``, ``symloc_ms``, ``dbow3_ms`` (or None),
+#: ``dbow3`` (``"same run"`` or ``"stored"``), ``ratio``.
+ROWS: list[dict[str, Any]] = []
 
 
 def median_ms(fn: Callable[[], object], repeats: int) -> float:
@@ -190,15 +201,35 @@ def same_run_rows(
             voc.transform(d)
             times.append(CLOCK() - t0)
     ours = 1000.0 * float(np.median(times))
-    row(f"transform, {label}, DBoW3 same run", ours, peer_ms)
+    row(
+        f"transform, {label}, DBoW3 same run",
+        ours,
+        peer_ms,
+        same_run=True,
+        vocabulary=label,
+        images=len(images),
+        bow_vectors_equal=agree,
+    )
     print(f"  ({len(images)} images; BoW vectors agreeing with DBoW3's: {agree}/{len(images)})")
 
 
-def row(name: str, ours: float, ref: float | None) -> None:
+def row(name: str, ours: float, ref: float | None, *, same_run: bool = False, **extra: Any) -> None:
+    """Print one row (symloc's figure [ms], DBoW3's and their ratio) and keep it in
+    :data:`ROWS`; ``same_run``: DBoW3's figure was measured in this run (else the stored one)."""
     if ref is None:
         print(f"{name:<46}{ours:>10.3f}{'':>10}{'':>9}")
     else:
         print(f"{name:<46}{ours:>10.3f}{ref:>10.2f}{ours / ref:>8.2f}x")
+    ROWS.append(
+        {
+            "what": name,
+            "symloc_ms": round(ours, 5),
+            "dbow3_ms": None if ref is None else round(ref, 5),
+            "dbow3": None if ref is None else ("same run" if same_run else "stored"),
+            "ratio": None if ref is None else round(ours / ref, 4),
+            **extra,
+        }
+    )
 
 
 def main() -> int:
@@ -215,7 +246,17 @@ def main() -> int:
         metavar="CMD",
         help="DBoW3 driver (benchmarks/peers/dbow3/build.sh): time its transform in this run",
     )
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_vision.json)",
+    )
     args = ap.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     global CLOCK
     CLOCK = time.process_time if args.clock == "cpu" else time.perf_counter
     if args.dbow3 and args.clock != "cpu":
@@ -322,6 +363,29 @@ def main() -> int:
         "(DBoW3's L=5 vocabulary: 67,919 trained words; the synthetic trees are full, the worst "
         "case; the shipped one is trained; the machine load inflates every figure alike)"
     )
+    if args.results is not None:
+        from symloc.bench.provenance import peer_source
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {
+            "repeats": r,
+            "clock": args.clock,
+            "seed": 0,
+            "dbow3": (
+                peer_source(args.dbow3, "the driver of benchmarks/peers/dbow3 (rmsalinas/DBow3)")
+                if args.dbow3
+                else None
+            ),
+            "opencv": cv2.__version__,
+            "numpy": np.__version__,
+        }
+        written = write_bench_results(
+            args.results,
+            clock=clock,
+            settings=settings,
+            figures={"rows": ROWS, "stored_dbow3_ms": DBOW3_MS},
+        )
+        print(f"wrote {written}")
     return 0
 
 

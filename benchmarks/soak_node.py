@@ -1,7 +1,7 @@
 """Soak test of the node logic: 30 minutes at 10 Hz with 1 % malformed messages (not in CI).
 
     python benchmarks/soak_node.py [--minutes 30] [--rate 10] [--malformed 0.01] [--seed 0]
-                                   [--map-change 10] [--json soak.json]
+                                   [--map-change 10] [--json soak.json] [--results PATH]
 
 A robot circles in an L-shaped room (simulated RPLIDAR A2 scans, exact odometry at 5x the scan
 rate, a camera image every second that nobody asked for) and :class:`symloc.ros.core.NodeCore`
@@ -18,7 +18,9 @@ handling [ms] and the process RSS [MB], and a line ``rss`` every minute; with ``
 file is rewritten after every window, so a run that is stopped leaves its partial results. Then
 the verdicts: RSS flat within 10 % of the median after the first minute's warm-up, RSS within
 5 % of its level at the first minute (issue 31's criterion), p99 stable (the last window within
-1.5x the first), a status for every scan, and the drop and recovery counters.
+1.5x the first), a status for every scan, and the drop and recovery counters. ``--results
+PATH`` also writes them as a results file (the README's: ``docs/results/soak_node.json``:
+the windows as rows, the verdicts, command, commit, date, machine and load).
 """
 
 from __future__ import annotations
@@ -57,7 +59,17 @@ def main(argv: list[str] | None = None) -> int:
         help="a new map on the map topic every this many seconds (0: never)",
     )
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/soak_node.json)",
+    )
     args = ap.parse_args(argv)
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from rosbags.typesys import Stores, get_typestore
 
@@ -291,6 +303,21 @@ def main(argv: list[str] | None = None) -> int:
     if args.json is not None:
         final = {"windows": rows, "rss_mb": rss, "verdict": verdict}
         args.json.write_text(json.dumps(final, indent=2) + "\n")
+    if args.results is not None:
+        from symloc.bench.results_file import write_bench_results
+
+        settings = {
+            k: getattr(args, k)
+            for k in ("minutes", "rate", "malformed", "seed", "window", "map_change")
+        }
+        written = write_bench_results(
+            args.results,
+            clock=clock,
+            settings=settings,
+            figures={"rows": rows, "verdict": verdict, "rss_mb": [list(x) for x in rss]},
+            argv=sys.argv if argv is None else [sys.argv[0], *argv],
+        )
+        print(f"wrote {written}")
     ok = verdict["rss_flat_within_10pct"] and verdict["status_every_scan"]
     return 0 if ok else 1
 

@@ -12,6 +12,7 @@ import pytest
 
 from symloc.bench.experiment_results import (
     AmclSymmetricFigures,
+    BenchFigures,
     FiguresChangedError,
     KeyframesFigures,
     Table1Figures,
@@ -118,3 +119,34 @@ def test_amcl_carmen_writes_the_tracking_figures(tmp_path: Path) -> None:
     assert "global" not in aces  # --skip-global
     assert 0 < aces["tracking"]["mean_error_m"] < 1.0
     assert doc["settings"]["logs"] == "aces"
+
+
+def _bench(name: str, date: str, wall_s: float | None) -> BenchFigures:
+    doc = {
+        "command": f"python benchmarks/{name}.py",
+        "commit": "abc1234",
+        "date": date,
+        "machine": "2 cores",
+        "load": "idle",
+        "settings": {"seed": 0},
+        "figures": {"rows": [{"what": "a", "ms": 1.0}, {"what": "b", "ms": 2.0}]},
+        "wall_s": wall_s,
+    }
+    return BenchFigures(doc, name)
+
+
+def test_bench_figures_rows_and_runs_that_went_on_together() -> None:
+    soak = _bench("soak_node", "2026-11-28T17:09:00Z", 1800.0)
+    during = _bench("bench_sim", "2026-11-28T16:50:00Z", 5.0)
+    before = _bench("bench_symmetry", "2026-11-28T16:37:00Z", 3.0)
+    undated = _bench("bench_x", "2026-11-28", 3.0)
+    assert during.row(what="b")["ms"] == 2.0
+    with pytest.raises(FiguresChangedError, match="no row"):
+        during.rows(what="c")
+    assert during.overlaps(soak)
+    assert soak.overlaps(during)
+    assert not before.overlaps(soak)
+    assert not undated.overlaps(soak)
+    assert "while `python benchmarks/soak_node.py` ran" in during.source(beside=[soak])
+    assert "while" not in before.source(beside=[soak])
+    assert "[docs/results/bench_sim.json](docs/results/bench_sim.json)" in during.source()

@@ -31,6 +31,7 @@ from typing import Any
 
 from symloc.bench.experiment_results import (
     AmclSymmetricFigures,
+    BenchFigures,
     ExperimentFigures,
     KeyframesFigures,
     Table1Figures,
@@ -50,6 +51,7 @@ from symloc.bench.slam_results import SlamFigures
 __all__ = [
     "RESULTS_DIR",
     "amcl_symmetric",
+    "bench",
     "check",
     "expect",
     "experiment",
@@ -100,6 +102,12 @@ def slam(name: str) -> SlamFigures:
 def experiment(name: str) -> ExperimentFigures:
     """Any ``symloc experiment ... --results`` file: its provenance in words."""
     return ExperimentFigures(results(name))
+
+
+def bench(name: str) -> BenchFigures:
+    """A benchmark script's results file (``python benchmarks/NAME.py --results PATH``): its
+    rows and its provenance in words."""
+    return BenchFigures(results(name), name)
 
 
 def table1(name: str = "table1") -> Table1Figures:

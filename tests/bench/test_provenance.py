@@ -6,6 +6,8 @@ import re
 import shlex
 from pathlib import Path
 
+import pytest
+
 from symloc.bench.provenance import RunClock, command_line, commit, machine, utc_now
 
 
@@ -36,3 +38,34 @@ def test_machine_and_clock() -> None:
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", utc_now())
     assert clock.load()["cpus"] == m["cpus"]
     assert clock.revision == commit()
+
+
+def test_a_pinned_benchmark_run_says_taskset(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from symloc.bench import provenance
+    from symloc.bench.results_file import load_results, write_bench_results
+
+    monkeypatch.setattr(provenance, "cpus_allowed", lambda: [0])
+    argv = ["benchmarks/bench_x.py", "--seed", "0"]
+    path = write_bench_results(
+        tmp_path / "r.json", clock=RunClock(), settings={"seed": 0}, figures={"rows": []}, argv=argv
+    )
+    doc = load_results(path)
+    assert doc["command"] == "taskset -c 0 python benchmarks/bench_x.py --seed 0"
+    assert doc["settings"]["cpus_allowed"] == [0]
+    monkeypatch.setattr(provenance, "cpus_allowed", lambda: None)
+    path = write_bench_results(
+        tmp_path / "r.json", clock=RunClock(), settings={"seed": 0}, figures={"rows": []}, argv=argv
+    )
+    assert load_results(path)["command"] == "python benchmarks/bench_x.py --seed 0"
+
+
+def test_peer_source_reads_the_build_note_beside_the_program(tmp_path: Path) -> None:
+    from symloc.bench.provenance import peer_source
+
+    (tmp_path / "driver").write_text("", encoding="utf-8")
+    assert peer_source(f"{tmp_path / 'driver'} --x", "stock") == "stock"
+    (tmp_path / "SOURCE.txt").write_text("ROS 1 amcl 1.17.3 core\n", encoding="utf-8")
+    assert peer_source(f"{tmp_path / 'driver'} --x", "stock") == "ROS 1 amcl 1.17.3 core"
+    assert peer_source("", "stock") == "stock"

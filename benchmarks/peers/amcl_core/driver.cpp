@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
   std::vector<char> out;
   out.reserve(records * 64);
   char line[256];
-  double t_upd = 0.0;
+  double t_upd = 0.0, t_action = 0.0, t_laser = 0.0, t_resample = 0.0, t2 = 0.0;
   for (int k = 0; k < records; k++) {
     pf_vector_t pose;
     pose.v[0] = take<double>(p); pose.v[1] = take<double>(p); pose.v[2] = take<double>(p);
@@ -144,7 +144,9 @@ int main(int argc, char** argv) {
       AMCLOdomData odata;
       odata.pose = pose;
       odata.delta = delta;
+      t2 = cpu_now();
       odom->UpdateAction(pf, (AMCLSensorData*)&odata);
+      t_action += cpu_now() - t2;
     }
     bool resampled = false;
     if (lupdate) {
@@ -160,10 +162,17 @@ int main(int argc, char** argv) {
         else ldata.ranges[i][0] = r;
         ldata.ranges[i][1] = angle_min + i * angle_inc;
       }
+      t2 = cpu_now();
       laser->UpdateSensor(pf, (AMCLSensorData*)&ldata);
+      t_laser += cpu_now() - t2;
       pf_odom_pose = pose;
       n_upd++;
-      if (!(++resample_count % resample_interval)) { pf_update_resample(pf); resampled = true; }
+      if (!(++resample_count % resample_interval)) {
+        t2 = cpu_now();
+        pf_update_resample(pf);
+        t_resample += cpu_now() - t2;
+        resampled = true;
+      }
     }
     if (resampled || force_pub) {
       double max_w = 0.0; int best = -1; pf_vector_t bm = pf_vector_zero();
@@ -186,7 +195,8 @@ int main(int argc, char** argv) {
     while (fgets(l, sizeof l, st)) if (!strncmp(l, "VmHWM:", 6)) hwm = atof(l + 6) / 1024.0;
     fclose(st);
   }
-  printf("# updates %d map_cpu %.6f update_cpu %.6f total_cpu %.6f vmhwm_mib %.1f\n", n_upd,
-         t_map, t_upd, cpu_now() - t0, hwm);
+  printf("# updates %d map_cpu %.6f update_cpu %.6f total_cpu %.6f vmhwm_mib %.1f action_cpu %.6f"
+         " laser_cpu %.6f resample_cpu %.6f\n", n_upd, t_map, t_upd, cpu_now() - t0, hwm, t_action,
+         t_laser, t_resample);
   return 0;
 }

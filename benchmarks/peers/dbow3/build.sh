@@ -7,6 +7,7 @@
 #
 # usage: benchmarks/peers/dbow3/build.sh DBOW3_CHECKOUT OUT_DIR
 #   then: python benchmarks/bench_vision.py --clock cpu --dbow3 OUT_DIR/dbow3_driver
+# OUT_DIR/SOURCE.txt says what was built (the benchmark's results file quotes it).
 set -euo pipefail
 DBOW3=${1:?a DBow3 checkout (with src/)}
 OUT=${2:?output folder}
@@ -19,4 +20,8 @@ for f in BowVector Database DescManip FeatureVector QueryResults ScoringObject V
   c++ -std=c++11 "${FLAGS[@]}" -c "$DBOW3/src/$f.cpp" -o "$f.o"
 done
 c++ -std=c++11 "${FLAGS[@]}" "$HERE/driver.cpp" ./*.o -o dbow3_driver -lopencv_core
+# what was built, for bench_vision's results file (DBOW3_REV names the revision of a checkout
+# that is not a git clone, e.g. an exported tree)
+REV=$(git -C "$DBOW3" rev-parse --short HEAD 2>/dev/null || echo "${DBOW3_REV:-revision unknown}")
+echo "rmsalinas/DBow3 $REV, DBoW3's Release flags (benchmarks/peers/dbow3/build.sh)" > SOURCE.txt
 echo "built $OUT/dbow3_driver"

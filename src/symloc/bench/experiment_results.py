@@ -10,6 +10,7 @@ says otherwise, so the sentence cannot go stale either.
 
 from __future__ import annotations
 
+import datetime as _dt
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -18,6 +19,7 @@ from symloc.bench.localization_results import FiguresChangedError
 
 __all__ = [
     "AmclSymmetricFigures",
+    "BenchFigures",
     "ExperimentFigures",
     "KeyframesFigures",
     "Table1Figures",
@@ -73,6 +75,59 @@ class ExperimentFigures:
         if machine:
             text += f" ({describe_machine(d['machine'])}; {describe_load(d['load'])})"
         return text
+
+
+class BenchFigures(ExperimentFigures):
+    """A results file of a benchmark script (``python benchmarks/NAME.py ... --results PATH``)
+    whose ``figures`` hold a list of ``rows`` (one dict per measured line of its table)."""
+
+    def __init__(self, doc: Mapping[str, Any], name: str) -> None:
+        super().__init__(doc)
+        self.name = name
+
+    def interval(self) -> tuple[_dt.datetime, _dt.datetime] | None:
+        """When the run went on (UTC): its ``date`` (the end, to the second) minus its
+        ``wall_s``; ``None`` when the file has no time of day or no wall time."""
+        d = self.doc
+        if len(d["date"]) <= 10 or d.get("wall_s") is None:
+            return None
+        end = _dt.datetime.fromisoformat(d["date"].replace("Z", "+00:00"))
+        return end - _dt.timedelta(seconds=float(d["wall_s"])), end
+
+    def overlaps(self, other: BenchFigures) -> bool:
+        """Whether this run and ``other`` went on at the same time (to the second)."""
+        a, b = self.interval(), other.interval()
+        return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+
+    def source(self, beside: Sequence[BenchFigures] = ()) -> str:
+        """The run in words for a README paragraph: ``"`python benchmarks/...`, commit 7a9cbc1,
+        2026-11-28, 2 cores, ...; load average 0.9 at the start, ...; results file
+        [docs/results/NAME.json](docs/results/NAME.json)"``; each run of ``beside`` that went on
+        at the same time is named (``"while `python benchmarks/soak_node.py ...` ran"``)."""
+        from symloc.bench.results_file import describe_load, describe_machine
+
+        d = self.doc
+        path = f"docs/results/{self.name}.json"
+        meanwhile = "".join(
+            f", while `{o['command']}` ran" for o in beside if o is not self and self.overlaps(o)
+        )
+        return (
+            f"`{d['command']}`, commit {d['commit']}, {d['date'][:10]}, "
+            f"{describe_machine(d['machine'])}; {describe_load(d['load'])}{meanwhile}; "
+            f"results file [{path}]({path})"
+        )
+
+    def rows(self, **match: Any) -> list[Mapping[str, Any]]:
+        """The rows whose fields equal ``match``; raises :class:`FiguresChangedError` when
+        none does (the README names a row the benchmark no longer measures)."""
+        out = [r for r in self.figures["rows"] if all(r.get(k) == v for k, v in match.items())]
+        if not out:
+            raise FiguresChangedError(f"{self.name}: no row with {match}")
+        return out
+
+    def row(self, **match: Any) -> Mapping[str, Any]:
+        """The one row matching ``match`` (the first when several do)."""
+        return self.rows(**match)[0]
 
 
 class Table1Figures(ExperimentFigures):

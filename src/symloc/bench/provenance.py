@@ -20,7 +20,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RunClock", "command_line", "commit", "machine", "utc_now"]
+__all__ = [
+    "RunClock",
+    "command_line",
+    "commit",
+    "cpus_allowed",
+    "machine",
+    "peer_source",
+    "utc_now",
+]
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +56,30 @@ def commit(where: Path = _SOURCE) -> str:
         log.debug("no git commit for %s: %s", where, err)
         return "unknown (not a git checkout)"
     return f"{head}+dirty" if dirty else head
+
+
+def cpus_allowed() -> list[int] | None:
+    """The cores this process may run on (``taskset``, cgroups' cpusets) when they are fewer
+    than the machine's, else ``None`` (every core, or a system that does not say)."""
+    try:
+        allowed = sorted(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return None
+    return allowed if len(allowed) < (os.cpu_count() or len(allowed)) else None
+
+
+def peer_source(cmd: str, default: str) -> str:
+    """What a peer program was built from, for a results file: the first line of
+    ``SOURCE.txt`` beside the program that the command ``cmd`` runs (the build scripts of
+    ``benchmarks/peers`` write it), else ``default``."""
+    words = shlex.split(cmd)
+    if not words:
+        return default
+    try:
+        text = (Path(words[0]).parent / "SOURCE.txt").read_text(encoding="utf-8").strip()
+    except (OSError, UnicodeDecodeError):
+        return default
+    return text.splitlines()[0] if text else default
 
 
 def utc_now() -> str:

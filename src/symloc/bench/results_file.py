@@ -26,6 +26,7 @@ __all__ = [
     "dumps",
     "load_results",
     "validate",
+    "write_bench_results",
     "write_results",
     "write_run_results",
 ]
@@ -200,4 +201,34 @@ def write_run_results(
         figures=figures,
         wall_s=None if clock.wall_s is None else round(clock.wall_s, 1),
         **extra,
+    )
+
+
+def write_bench_results(
+    path: str | Path,
+    *,
+    clock: RunClock,
+    settings: Mapping[str, Any],
+    figures: Mapping[str, Any],
+    argv: Sequence[str] | None = None,
+    **extra: Any,
+) -> Path:
+    """Write the results file of a benchmark script run as ``python benchmarks/NAME.py ...``:
+    :func:`write_run_results` with the script's own ``argv`` (default ``sys.argv``), and when
+    the process may only run on some of the machine's cores (``taskset``) the command starts
+    with ``taskset -c CPUS`` and ``settings`` gain ``cpus_allowed`` (the core numbers)."""
+    import sys
+
+    from symloc.bench.provenance import cpus_allowed
+
+    words = list(sys.argv if argv is None else argv)
+    allowed = cpus_allowed()
+    program = "python"
+    settings = dict(settings)
+    if allowed is not None:
+        words = ["-c", ",".join(str(c) for c in allowed), "python", *words]
+        program = "taskset"
+        settings["cpus_allowed"] = allowed
+    return write_run_results(
+        path, argv=words, clock=clock, settings=settings, figures=figures, program=program, **extra
     )
