@@ -41,17 +41,22 @@ tracking error on the same log (step 6 against step 5), fewer than 1 % of scans 
 ``--build-map`` within 0.02 m ATE of ``map build --carmen``. Replay poses are matched to the
 bag's ground truth (the corrected poses) by their stamps, in order among repeated stamps (intel's
 go backwards now and then; a log without usable stamps is stamped by its motion in the bag). Rows are appended to
-``<out>/bench_bag_replay.partial.jsonl`` as each log finishes.
+``<out>/bench_bag_replay.partial.jsonl`` as each log finishes, and a line of progress printed.
+``--results PATH`` writes, at the end, a results file (:mod:`symloc.bench.bag_replay_results`:
+per log the figures above, the scans dropped with their reasons, and the run's command, commit,
+date, machine and load); README.md renders its paragraph from
+``docs/results/bench_bag_replay.json`` (``python -m symloc.readme``).
 
 Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seeds N ...]
-[--build-map-only] [--no-own-odometry]`` (several seeds: every log with the first seed, then
-with the next; a seed other than 0 works in ``<out>/<log>_seed<N>``).
+[--build-map-only] [--no-own-odometry] [--results PATH]`` (several seeds: every log with the
+first seed, then with the next; a seed other than 0 works in ``<out>/<log>_seed<N>``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
@@ -61,6 +66,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.bench.bag_replay_results import replay_counts, write_bag_replay_results
+from symloc.bench.provenance import RunClock
 from symloc.bench.shared_data import find_carmen_dir
 
 REPO = Path(__file__).resolve().parents[1]
@@ -137,16 +144,37 @@ def _errors(tum: Path, stamps: np.ndarray, truth: np.ndarray) -> dict[str, float
     }
 
 
-def _bag_reference(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+def _bag_poses(bag: Path) -> tuple[np.ndarray, np.ndarray]:
     """The bag's ground truth (the log's corrected poses as carmen-to-bag wrote them): stamps
-    (N,) [s] and positions (N, 2) [m]. Its stamps are the bag's, the ones replay writes (a log
-    without usable stamps is stamped by its motion in the bag)."""
+    (N,) [s] and poses (N, 3) [m, m, rad]. Its stamps are the bag's, the ones replay writes (a
+    log without usable stamps is stamped by its motion in the bag)."""
     from symloc.io.rosbag import read_bag
 
     msgs = [m for m in read_bag(bag, kinds=("truth",)) if m.kind == "truth"]
     stamps = np.array([m.stamp for m in msgs], dtype=np.float64)
-    xy = np.array([m.value.pose[:2] for m in msgs], dtype=np.float64).reshape(-1, 2)
-    return stamps, xy
+    poses = np.array([m.value.pose[:3] for m in msgs], dtype=np.float64).reshape(-1, 3)
+    return stamps, poses
+
+
+def _bag_reference(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The bag's ground truth: stamps (N,) [s] and positions (N, 2) [m] (:func:`_bag_poses`)."""
+    stamps, poses = _bag_poses(bag)
+    return stamps, poses[:, :2]
+
+
+def _motion(poses: np.ndarray) -> dict[str, float]:
+    """The scan-to-scan motions of the corrected poses (N, 3) as the odometry noise of
+    ``experiment amcl-carmen`` splits them (rot-trans-rot, no first rotation below 1 cm): the
+    share whose first rotation exceeds 0.5 rad, and the median step [m]."""
+    from symloc.odometry import rot_trans_rot
+
+    if len(poses) < 2:
+        return {"rot1_over_half_rad_share": float("nan"), "median_step_m": float("nan")}
+    rot1, trans, _ = rot_trans_rot(poses[:-1], poses[1:])
+    return {
+        "rot1_over_half_rad_share": float((np.abs(rot1) > 0.5).mean()),
+        "median_step_m": float(np.median(trans)),
+    }
 
 
 def _map_file(npz: Path, yaml: Path) -> Path:
@@ -162,8 +190,8 @@ def _map_file(npz: Path, yaml: Path) -> Path:
 
 def _dropped(replay_out: str) -> float | None:
     """The share of the bag's scans replay did not use (its ``scans used`` line)."""
-    used = re.search(r"scans used: (\d+) of (\d+)", replay_out)
-    return (1.0 - int(used.group(1)) / int(used.group(2))) if used else None
+    counts = replay_counts(replay_out)
+    return None if counts is None else counts["dropped_share"]
 
 
 def same_as_experiment(
@@ -204,6 +232,7 @@ def same_as_experiment(
         "replay_n": err["n"],
         "difference": err["mean"] - float(tracking["mean_error_m"]),
         "dropped_share": _dropped(replay),
+        "dropped": replay_counts(replay),
     }
 
 
@@ -256,7 +285,8 @@ def bench_log(
     work.mkdir(parents=True, exist_ok=True)
     _run(["ros", "carmen-to-bag", str(log_path), "--out", str(work / "bag")], work / "bag.txt")
     bag = work / "bag" / f"{name}-corrected"
-    stamps, truth = _bag_reference(bag)
+    stamps, poses = _bag_poses(bag)
+    truth = poses[:, :2]
     same = same_input_as_map_build(name, log_path, work, seed)
     row: dict[str, Any] = {
         "log": name,
@@ -265,6 +295,7 @@ def bench_log(
         "map_build_ate": same["map_build_ate"],
         "build_map_ate": _build_map_ate(bag, work, "bagmap") if own_odometry else None,
         "same_input_as_map_build": same,
+        "motion": _motion(poses),
     }
     if build_map_only:
         row["wall_s"] = time.perf_counter() - t0
@@ -278,11 +309,29 @@ def bench_log(
     )  # fmt: skip
     row.update(
         dropped_share=_dropped(replay),
+        dropped=replay_counts(replay),
         replay_all=_errors(work / "replay" / "replay_scans.tum", stamps, truth),
         replay_tracked=_errors(work / "replay" / "replay.tum", stamps, truth),
         same_as_experiment=same_as_experiment(name, log_path, carmen, work, seed),
+        wall_s=time.perf_counter() - t0,
     )
     return row
+
+
+def _progress(row: dict[str, Any]) -> str:
+    """One line on a finished log: its wall time and the issue's comparison."""
+    text = f"{row['log']} seed {row['seed']} done in {row['wall_s']:.0f} s"
+    e = row.get("same_as_experiment")
+    if e:
+        d = e.get("dropped") or {}
+        text += (
+            f": replay {e['replay_mean']:.3f} m, experiment {e['amcl_carmen_mean']:.3f} m"
+            f" ({e['difference']:+.3f}), dropped {d.get('dropped')} of {d.get('scans')}"
+        )
+    m = row["same_input_as_map_build"]
+    if m.get("difference") is not None:
+        text += f"; --build-map - map build ATE {m['difference']:+.4f} m"
+    return text
 
 
 def main() -> int:
@@ -310,24 +359,50 @@ def main() -> int:
         action="store_true",
         help="skip step 4 (--build-map on the log's own odometry; one SLAM run per log less)",
     )
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_bag_replay.json) with"
+        " per log the replay's and the experiment's mean error, their difference, the scans"
+        " dropped, and the command, commit, date, machine and load; python -m symloc.readme"
+        " re-renders the README from it",
+    )
     args = parser.parse_args()
+    clock = RunClock()
     carmen = args.carmen or find_carmen_dir()
     if carmen is None:
         print("no CARMEN logs: pass --carmen DIR or set SYMLOC_SHARED_DATA", file=sys.stderr)
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
     partial = args.out / "bench_bag_replay.partial.jsonl"
-    print(f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name}")
+    print(
+        f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name};"
+        f" rows appended to {partial} as each log finishes",
+        flush=True,
+    )
     rows = []
-    for seed in args.seeds:
-        for name in args.logs:
-            print(f"# {name} seed {seed}", flush=True)
-            row = bench_log(
-                name, carmen, args.out, seed, args.build_map_only, not args.no_own_odometry
-            )
-            rows.append(row)
-            with partial.open("a") as fh:
-                fh.write(json.dumps(row) + "\n")
+    runs = [(seed, name) for seed in args.seeds for name in args.logs]
+    for k, (seed, name) in enumerate(runs, 1):
+        print(f"# [{k}/{len(runs)}] {name} seed {seed} (load {os.getloadavg()[0]:.2f})", flush=True)
+        row = bench_log(name, carmen, args.out, seed, args.build_map_only, not args.no_own_odometry)
+        rows.append(row)
+        with partial.open("a") as fh:
+            fh.write(json.dumps(row) + "\n")
+        print(f"# [{k}/{len(runs)}] {_progress(row)}", flush=True)
+    if args.results:
+        settings = {
+            "logs": args.logs,
+            "seeds": args.seeds,
+            "params": str(PARAMS.relative_to(REPO)),
+            "build_map_only": args.build_map_only,
+            "own_odometry": not args.no_own_odometry,
+        }
+        written = write_bag_replay_results(
+            args.results, rows, argv=sys.argv, clock=clock, settings=settings
+        )
+        print(f"wrote {written}", flush=True)
     print(
         f"\n--build-map against map build --carmen on the same log and odometry (map build's,"
         f" realistic, seeds {args.seeds}; target: |difference| <= 0.02 m); --build-map on the"
