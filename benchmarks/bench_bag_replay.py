@@ -29,7 +29,10 @@ experiment amcl-carmen`` tracks on a map drawn from the corrected poses with odo
 noisy (alpha1..4 = 0.01). So, for the issue's comparison, on the same map and odometry:
 
 5. ``symloc experiment amcl-carmen --logs LOG --skip-global --seed N``: its tracking error
-   (every scan, the filter's pose carried by odometry between updates) and its map;
+   (every scan, the filter's pose carried by odometry between updates) and its map; then its
+   AMCL again in this process (:func:`symloc.experiments.amcl_carmen.amcl_tracking_error`: the
+   same odometry draw and random stream) as run, updating on every scan, and with alpha1 0.04
+   (:data:`AMCL_VARIANTS`), to tell why a log where it loses track does;
 6. ``symloc ros carmen-to-bag LOG --odom-alpha 0.01 --seed N``: a bag with that experiment's
    odometry, replayed with ``carmen_params.yaml`` on the experiment's map (written as a map
    file): the mean error of every scan's estimate against the corrected poses in the map
@@ -162,19 +165,73 @@ def _bag_reference(bag: Path) -> tuple[np.ndarray, np.ndarray]:
     return stamps, poses[:, :2]
 
 
-def _motion(poses: np.ndarray) -> dict[str, float]:
-    """The scan-to-scan motions of the corrected poses (N, 3) as the odometry noise of
-    ``experiment amcl-carmen`` splits them (rot-trans-rot, no first rotation below 1 cm): the
-    share whose first rotation exceeds 0.5 rad, and the median step [m]."""
+def _heading_variance(a: np.ndarray, b: np.ndarray, alpha: float) -> np.ndarray:
+    """The variance [rad^2] of the heading change ``rot1 + rot2`` that the rot-trans-rot model
+    with alpha1..4 = ``alpha`` gives the motions from poses ``a`` to ``b`` (..., 3)."""
     from symloc.odometry import rot_trans_rot
 
+    r1, tr, r2 = rot_trans_rot(a, b)
+    q1 = np.minimum(np.abs(r1), np.pi - np.abs(r1))
+    q2 = np.minimum(np.abs(r2), np.pi - np.abs(r2))
+    return np.asarray(alpha * (q1**2 + q2**2) + 2 * alpha * tr**2)
+
+
+def _motion(poses: np.ndarray, alpha: float = 0.01) -> dict[str, float]:
+    """The scan-to-scan motions of the corrected poses (N, 3) as the odometry noise of
+    ``experiment amcl-carmen`` splits them (rot-trans-rot, no first rotation below 1 cm): the
+    share whose first rotation exceeds 0.5 rad and the median step [m]; and, over the motions
+    AMCL integrates at once (it updates after 0.25 m or 0.2 rad, nav2's defaults, here on the
+    corrected poses rather than the noisy odometry), the share of updates whose heading noise,
+    drawn scan by scan, has more than twice the standard deviation AMCL's model gives the
+    update's motion as one (both with alpha1..4 = ``alpha``)."""
+    from symloc.geometry import angle_diff
+    from symloc.odometry import rot_trans_rot
+
+    nan = float("nan")
     if len(poses) < 2:
-        return {"rot1_over_half_rad_share": float("nan"), "median_step_m": float("nan")}
+        return {
+            "rot1_over_half_rad_share": nan,
+            "median_step_m": nan,
+            "updates": 0,
+            "heading_noise_over_twice_model_share": nan,
+        }
     rot1, trans, _ = rot_trans_rot(poses[:-1], poses[1:])
+    per_scan = _heading_variance(poses[:-1], poses[1:], alpha)
+    drawn, model = [], []
+    last = 0
+    for i in range(1, len(poses)):
+        moved = np.hypot(*(poses[i, :2] - poses[last, :2]))
+        turned = abs(float(angle_diff(poses[i, 2], poses[last, 2])))
+        if moved >= 0.25 or turned >= 0.2:
+            drawn.append(per_scan[last:i].sum())
+            model.append(float(_heading_variance(poses[last], poses[i], alpha)))
+            last = i
+    wide = np.sqrt(drawn) > 2 * np.sqrt(model) if drawn else np.zeros(0, dtype=bool)
     return {
         "rot1_over_half_rad_share": float((np.abs(rot1) > 0.5).mean()),
         "median_step_m": float(np.median(trans)),
+        "updates": len(drawn),
+        "heading_noise_over_twice_model_share": float(wide.mean()) if len(wide) else nan,
     }
+
+
+#: AMCL alone on the experiment's map and odometry with one parameter changed
+#: (:func:`symloc.experiments.amcl_carmen.amcl_tracking_error`): as the experiment runs it,
+#: updating on every scan, and with its rotational noise alpha1 four times wider (0.04).
+AMCL_VARIANTS: dict[str, dict[str, float]] = {
+    "as_run": {},
+    "every_scan": {"update_min_d": 0.0, "update_min_a": 0.0},
+    "alpha1_0.04": {"alpha1": 0.04},
+}
+
+
+def amcl_variants(name: str, log_path: Path, map_cache: Path, seed: int) -> dict[str, Any]:
+    """Step 5's AMCL again in this process, as run and with each change of
+    :data:`AMCL_VARIANTS`: mean, median and largest error [m] of each."""
+    from symloc.experiments.amcl_carmen import amcl_tracking_error, log_data
+
+    data = log_data(name, log_path, cache=map_cache)
+    return {k: amcl_tracking_error(data, seed, **v) for k, v in AMCL_VARIANTS.items()}
 
 
 def _map_file(npz: Path, yaml: Path) -> Path:
@@ -226,6 +283,7 @@ def same_as_experiment(
     )  # fmt: skip
     stamps, truth = _bag_reference(work / "bag_amcl" / f"{name}-corrected")
     err = _errors(work / "replay_amcl" / "replay_scans.tum", stamps, truth)
+    variants = amcl_variants(name, log_path, work / "amcl" / f"amcl_carmen_map_{name}.npz", seed)
     return {
         "amcl_carmen_mean": float(tracking["mean_error_m"]),
         "replay_mean": err["mean"],
@@ -233,6 +291,7 @@ def same_as_experiment(
         "difference": err["mean"] - float(tracking["mean_error_m"]),
         "dropped_share": _dropped(replay),
         "dropped": replay_counts(replay),
+        "amcl_variants": variants,
     }
 
 

@@ -36,7 +36,12 @@ def _row(log: str, replay: float, experiment: float, out: str = REPLAY_OUT) -> d
             "build_map_ate": 0.0758,
             "difference": -0.0002,
         },
-        "motion": {"rot1_over_half_rad_share": 0.4, "median_step_m": 0.67},
+        "motion": {
+            "rot1_over_half_rad_share": 0.4,
+            "median_step_m": 0.67,
+            "updates": 900,
+            "heading_noise_over_twice_model_share": 0.0,
+        },
         "dropped_share": 0.0,
         "dropped": replay_counts("scans used: 910 of 910\n"),
         "replay_all": {"n": 910, "mean": 0.15, "mean_aligned": 0.08, "rmse_aligned": 0.09},
@@ -48,6 +53,10 @@ def _row(log: str, replay: float, experiment: float, out: str = REPLAY_OUT) -> d
             "difference": replay - experiment,
             "dropped_share": counts["dropped_share"],
             "dropped": counts,
+            "amcl_variants": {
+                "as_run": {"mean_error_m": experiment, "max_error_m": 0.3},
+                "every_scan": {"mean_error_m": float("nan"), "max_error_m": 0.2},
+            },
         },
         "wall_s": 123.456,
     }
@@ -81,6 +90,9 @@ def test_a_summary_row_keeps_the_paragraphs_figures_and_judges_the_targets() -> 
     assert s["as_user"]["dropped"] == 0
     assert s["build_map"]["difference_m"] == -0.0002
     assert s["motion"]["rot1_over_half_rad_share"] == 0.4
+    assert s["motion"]["updates"] == 900
+    assert s["amcl_variants"]["as_run"]["mean_error_m"] == 0.0487
+    assert s["amcl_variants"]["every_scan"]["mean_error_m"] is None
     assert s["wall_s"] == 123.5
     lost = summary_row(_row("freiburg-079", 10.4, 6.45))
     assert lost["within_targets"] is False

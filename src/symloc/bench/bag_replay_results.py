@@ -91,7 +91,10 @@ def summary_row(row: Mapping[str, Any]) -> dict[str, Any]:
     frame and after a rigid fit, mean over the scans published as tracking); ``build_map``
     (``--build-map`` ATE against ``map build --carmen`` on the same odometry, and on the log's
     own); ``motion`` (the share of scan-to-scan motions whose first rotation exceeds 0.5 rad,
-    and the median step); ``wall_s``. Missing steps give None."""
+    the median step, and the share of AMCL's updates whose heading noise, drawn scan by scan, is
+    over twice as wide as its model of the update's motion); ``amcl_variants`` (the
+    experiment's AMCL again, as run and with one parameter changed: mean, median and largest
+    error); ``wall_s``. Missing steps give None (an empty object for the last two)."""
     same = row.get("same_as_experiment") or {}
     counts = same.get("dropped") if isinstance(same.get("dropped"), Mapping) else None
     out: dict[str, Any] = {
@@ -125,10 +128,9 @@ def summary_row(row: Mapping[str, Any]) -> dict[str, Any]:
         "difference_m": _num(mb.get("difference")),
         "own_odometry_ate_m": _num(row.get("build_map_ate")),
     }
-    motion = row.get("motion") or {}
-    out["motion"] = {
-        "rot1_over_half_rad_share": _num(motion.get("rot1_over_half_rad_share")),
-        "median_step_m": _num(motion.get("median_step_m")),
+    out["motion"] = {k: _num(v) for k, v in (row.get("motion") or {}).items()}
+    out["amcl_variants"] = {
+        k: {f: _num(x) for f, x in v.items()} for k, v in (same.get("amcl_variants") or {}).items()
     }
     out["wall_s"] = None if row.get("wall_s") is None else round(float(row["wall_s"]), 1)
     return out
