@@ -229,6 +229,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "symmetry_carmen",
         "bench_keyframe_headings",
         "bench_localization_test_realistic_15d826e",
+        "bench_ros",
     ],
 )
 def test_each_new_results_file_is_needed_by_the_readme(copy: Path, name: str) -> None:
