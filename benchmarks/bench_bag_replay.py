@@ -29,7 +29,10 @@ experiment amcl-carmen`` tracks on a map drawn from the corrected poses with odo
 noisy (alpha1..4 = 0.01). So, for the issue's comparison, on the same map and odometry:
 
 5. ``symloc experiment amcl-carmen --logs LOG --skip-global --seed N``: its tracking error
-   (every scan, the filter's pose carried by odometry between updates) and its map;
+   (every scan, the filter's pose carried by odometry between updates) and its map; then its
+   AMCL again in this process (:func:`symloc.experiments.amcl_carmen.amcl_tracking_error`: the
+   same odometry draw and random stream) as run, updating on every scan, and with alpha1 0.04
+   (:data:`AMCL_VARIANTS`), to tell why a log where it loses track does;
 6. ``symloc ros carmen-to-bag LOG --odom-alpha 0.01 --seed N``: a bag with that experiment's
    odometry, replayed with ``carmen_params.yaml`` on the experiment's map (written as a map
    file): the mean error of every scan's estimate against the corrected poses in the map
@@ -41,17 +44,22 @@ tracking error on the same log (step 6 against step 5), fewer than 1 % of scans 
 ``--build-map`` within 0.02 m ATE of ``map build --carmen``. Replay poses are matched to the
 bag's ground truth (the corrected poses) by their stamps, in order among repeated stamps (intel's
 go backwards now and then; a log without usable stamps is stamped by its motion in the bag). Rows are appended to
-``<out>/bench_bag_replay.partial.jsonl`` as each log finishes.
+``<out>/bench_bag_replay.partial.jsonl`` as each log finishes, and a line of progress printed.
+``--results PATH`` writes, at the end, a results file (:mod:`symloc.bench.bag_replay_results`:
+per log the figures above, the scans dropped with their reasons, and the run's command, commit,
+date, machine and load); README.md renders its paragraph from
+``docs/results/bench_bag_replay.json`` (``python -m symloc.readme``).
 
 Run: ``python benchmarks/bench_bag_replay.py [--logs intel aces] [--out DIR] [--seeds N ...]
-[--build-map-only] [--no-own-odometry]`` (several seeds: every log with the first seed, then
-with the next; a seed other than 0 works in ``<out>/<log>_seed<N>``).
+[--build-map-only] [--no-own-odometry] [--results PATH]`` (several seeds: every log with the
+first seed, then with the next; a seed other than 0 works in ``<out>/<log>_seed<N>``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
@@ -61,6 +69,8 @@ from typing import Any
 
 import numpy as np
 
+from symloc.bench.bag_replay_results import replay_counts, write_bag_replay_results
+from symloc.bench.provenance import RunClock
 from symloc.bench.shared_data import find_carmen_dir
 
 REPO = Path(__file__).resolve().parents[1]
@@ -137,16 +147,91 @@ def _errors(tum: Path, stamps: np.ndarray, truth: np.ndarray) -> dict[str, float
     }
 
 
-def _bag_reference(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+def _bag_poses(bag: Path) -> tuple[np.ndarray, np.ndarray]:
     """The bag's ground truth (the log's corrected poses as carmen-to-bag wrote them): stamps
-    (N,) [s] and positions (N, 2) [m]. Its stamps are the bag's, the ones replay writes (a log
-    without usable stamps is stamped by its motion in the bag)."""
+    (N,) [s] and poses (N, 3) [m, m, rad]. Its stamps are the bag's, the ones replay writes (a
+    log without usable stamps is stamped by its motion in the bag)."""
     from symloc.io.rosbag import read_bag
 
     msgs = [m for m in read_bag(bag, kinds=("truth",)) if m.kind == "truth"]
     stamps = np.array([m.stamp for m in msgs], dtype=np.float64)
-    xy = np.array([m.value.pose[:2] for m in msgs], dtype=np.float64).reshape(-1, 2)
-    return stamps, xy
+    poses = np.array([m.value.pose[:3] for m in msgs], dtype=np.float64).reshape(-1, 3)
+    return stamps, poses
+
+
+def _bag_reference(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The bag's ground truth: stamps (N,) [s] and positions (N, 2) [m] (:func:`_bag_poses`)."""
+    stamps, poses = _bag_poses(bag)
+    return stamps, poses[:, :2]
+
+
+def _heading_variance(a: np.ndarray, b: np.ndarray, alpha: float) -> np.ndarray:
+    """The variance [rad^2] of the heading change ``rot1 + rot2`` that the rot-trans-rot model
+    with alpha1..4 = ``alpha`` gives the motions from poses ``a`` to ``b`` (..., 3)."""
+    from symloc.odometry import rot_trans_rot
+
+    r1, tr, r2 = rot_trans_rot(a, b)
+    q1 = np.minimum(np.abs(r1), np.pi - np.abs(r1))
+    q2 = np.minimum(np.abs(r2), np.pi - np.abs(r2))
+    return np.asarray(alpha * (q1**2 + q2**2) + 2 * alpha * tr**2)
+
+
+def _motion(poses: np.ndarray, alpha: float = 0.01) -> dict[str, float]:
+    """The scan-to-scan motions of the corrected poses (N, 3) as the odometry noise of
+    ``experiment amcl-carmen`` splits them (rot-trans-rot, no first rotation below 1 cm): the
+    share whose first rotation exceeds 0.5 rad and the median step [m]; and, over the motions
+    AMCL integrates at once (it updates after 0.25 m or 0.2 rad, nav2's defaults, here on the
+    corrected poses rather than the noisy odometry), the share of updates whose heading noise,
+    drawn scan by scan, has more than twice the standard deviation AMCL's model gives the
+    update's motion as one (both with alpha1..4 = ``alpha``)."""
+    from symloc.geometry import angle_diff
+    from symloc.odometry import rot_trans_rot
+
+    nan = float("nan")
+    if len(poses) < 2:
+        return {
+            "rot1_over_half_rad_share": nan,
+            "median_step_m": nan,
+            "updates": 0,
+            "heading_noise_over_twice_model_share": nan,
+        }
+    rot1, trans, _ = rot_trans_rot(poses[:-1], poses[1:])
+    per_scan = _heading_variance(poses[:-1], poses[1:], alpha)
+    drawn, model = [], []
+    last = 0
+    for i in range(1, len(poses)):
+        moved = np.hypot(*(poses[i, :2] - poses[last, :2]))
+        turned = abs(float(angle_diff(poses[i, 2], poses[last, 2])))
+        if moved >= 0.25 or turned >= 0.2:
+            drawn.append(per_scan[last:i].sum())
+            model.append(float(_heading_variance(poses[last], poses[i], alpha)))
+            last = i
+    wide = np.sqrt(drawn) > 2 * np.sqrt(model) if drawn else np.zeros(0, dtype=bool)
+    return {
+        "rot1_over_half_rad_share": float((np.abs(rot1) > 0.5).mean()),
+        "median_step_m": float(np.median(trans)),
+        "updates": len(drawn),
+        "heading_noise_over_twice_model_share": float(wide.mean()) if len(wide) else nan,
+    }
+
+
+#: AMCL alone on the experiment's map and odometry with one parameter changed
+#: (:func:`symloc.experiments.amcl_carmen.amcl_tracking_error`): as the experiment runs it,
+#: updating on every scan, and with its rotational noise alpha1 four times wider (0.04).
+AMCL_VARIANTS: dict[str, dict[str, float]] = {
+    "as_run": {},
+    "every_scan": {"update_min_d": 0.0, "update_min_a": 0.0},
+    "alpha1_0.04": {"alpha1": 0.04},
+}
+
+
+def amcl_variants(name: str, log_path: Path, map_cache: Path, seed: int) -> dict[str, Any]:
+    """Step 5's AMCL again in this process, as run and with each change of
+    :data:`AMCL_VARIANTS`: mean, median and largest error [m] of each."""
+    from symloc.experiments.amcl_carmen import amcl_tracking_error, log_data
+
+    data = log_data(name, log_path, cache=map_cache)
+    return {k: amcl_tracking_error(data, seed, **v) for k, v in AMCL_VARIANTS.items()}
 
 
 def _map_file(npz: Path, yaml: Path) -> Path:
@@ -162,8 +247,8 @@ def _map_file(npz: Path, yaml: Path) -> Path:
 
 def _dropped(replay_out: str) -> float | None:
     """The share of the bag's scans replay did not use (its ``scans used`` line)."""
-    used = re.search(r"scans used: (\d+) of (\d+)", replay_out)
-    return (1.0 - int(used.group(1)) / int(used.group(2))) if used else None
+    counts = replay_counts(replay_out)
+    return None if counts is None else counts["dropped_share"]
 
 
 def same_as_experiment(
@@ -198,12 +283,15 @@ def same_as_experiment(
     )  # fmt: skip
     stamps, truth = _bag_reference(work / "bag_amcl" / f"{name}-corrected")
     err = _errors(work / "replay_amcl" / "replay_scans.tum", stamps, truth)
+    variants = amcl_variants(name, log_path, work / "amcl" / f"amcl_carmen_map_{name}.npz", seed)
     return {
         "amcl_carmen_mean": float(tracking["mean_error_m"]),
         "replay_mean": err["mean"],
         "replay_n": err["n"],
         "difference": err["mean"] - float(tracking["mean_error_m"]),
         "dropped_share": _dropped(replay),
+        "dropped": replay_counts(replay),
+        "amcl_variants": variants,
     }
 
 
@@ -256,7 +344,8 @@ def bench_log(
     work.mkdir(parents=True, exist_ok=True)
     _run(["ros", "carmen-to-bag", str(log_path), "--out", str(work / "bag")], work / "bag.txt")
     bag = work / "bag" / f"{name}-corrected"
-    stamps, truth = _bag_reference(bag)
+    stamps, poses = _bag_poses(bag)
+    truth = poses[:, :2]
     same = same_input_as_map_build(name, log_path, work, seed)
     row: dict[str, Any] = {
         "log": name,
@@ -265,6 +354,7 @@ def bench_log(
         "map_build_ate": same["map_build_ate"],
         "build_map_ate": _build_map_ate(bag, work, "bagmap") if own_odometry else None,
         "same_input_as_map_build": same,
+        "motion": _motion(poses),
     }
     if build_map_only:
         row["wall_s"] = time.perf_counter() - t0
@@ -278,11 +368,29 @@ def bench_log(
     )  # fmt: skip
     row.update(
         dropped_share=_dropped(replay),
+        dropped=replay_counts(replay),
         replay_all=_errors(work / "replay" / "replay_scans.tum", stamps, truth),
         replay_tracked=_errors(work / "replay" / "replay.tum", stamps, truth),
         same_as_experiment=same_as_experiment(name, log_path, carmen, work, seed),
+        wall_s=time.perf_counter() - t0,
     )
     return row
+
+
+def _progress(row: dict[str, Any]) -> str:
+    """One line on a finished log: its wall time and the issue's comparison."""
+    text = f"{row['log']} seed {row['seed']} done in {row['wall_s']:.0f} s"
+    e = row.get("same_as_experiment")
+    if e:
+        d = e.get("dropped") or {}
+        text += (
+            f": replay {e['replay_mean']:.3f} m, experiment {e['amcl_carmen_mean']:.3f} m"
+            f" ({e['difference']:+.3f}), dropped {d.get('dropped')} of {d.get('scans')}"
+        )
+    m = row["same_input_as_map_build"]
+    if m.get("difference") is not None:
+        text += f"; --build-map - map build ATE {m['difference']:+.4f} m"
+    return text
 
 
 def main() -> int:
@@ -310,24 +418,50 @@ def main() -> int:
         action="store_true",
         help="skip step 4 (--build-map on the log's own odometry; one SLAM run per log less)",
     )
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_bag_replay.json) with"
+        " per log the replay's and the experiment's mean error, their difference, the scans"
+        " dropped, and the command, commit, date, machine and load; python -m symloc.readme"
+        " re-renders the README from it",
+    )
     args = parser.parse_args()
+    clock = RunClock()
     carmen = args.carmen or find_carmen_dir()
     if carmen is None:
         print("no CARMEN logs: pass --carmen DIR or set SYMLOC_SHARED_DATA", file=sys.stderr)
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
     partial = args.out / "bench_bag_replay.partial.jsonl"
-    print(f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name}")
+    print(
+        f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name};"
+        f" rows appended to {partial} as each log finishes",
+        flush=True,
+    )
     rows = []
-    for seed in args.seeds:
-        for name in args.logs:
-            print(f"# {name} seed {seed}", flush=True)
-            row = bench_log(
-                name, carmen, args.out, seed, args.build_map_only, not args.no_own_odometry
-            )
-            rows.append(row)
-            with partial.open("a") as fh:
-                fh.write(json.dumps(row) + "\n")
+    runs = [(seed, name) for seed in args.seeds for name in args.logs]
+    for k, (seed, name) in enumerate(runs, 1):
+        print(f"# [{k}/{len(runs)}] {name} seed {seed} (load {os.getloadavg()[0]:.2f})", flush=True)
+        row = bench_log(name, carmen, args.out, seed, args.build_map_only, not args.no_own_odometry)
+        rows.append(row)
+        with partial.open("a") as fh:
+            fh.write(json.dumps(row) + "\n")
+        print(f"# [{k}/{len(runs)}] {_progress(row)}", flush=True)
+    if args.results:
+        settings = {
+            "logs": args.logs,
+            "seeds": args.seeds,
+            "params": str(PARAMS.relative_to(REPO)),
+            "build_map_only": args.build_map_only,
+            "own_odometry": not args.no_own_odometry,
+        }
+        written = write_bag_replay_results(
+            args.results, rows, argv=sys.argv, clock=clock, settings=settings
+        )
+        print(f"wrote {written}", flush=True)
     print(
         f"\n--build-map against map build --carmen on the same log and odometry (map build's,"
         f" realistic, seeds {args.seeds}; target: |difference| <= 0.02 m); --build-map on the"

@@ -7,7 +7,10 @@
 - DDS (when rclpy is installed): publisher -> subscriber latency on loopback for a 800-beam
   LaserScan and a 640 x 480 Image, in one process, Fast DDS, random domain id.
 
-Prints medians (wall and process CPU) in ms. Run: ``python benchmarks/bench_ros.py``
+Prints medians (wall and process CPU) in ms. Run: ``python benchmarks/bench_ros.py
+[--results PATH]``: ``--results`` also writes the figures as a results file with the run's
+command, commit, date, machine and load (:mod:`symloc.bench.results_file`; the README's is
+``docs/results/bench_ros.json``, rendered by ``python -m symloc.readme``).
 """
 
 from __future__ import annotations
@@ -16,10 +19,12 @@ import argparse
 import math
 import os
 import random
+import sys
 import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
@@ -46,7 +51,9 @@ def median_ms(fn: Callable[[int], object], repeats: int) -> tuple[float, float]:
     return 1e3 * float(np.median(wall)), 1e3 * float(np.median(cpu))
 
 
-def bench_conversions(repeats: int) -> None:
+def bench_conversions(repeats: int) -> dict[str, Any]:
+    """Median ms of the message conversions: ``{name: {"wall_ms", "cpu_ms"}}``."""
+    out: dict[str, Any] = {}
     ts = get_typestore(Stores.ROS2_HUMBLE)
     rng = np.random.default_rng(0)
     scan = LaserScan(-math.pi, 2 * math.pi / 800, 0.15, 12.0, rng.uniform(0.5, 6, 800), stamp=1.0)
@@ -63,10 +70,12 @@ def bench_conversions(repeats: int) -> None:
         lambda i: scan_from_msg(ts.deserialize_cdr(raw, "sensor_msgs/msg/LaserScan")), repeats
     )
     print(f"LaserScan 800 beams, CDR -> symloc:      {w:7.3f} ms wall  {c:7.3f} ms cpu")
+    out["scan_cdr_to_symloc"] = {"wall_ms": w, "cpu_ms": c, "beams": 800}
     w, c = median_ms(
         lambda i: image_from_msg(ts.deserialize_cdr(raw_img, "sensor_msgs/msg/Image")), repeats
     )
     print(f"Image 640x480 rgb8, CDR -> RGB array:    {w:7.3f} ms wall  {c:7.3f} ms cpu")
+    out["image_cdr_to_rgb"] = {"wall_ms": w, "cpu_ms": c, "width": 640, "height": 480}
     try:
         from sensor_msgs.msg import Image
 
@@ -75,13 +84,16 @@ def bench_conversions(repeats: int) -> None:
         print(
             "rclpy absent: rclpy message building skipped (pip install '.[ros]' in symloc's checkout)"
         )
-        return
+        return out
     fields = image_to_fields(img, stamp=1.0)
     w, c = median_ms(lambda i: build_rclpy(Image, fields), repeats)
     print(f"Image 640x480, field dict -> rclpy msg:  {w:7.3f} ms wall  {c:7.3f} ms cpu")
+    out["rclpy_image_from_fields"] = {"wall_ms": w, "cpu_ms": c, "width": 640, "height": 480}
+    return out
 
 
-def bench_node_logic(seed: int) -> None:
+def bench_node_logic(seed: int) -> dict[str, Any]:
+    """NodeCore per scan over a recorded simulated kidnapped run: ms wall and CPU per scan."""
     from symloc.bench.sim_record import record_sim_run
     from symloc.ros.params import NodeParams
     from symloc.ros.replay import replay_bag
@@ -98,9 +110,19 @@ def bench_node_logic(seed: int) -> None:
         f"{1e3 * cpu / n:7.3f} ms cpu per scan ({n} scans, 800 beams, 2000 particles max, "
         f"bag reading included)"
     )
+    return {
+        "wall_ms_per_scan": 1e3 * wall / n,
+        "cpu_ms_per_scan": 1e3 * cpu / n,
+        "scans": n,
+        "beams": 800,
+        "max_particles": 2000,
+    }
 
 
-def bench_dds(repeats: int) -> None:
+def bench_dds(repeats: int) -> dict[str, Any]:
+    """DDS loopback latency, publisher to subscriber in one process: ``{name: {"median_ms",
+    "p90_ms", "delivered", "sent"}}`` (empty without rclpy)."""
+    out: dict[str, Any] = {}
     try:
         import rclpy
         from rclpy.context import Context
@@ -111,7 +133,7 @@ def bench_dds(repeats: int) -> None:
         from symloc.msgs import build_rclpy
     except ImportError:
         print("rclpy absent: DDS round trips skipped (pip install '.[ros]' in symloc's checkout)")
-        return
+        return out
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     ctx = Context()
     rclpy.init(context=ctx, domain_id=random.randint(150, 230))
@@ -121,9 +143,9 @@ def bench_dds(repeats: int) -> None:
     rng = np.random.default_rng(1)
     scan = LaserScan(-math.pi, 2 * math.pi / 800, 0.15, 12.0, rng.uniform(0.5, 6, 800), stamp=1.0)
     img = rng.integers(0, 256, (480, 640, 3), dtype=np.uint8)
-    for name, cls, fields in (
-        ("LaserScan 800 beams", ScanMsg, scan_to_fields(scan)),
-        ("Image 640x480 rgb8", Image, image_to_fields(img, stamp=1.0)),
+    for key, name, cls, fields in (
+        ("scan", "LaserScan 800 beams", ScanMsg, scan_to_fields(scan)),
+        ("image", "Image 640x480 rgb8", Image, image_to_fields(img, stamp=1.0)),
     ):
         got: list[float] = []
         node.create_subscription(
@@ -148,20 +170,52 @@ def bench_dds(repeats: int) -> None:
             f"DDS loopback {name}: median {1e3 * float(np.median(lat)):.3f} ms,"
             f" p90 {1e3 * float(np.percentile(lat, 90)):.3f} ms ({len(lat)}/{repeats} delivered)"
         )
+        out[key] = {
+            "median_ms": 1e3 * float(np.median(lat)) if lat else None,
+            "p90_ms": 1e3 * float(np.percentile(lat, 90)) if lat else None,
+            "delivered": len(lat),
+            "sent": repeats,
+        }
     ex.shutdown()
     node.destroy_node()
     rclpy.shutdown(context=ctx)
+    return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=50)
     parser.add_argument("--seed", type=int, default=0, help="seed of the recorded run (printed)")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a results file (the README's: docs/results/bench_ros.json) with the"
+        " figures, command, commit, date, machine and load",
+    )
     args = parser.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     print(f"# bench_ros  seed={args.seed}  repeats={args.repeats}")
-    bench_conversions(args.repeats)
-    bench_node_logic(args.seed)
-    bench_dds(args.repeats)
+    figures = {
+        "conversions": bench_conversions(args.repeats),
+        "node_logic": bench_node_logic(args.seed),
+        "dds": bench_dds(args.repeats),
+    }
+    if args.results:
+        from symloc.bench.results_file import write_run_results
+
+        written = write_run_results(
+            args.results,
+            argv=sys.argv,
+            clock=clock,
+            settings={"repeats": args.repeats, "seed": args.seed},
+            figures=figures,
+            program="python",
+        )
+        print(f"wrote {written}")
 
 
 if __name__ == "__main__":

@@ -125,3 +125,31 @@ def test_global_localization_reports_the_confidence_columns():
         if c.any():
             assert run["max_error_while_confident_m"] == pytest.approx(float(tr["dxy"][c].max()))
         assert len(tr["reason"]) == len(c)
+
+
+@pytest.mark.shared_data
+def test_amcl_tracking_error_without_overrides_is_the_experiments_tracking_error(tmp_path):
+    """amcl_tracking_error replays the experiment's own odometry draw and AMCL: without
+    overrides its mean error is the experiment's (tracking, the same seed); an override
+    changes the run."""
+    folder = find_carmen_dir()
+    if folder is None or not (folder / "aces-corrected.log.gz").is_file():
+        pytest.skip("CARMEN logs not found (../shared/data/carmen or SYMLOC_SHARED_DATA)")
+    from symloc.experiments.amcl_carmen import (
+        _LogData,
+        amcl_tracking_error,
+        log_data,
+        tracking_params,
+        tracking_stream,
+    )
+
+    full = log_data("aces", folder / "aces-corrected.log.gz", cache=tmp_path / "aces.npz")
+    assert (tmp_path / "aces.npz").is_file()
+    n = 30
+    data = _LogData("aces", SimpleNamespace(scans=full.log.scans[:n]), full.grid, full.truth[:n])
+    same = tracking(data, tracking_params(0.01), (0.01,) * 4, tracking_stream("aces", 3))
+    got = amcl_tracking_error(data, 3)
+    assert got["mean_error_m"] == same["mean_error_m"]
+    assert got["max_error_m"] == same["max_error_m"]
+    every_scan = amcl_tracking_error(data, 3, update_min_d=0.0, update_min_a=0.0)
+    assert every_scan["mean_error_m"] != got["mean_error_m"]

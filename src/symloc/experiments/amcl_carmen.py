@@ -61,9 +61,11 @@ from symloc.localizer.settings import LocalizerSettings
 
 __all__ = [
     "LOG_NAMES",
+    "amcl_tracking_error",
     "build_map",
     "find_carmen_dir",
     "global_localization",
+    "log_data",
     "noisy_odometry",
     "register",
     "run",
@@ -316,6 +318,48 @@ def tracking(data: _LogData, params: Any, alphas: tuple[float, ...], rng: Any) -
     }
 
 
+def log_data(name: str, path: Path, cache: Path | None = None) -> _LogData:
+    """Log ``name`` read from ``path`` as the experiment reads it: its scans, the map drawn
+    from the corrected poses (:func:`build_map`, kept in ``cache``) and the corrected poses
+    with wrapped headings as the truth."""
+    from symloc.io.carmen import read_carmen
+
+    log = read_carmen(path)
+    grid = build_map(log, cache=cache)
+    truth = log.laser_poses.copy()
+    truth[:, 2] = wrap_angle(truth[:, 2])
+    return _LogData(name, log, grid, truth)
+
+
+def amcl_tracking_error(
+    data: _LogData,
+    seed: int,
+    alpha: float = 0.01,
+    position: int = 0,
+    **overrides: Any,
+) -> dict[str, float]:
+    """AMCL alone tracking ``data``'s log as this experiment's tracking does with ``--seed
+    seed --odom-alpha alpha`` (the same odometry draw and random stream,
+    :func:`tracking_stream`, ``position`` as there; the same AMCL parameters,
+    :func:`tracking_params` with its default laser model and particles), with ``overrides`` of those parameters (e.g. ``update_min_d=0``,
+    ``alpha1=0.04``): the mean, median and largest position error [m] over the scans. Without
+    overrides the mean is the experiment's ``mean_error_m``; the confidence verdict and
+    symloc's claims are not run."""
+    from symloc.mcl import Amcl
+
+    gen = tracking_stream(data.name, seed, position)
+    odom = noisy_odometry(data.truth, (alpha,) * 4, gen)
+    amcl = Amcl(data.grid, tracking_params(alpha).replace(**overrides), gen)
+    amcl.initialize_pose(data.truth[0])
+    out = _run_filter(amcl, data.log, odom, 0, len(data.truth))
+    dxy, _ = _errors(out["estimate"], data.truth)
+    return {
+        "mean_error_m": float(dxy.mean()),
+        "median_error_m": float(np.median(dxy)),
+        "max_error_m": float(dxy.max()),
+    }
+
+
 def global_localization(
     data: _LogData,
     params: Any,
@@ -501,8 +545,6 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the experiment on each log; print, write JSON and the figure."""
-    from symloc.io.carmen import read_carmen
-
     paths = carmen_log_paths(args.logs, args.data)
     folder = next(iter(paths.values())).parent
     a = args.odom_alpha
@@ -542,12 +584,8 @@ def run(args: argparse.Namespace) -> int:
         rng_track = tracking_stream(name, args.seed, len(results))
         idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
         rng_global = np.random.default_rng([args.seed, idx, 1])
-        path = paths[name]
-        log = read_carmen(path)
-        grid = build_map(log, cache=args.out / f"amcl_carmen_map_{name}.npz")
-        truth = log.laser_poses.copy()
-        truth[:, 2] = wrap_angle(truth[:, 2])
-        data = _LogData(name, log, grid, truth)
+        data = log_data(name, paths[name], cache=args.out / f"amcl_carmen_map_{name}.npz")
+        log, grid, truth = data.log, data.grid, data.truth
         tr = tracking(data, track_p, alphas, rng_track)
         est = tr.pop("_estimate")
         entry: dict[str, Any] = {"log": name, "scans": len(truth), "tracking": tr}
