@@ -228,7 +228,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "amcl_carmen",
         "symmetry_carmen",
         "bench_keyframe_headings",
-        "bench_localization_test_realistic_15d826e",
+        "bench_localization_test_realistic_c96d745",
         "bench_symmetry",
         "bench_vision",
         "bench_amcl_update",
