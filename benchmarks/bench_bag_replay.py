@@ -43,8 +43,9 @@ The issue's targets: replay's mean error within 0.02 m of ``symloc experiment am
 tracking error on the same log (step 6 against step 5), fewer than 1 % of scans dropped,
 ``--build-map`` within 0.02 m ATE of ``map build --carmen``. Replay poses are matched to the
 bag's ground truth (the corrected poses) by their stamps, in order among repeated stamps (intel's
-go backwards now and then; a log without usable stamps is stamped by its motion in the bag). Rows are appended to
-``<out>/bench_bag_replay.partial.jsonl`` as each log finishes, and a line of progress printed.
+go backwards now and then; a log without usable stamps is stamped by its motion in the bag).
+Rows are appended to ``<out>/bench_bag_replay.partial.jsonl`` (emptied when the run starts) as
+each log finishes, and a line of progress printed.
 ``--results PATH`` writes, at the end, a results file (:mod:`symloc.bench.bag_replay_results`:
 per log the figures above, the scans dropped with their reasons, and the run's command, commit,
 date, machine and load); README.md renders its paragraph from
@@ -436,6 +437,7 @@ def main() -> int:
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
     partial = args.out / "bench_bag_replay.partial.jsonl"
+    partial.write_text("")  # this run's rows only (a rerun into the same --out starts afresh)
     print(
         f"# bench_bag_replay: logs {args.logs} from {carmen}; replay params {PARAMS.name};"
         f" rows appended to {partial} as each log finishes",
