@@ -229,6 +229,7 @@ def test_a_sentence_stating_no_wrong_claim_fails_when_one_appears(copy: Path) ->
         "symmetry_carmen",
         "bench_keyframe_headings",
         "bench_localization_test_realistic_c96d745",
+        "bench_localization_test_realistic_1181969",
         "bench_localization_seeds1000005-1000006_realistic",
         "bench_localization_seeds1000005-1000006_realistic_50d3343",
         "bench_localization_dev_realistic_1181969",
