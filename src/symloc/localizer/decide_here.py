@@ -712,10 +712,9 @@ class DecideHere:
         cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
         # verified before this image, carried to now: a pose the camera vouched for once
         # is not ruled out by a later view that fails to see it
+        seen = checked_by(carried, inp.odom_pose, answer)
         before = list(self.verified)
-        self.verified.extend(
-            c for c in checked_by(carried, inp.odom_pose, answer) if not c.contradicted
-        )
+        self.verified.extend(c for c in seen if not c.contradicted)
         index, pose_or_none, verdict = answer.index, answer.pose, answer.reason
         if index is None and ctx.gate is not None and isinstance(inp.scan, LaserScan):
             together = one_pose_verified(ctx.gate, inp.scan, carried, answer, cov)
@@ -724,7 +723,7 @@ class DecideHere:
         if index is None or pose_or_none is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
         if self.classes is None:
-            self.checked.extend(checked_by(carried, inp.odom_pose, answer))
+            self.checked.extend(seen)
             fits = self.fits
             unchecked = [
                 i + 1
@@ -745,7 +744,6 @@ class DecideHere:
                     f"image {self.views}: hypothesis {index + 1} verified, but no image could "
                     f"check {_listed(unchecked)}, which the laser ranks at least as high",
                 )
-        if self.classes is None:
             also = [
                 j + 1
                 for j in range(carried.shape[0])
