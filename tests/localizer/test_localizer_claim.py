@@ -19,7 +19,7 @@ from symloc.odometry import OdometryReading
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
-from symloc.sim.rooms import hallway, l_shaped_room
+from symloc.sim.rooms import Room, hallway, l_shaped_room, rectangle_room
 from symloc.symmetry import SymmetryConfig, judge_symmetry
 
 ALPHAS = (0.05, 0.05, 0.05, 0.05)
@@ -282,18 +282,13 @@ def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
     assert not any("global relocalization" in line for line in loc.log)
 
 
-def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_next() -> None:
-    """The operator's pose chooses among a symmetric room's copies only while the robot is
-    there: after it is carried off (the pose never confirmed: too few beams returned), the
-    pose AMCL finds next is checked against the map's rotated copies like any other, so in a
-    rectangle it is never published as tracking."""
+def _rectangle_localizer() -> tuple[Room, Localizer]:
+    """A 4 x 2 m rectangle room and a localizer on its rasterised map that knows the map's
+    rotated copies (order 2)."""
     from symloc.localizer.map_symmetry import map_symmetries
-    from symloc.sim.rooms import rectangle_room
 
     room = rectangle_room(4.0, 2.0)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
-    syms = map_symmetries(grid)
-    assert any(s.order == 2 for s in syms)
     amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 3)
     loc = Localizer(
         AmclTracker(amcl),
@@ -301,8 +296,18 @@ def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_n
         _NoPlaces(),
         scorer=GridScorer(grid),
         claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
-        map_symmetries=syms,
+        map_symmetries=map_symmetries(grid),
     )
+    return room, loc
+
+
+def test_an_unconfirmed_operator_pose_does_not_vouch_for_where_the_filter_goes_next() -> None:
+    """The operator's pose chooses among a symmetric room's copies only while the robot is
+    there: after it is carried off (the pose never confirmed: too few beams returned), the
+    pose AMCL finds next is checked against the map's rotated copies like any other, so in a
+    rectangle it is never published as tracking."""
+    room, loc = _rectangle_localizer()
+    assert any(s.order == 2 for s in loc.map_symmetries)
     start = room.center + np.array([-1.2, 0.5])
     robot = DiffDriveRobot(
         np.array([*start, 0.4]), RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)), 5
@@ -332,21 +337,7 @@ def test_a_robot_carried_to_the_half_turned_copy_is_not_resumed_there() -> None:
     looks exactly as it did from the carried pose. Resuming is checked against the map's
     rotated copies like a first claim, so the carried pose, now half a turn wrong, is never
     published (it was, before resumptions were checked)."""
-    from symloc.localizer.map_symmetry import map_symmetries
-    from symloc.sim.rooms import rectangle_room
-
-    room = rectangle_room(4.0, 2.0)
-    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
-    syms = map_symmetries(grid)
-    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 3)
-    loc = Localizer(
-        AmclTracker(amcl),
-        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
-        _NoPlaces(),
-        scorer=GridScorer(grid),
-        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
-        map_symmetries=syms,
-    )
+    room, loc = _rectangle_localizer()
     centre = np.asarray(room.center, dtype=np.float64)
     robot = DiffDriveRobot(
         np.array([*(centre + np.array([-1.1, 0.4])), 0.4]),

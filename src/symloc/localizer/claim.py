@@ -37,8 +37,8 @@ The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
 when the last confirmed pose, carried by odometry, is confirmed ``resume_after`` scans in a row
 (a person walked past) and, like a first claim, no rotated copy of it explains the scan as well
-(a robot carried to a look-alike place fits the carried pose too), and after ``patience`` failing scans since the suspension (counted, not
-necessarily in a row) the pose is given up and the
+(a robot carried to a look-alike place fits the carried pose too); after ``patience`` failing
+scans since the suspension (counted, not necessarily in a row) the pose is given up and the
 filter relocalizes globally (the robot was carried away). An operator's initial pose chose among
 symmetric copies, so while the filter stays on it no copy check is needed.
 
@@ -465,8 +465,8 @@ class ClaimGate:
         A withdrawn claim or a jump of the filter suspends claims: they resume only when the
         last confirmed pose, carried by odometry, fits the scan again (a person walked past),
         and that scan's ruling is :attr:`Standing.FIRST` (the caller checks the pose's rotated
-        copies before it publishes and confirms it); after ``patience`` scans without that the pose is given up and ``tracker``
-        relocalizes globally (the robot was carried away). While suspended, ``tracker`` is
+        copies before it publishes and confirms it); after ``patience`` scans without that the
+        pose is given up and ``tracker`` relocalizes globally (the robot was carried away). While suspended, ``tracker`` is
         made to update at every scan. ``note`` hears of suspensions and resumptions.
         """
         odom = np.asarray(odom_pose, dtype=np.float64)

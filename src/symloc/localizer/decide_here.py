@@ -361,6 +361,8 @@ class DecideHere:
     watch: LaserWatch | None = None
     #: what the images of this episode said about each hypothesis they checked
     checked: list[Checked] = field(default_factory=list)
+    #: every hypothesis an image of this episode verified, whatever else it verified
+    verified: list[Checked] = field(default_factory=list)
     #: why the camera is done here (its views used up, no keyframe in view): the laser's
     #: proposals go to the watch from then on; empty while the camera may still decide
     camera_done: str = ""
@@ -708,6 +710,11 @@ class DecideHere:
             self.rest_after = cfg.axis_recheck
             return enter_axis(ctx, inp, self.classes[vote.winner], self.odom0, vote.reason)
         cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
+        # verified before this image, carried to now: a pose the camera vouched for once
+        # is not ruled out by a later view that fails to see it
+        seen = checked_by(carried, inp.odom_pose, answer)
+        before = list(self.verified)
+        self.verified.extend(c for c in seen if not c.contradicted)
         index, pose_or_none, verdict = answer.index, answer.pose, answer.reason
         if index is None and ctx.gate is not None and isinstance(inp.scan, LaserScan):
             together = one_pose_verified(ctx.gate, inp.scan, carried, answer, cov)
@@ -716,7 +723,7 @@ class DecideHere:
         if index is None or pose_or_none is None:
             return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
         if self.classes is None:
-            self.checked.extend(checked_by(carried, inp.odom_pose, answer))
+            self.checked.extend(seen)
             fits = self.fits
             unchecked = [
                 i + 1
@@ -736,6 +743,21 @@ class DecideHere:
                     inp,
                     f"image {self.views}: hypothesis {index + 1} verified, but no image could "
                     f"check {_listed(unchecked)}, which the laser ranks at least as high",
+                )
+            also = [
+                j + 1
+                for j in range(carried.shape[0])
+                if j != index and checked_before(before, carried[j], inp.odom_pose, cfg)
+            ]
+            if also:
+                # the camera's views disagree: an earlier one verified another hypothesis
+                # (keyframes that look alike from both, a short corridor's two ends); the
+                # view that verifies one alone may be the look-alike
+                return self._look_elsewhere(
+                    ctx,
+                    inp,
+                    f"image {self.views}: hypothesis {index + 1} verified, but an earlier "
+                    f"image verified {_listed(also)} too",
                 )
         counts.verified += 1
         pose = np.asarray(pose_or_none, dtype=np.float64)
