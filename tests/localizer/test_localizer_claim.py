@@ -189,6 +189,29 @@ def test_anchor_reports_a_jump_of_the_filter(l_room) -> None:
     assert not gate.anchor(np.array([0.8, 0.0, 0.01]), COV, np.zeros(3))  # another place
 
 
+def test_a_pose_carried_through_turns_back_and_forth_keeps_their_error(l_room) -> None:
+    # Between two confirmations the robot turned in place +0.5, -0.5 rad four times: its net
+    # turn is zero, but its odometry erred on every turn. Carried with the net increment alone
+    # the heading would keep the prior's 1 deg, and a 10-deg odometry error (a CARMEN log's
+    # scans 1 m and several turns apart) would be read as a kidnapping.
+    _, grid = l_room
+    a1 = ALPHAS[0]
+    wiggle = [0.5 * (i % 2) for i in range(1, 9)] + [0.0]
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    gate.anchor(np.zeros(3), COV, np.zeros(3))
+    for h in wiggle:
+        pose, cov = gate.carried(np.array([0.0, 0.0, h]))
+    turning = 0.5 * (len(wiggle) - 1)  # eight turns of 0.5 rad
+    assert pose == pytest.approx(np.zeros(3))
+    assert math.sqrt(cov[2, 2]) >= math.sqrt(a1) * turning
+    told_the_end_only = ClaimGate(surface_distance_field(grid), ALPHAS)
+    told_the_end_only.anchor(np.zeros(3), COV, np.zeros(3))
+    _, cov_end = told_the_end_only.carried(np.zeros(3))
+    assert cov_end == pytest.approx(COV)
+    # the same pose asked for twice at one odometry reading is carried once
+    assert gate.carried(np.zeros(3))[1] == pytest.approx(cov)
+
+
 def test_gate_settings_follow_the_tolerance() -> None:
     cfg = ClaimConfig(tolerance_position=0.1, gate_sigmas=5.0)
     assert cfg.max_std_xy == pytest.approx(0.02)

@@ -10,7 +10,7 @@ import pytest
 from symloc.errors import ConfigurationError
 from symloc.grid.fields import distance_field, surface_distance_field
 from symloc.mcl.beams import select_beams
-from symloc.mcl.motion_model import carry_by_odometry
+from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
@@ -122,6 +122,37 @@ def test_carry_by_odometry_composes_exactly_and_grows_the_covariance() -> None:
         np.zeros(3), np.diag([0, 0, 0.01]), np.zeros(3), np.array([2.0, 0.0, 0.0]), (0, 0, 0, 0)
     )
     assert math.sqrt(c_far[1, 1]) == pytest.approx(2.0 * 0.1, rel=0.05)
+
+
+def test_carry_by_odometry_grows_with_the_path_and_turning_travelled() -> None:
+    odo = Odometer()
+    # out 1 m along x, turn round in place, back 1 m: net increment zero
+    path = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.5], [1.0, 0.0, 3.0]]
+    path += [[1.0, 0.0, math.pi], [0.5, 0.0, math.pi], [0.0, 0.0, math.pi]]
+    for p in path:
+        travelled = odo.advance(np.array(p))
+    assert travelled == pytest.approx((2.0, math.pi))
+    assert odo.advance(np.array(path[-1])) == pytest.approx((2.0, math.pi))  # no step, no motion
+    assert odo.since((1.0, 0.0)) == pytest.approx((1.0, math.pi))
+    alphas = (0.01, 0.01, 0.01, 0.01)
+    cov = np.diag([1e-4, 1e-4, 1e-4])
+    start, end = np.array(path[0]), np.array(path[-1])
+    net_pose, net_cov = carry_by_odometry(np.zeros(3), cov, start, end, alphas)
+    pose, grown = carry_by_odometry(np.zeros(3), cov, start, end, alphas, travelled=travelled)
+    assert pose == pytest.approx(net_pose)  # the mean is the odometry's, path or not
+    assert np.all(np.linalg.eigvalsh(grown - net_cov) >= -1e-12)  # never less
+    assert grown[2, 2] >= cov[2, 2] + 0.01 * math.pi**2 - 1e-12  # every turn's error
+    assert grown[0, 0] + grown[1, 1] >= 2 * 1e-4 + 0.01 * 2.0**2 - 1e-12  # every metre's
+    # one step: the path is the increment, and the covariance is the model's own
+    step = np.array([0.5, 0.1, 0.3])
+    one = Odometer()
+    one.advance(np.zeros(3))
+    same = carry_by_odometry(
+        np.zeros(3), cov, np.zeros(3), step, alphas, travelled=one.advance(step)
+    )
+    assert same[1] == pytest.approx(
+        carry_by_odometry(np.zeros(3), cov, np.zeros(3), step, alphas)[1]
+    )
 
 
 def test_a_round_room_leaves_the_rotation_about_its_centre_unconstrained() -> None:

@@ -8,7 +8,9 @@ scan goes through :meth:`ClaimGate.check`:
 
 1. **Carry**: the last confirmed pose (or, before the first, the filter's estimate at its last
    update, :meth:`ClaimGate.anchor`) is moved to this scan by the odometry since then, its
-   covariance grown by the motion model (:func:`symloc.mcl.motion_model.carry_by_odometry`).
+   covariance grown by the motion model (:func:`symloc.mcl.motion_model.carry_by_odometry`)
+   with all the path and turning since, not only the net increment: a robot that turned back
+   and forth between two confirmations has the odometry error of every turn.
    Carrying the confirmed pose, not the particle cloud, keeps the uncertainty honest where the
    laser cannot see: a round room's heading, a corridor's axis grow with every turn and metre
    as the motion model says, whatever the particles did.
@@ -65,7 +67,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
-from symloc.mcl.motion_model import carry_by_odometry
+from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.scan import LaserScan
 
@@ -75,6 +77,18 @@ from .types import Tracker, TrackerResult
 __all__ = ["Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class _Held:
+    """A pose (3,) and covariance (3, 3) held at odometry pose ``odom`` (3,), when the
+    gate's :class:`~symloc.mcl.motion_model.Odometer` read ``reading`` (path [m], turning
+    [rad])."""
+
+    pose: FloatArray
+    cov: FloatArray
+    odom: FloatArray
+    reading: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -368,11 +382,14 @@ class ClaimGate:
         self.alphas = (a1, a2, a3, a4)
         self.match_config = match_config if match_config is not None else ScanMatchConfig()
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
-        self._anchor: tuple[FloatArray, FloatArray, FloatArray] | None = None
-        self._chain: tuple[FloatArray, FloatArray, FloatArray] | None = None
-        # the lifecycle (step): the operator's pose (3,), its covariance (3, 3) and the
-        # odometry pose (3,) it refers to (None until the next scan); suspension and its rules
-        self._operator: tuple[FloatArray, FloatArray, FloatArray | None] | None = None
+        # the path and turning since a pose was held: a pose carried over many scans grows
+        # its covariance with all the motion, not only with the net increment
+        self._odometer = Odometer()
+        self._anchor: _Held | None = None
+        self._chain: _Held | None = None
+        # the lifecycle (step): the operator's pose, held from the next scan on (None until
+        # then); suspension and its rules
+        self._operator: tuple[FloatArray, FloatArray, _Held | None] | None = None
         self._jumped = False
         self._suspended = False
         self._patience = Streak(self.config.patience)
@@ -404,11 +421,7 @@ class ClaimGate:
         """Remember ``claim`` (published at ``odom_pose``) as the last confirmed pose."""
         if claim.pose is None or claim.covariance is None:
             raise ConfigurationError("ClaimGate.confirmed: the claim carries no pose")
-        self._chain = (
-            claim.pose.copy(),
-            claim.covariance.copy(),
-            np.asarray(odom_pose, dtype=np.float64).copy(),
-        )
+        self._chain = self._hold(claim.pose, claim.covariance, odom_pose)
 
     def forget_chain(self) -> None:
         """Forget the last confirmed pose (tracking ended), and a suspension waiting for it to
@@ -445,9 +458,10 @@ class ClaimGate:
         """Every scan, after the filter's update: anchor its estimate (a jump of the filter is
         remembered for :meth:`step`) and date the operator's pose."""
         odom = np.asarray(odom_pose, dtype=np.float64)
+        self._odometer.advance(odom)
         if self._operator is not None and self._operator[2] is None:
             pose, cov, _ = self._operator
-            self._operator = (pose, cov, odom.copy())
+            self._operator = (pose, cov, self._hold(pose, cov, odom))
         self._jumped = False
         if result.updated:
             self._jumped = not self.anchor(result.estimate, result.covariance, odom)
@@ -561,10 +575,10 @@ class ClaimGate:
         operator's pose is forgotten."""
         if self._operator is None or pose is None:
             return False
-        op, cov, odom0 = self._operator
-        if odom0 is None:
+        held = self._operator[2]
+        if held is None:
             return False
-        carried, ccov = carry_by_odometry(op, cov, odom0, odom, self.alphas)
+        carried, ccov = self._carry(held, odom)
         e = np.asarray(pose, dtype=np.float64) - carried
         e[2] = float(wrap_angle(e[2]))
         if float(e @ np.linalg.solve(ccov, e)) <= self.config.max_pull:
@@ -593,16 +607,39 @@ class ClaimGate:
             e = pose - before
             e[2] = float(wrap_angle(e[2]))
             continuous = float(e @ np.linalg.solve(before_cov + cov, e)) <= cfg.max_pull
-        self._anchor = (pose, cov, odom)
+        self._anchor = self._hold(pose, cov, odom)
         return continuous
 
     def carried(self, odom_pose: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The anchor moved to ``odom_pose``: pose (3,) and grown covariance (3, 3)."""
         if self._anchor is None:
             raise ConfigurationError("ClaimGate.carried: no anchor yet (call anchor() first)")
-        pose, cov, odom0 = self._anchor
+        return self._carry(self._anchor, odom_pose)
+
+    def _hold(self, pose: FloatArray, cov: FloatArray, odom_pose: FloatArray) -> _Held:
+        """``pose`` (3,) with ``cov`` (3, 3) at ``odom_pose`` (3,), to be carried later."""
+        odom = np.asarray(odom_pose, dtype=np.float64).copy()
+        self._odometer.advance(odom)
+        return _Held(
+            np.asarray(pose, dtype=np.float64).copy(),
+            np.asarray(cov, dtype=np.float64).copy(),
+            odom,
+            self._odometer.reading,
+        )
+
+    def _carry(self, held: _Held, odom_pose: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``held`` carried to ``odom_pose`` (3,) with the motion since: pose (3,), covariance
+        (3, 3) grown by the path and turning in between
+        (:func:`~symloc.mcl.motion_model.carry_by_odometry`'s ``travelled``)."""
+        odom = np.asarray(odom_pose, dtype=np.float64)
+        self._odometer.advance(odom)
         return carry_by_odometry(
-            pose, cov, odom0, np.asarray(odom_pose, dtype=np.float64), self.alphas
+            held.pose,
+            held.cov,
+            held.odom,
+            odom,
+            self.alphas,
+            travelled=self._odometer.since(held.reading),
         )
 
     def points(self, scan: LaserScan) -> FloatArray:
@@ -622,8 +659,7 @@ class ClaimGate:
         odom = np.asarray(odom_pose, dtype=np.float64)
         start = self.carried(odom)[0] if self._anchor is not None else None
         if self._chain is not None:
-            pose, cov, odom0 = self._chain
-            prior, p_cov = carry_by_odometry(pose, cov, odom0, odom, self.alphas)
+            prior, p_cov = self._carry(self._chain, odom)
         elif self._anchor is not None:
             prior, p_cov = self.carried(odom)
         else:

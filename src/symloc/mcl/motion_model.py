@@ -32,7 +32,9 @@ from symloc.mcl import kernels
 
 __all__ = [
     "MOTION_VARIANTS",
+    "Odometer",
     "carry_by_odometry",
+    "folded_rotations",
     "odometry_delta",
     "sample_motion_model_odometry",
 ]
@@ -143,12 +145,65 @@ def sample_motion_model_odometry(
     return res
 
 
+def folded_rotations(rot1: float, rot2: float) -> tuple[float, float]:
+    """``|rot1|``, ``|rot2|`` [rad] folded as nav2 folds them (``min(|r|, pi - |r|)``: a step
+    backwards is as noisy as one forwards)."""
+    return (
+        min(abs(float(angle_diff(rot1, 0.0))), abs(float(angle_diff(rot1, np.pi)))),
+        min(abs(float(angle_diff(rot2, 0.0))), abs(float(angle_diff(rot2, np.pi)))),
+    )
+
+
+class Odometer:
+    """The path [m] and turning [rad] the odometry went through, summed step by step.
+
+    Fed every odometry pose in order (:meth:`advance`; the same pose twice adds nothing), it
+    tells how much motion lies between two readings (:meth:`since`), which
+    :func:`carry_by_odometry` needs to grow a covariance carried over many steps: each step
+    adds its translation and its folded ``|rot1| + |rot2|`` (the motion model's own measure of
+    turning).
+    """
+
+    def __init__(self) -> None:
+        self._last: FloatArray | None = None
+        self.path = 0.0
+        self.turning = 0.0
+
+    def advance(self, odom_pose: FloatArray) -> tuple[float, float]:
+        """Add the step to ``odom_pose`` (3,); returns the totals ``(path, turning)``."""
+        odom = np.asarray(odom_pose, dtype=np.float64).reshape(3)
+        if self._last is not None:
+            delta = odometry_delta(self._last, odom)
+            trans = float(np.hypot(delta[0], delta[1]))
+            rot1 = (
+                0.0
+                if trans < 0.01
+                else float(angle_diff(np.arctan2(delta[1], delta[0]), self._last[2]))
+            )
+            r1n, r2n = folded_rotations(rot1, float(angle_diff(delta[2], rot1)))
+            self.path += trans
+            self.turning += r1n + r2n
+        self._last = odom.copy()
+        return self.path, self.turning
+
+    @property
+    def reading(self) -> tuple[float, float]:
+        """The totals ``(path, turning)`` so far."""
+        return self.path, self.turning
+
+    def since(self, reading: tuple[float, float]) -> tuple[float, float]:
+        """The motion ``(path, turning)`` since an earlier :attr:`reading`."""
+        return max(0.0, self.path - reading[0]), max(0.0, self.turning - reading[1])
+
+
 def carry_by_odometry(
     pose: FloatArray,
     covariance: FloatArray,
     odom_prev: FloatArray,
     odom_curr: FloatArray,
     alphas: tuple[float, float, float, float],
+    *,
+    travelled: tuple[float, float] | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Move a pose estimate by the odometry increment; grow its covariance by the motion model.
 
@@ -160,6 +215,14 @@ def carry_by_odometry(
     composition ``pose * (odom_prev^-1 * odom_curr)``. Returns
     ``(pose (3,), covariance (3, 3))``: what a ``map -> odom`` transform gives between filter
     updates, with its uncertainty.
+
+    ``travelled`` ``(path [m], turning [rad])``: what the odometry went through between the
+    two poses (:class:`Odometer`), when the increment spans more than one step. The noise then
+    grows with the path and the turning, not with the net increment: a robot that turned back
+    and forth, or drove out and back, has the error of all that motion although its net
+    increment is small. The translation noise uses ``max(trans, path)``, the rotation noises
+    are scaled up so that ``|rot1| + |rot2|`` reaches ``turning``, and a heading error along the
+    way moves the position by up to ``path`` times it. Never less than without it.
     """
     a1, a2, a3, a4 = (float(a) for a in alphas)
     prev = np.asarray(odom_prev, dtype=np.float64)
@@ -167,13 +230,22 @@ def carry_by_odometry(
     trans = float(np.hypot(delta[0], delta[1]))
     rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
     rot2 = float(angle_diff(delta[2], rot1))
-    r1n = min(abs(angle_diff(rot1, 0.0)), abs(angle_diff(rot1, np.pi)))
-    r2n = min(abs(angle_diff(rot2, 0.0)), abs(angle_diff(rot2, np.pi)))
+    r1n, r2n = folded_rotations(rot1, rot2)
+    moved = trans
+    if travelled is not None:
+        path, turning = (float(v) for v in travelled)
+        moved = max(trans, path)
+        turned = r1n + r2n
+        if turning > turned:
+            if turned > 0.0:
+                r1n, r2n = r1n * turning / turned, r2n * turning / turned
+            else:
+                r2n = turning
     q = np.diag(
         [
-            a1 * r1n * r1n + a2 * trans * trans,
-            a3 * trans * trans + a4 * (r1n * r1n + r2n * r2n),
-            a1 * r2n * r2n + a2 * trans * trans,
+            a1 * r1n * r1n + a2 * moved * moved,
+            a3 * moved * moved + a4 * (r1n * r1n + r2n * r2n),
+            a1 * r2n * r2n + a2 * moved * moved,
         ]
     )
     p = np.asarray(pose, dtype=np.float64)
@@ -181,6 +253,6 @@ def carry_by_odometry(
     c, s = np.cos(heading), np.sin(heading)
     out = compose(p, relative(prev, np.asarray(odom_curr, dtype=np.float64)))
     f = np.array([[1.0, 0.0, -trans * s], [0.0, 1.0, trans * c], [0.0, 0.0, 1.0]])
-    g = np.array([[-trans * s, c, 0.0], [trans * c, s, 0.0], [1.0, 0.0, 1.0]])
+    g = np.array([[-moved * s, c, 0.0], [moved * c, s, 0.0], [1.0, 0.0, 1.0]])
     cov = f @ np.asarray(covariance, dtype=np.float64) @ f.T + g @ q @ g.T
     return out, 0.5 * (cov + cov.T)
