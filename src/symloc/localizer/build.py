@@ -115,7 +115,9 @@ def build_localizer(
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     decide = settings.localizer.decide_here
-    proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser) if decide else None
+    # the global search proposes poses to decide among, and vouches that the robot is
+    # elsewhere before the claim gate gives a tracked pose up
+    proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser)
     return Localizer(
         AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
         ReportJudge(judge_symmetry, laser_pose=judge_laser, config=settings.symmetry),
@@ -130,9 +132,10 @@ def build_localizer(
             laser_pose=laser,
             scale_centre=free_centroid(grid),
             rotation_centre=grid_round_centre(grid),
+            proposer=proposer,
         ),
         laser_pose=laser,
-        proposer=proposer,
+        proposer=proposer if decide else None,
         keyframes=keyframes if decide else None,
         grid=grid,
     )

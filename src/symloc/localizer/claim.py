@@ -72,7 +72,7 @@ from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map
 from symloc.scan import LaserScan
 
 from .rules import Streak
-from .types import Tracker, TrackerResult
+from .types import PoseProposer, Tracker, TrackerResult
 
 __all__ = ["Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
 
@@ -162,6 +162,20 @@ class ClaimConfig:
         from the carried pose fits with at most ``gross_fit`` of its beams give the pose up at
         once, without waiting for ``patience`` (a kidnapping: the scan contradicts the pose
         wholesale; a person or a moved chair hides a part of it). ``gross_after`` 0: off.
+    elsewhere_margin : float
+        Giving the pose up (``gross_after`` or ``patience``) needs a place that explains the
+        scan: some pose of the map (the gate's ``proposer``, the global scan-to-map search)
+        whose score is at least ``min_claim_fit`` and ``elsewhere_margin`` above the carried
+        pose's fit. A scan that fits nowhere (clutter, people, a part of the building the map
+        got wrong) says nothing about where the robot is: claims stay suspended, the filter
+        tracks on, and the streaks start again.
+    local_window : (float, float)
+        A pose that explains the scan within this distance [m] and turn [rad] of the carried
+        pose is where the robot is, not elsewhere: the alignment from a carried pose that
+        drifted 15-20 deg lost its basin (freiburg-079, a stretch of cluttered scans between
+        two turns). The filter is reseeded there and the pose must be confirmed again (as
+        after any suspension, a first claim: its copies are checked). Beyond it the robot was
+        carried away and the filter relocalizes globally. Both set on the freiburg-079 log.
     odometry_alphas : (4,) floats
         Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
         grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
@@ -190,6 +204,8 @@ class ClaimConfig:
     resume_after: int = 2
     gross_fit: float = 0.25
     gross_after: int = 5
+    elsewhere_margin: float = 0.2
+    local_window: tuple[float, float] = (1.0, math.radians(45.0))
     min_beams: int = 20
 
     def __post_init__(self) -> None:
@@ -208,6 +224,20 @@ class ClaimConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigurationError(f"ClaimConfig.{name}: expected a value > 0, got {v!r}")
+        w = self.local_window
+        if not (
+            isinstance(w, tuple)
+            and len(w) == 2
+            and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in w)
+        ):
+            raise ConfigurationError(
+                f"ClaimConfig.local_window: expected (metres, radians) >= 0, got {w!r}"
+            )
+        m = self.elsewhere_margin
+        if not (isinstance(m, (int, float)) and 0.0 <= m < 1.0):
+            raise ConfigurationError(
+                f"ClaimConfig.elsewhere_margin: expected a share in [0, 1), got {m!r}"
+            )
         v = self.map_rotation_std
         if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 <= v <= math.pi):
             raise ConfigurationError(
@@ -349,6 +379,10 @@ class ClaimGate:
         The centre [m] (map frame) of a round map
         (:func:`~symloc.localizer.map_symmetry.round_centre`), about which the map's rotation
         is uncertain by ``config.map_rotation_std``; None: the map is not round.
+    proposer : PoseProposer, optional
+        The global scan-to-map search (:class:`~symloc.localizer.adapters.GlobalSearchProposer`)
+        that must find a place explaining the scan before a suspended pose is given up
+        (``config.elsewhere_margin``); None: poor fit alone gives it up.
     """
 
     def __init__(
@@ -361,8 +395,10 @@ class ClaimGate:
         laser_pose: FloatArray | tuple[float, float, float] = (0.0, 0.0, 0.0),
         scale_centre: FloatArray | tuple[float, float] = (0.0, 0.0),
         rotation_centre: FloatArray | tuple[float, float] | None = None,
+        proposer: PoseProposer | None = None,
     ) -> None:
         self.field = field
+        self.proposer = proposer
         self.rotation_centre = (
             None
             if rotation_centre is None
@@ -480,8 +516,13 @@ class ClaimGate:
         last confirmed pose, carried by odometry, fits the scan again (a person walked past),
         and that scan's ruling is :attr:`Standing.FIRST` (the caller checks the pose's rotated
         copies before it publishes and confirms it); after ``patience`` scans without that the
-        pose is given up and ``tracker`` relocalizes globally (the robot was carried away). While suspended, ``tracker`` is
-        made to update at every scan. ``note`` hears of suspensions and resumptions.
+        pose is given up and ``tracker`` relocalizes globally (the robot was carried away), if a
+        place of the map explains the scan clearly better (``elsewhere_margin``). A suspension
+        forces one filter update; after it the filter updates at its own pace: forced at every
+        scan that does not fit (clutter), it integrated the same misleading evidence again and
+        again and resampled a wrong heading into its cloud (freiburg-079: 2-5 m off over a
+        stretch of 160 scans, where the filter alone stayed within 0.2 m). ``note`` hears of
+        suspensions and resumptions.
         """
         odom = np.asarray(odom_pose, dtype=np.float64)
         if not self.anchored:
@@ -552,6 +593,11 @@ class ClaimGate:
             self._gross.miss()
         gross = cfg.gross_after > 0 and contradicted and self._gross.hit()
         if gross or self._patience.hit():
+            held = self._not_elsewhere(scan, fit, odom, tracker)
+            if held is not None:
+                self._gross.reset()
+                self._patience.reset()
+                return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}; {held}")
             tracker.initialize_global()
             self.reset()
             self.restart()
@@ -564,8 +610,61 @@ class ClaimGate:
                 "(kidnapped?)"
             ) + ": global relocalization, the pose must be earned again"
             return Ruling(Standing.RELOCALIZE, claim, why)
-        tracker.force_update()
         return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}")
+
+    def _not_elsewhere(
+        self, scan: LaserScan, fit: float, odom: FloatArray, tracker: Tracker
+    ) -> str | None:
+        """Before a suspended pose is given up: is the robot elsewhere? None when a pose of
+        the map away from the carried one explains ``scan`` well enough to be claimed and
+        clearly better than ``fit`` (its share of fitting beams; ``elsewhere_margin``), or
+        when there is no ``proposer`` to ask. Else why the pose is kept: no pose explains the
+        scan clearly better (the scan is at fault: clutter, people, a wrong map), the search's
+        list is incomplete (an open map), or a pose does within ``local_window`` of the carried
+        pose (the alignment lost its basin, not the robot its place: ``tracker`` is reseeded
+        there)."""
+        if self.proposer is None:
+            return None
+        cfg = self.config
+        found = self.proposer.propose(scan)
+        need = max(cfg.min_claim_fit, (0.0 if math.isnan(fit) else fit) + cfg.elsewhere_margin)
+        good = found.poses[found.scores >= need]
+        if good.shape[0] == 0:
+            best = float(np.max(found.scores)) if found.scores.size else 0.0
+            return (
+                f"no place of the map explains the scan clearly better (best {100 * best:.0f} "
+                f"% of beams, {100 * need:.0f} % needed): the scan, not the pose, is at fault"
+            )
+        if not found.complete:
+            # an open map (the robot's place may lie in its unmapped part) or a search cut
+            # short: the places listed are not all that explain the scan, and a scan that
+            # fits a few of them (a stretch of wall) does not show the robot is at one
+            return (
+                "the places that explain the scan better are not a complete list "
+                f"({found.reason}): not evidence that the robot was carried off"
+            )
+        carried = self._carry(self._chain, odom)[0] if self._chain is not None else None
+        if carried is None and self._anchor is not None:
+            carried = self.carried(odom)[0]
+        if carried is None:
+            return None
+        off = good[:, :2] - carried[:2]
+        turn = np.abs(wrap_angle(good[:, 2] - carried[2]))
+        near = np.flatnonzero(
+            (np.hypot(off[:, 0], off[:, 1]) <= cfg.local_window[0]) & (turn <= cfg.local_window[1])
+        )
+        if near.size == 0:
+            return None
+        pose, share = self.fit(good[near[0]], scan)
+        tracker.initialize_pose(
+            pose, np.diag([cfg.min_carried_xy**2, cfg.min_carried_xy**2, cfg.min_carried_theta**2])
+        )
+        e = pose - carried
+        return (
+            f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f} cm / "
+            f"{math.degrees(abs(float(wrap_angle(e[2])))):.0f} deg from the tracked pose: the "
+            "filter is reseeded there, the pose must be confirmed again"
+        )
 
     def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:
         """True when ``pose`` is the operator's initial pose carried by odometry (squared
