@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
-from symloc.grid.fields import surface_distance_field
+from symloc.grid.fields import MapFields, surface_distance_field
 from symloc.localizer import Localizer, Status
-from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
+from symloc.localizer.adapters import AmclTracker, GlobalSearchProposer, GridScorer, ReportJudge
 from symloc.localizer.claim import ClaimConfig, ClaimGate, Standing, Verdict
-from symloc.localizer.types import TrackerResult
+from symloc.localizer.types import Proposal, TrackerResult
 from symloc.mcl import Amcl, AmclParams
+from symloc.mcl.global_search import GlobalSearch
 from symloc.odometry import OdometryReading
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
@@ -115,14 +116,18 @@ class _Relocalizing(_Tracker):
     def __init__(self) -> None:
         super().__init__()
         self.relocalized = 0
+        self.reseeded: list[np.ndarray] = []
 
     def initialize_global(self) -> None:
         self.relocalized += 1
 
+    def initialize_pose(self, pose, covariance) -> None:  # type: ignore[no-untyped-def]
+        self.reseeded.append(np.asarray(pose, dtype=np.float64))
 
-def _tracking_gate(room, grid, truth):  # type: ignore[no-untyped-def]
+
+def _tracking_gate(room, grid, truth, proposer=None):  # type: ignore[no-untyped-def]
     """A gate with a confirmed chain at ``truth`` (the localizer published it)."""
-    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS, proposer=proposer)
     result = TrackerResult(estimate=truth, covariance=COV, hypotheses=())
     gate.observe(result, np.zeros(3))
     first = gate.step(
@@ -155,6 +160,91 @@ def test_a_scan_that_contradicts_the_pose_wholesale_relocalizes_within_gross_aft
     assert standings[-1].standing is Standing.RELOCALIZE, standings[-1].reason
     assert "in a row" in standings[-1].reason
     assert tracker.relocalized == 1
+
+
+class _Listed:
+    """A proposer that lists fixed poses and scores (the global search's answer)."""
+
+    def __init__(self, poses, scores, complete=True):  # type: ignore[no-untyped-def]
+        self.proposal = Proposal(
+            np.asarray(poses, dtype=np.float64).reshape(-1, 3),
+            np.asarray(scores, dtype=np.float64),
+            complete,
+            "" if complete else "the map is open",
+        )
+        self.asked = 0
+
+    def propose(self, scan):  # type: ignore[no-untyped-def]
+        self.asked += 1
+        return self.proposal
+
+
+def _contradicted(gate, result, room, away, tracker, n):  # type: ignore[no-untyped-def]
+    return [
+        gate.step(
+            result, np.zeros(3), simulate_scan(room.world, away, RPLIDAR_A2, 40 + i), tracker, print
+        )
+        for i in range(n)
+    ]
+
+
+def test_a_kidnapping_needs_a_place_that_explains_the_scan(l_room) -> None:
+    # The real global search: carried to the other arm of the L, the scan fits there and the
+    # search says so, so the pose is given up as before.
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    away = np.array([1.2, 1.4, -2.0])
+    search = GlobalSearchProposer(GlobalSearch(MapFields.of(grid)))
+    gate, result = _tracking_gate(room, grid, truth, proposer=search)
+    tracker = _Relocalizing()
+    steps = _contradicted(gate, result, room, away, tracker, 1 + gate.config.gross_after)
+    assert steps[-1].standing is Standing.RELOCALIZE, steps[-1].reason
+    assert tracker.relocalized == 1
+
+
+@pytest.mark.parametrize(
+    ("scores", "complete", "why"),
+    [
+        ([0.45], True, "no place of the map explains the scan clearly better"),
+        ([0.95], False, "not a complete list"),
+    ],
+)
+def test_a_scan_that_fits_nowhere_keeps_the_pose_suspended(l_room, scores, complete, why) -> None:
+    # Clutter, people or a wrong map: the scan contradicts the pose, but no place explains it
+    # well enough to be claimed (or the list of places is open-ended): the robot is not shown
+    # to be elsewhere, so the filter is not thrown away; the streak starts again.
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    listed = _Listed([[1.2, 1.4, -2.0]], scores, complete)
+    gate, result = _tracking_gate(room, grid, truth, proposer=listed)
+    tracker = _Relocalizing()
+    steps = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 12)
+    assert all(r.standing is Standing.HOLD for r in steps), [r.reason for r in steps]
+    assert tracker.relocalized == 0
+    assert listed.asked == 2  # once per streak of gross_after scans
+    assert why in steps[gate.config.gross_after].reason
+    assert gate.suspended
+
+
+def test_a_place_near_the_tracked_pose_reseeds_the_filter_there(l_room) -> None:
+    # The carried pose drifted out of the alignment's basin: the place that explains the scan
+    # is 0.4 m and 20 deg from it, so the robot was not carried off; the filter is reseeded
+    # there (the pose must still be confirmed to be published).
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    near = truth + np.array([0.4, 0.0, math.radians(20.0)])
+    listed = _Listed([near], [0.9])
+    gate, result = _tracking_gate(room, grid, truth, proposer=listed)
+    tracker = _Relocalizing()
+    steps = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 6)
+    assert steps[-1].standing is Standing.HOLD
+    assert "reseeded" in steps[-1].reason
+    assert tracker.relocalized == 0
+    assert len(tracker.reseeded) == 1
+    with pytest.raises(ConfigurationError, match="local_window"):
+        ClaimConfig(local_window=(1.0, -0.1))
+    with pytest.raises(ConfigurationError, match="elsewhere_margin"):
+        ClaimConfig(elsewhere_margin=1.0)
 
 
 def test_a_partly_hidden_scan_waits_for_patience(l_room) -> None:
