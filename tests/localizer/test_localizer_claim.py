@@ -197,32 +197,57 @@ def test_a_kidnapping_needs_a_place_that_explains_the_scan(l_room) -> None:
     search = GlobalSearchProposer(GlobalSearch(MapFields.of(grid)))
     gate, result = _tracking_gate(room, grid, truth, proposer=search)
     tracker = _Relocalizing()
-    steps = _contradicted(gate, result, room, away, tracker, 1 + gate.config.gross_after)
+    cfg = gate.config
+    # suspended, gross_after contradicting scans, then the place found is followed
+    steps = _contradicted(
+        gate, result, room, away, tracker, 1 + cfg.gross_after + cfg.elsewhere_scans
+    )
+    assert [r.standing for r in steps[:-1]] == [Standing.HOLD] * (len(steps) - 1)
+    assert "following" in steps[cfg.gross_after].reason
     assert steps[-1].standing is Standing.RELOCALIZE, steps[-1].reason
+    assert "kidnapped" in steps[-1].reason
     assert tracker.relocalized == 1
 
 
-@pytest.mark.parametrize(
-    ("scores", "complete", "why"),
-    [
-        ([0.45], True, "no place of the map explains the scan clearly better"),
-        ([0.95], False, "not a complete list"),
-    ],
-)
-def test_a_scan_that_fits_nowhere_keeps_the_pose_suspended(l_room, scores, complete, why) -> None:
-    # Clutter, people or a wrong map: the scan contradicts the pose, but no place explains it
-    # well enough to be claimed (or the list of places is open-ended): the robot is not shown
-    # to be elsewhere, so the filter is not thrown away; the streak starts again.
+def test_on_an_open_map_the_place_elsewhere_must_hold_while_the_robot_moves(l_room) -> None:
+    # The search's list is incomplete (an open map: the robot may stand where the map does
+    # not reach, at a look-alike of the place found): however many scans the place explains,
+    # a robot that does not move has not shown it is there.
     room, grid = l_room
     truth = np.array([-0.6, -0.8, 0.4])
-    listed = _Listed([[1.2, 1.4, -2.0]], scores, complete)
+    away = np.array([1.2, 1.4, -2.0])
+    listed = _Listed([away], [0.95], complete=False)
     gate, result = _tracking_gate(room, grid, truth, proposer=listed)
     tracker = _Relocalizing()
-    steps = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 12)
+    steps = _contradicted(gate, result, room, away, tracker, 20)
+    assert all(r.standing is Standing.HOLD for r in steps), [r.reason for r in steps]
+    assert "following 1 place(s) elsewhere" in steps[-1].reason
+    assert tracker.relocalized == 0
+
+
+@pytest.mark.parametrize(
+    ("place", "score", "why", "at"),
+    [
+        # no place explains the scan well enough to be claimed
+        ([1.2, 1.4, -2.0], 0.45, "no place of the map explains the scan clearly better", 0),
+        # a look-alike explained one scan (as the search says) but not the next, aligned there
+        ([-1.5, -1.5, 0.0], 0.95, "do not explain this one", 1),
+    ],
+)
+def test_a_scan_that_fits_nowhere_keeps_the_pose_suspended(l_room, place, score, why, at) -> None:
+    # Clutter, people or a wrong map: the scan contradicts the pose, but no place explains it
+    # and the next scans: the robot is not shown to be elsewhere, so the filter is not thrown
+    # away; the streak starts again.
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    listed = _Listed([place], [score])
+    gate, result = _tracking_gate(room, grid, truth, proposer=listed)
+    tracker = _Relocalizing()
+    steps = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 14)
     assert all(r.standing is Standing.HOLD for r in steps), [r.reason for r in steps]
     assert tracker.relocalized == 0
     assert listed.asked == 2  # once per streak of gross_after scans
-    assert why in steps[gate.config.gross_after].reason
+    assert why in steps[gate.config.gross_after + at].reason
     assert gate.suspended
 
 

@@ -64,7 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import compose, relative, wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
@@ -89,6 +89,21 @@ class _Held:
     cov: FloatArray
     odom: FloatArray
     reading: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class _Elsewhere:
+    """Places ``poses`` (K, 3) that explained a scan while the carried pose did not, at
+    odometry pose ``odom`` (3,), followed for ``scans`` scans over ``path`` [m] and ``turned``
+    [rad] (summed heading changes) since; ``complete`` when the search that found them listed
+    every such place."""
+
+    poses: FloatArray
+    odom: FloatArray
+    scans: int
+    path: float
+    turned: float
+    complete: bool
 
 
 @dataclass(frozen=True)
@@ -175,7 +190,19 @@ class ClaimConfig:
         drifted 15-20 deg lost its basin (freiburg-079, a stretch of cluttered scans between
         two turns). The filter is reseeded there and the pose must be confirmed again (as
         after any suspension, a first claim: its copies are checked). Beyond it the robot was
-        carried away and the filter relocalizes globally. Both set on the freiburg-079 log.
+        carried away, if the place explains the next scans too (``elsewhere_scans``). Both set
+        on the freiburg-079 log.
+    elsewhere_scans : int
+        A place elsewhere must go on explaining this many further scans, carried there by
+        odometry and aligned, before the pose is given up: on freiburg-079 six places of the
+        building explained one cluttered scan at 80 % (a stretch of wall) while the robot stood
+        where it was tracked.
+    elsewhere_motion : (float, float)
+        When the search's list was incomplete (an open map: the robot may stand in its
+        unmapped part, where a place like one of the map's would explain every scan there),
+        the places elsewhere must also go on explaining the scans over this much path [m] or
+        turning [rad]: on freiburg-079 one look-alike of a cluttered corridor explained three
+        more scans 10 cm apart.
     odometry_alphas : (4,) floats
         Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
         grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
@@ -206,6 +233,8 @@ class ClaimConfig:
     gross_after: int = 5
     elsewhere_margin: float = 0.2
     local_window: tuple[float, float] = (1.0, math.radians(45.0))
+    elsewhere_scans: int = 3
+    elsewhere_motion: tuple[float, float] = (1.0, math.radians(90.0))
     min_beams: int = 20
 
     def __post_init__(self) -> None:
@@ -224,15 +253,8 @@ class ClaimConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigurationError(f"ClaimConfig.{name}: expected a value > 0, got {v!r}")
-        w = self.local_window
-        if not (
-            isinstance(w, tuple)
-            and len(w) == 2
-            and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in w)
-        ):
-            raise ConfigurationError(
-                f"ClaimConfig.local_window: expected (metres, radians) >= 0, got {w!r}"
-            )
+        for name in ("local_window", "elsewhere_motion"):
+            self._check_pair(name)
         m = self.elsewhere_margin
         if not (isinstance(m, (int, float)) and 0.0 <= m < 1.0):
             raise ConfigurationError(
@@ -263,10 +285,21 @@ class ClaimConfig:
             raise ConfigurationError(
                 f"ClaimConfig.gross_after: expected an integer >= 0, got {g!r}"
             )
-        for name in ("patience", "resume_after", "min_beams"):
+        for name in ("patience", "resume_after", "min_beams", "elsewhere_scans"):
             v = getattr(self, name)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
                 raise ConfigurationError(f"ClaimConfig.{name}: expected an integer >= 1, got {v!r}")
+
+    def _check_pair(self, name: str) -> None:
+        w = getattr(self, name)
+        if not (
+            isinstance(w, tuple)
+            and len(w) == 2
+            and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in w)
+        ):
+            raise ConfigurationError(
+                f"ClaimConfig.{name}: expected (metres, radians) >= 0, got {w!r}"
+            )
 
     def with_map_error(self, map_std_xy: float | None) -> ClaimConfig:
         """This configuration with ``map_std_xy`` raised to a map's own error [m] (std) when
@@ -431,6 +464,7 @@ class ClaimGate:
         self._patience = Streak(self.config.patience)
         self._resume = Streak(self.config.resume_after)
         self._gross = Streak(max(1, self.config.gross_after))
+        self._elsewhere: _Elsewhere | None = None
 
     def reset(self) -> None:
         """Forget the anchor and the last confirmed pose (the pose is no longer believed)."""
@@ -464,6 +498,7 @@ class ClaimGate:
         fit again; the filter's anchor stays."""
         self._chain = None
         self._suspended = False
+        self._elsewhere = None
         self._patience.reset()
         self._resume.reset()
 
@@ -474,6 +509,7 @@ class ClaimGate:
         any suspension. The anchor and the chain stay (:meth:`reset` forgets those)."""
         self._operator = None
         self._suspended = False
+        self._elsewhere = None
         self._patience.reset()
         self._resume.reset()
         self._gross.reset()
@@ -551,6 +587,7 @@ class ClaimGate:
 
     def _suspend(self, why: str, tracker: Tracker, note: Callable[[str], None]) -> None:
         self._suspended = True
+        self._elsewhere = None
         self._operator = None  # the operator chose among copies before whatever this was
         self._patience.reset()
         self._resume.reset()
@@ -588,43 +625,61 @@ class ClaimGate:
         self._resume.miss()
         cfg = self.config
         fit = claim.match.inlier_fraction if claim.match is not None else math.nan
+        if self._elsewhere is not None:
+            return self._follow_elsewhere(claim, scan, odom, tracker)
         contradicted = fit <= cfg.gross_fit  # False without a match (NaN)
         if not contradicted:
             self._gross.miss()
         gross = cfg.gross_after > 0 and contradicted and self._gross.hit()
         if gross or self._patience.hit():
-            held = self._not_elsewhere(scan, fit, odom, tracker)
-            if held is not None:
-                self._gross.reset()
-                self._patience.reset()
-                return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}; {held}")
-            tracker.initialize_global()
-            self.reset()
-            self.restart()
             why = (
                 f"the scan has contradicted the tracked pose for {cfg.gross_after} scans in a "
                 f"row ({100 * fit:.0f} % of beams fit near it, at most {100 * cfg.gross_fit:.0f} "
-                "%: kidnapped)"
+                "%: kidnapped?)"
                 if gross
                 else f"the tracked pose has not fitted the scan for {cfg.patience} scans "
                 "(kidnapped?)"
-            ) + ": global relocalization, the pose must be earned again"
-            return Ruling(Standing.RELOCALIZE, claim, why)
+            )
+            if self.proposer is None:
+                return self._relocalize(claim, tracker, why)
+            held = self._look_elsewhere(scan, fit, odom, tracker)
+            if held is not None:
+                self._gross.reset()
+                self._patience.reset()
+                return Ruling(Standing.HOLD, claim, f"claims suspended; {why}; {held}")
+            return Ruling(
+                Standing.HOLD,
+                claim,
+                f"claims suspended; {why}; {self._elsewhere_count()} place(s) elsewhere explain "
+                f"the scan: following them for {cfg.elsewhere_scans} scans",
+            )
         return Ruling(Standing.HOLD, claim, f"claims suspended; {claim.reason}")
 
-    def _not_elsewhere(
+    def _relocalize(self, claim: Claim, tracker: Tracker, why: str) -> Ruling:
+        tracker.initialize_global()
+        self.reset()
+        self.restart()
+        return Ruling(
+            Standing.RELOCALIZE,
+            claim,
+            f"{why}: global relocalization, the pose must be earned again",
+        )
+
+    def _elsewhere_count(self) -> int:
+        return 0 if self._elsewhere is None else int(self._elsewhere.poses.shape[0])
+
+    def _look_elsewhere(
         self, scan: LaserScan, fit: float, odom: FloatArray, tracker: Tracker
     ) -> str | None:
-        """Before a suspended pose is given up: is the robot elsewhere? None when a pose of
-        the map away from the carried one explains ``scan`` well enough to be claimed and
-        clearly better than ``fit`` (its share of fitting beams; ``elsewhere_margin``), or
-        when there is no ``proposer`` to ask. Else why the pose is kept: no pose explains the
-        scan clearly better (the scan is at fault: clutter, people, a wrong map), the search's
-        list is incomplete (an open map), or a pose does within ``local_window`` of the carried
-        pose (the alignment lost its basin, not the robot its place: ``tracker`` is reseeded
-        there)."""
-        if self.proposer is None:
-            return None
+        """Before a suspended pose is given up, ask the ``proposer`` where the robot could
+        be. The places that explain ``scan`` well enough to be claimed and clearly better
+        than ``fit`` (the carried pose's share of fitting beams; ``elsewhere_margin``) are
+        followed by odometry over the next ``elsewhere_scans`` scans (:meth:`_follow_elsewhere`)
+        and None is returned. Else why the pose is kept: no place explains the scan clearly
+        better (the scan is at fault: clutter, people, a wrong map), or one does within
+        ``local_window`` of the carried pose (the alignment lost its basin, not the robot its
+        place: ``tracker`` is reseeded there)."""
+        assert self.proposer is not None
         cfg = self.config
         found = self.proposer.propose(scan)
         need = max(cfg.min_claim_fit, (0.0 if math.isnan(fit) else fit) + cfg.elsewhere_margin)
@@ -635,35 +690,80 @@ class ClaimGate:
                 f"no place of the map explains the scan clearly better (best {100 * best:.0f} "
                 f"% of beams, {100 * need:.0f} % needed): the scan, not the pose, is at fault"
             )
-        if not found.complete:
-            # an open map (the robot's place may lie in its unmapped part) or a search cut
-            # short: the places listed are not all that explain the scan, and a scan that
-            # fits a few of them (a stretch of wall) does not show the robot is at one
-            return (
-                "the places that explain the scan better are not a complete list "
-                f"({found.reason}): not evidence that the robot was carried off"
-            )
         carried = self._carry(self._chain, odom)[0] if self._chain is not None else None
         if carried is None and self._anchor is not None:
             carried = self.carried(odom)[0]
-        if carried is None:
-            return None
-        off = good[:, :2] - carried[:2]
-        turn = np.abs(wrap_angle(good[:, 2] - carried[2]))
-        near = np.flatnonzero(
-            (np.hypot(off[:, 0], off[:, 1]) <= cfg.local_window[0]) & (turn <= cfg.local_window[1])
+        if carried is not None:
+            off = good[:, :2] - carried[:2]
+            turn = np.abs(wrap_angle(good[:, 2] - carried[2]))
+            near = np.flatnonzero(
+                (np.hypot(off[:, 0], off[:, 1]) <= cfg.local_window[0])
+                & (turn <= cfg.local_window[1])
+            )
+            if near.size:
+                pose, share = self.fit(good[near[0]], scan)
+                floor = np.diag([cfg.min_carried_xy, cfg.min_carried_xy, cfg.min_carried_theta])
+                tracker.initialize_pose(pose, floor**2)
+                e = pose - carried
+                return (
+                    f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f}"
+                    f" cm / {math.degrees(abs(float(wrap_angle(e[2])))):.0f} deg from the tracked"
+                    " pose: the filter is reseeded there, the pose must be confirmed again"
+                )
+        self._elsewhere = _Elsewhere(good.copy(), odom.copy(), 0, 0.0, 0.0, bool(found.complete))
+        return None
+
+    def _follow_elsewhere(
+        self, claim: Claim, scan: LaserScan, odom: FloatArray, tracker: Tracker
+    ) -> Ruling:
+        """The places elsewhere that explained a scan, carried by odometry to this one and
+        aligned to it: those that still explain it (``min_claim_fit``) are kept. A robot
+        carried off stays where it was put, and its place explains every scan; a look-alike
+        that explained one scan (a stretch of wall) stops explaining the next ones as the robot
+        moves. After ``elsewhere_scans`` scans with a place kept the pose is given up (global
+        relocalization), and when the search's list was incomplete (an open map, a list cut
+        short) also ``elsewhere_motion`` of path or turning; with none kept the scan was at
+        fault and the pose stays."""
+        assert self._elsewhere is not None
+        cfg = self.config
+        was = self._elsewhere
+        step = relative(was.odom, odom)
+        kept = []
+        for pose in was.poses:
+            aligned, share = self.fit(compose(pose, step), scan)
+            if share >= cfg.min_claim_fit:
+                kept.append(aligned)
+        if not kept:
+            self._elsewhere = None
+            self._gross.reset()
+            self._patience.reset()
+            return Ruling(
+                Standing.HOLD,
+                claim,
+                f"claims suspended; {claim.reason}; the places elsewhere that explained an "
+                "earlier scan do not explain this one: the scan, not the pose, was at fault",
+            )
+        now = self._elsewhere = dataclasses.replace(
+            was,
+            poses=np.array(kept),
+            odom=odom.copy(),
+            scans=was.scans + 1,
+            path=was.path + math.hypot(step[0], step[1]),
+            turned=was.turned + abs(float(wrap_angle(step[2]))),
         )
-        if near.size == 0:
-            return None
-        pose, share = self.fit(good[near[0]], scan)
-        tracker.initialize_pose(
-            pose, np.diag([cfg.min_carried_xy**2, cfg.min_carried_xy**2, cfg.min_carried_theta**2])
-        )
-        e = pose - carried
-        return (
-            f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f} cm / "
-            f"{math.degrees(abs(float(wrap_angle(e[2])))):.0f} deg from the tracked pose: the "
-            "filter is reseeded there, the pose must be confirmed again"
+        moved = now.path >= cfg.elsewhere_motion[0] or now.turned >= cfg.elsewhere_motion[1]
+        if now.scans < cfg.elsewhere_scans or not (now.complete or moved):
+            return Ruling(
+                Standing.HOLD,
+                claim,
+                f"claims suspended; {claim.reason}; following {len(kept)} place(s) elsewhere",
+            )
+        self._elsewhere = None
+        return self._relocalize(
+            claim,
+            tracker,
+            f"the scan has contradicted the tracked pose and {len(kept)} place(s) elsewhere "
+            f"explain the last {cfg.elsewhere_scans + 1} scans: kidnapped",
         )
 
     def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:
