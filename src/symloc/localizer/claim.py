@@ -27,8 +27,12 @@ scan goes through :meth:`ClaimGate.check`:
    after ``patience`` such scans since the first (not necessarily in a row: a scan that fits
    once does not restart the count) it relocalizes from scratch; sooner, after
    ``gross_after`` scans in a row at which at most ``gross_fit`` of the beams fit anywhere
-   near the carried pose (no passer-by hides three quarters of a room: the robot is
-   elsewhere).
+   near the carried pose (no passer-by hides three quarters of a room). Either way only if
+   the robot is shown to be elsewhere: a place of the map (the global search) explains the
+   scan clearly better and goes on explaining the next scans, carried there by odometry, as
+   the robot moves. A scan that fits nowhere is the scan's fault (clutter, people, a wrong
+   map) and a place near the carried pose means the alignment, not the robot, lost its way
+   (the filter is reseeded there); claims then stay suspended.
 4. **Gate**: the pose is published only while its published covariance puts it inside the
    tolerance with a margin of ``gate_sigmas`` standard deviations in position and heading
    (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans, and
