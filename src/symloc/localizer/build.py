@@ -13,6 +13,7 @@ what ``symloc ros node`` runs when both are given the same settings.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,12 +36,12 @@ from symloc.localizer.map_symmetry import (
 )
 from symloc.localizer.places import MemoryPlaces
 from symloc.localizer.settings import LocalizerSettings
-from symloc.localizer.types import KeyframeStore, PlaceStore
+from symloc.localizer.types import KeyframeStore, PlaceStore, PoseProposer, Proposal
 from symloc.mcl.amcl import Amcl
 from symloc.mcl.global_search import GlobalSearch
 from symloc.symmetry import judge_symmetry
 
-__all__ = ["build_localizer", "free_centroid", "grid_symmetries"]
+__all__ = ["LazyProposer", "build_localizer", "free_centroid", "grid_symmetries"]
 
 FloatArray = NDArray[np.float64]
 logger = logging.getLogger(__name__)
@@ -115,9 +116,14 @@ def build_localizer(
     # a laser at the robot's origin needs no turning of the verdicts (bit for bit the same)
     judge_laser = laser if np.any(laser != 0.0) else None
     decide = settings.localizer.decide_here
-    # the global search proposes poses to decide among, and vouches that the robot is
-    # elsewhere before the claim gate gives a tracked pose up
-    proposer = GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser)
+
+    # the global search proposes poses to decide among, and shows that the robot is
+    # elsewhere before the claim gate gives a tracked pose up; without deciding here it is
+    # built on the gate's first question (its precomputation costs memory on a large map)
+    def search() -> GlobalSearchProposer:
+        return GlobalSearchProposer(GlobalSearch(fields), laser_pose=laser)
+
+    proposer: PoseProposer = search() if decide else LazyProposer(search)
     return Localizer(
         AmclTracker(amcl, laser_pose=laser, confidence=settings.confidence),
         ReportJudge(judge_symmetry, laser_pose=judge_laser, config=settings.symmetry),
@@ -166,3 +172,17 @@ def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig
             claim.map_std_xy,
         )
     return raised
+
+
+class LazyProposer:
+    """A :class:`~symloc.localizer.types.PoseProposer` built on its first :meth:`propose`
+    by ``make`` (a zero-argument callable)."""
+
+    def __init__(self, make: Callable[[], PoseProposer]) -> None:
+        self._make = make
+        self._proposer: PoseProposer | None = None
+
+    def propose(self, scan: object) -> Proposal:
+        if self._proposer is None:
+            self._proposer = self._make()
+        return self._proposer.propose(scan)
