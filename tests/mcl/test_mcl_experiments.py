@@ -53,6 +53,30 @@ def test_noisy_odometry_zero_noise_is_the_truth():
     assert np.abs(noisy[1:, :2] - t[1:, :2]).max() > 0.01
 
 
+def test_a_cached_map_is_used_only_for_the_log_it_was_built_from(tmp_path):
+    from symloc.experiments.amcl_carmen import build_map
+    from symloc.scan import LaserScan
+
+    def log(shift):  # type: ignore[no-untyped-def]
+        ranges = np.full(90, 2.0)
+        scan = LaserScan(angle_min=-np.pi / 2, angle_increment=np.pi / 90, range_min=0.0,
+                         range_max=10.0, ranges=ranges, stamp=0.0)  # fmt: skip
+        pose = np.array([shift, 0.0, 0.0])
+        return SimpleNamespace(scans=[SimpleNamespace(laser_pose=pose, scan=scan, stamp=0.0)])
+
+    cache = tmp_path / "amcl_carmen_map_x.npz"
+    first = build_map(log(0.0), cache=cache)
+    assert cache.is_file()
+    assert np.array_equal(build_map(log(0.0), cache=cache).data, first.data)  # from the cache
+    other = build_map(log(1.0), cache=cache)  # another log under the same name: built anew
+    assert not np.array_equal(np.asarray(other.origin), np.asarray(first.origin)) or not (
+        np.array_equal(other.data, first.data)
+    )
+    np.savez_compressed(cache, data=first.data, resolution=0.05, origin=np.asarray(first.origin))
+    again = build_map(log(1.0), cache=cache)  # a cache of an older version (no key): rebuilt
+    assert np.array_equal(again.data, other.data)
+
+
 @pytest.mark.shared_data
 def test_tracking_on_the_start_of_the_aces_log():
     folder = find_carmen_dir()

@@ -35,6 +35,7 @@ is told apart from a claim that is wrong.
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,19 +78,25 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
+logger = logging.getLogger(__name__)
+
 
 def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> Any:
     """Occupancy grid from the log's scans at their corrected poses.
 
-    With ``cache`` (an ``.npz`` path) the grid is loaded from there if present, else built and
-    saved there.
+    With ``cache`` (an ``.npz`` path) the grid is loaded from there if it was built from this
+    log at this resolution by this version of the builder (:func:`_map_key`), else built and
+    saved there: a folder reused across versions must not hand a stale map to a new run.
     """
     from symloc.grid import OccupancyGrid
     from symloc.grid.log_odds import LogOddsGrid
 
+    key = _map_key(log, resolution)
     if cache is not None and cache.is_file():
-        z = np.load(cache)
-        return OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
+        with np.load(cache) as z:
+            if "key" in z.files and str(z["key"]) == key:
+                return OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
+        logger.info("%s: built for another log, resolution or builder; building anew", cache)
     lo = LogOddsGrid(resolution)
     for s in log.scans:
         lo.integrate(s.laser_pose, s.scan)
@@ -97,9 +104,33 @@ def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> 
     if cache is not None:
         with atomic_path(cache) as tmp:
             np.savez_compressed(
-                tmp, data=grid.data, resolution=grid.resolution, origin=np.asarray(grid.origin)
+                tmp,
+                data=grid.data,
+                resolution=grid.resolution,
+                origin=np.asarray(grid.origin),
+                key=np.asarray(key),
             )
     return grid
+
+
+#: Bumped whenever :func:`build_map` would draw another grid from the same log.
+MAP_BUILDER_VERSION = 2
+
+
+def _map_key(log: Any, resolution: float) -> str:
+    """What a cached map must have been built from: the builder's version, the resolution and
+    a fingerprint of the log's scans (count, first and last stamp, and the sum of their
+    poses and ranges)."""
+    scans = log.scans
+    n = len(scans)
+    if n == 0:
+        return f"v{MAP_BUILDER_VERSION}|{resolution!r}|0"
+    poses = float(sum(float(np.sum(s.laser_pose)) for s in scans))
+    ranges = float(sum(float(np.sum(s.scan.ranges)) for s in scans))
+    return (
+        f"v{MAP_BUILDER_VERSION}|{resolution!r}|{n}|{scans[0].stamp!r}|{scans[-1].stamp!r}"
+        f"|{poses!r}|{ranges!r}"
+    )
 
 
 def tracking_params(
