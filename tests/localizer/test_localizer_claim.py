@@ -266,6 +266,11 @@ def test_a_place_near_the_tracked_pose_reseeds_the_filter_there(l_room) -> None:
     assert "reseeded" in steps[-1].reason
     assert tracker.relocalized == 0
     assert len(tracker.reseeded) == 1
+    # once per suspension: still not confirmed, the next give-up follows the place instead
+    # (it may be a rotated copy of a symmetric room) and does not reseed again
+    more = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 10)
+    assert len(tracker.reseeded) == 1
+    assert any("place(s) elsewhere" in r.reason for r in more), [r.reason for r in more]
     with pytest.raises(ConfigurationError, match="local_window"):
         ClaimConfig(local_window=(1.0, -0.1))
     with pytest.raises(ConfigurationError, match="elsewhere_margin"):

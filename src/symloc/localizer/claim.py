@@ -469,6 +469,7 @@ class ClaimGate:
         self._resume = Streak(self.config.resume_after)
         self._gross = Streak(max(1, self.config.gross_after))
         self._elsewhere: _Elsewhere | None = None
+        self._reseeded = False  # the filter reseeded near the carried pose in this suspension
 
     def reset(self) -> None:
         """Forget the anchor and the last confirmed pose (the pose is no longer believed)."""
@@ -503,6 +504,7 @@ class ClaimGate:
         self._chain = None
         self._suspended = False
         self._elsewhere = None
+        self._reseeded = False
         self._patience.reset()
         self._resume.reset()
 
@@ -514,6 +516,7 @@ class ClaimGate:
         self._operator = None
         self._suspended = False
         self._elsewhere = None
+        self._reseeded = False
         self._patience.reset()
         self._resume.reset()
         self._gross.reset()
@@ -592,6 +595,7 @@ class ClaimGate:
     def _suspend(self, why: str, tracker: Tracker, note: Callable[[str], None]) -> None:
         self._suspended = True
         self._elsewhere = None
+        self._reseeded = False
         self._operator = None  # the operator chose among copies before whatever this was
         self._patience.reset()
         self._resume.reset()
@@ -682,7 +686,9 @@ class ClaimGate:
         and None is returned. Else why the pose is kept: no place explains the scan clearly
         better (the scan is at fault: clutter, people, a wrong map), or one does within
         ``local_window`` of the carried pose (the alignment lost its basin, not the robot its
-        place: ``tracker`` is reseeded there)."""
+        place: ``tracker`` is reseeded there, once per suspension: a pose near the carried one
+        may be a rotated copy of a symmetric room, and a robot not confirmed there either is
+        given up like any other)."""
         assert self.proposer is not None
         cfg = self.config
         found = self.proposer.propose(scan)
@@ -697,7 +703,7 @@ class ClaimGate:
         carried = self._carry(self._chain, odom)[0] if self._chain is not None else None
         if carried is None and self._anchor is not None:
             carried = self.carried(odom)[0]
-        if carried is not None:
+        if carried is not None and not self._reseeded:
             off = good[:, :2] - carried[:2]
             turn = np.abs(wrap_angle(good[:, 2] - carried[2]))
             near = np.flatnonzero(
@@ -708,6 +714,7 @@ class ClaimGate:
                 pose, share = self.fit(good[near[0]], scan)
                 floor = np.diag([cfg.min_carried_xy, cfg.min_carried_xy, cfg.min_carried_theta])
                 tracker.initialize_pose(pose, floor**2)
+                self._reseeded = True
                 e = pose - carried
                 return (
                     f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f}"
