@@ -68,13 +68,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, relative, wrap_angle
+from symloc.geometry import wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.scan import LaserScan
 
+from .elsewhere import Places, nearest_within, places_explaining
 from .rules import Streak
 from .types import PoseProposer, Tracker, TrackerResult
 
@@ -93,21 +94,6 @@ class _Held:
     cov: FloatArray
     odom: FloatArray
     reading: tuple[float, float]
-
-
-@dataclass(frozen=True)
-class _Elsewhere:
-    """Places ``poses`` (K, 3) that explained a scan while the carried pose did not, at
-    odometry pose ``odom`` (3,), followed for ``scans`` scans over ``path`` [m] and ``turned``
-    [rad] (summed heading changes) since; ``complete`` when the search that found them listed
-    every such place."""
-
-    poses: FloatArray
-    odom: FloatArray
-    scans: int
-    path: float
-    turned: float
-    complete: bool
 
 
 @dataclass(frozen=True)
@@ -468,7 +454,7 @@ class ClaimGate:
         self._patience = Streak(self.config.patience)
         self._resume = Streak(self.config.resume_after)
         self._gross = Streak(max(1, self.config.gross_after))
-        self._elsewhere: _Elsewhere | None = None
+        self._elsewhere: Places | None = None
         self._reseeded = False  # the filter reseeded near the carried pose in this suspension
 
     def reset(self) -> None:
@@ -693,7 +679,7 @@ class ClaimGate:
         cfg = self.config
         found = self.proposer.propose(scan)
         need = max(cfg.min_claim_fit, (0.0 if math.isnan(fit) else fit) + cfg.elsewhere_margin)
-        good = found.poses[found.scores >= need]
+        good = places_explaining(found, need)
         if good.shape[0] == 0:
             best = float(np.max(found.scores)) if found.scores.size else 0.0
             return (
@@ -703,25 +689,19 @@ class ClaimGate:
         carried = self._carry(self._chain, odom)[0] if self._chain is not None else None
         if carried is None and self._anchor is not None:
             carried = self.carried(odom)[0]
-        if carried is not None and not self._reseeded:
-            off = good[:, :2] - carried[:2]
-            turn = np.abs(wrap_angle(good[:, 2] - carried[2]))
-            near = np.flatnonzero(
-                (np.hypot(off[:, 0], off[:, 1]) <= cfg.local_window[0])
-                & (turn <= cfg.local_window[1])
+        near = None if carried is None else nearest_within(good, carried, cfg.local_window)
+        if carried is not None and near is not None and not self._reseeded:
+            pose, share = self.fit(good[near], scan)
+            floor = np.diag([cfg.min_carried_xy, cfg.min_carried_xy, cfg.min_carried_theta])
+            tracker.initialize_pose(pose, floor**2)
+            self._reseeded = True
+            e = pose - carried
+            return (
+                f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f}"
+                f" cm / {math.degrees(abs(float(wrap_angle(e[2])))):.0f} deg from the tracked"
+                " pose: the filter is reseeded there, the pose must be confirmed again"
             )
-            if near.size:
-                pose, share = self.fit(good[near[0]], scan)
-                floor = np.diag([cfg.min_carried_xy, cfg.min_carried_xy, cfg.min_carried_theta])
-                tracker.initialize_pose(pose, floor**2)
-                self._reseeded = True
-                e = pose - carried
-                return (
-                    f"the scan fits {100 * share:.0f} % of beams {100 * math.hypot(e[0], e[1]):.0f}"
-                    f" cm / {math.degrees(abs(float(wrap_angle(e[2])))):.0f} deg from the tracked"
-                    " pose: the filter is reseeded there, the pose must be confirmed again"
-                )
-        self._elsewhere = _Elsewhere(good.copy(), odom.copy(), 0, 0.0, 0.0, bool(found.complete))
+        self._elsewhere = Places(good, odom.copy(), complete=bool(found.complete))
         return None
 
     def _follow_elsewhere(
@@ -737,14 +717,8 @@ class ClaimGate:
         fault and the pose stays."""
         assert self._elsewhere is not None
         cfg = self.config
-        was = self._elsewhere
-        step = relative(was.odom, odom)
-        kept = []
-        for pose in was.poses:
-            aligned, share = self.fit(compose(pose, step), scan)
-            if share >= cfg.min_claim_fit:
-                kept.append(aligned)
-        if not kept:
+        now = self._elsewhere = self._elsewhere.followed(odom, scan, self.fit, cfg.min_claim_fit)
+        if now is None:
             self._elsewhere = None
             self._gross.reset()
             self._patience.reset()
@@ -754,26 +728,18 @@ class ClaimGate:
                 f"claims suspended; {claim.reason}; the places elsewhere that explained an "
                 "earlier scan do not explain this one: the scan, not the pose, was at fault",
             )
-        now = self._elsewhere = dataclasses.replace(
-            was,
-            poses=np.array(kept),
-            odom=odom.copy(),
-            scans=was.scans + 1,
-            path=was.path + math.hypot(step[0], step[1]),
-            turned=was.turned + abs(float(wrap_angle(step[2]))),
-        )
-        moved = now.path >= cfg.elsewhere_motion[0] or now.turned >= cfg.elsewhere_motion[1]
-        if now.scans < cfg.elsewhere_scans or not (now.complete or moved):
+        kept = now.poses.shape[0]
+        if now.scans < cfg.elsewhere_scans or not (now.complete or now.moved(cfg.elsewhere_motion)):
             return Ruling(
                 Standing.HOLD,
                 claim,
-                f"claims suspended; {claim.reason}; following {len(kept)} place(s) elsewhere",
+                f"claims suspended; {claim.reason}; following {kept} place(s) elsewhere",
             )
         self._elsewhere = None
         return self._relocalize(
             claim,
             tracker,
-            f"the scan has contradicted the tracked pose and {len(kept)} place(s) elsewhere "
+            f"the scan has contradicted the tracked pose and {kept} place(s) elsewhere "
             f"explain the last {cfg.elsewhere_scans + 1} scans: kidnapped",
         )
 
