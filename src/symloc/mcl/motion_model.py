@@ -35,6 +35,7 @@ __all__ = [
     "Odometer",
     "carry_by_odometry",
     "folded_rotations",
+    "increment",
     "odometry_delta",
     "sample_motion_model_odometry",
 ]
@@ -145,6 +146,17 @@ def sample_motion_model_odometry(
     return res
 
 
+def increment(odom_prev: FloatArray, odom_curr: FloatArray) -> tuple[float, float, float]:
+    """The odometry increment ``odom_prev -> odom_curr`` (3,) as ``rot1, trans, rot2``
+    [rad, m, rad] (Thrun et al. 2005, Table 5.6), no first rotation below 1 cm of travel (as
+    nav2: the direction of a tiny step is noise)."""
+    prev = np.asarray(odom_prev, dtype=np.float64)
+    delta = odometry_delta(prev, odom_curr)
+    trans = float(np.hypot(delta[0], delta[1]))
+    rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
+    return rot1, trans, float(angle_diff(delta[2], rot1))
+
+
 def folded_rotations(rot1: float, rot2: float) -> tuple[float, float]:
     """``|rot1|``, ``|rot2|`` [rad] folded as nav2 folds them (``min(|r|, pi - |r|)``: a step
     backwards is as noisy as one forwards)."""
@@ -173,14 +185,8 @@ class Odometer:
         """Add the step to ``odom_pose`` (3,); returns the totals ``(path, turning)``."""
         odom = np.asarray(odom_pose, dtype=np.float64).reshape(3)
         if self._last is not None:
-            delta = odometry_delta(self._last, odom)
-            trans = float(np.hypot(delta[0], delta[1]))
-            rot1 = (
-                0.0
-                if trans < 0.01
-                else float(angle_diff(np.arctan2(delta[1], delta[0]), self._last[2]))
-            )
-            r1n, r2n = folded_rotations(rot1, float(angle_diff(delta[2], rot1)))
+            rot1, trans, rot2 = increment(self._last, odom)
+            r1n, r2n = folded_rotations(rot1, rot2)
             self.path += trans
             self.turning += r1n + r2n
         self._last = odom.copy()
@@ -226,10 +232,7 @@ def carry_by_odometry(
     """
     a1, a2, a3, a4 = (float(a) for a in alphas)
     prev = np.asarray(odom_prev, dtype=np.float64)
-    delta = odometry_delta(prev, odom_curr)
-    trans = float(np.hypot(delta[0], delta[1]))
-    rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
-    rot2 = float(angle_diff(delta[2], rot1))
+    rot1, trans, rot2 = increment(prev, odom_curr)
     r1n, r2n = folded_rotations(rot1, rot2)
     moved = trans
     if travelled is not None:
