@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import functools
 import math
 from types import SimpleNamespace
 
@@ -130,7 +131,8 @@ def test_global_localization_reports_the_confidence_columns(monkeypatch):
         alpha4=0.01,
     )
     trace: list = []
-    gl = global_localization(
+    localize = functools.partial(
+        global_localization,
         _LogData("intel", short, grid, truth),
         p,
         (0.01,) * 4,
@@ -138,8 +140,8 @@ def test_global_localization_reports_the_confidence_columns(monkeypatch):
         starts=2,
         window=20,
         progress=False,
-        trace=trace,
     )
+    gl = localize(trace=trace)
     assert gl["starts"] == 2
     assert len(trace) == 2
     assert 0 <= gl["runs_confident_at_end"] <= 2
@@ -160,15 +162,7 @@ def test_global_localization_reports_the_confidence_columns(monkeypatch):
         return real(data, params, odom, s, stop, rng, **kw)
 
     monkeypatch.setattr(ac, "symloc_claims", greedy)
-    again = global_localization(
-        _LogData("intel", short, grid, truth),
-        p,
-        (0.01,) * 4,
-        1,
-        starts=2,
-        window=20,
-        progress=False,
-    )
+    again = localize()
     for a, b in zip(gl["runs"], again["runs"], strict=True):
         assert a["final_error_m"] == b["final_error_m"]
         assert a["confident_scans"] == b["confident_scans"]

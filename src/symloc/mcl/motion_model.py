@@ -103,11 +103,9 @@ def sample_motion_model_odometry(
     trans = float(np.hypot(delta[0], delta[1]))
     corrected = model.endswith("corrected")
     if model.startswith("diff"):
-        rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
-        rot2 = float(angle_diff(delta[2], rot1))
+        rot1, _, rot2 = _split(prev, delta)
         # Treat backward and forward motion symmetrically for the noise.
-        r1n = min(abs(angle_diff(rot1, 0.0)), abs(angle_diff(rot1, np.pi)))
-        r2n = min(abs(angle_diff(rot2, 0.0)), abs(angle_diff(rot2, np.pi)))
+        r1n, r2n = folded_rotations(rot1, rot2)
         v_r1 = a1 * r1n * r1n + a2 * trans * trans
         v_tr = a3 * trans * trans + a4 * r1n * r1n + a4 * r2n * r2n
         v_r2 = a1 * r2n * r2n + a2 * trans * trans
@@ -151,7 +149,11 @@ def increment(odom_prev: FloatArray, odom_curr: FloatArray) -> tuple[float, floa
     [rad, m, rad] (Thrun et al. 2005, Table 5.6), no first rotation below 1 cm of travel (as
     nav2: the direction of a tiny step is noise)."""
     prev = np.asarray(odom_prev, dtype=np.float64)
-    delta = odometry_delta(prev, odom_curr)
+    return _split(prev, odometry_delta(prev, odom_curr))
+
+
+def _split(prev: FloatArray, delta: FloatArray) -> tuple[float, float, float]:
+    """:func:`increment` from the previous pose (3,) and its :func:`odometry_delta` (3,)."""
     trans = float(np.hypot(delta[0], delta[1]))
     rot1 = 0.0 if trans < 0.01 else float(angle_diff(np.arctan2(delta[1], delta[0]), prev[2]))
     return rot1, trans, float(angle_diff(delta[2], rot1))
