@@ -271,10 +271,24 @@ def test_a_place_near_the_tracked_pose_reseeds_the_filter_there(l_room) -> None:
     more = _contradicted(gate, result, room, np.array([1.2, 1.4, -2.0]), tracker, 10)
     assert len(tracker.reseeded) == 1
     assert any("place(s) elsewhere" in r.reason for r in more), [r.reason for r in more]
-    with pytest.raises(ConfigurationError, match="local_window"):
-        ClaimConfig(local_window=(1.0, -0.1))
-    with pytest.raises(ConfigurationError, match="elsewhere_margin"):
-        ClaimConfig(elsewhere_margin=1.0)
+
+
+@pytest.mark.parametrize(
+    ("field", "bad"),
+    [
+        ("local_window", (1.0, -0.1)),
+        ("local_window", (1.0,)),
+        ("elsewhere_motion", (float("nan"), 1.0)),
+        ("elsewhere_motion", "1 m"),
+        ("elsewhere_margin", 1.0),
+        ("elsewhere_margin", -0.1),
+        ("elsewhere_scans", 0),
+        ("elsewhere_scans", 2.5),
+    ],
+)
+def test_the_kidnap_settings_are_checked(field, bad) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ConfigurationError, match=field):
+        ClaimConfig(**{field: bad})
 
 
 def test_a_partly_hidden_scan_waits_for_patience(l_room) -> None:

@@ -76,6 +76,9 @@ def test_a_cached_map_is_used_only_for_the_log_it_was_built_from(tmp_path):
     np.savez_compressed(cache, data=first.data, resolution=0.05, origin=np.asarray(first.origin))
     again = build_map(log(1.0), cache=cache)  # a cache of an older version (no key): rebuilt
     assert np.array_equal(again.data, other.data)
+    cache.write_bytes(b"not a zip file")  # a truncated or foreign file: rebuilt, not a crash
+    assert np.array_equal(build_map(log(1.0), cache=cache).data, other.data)
+    assert np.array_equal(build_map(log(1.0), cache=cache).data, other.data)  # and cached
 
 
 @pytest.mark.shared_data

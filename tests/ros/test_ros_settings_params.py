@@ -209,3 +209,14 @@ def test_settings_validate_and_name_the_field() -> None:
     with pytest.raises(ConfigurationError, match=r"ClaimConfig\.patience"):
         LocalizerSettings().replace(**{"claim.patience": 0})
     assert dataclasses.replace(LocalizerSettings(), seed=3).seed == 3
+
+
+def test_a_bad_field_in_a_params_file_names_the_file_and_the_field(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "robot.yaml"
+    path.write_text(
+        "symloc:\n  ros__parameters:\n    claim:\n      local_window: [0.5]\n", encoding="utf-8"
+    )
+    with pytest.raises(ConfigurationError, match=r"robot\.yaml: ClaimConfig\.local_window"):
+        NodeParams.from_yaml(path)
+    path.write_text("symloc:\n  ros__parameters:\n    claim:\n      local_window: [0.5, 0.3]\n")
+    assert NodeParams.from_yaml(path).claim.local_window == (0.5, 0.3)

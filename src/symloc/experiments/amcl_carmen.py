@@ -37,6 +37,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -93,10 +94,13 @@ def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> 
 
     key = _map_key(log, resolution)
     if cache is not None and cache.is_file():
-        with np.load(cache) as z:
-            if "key" in z.files and str(z["key"]) == key:
-                return OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
-        logger.info("%s: built for another log, resolution or builder; building anew", cache)
+        try:
+            with np.load(cache) as z:
+                if "key" in z.files and str(z["key"]) == key:
+                    return OccupancyGrid(z["data"], float(z["resolution"]), z["origin"])
+            logger.info("%s: built for another log, resolution or builder; building anew", cache)
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:
+            logger.warning("%s: not a readable map cache (%s); building anew", cache, err)
     lo = LogOddsGrid(resolution)
     for s in log.scans:
         lo.integrate(s.laser_pose, s.scan)

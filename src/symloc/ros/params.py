@@ -588,14 +588,21 @@ class NodeParams:
         The block is looked up under ``node_name``, ``/node_name``, any namespaced
         ``ns/node_name`` or ``/**``; a file with none of them raises.
         """
-        if isinstance(source, Path) or (
+        is_file = isinstance(source, Path) or (
             isinstance(source, str) and "\n" not in source and source.endswith((".yaml", ".yml"))
-        ):
-            text = read_text_bounded(
-                source, MAX_PARAMS_FILE_BYTES, what="the params file", error=ConfigurationError
-            )
-        else:
-            text = str(source)
+        )
+        if not is_file:
+            return cls._from_text(str(source), node_name)
+        text = read_text_bounded(
+            source, MAX_PARAMS_FILE_BYTES, what="the params file", error=ConfigurationError
+        )
+        try:
+            return cls._from_text(text, node_name)
+        except ConfigurationError as err:  # say which file the bad field is in
+            raise ConfigurationError(f"{source}: {err}") from err
+
+    @classmethod
+    def _from_text(cls, text: str, node_name: str) -> NodeParams:
         doc = load_yaml_bounded(text, where="params", error=ConfigurationError)
         if not isinstance(doc, dict):
             raise ConfigurationError(f"params: expected a mapping with a {node_name!r} key")
