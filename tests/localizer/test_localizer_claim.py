@@ -612,3 +612,47 @@ def test_map_rotation_std_is_checked(bad):
 def test_a_non_finite_rotation_centre_is_refused(l_room, bad):
     with pytest.raises(ConfigurationError, match="rotation_centre"):
         ClaimGate(surface_distance_field(l_room[1]), ALPHAS, rotation_centre=bad)
+
+
+def _deciding_localizer(grid, claim: ClaimConfig | None = None) -> Localizer:  # type: ignore[no-untyped-def]
+    """A localizer that decides from where the robot stands, with the real global search."""
+    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 0)
+    return Localizer(
+        AmclTracker(amcl),
+        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
+        _NoPlaces(),
+        scorer=GridScorer(grid),
+        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS, claim),
+        proposer=GlobalSearchProposer(GlobalSearch(MapFields.of(grid))),
+    )
+
+
+@pytest.mark.parametrize(
+    ("claim", "claimed"),
+    [
+        (None, True),
+        # a map whose scale is unknown by 5 %: the gate withholds, AMCL earns the pose
+        (ClaimConfig(map_scale_std=0.05), False),
+    ],
+)
+def test_a_pose_the_laser_alone_leaves_is_claimed_at_that_scan(l_room, claim, claimed) -> None:
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    loc = _deciding_localizer(grid, claim)
+    loc.reset_global()
+    est = loc.update(
+        OdometryReading(np.zeros(3), 0.0), simulate_scan(room.world, truth, RPLIDAR_A2, 3)
+    )
+    assert "the laser alone leaves one pose" in est.reason, est.reason
+    assert loc.decide_counts.laser_single == 1
+    assert loc.decide_counts.laser_claimed == int(claimed)
+    if claimed:
+        assert est.status is Status.TRACKING
+        assert est.pose is not None
+        e = est.pose - truth
+        assert math.hypot(e[0], e[1]) < 0.05
+        assert abs(math.remainder(e[2], 2 * math.pi)) < math.radians(2.0)
+        assert loc.phase == "tracking"
+    else:
+        assert est.status is not Status.TRACKING
+        assert "pose to be earned" in est.reason

@@ -54,7 +54,8 @@ class DecideCounts:
     """What deciding from where the robot stands did (:mod:`symloc.localizer.decide_here`).
 
     ``entered`` times it started; ``proposals`` sets of hypotheses the laser proposed;
-    ``laser_single`` times one hypothesis alone survived the laser (handed to AMCL);
+    ``laser_single`` times one hypothesis alone survived the laser; ``laser_claimed`` of those,
+    poses the laser claimed at once (the others handed to AMCL to be earned);
     ``images`` images verified; ``verified`` images that verified one hypothesis with margin;
     ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
     but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
@@ -68,6 +69,7 @@ class DecideCounts:
     entered: int = 0
     proposals: int = 0
     laser_single: int = 0
+    laser_claimed: int = 0
     images: int = 0
     verified: int = 0
     rejected: int = 0

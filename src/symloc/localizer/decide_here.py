@@ -10,8 +10,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    claim gate's scan matcher and scored by the share of beams that then fit.
 2. **One survivor** (within ``decide_laser_margin`` of the best, the search complete, and no
    rotated copy of it that the copy check would not rule out: such a copy survives too, or
-   the check would refuse the pose): AMCL is reseeded there and the pose is earned as always,
-   through :class:`~.phases.Lost`'s copy checks and the claim gate.
+   the check would refuse the pose): the laser sets the pose (:meth:`ClaimGate.confirm`) and
+   it is claimed at this scan when the gate claims it and the copy check of every first
+   claim (:func:`~.phases.copies_ambiguity`) finds no copy; otherwise (withheld, refused)
+   AMCL is reseeded there and the pose is earned as always, through
+   :class:`~.phases.Lost`'s copy checks and the claim gate.
 3. **Several survivors**: the robot turns in place to where the keyframes are
    (:func:`~symloc.localizer.view_planning.plan_turn`: the heading at which the most
    hypotheses predict keyframes, at least ``decide_turn`` from every heading already
@@ -79,7 +82,7 @@ from .config import LocalizerConfig
 from .context import Context, Inputs, cov_from_std, lost, reseed_tracker
 from .copies import CopyScores, claim_floor, known_place_at, rotated_copies
 from .laser_watch import LaserWatch, WatchVerdict
-from .phases import Centering, Lost, Phase, Step, Tracking, restart
+from .phases import Centering, Lost, Phase, Step, Tracking, copies_ambiguity, restart
 from .types import (
     Estimate,
     Hypothesis,
@@ -410,13 +413,14 @@ class DecideHere:
             counts.laser_single += 1
             pose = hyp.poses[0]
             cov = cov_from_std(cfg.reseed_xy_std, cfg.reseed_theta_std)
+            single = f"{100 * hyp.fits[0]:.0f} % of beams fit, the next {self._next_fit(hyp)}"
+            claimed = self._laser_claim(ctx, inp, pose, cov, single)
+            if claimed is not None:
+                return claimed
             ctx.tracker.initialize_pose(pose, cov)
             if ctx.gate is not None:
                 ctx.gate.anchor(pose, cov, inp.odom_pose)
-            why = (
-                f"the laser alone leaves one pose ({100 * hyp.fits[0]:.0f} % of beams fit, "
-                f"the next {self._next_fit(hyp)}): AMCL reseeded there, pose to be earned"
-            )
+            why = f"the laser alone leaves one pose ({single}): AMCL reseeded there, pose to be earned"
             ctx.note(f"deciding here: {why}")
             self.rest_after = max(1, cfg.decide_rest // 3)
             return lost(why, inp.result), restart(ctx)
@@ -452,6 +456,31 @@ class DecideHere:
         request = Request(RequestKind.CAPTURE_IMAGE)
         why = f"{len(poses)} poses explain the scan; image requested"
         return self._wait(ctx, inp, request, why), self
+
+    def _laser_claim(
+        self, ctx: Context, inp: Inputs, pose: FloatArray, cov: FloatArray, single: str
+    ) -> Step | None:
+        """The laser alone leaves one pose ``pose`` (3,) (known to ``cov`` (3, 3)): claimed at
+        this scan when the claim gate confirms it and no rotated copy of it explains the scan
+        about as well (the copy check every first claim passes); None to earn it through AMCL
+        as before (no gate, a claim withheld or refused). A copy check that finds something
+        returns its step (ambiguous, or to a symmetric place's centre), as on convergence.
+
+        Waiting for AMCL to converge from the reseed added nothing the gate does not test
+        (the same scan matcher, the same copy check) but ten scans or so, about a second.
+        """
+        gate = ctx.gate
+        if gate is None or not isinstance(inp.scan, LaserScan):
+            return None
+        claim = gate.confirm(pose, cov, inp.scan)
+        if claim.verdict is not Verdict.CLAIM or claim.pose is None:
+            return None
+        found = copies_ambiguity(ctx, inp, Lost.fresh(ctx.config), claim.pose)
+        if found is not None:
+            return found
+        ctx.record.decide.laser_claimed += 1
+        reason = f"decided here: the laser alone leaves one pose ({single}); pose set by the laser"
+        return self._claimed(ctx, inp, claim, reason)
 
     def _axis(
         self, ctx: Context, inp: Inputs, classes: tuple[AxisClass, AxisClass], count: int
