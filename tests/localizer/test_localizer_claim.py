@@ -656,3 +656,38 @@ def test_a_pose_the_laser_alone_leaves_is_claimed_at_that_scan(l_room, claim, cl
     else:
         assert est.status is not Status.TRACKING
         assert "pose to be earned" in est.reason
+
+
+@pytest.mark.parametrize(
+    "cov",
+    [
+        np.diag([0.03**2, 0.03**2]),
+        np.diag([0.04**2, 0.01**2]),
+        np.array([[0.04**2, 3e-4], [3e-4, 0.02**2]]),
+        np.diag([0.05**2, 0.0]),
+    ],
+)
+def test_outside_probability_matches_sampling(cov) -> None:
+    from symloc.localizer.claim import outside_probability
+
+    rng = np.random.default_rng(0)
+    e = rng.multivariate_normal(np.zeros(2), cov, size=400_000)
+    sampled = float(np.mean(np.hypot(e[:, 0], e[:, 1]) > 0.1))
+    p = outside_probability(cov, 0.1)
+    assert p == pytest.approx(sampled, rel=0.05, abs=2e-4)
+    if cov[0, 0] == cov[1, 1] and cov[0, 1] == 0.0:
+        assert p == pytest.approx(math.exp(-0.5 * 0.1**2 / cov[0, 0]), rel=1e-9)
+
+
+def test_the_gate_bounds_the_chance_of_lying_outside_not_the_longest_axis() -> None:
+    from symloc.localizer.claim import outside_probability
+
+    cfg = ClaimConfig()  # 10 cm, four sigmas: a circular 2.5 cm std at most
+    assert cfg.max_outside_probability == pytest.approx(math.exp(-8.0))
+    assert outside_probability(np.eye(2) * 0.025**2, 0.1) == pytest.approx(math.exp(-8.0))
+    # long in one direction only (the map's scale error): 2.7 cm along, 1 cm across is less
+    # likely outside than the circular 2.5 cm the gate has always accepted
+    assert outside_probability(np.diag([0.027**2, 0.01**2]), 0.1) < cfg.max_outside_probability
+    # but not 2.6 cm in every direction, nor 3 cm along
+    assert outside_probability(np.eye(2) * 0.026**2, 0.1) > cfg.max_outside_probability
+    assert outside_probability(np.diag([0.03**2, 0.01**2]), 0.1) > cfg.max_outside_probability

@@ -34,10 +34,11 @@ scan goes through :meth:`ClaimGate.check`:
    map) and a place near the carried pose means the alignment, not the robot, lost its way
    (the filter is reseeded there); claims then stay suspended.
 4. **Gate**: the pose is published only while its published covariance puts it inside the
-   tolerance with a margin of ``gate_sigmas`` standard deviations in position and heading
-   (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans, and
-   the scans of a run are far from independent); otherwise the claim is *withheld*
-   and the status says which bound failed.
+   tolerance with a margin of ``gate_sigmas`` standard deviations in heading and, in
+   position, a chance of lying outside at most that of a circular covariance with that
+   margin (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans,
+   and the scans of a run are far from independent; :func:`outside_probability`); otherwise
+   the claim is *withheld* and the status says which bound failed.
 
 The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
@@ -66,6 +67,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.special import erfc
 
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
@@ -106,8 +108,11 @@ class ClaimConfig:
         A pose published as tracking must be within these of the truth (the declared
         tolerance: 0.1 m and 5 degrees).
     gate_sigmas : float
-        Publish only while ``gate_sigmas`` standard deviations fit inside the tolerance
-        (position: the largest axis of the x-y covariance; heading: its std).
+        Publish only while ``gate_sigmas`` standard deviations fit inside the tolerance: the
+        heading's std, and in position a chance of lying outside the tolerance at most that of
+        a circular covariance of std ``tolerance_position / gate_sigmas``
+        (:attr:`max_outside_probability`; a covariance long in one direction only, as the
+        map's scale error makes it, may be longer there).
     min_inlier_fraction : float
         Below this share of returning beams ending within the match's ``inlier_distance`` of an
         obstacle, the scan contradicts the pose: the claim is withdrawn.
@@ -309,6 +314,14 @@ class ClaimConfig:
         """Largest heading std [rad] the gate accepts."""
         return self.tolerance_heading / self.gate_sigmas
 
+    @property
+    def max_outside_probability(self) -> float:
+        """Largest probability the gate accepts that the position lies outside the tolerance:
+        that of a circular covariance of std :attr:`max_std_xy`, ``exp(-gate_sigmas^2 / 2)``
+        (3.4e-4 at four sigmas). An elongated covariance (the map's scale error, radial from
+        its centre; a corridor's axis) may be longer along one axis for the same chance."""
+        return math.exp(-0.5 * self.gate_sigmas**2)
+
 
 class Verdict(enum.Enum):
     """The gate's verdict on one scan (``.value`` as logs and JSON spell it)."""
@@ -363,9 +376,37 @@ class Ruling:
     reason: str
 
 
-def _std(cov: FloatArray) -> tuple[float, float]:
-    ev = np.linalg.eigvalsh(0.5 * (cov[:2, :2] + cov[:2, :2].T))
-    return math.sqrt(max(float(ev.max()), 0.0)), math.sqrt(max(float(cov[2, 2]), 0.0))
+def _std(cov: FloatArray) -> tuple[float, float, float]:
+    """The position's largest and smallest std [m] and the heading's std [rad] of ``cov``."""
+    ev = np.clip(np.linalg.eigvalsh(0.5 * (cov[:2, :2] + cov[:2, :2].T)), 0.0, None)
+    return math.sqrt(float(ev[1])), math.sqrt(float(ev[0])), math.sqrt(max(float(cov[2, 2]), 0.0))
+
+
+#: Gauss-Legendre nodes and weights on [-1, 1] for :func:`outside_probability`.
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(64)
+
+
+def outside_probability(cov_xy: FloatArray, radius: float) -> float:
+    """The probability that a position error drawn from N(0, ``cov_xy``) (2, 2) [m^2] lies
+    farther than ``radius`` [m] from zero.
+
+    In the covariance's principal axes (variances ``a >= b``) it is the error's chance beyond
+    ``radius`` along the major axis plus, for ``|x| < radius``, its chance beyond
+    ``sqrt(radius^2 - x^2)`` along the minor one, integrated over ``x`` (Gauss-Legendre in
+    ``x = radius sin t``). A circular covariance of std ``s`` gives ``exp(-radius^2 / 2 s^2)``.
+    """
+    ev = np.clip(np.linalg.eigvalsh(0.5 * (cov_xy + cov_xy.T)), 0.0, None)
+    b, a = float(ev[0]), float(ev[1])
+    if a <= 0.0:
+        return 0.0
+    beyond = math.erfc(radius / math.sqrt(2.0 * a))  # |x| > radius
+    if b <= 0.0:
+        return beyond
+    t = 0.5 * math.pi * _GL_NODES
+    x, h = radius * np.sin(t), radius * np.cos(t)
+    density = np.exp(-0.5 * x * x / a) / math.sqrt(2.0 * math.pi * a)
+    inside = 0.5 * math.pi * float(np.sum(_GL_WEIGHTS * density * erfc(h / math.sqrt(2.0 * b)) * h))
+    return beyond + inside
 
 
 def _floored(cov: FloatArray, xy: float, theta: float) -> FloatArray:
@@ -958,14 +999,17 @@ class ClaimGate:
                 f"{100 * cfg.min_claim_fit:.0f} % needed to claim)",
                 match,
             )
-        sxy, sth = _std(cov)
-        if sxy > cfg.max_std_xy or sth > cfg.max_std_theta:
+        major, minor, sth = _std(cov)
+        outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
+        if outside > cfg.max_outside_probability or sth > cfg.max_std_theta:
             return Claim(
                 Verdict.WITHHELD,
                 pose,
                 cov,
-                f"claim withheld: std {100 * sxy:.1f} cm / {math.degrees(sth):.2f} deg exceeds "
-                f"{100 * cfg.max_std_xy:.1f} cm / {math.degrees(cfg.max_std_theta):.2f} deg "
+                f"claim withheld: std {100 * major:.1f} cm (across {100 * minor:.1f} cm) / "
+                f"{math.degrees(sth):.2f} deg: outside {100 * cfg.tolerance_position:.0f} cm "
+                f"with probability {outside:.1e} (at most {cfg.max_outside_probability:.1e}), "
+                f"heading std at most {math.degrees(cfg.max_std_theta):.2f} deg "
                 f"({cfg.gate_sigmas:g} sigma inside {100 * cfg.tolerance_position:.0f} cm / "
                 f"{math.degrees(cfg.tolerance_heading):.0f} deg)",
                 match,
