@@ -332,6 +332,29 @@ def test_turns_to_where_the_keyframes_are_before_the_image() -> None:
     assert not kf.shown
 
 
+@pytest.mark.parametrize(("short", "done"), [(8.0, True), (12.0, False)])
+def test_a_turn_to_a_view_is_done_within_its_tolerance(short: float, done: bool) -> None:
+    # the keyframes lie within 40 deg of the heading turned to: a turn that stops 8 deg
+    # short of the plan (decide_turn_tolerance 10 deg) takes the image there
+    fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    loc, _ = _localizer(TurningProposer([TRUE, COPY]), DirectionalKeyframes(), fits)
+    assert loc.config.decide_turn_tolerance == pytest.approx(math.radians(10.0))
+    est = _step(loc, pose=[0, 0, 0.0])
+    assert est.request is not None
+    assert est.request.kind is RequestKind.ROTATE
+    angle = est.request.angle
+    turned = angle - math.copysign(math.radians(short), angle)
+    est = _step(loc, pose=[0, 0, turned])
+    assert est.request is not None
+    # done: the laser proposes anew from here (the image, or a new plan), not the rest of
+    # the turn; not done: the rest of the turn
+    rest = est.request.kind is RequestKind.ROTATE and est.request.angle == pytest.approx(
+        math.copysign(math.radians(short), angle)
+    )
+    assert rest is not done, est.reason
+    assert ("turning to look elsewhere" in est.reason) is not done
+
+
 def test_no_keyframe_in_any_direction_gives_up_without_an_image() -> None:
     fits = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
     kf = DirectionalKeyframes()

@@ -61,6 +61,14 @@ class LocalizerConfig:
     decide_views : images asked for from where the robot stands before giving up.
     decide_turn : least angle [rad] between the headings of two views (the view planner,
         :mod:`symloc.localizer.view_planning`, turns to where the keyframes are).
+    decide_turn_tolerance : a turn to a view is done when odometry turned within this [rad]
+        of it. The keyframes the plan counted lie within
+        ``VerificationSettings.max_heading_difference`` (40 deg) of the heading turned to, and
+        the hypotheses are carried to the image's moment whatever heading it was taken at,
+        while a turn controller slowing down in proportion to the angle left
+        (:mod:`symloc.localizer.centering`: 1.5 / s) spends most of a turn on its last
+        degrees: 1.7 s of a 60 deg turn to reach 3 deg (``rotate_tolerance``), 0.9 s to reach
+        10 deg.
     decide_theta_std : how well a verified hypothesis' heading is known before the laser
         sets it [rad] (its position: ``decision_xy_std``).
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
@@ -131,6 +139,7 @@ class LocalizerConfig:
     decide_laser_margin: float = 0.15
     decide_views: int = 4
     decide_turn: float = math.radians(45.0)
+    decide_turn_tolerance: float = math.radians(10.0)
     decide_theta_std: float = math.radians(5.0)
     decide_max_hypotheses: int = 16
     decide_rest: int = 100
@@ -166,6 +175,7 @@ class LocalizerConfig:
             "decision_xy_std",
             "decision_theta_std",
             "decide_turn",
+            "decide_turn_tolerance",
             "decide_theta_std",
             "decide_watch_evidence",
             "axis_max_spread",

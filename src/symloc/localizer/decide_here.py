@@ -376,7 +376,7 @@ class DecideHere:
         if self.turn_start is not None:
             turned = float(angle_diff(inp.odom_pose[2], self.turn_start))
             remaining = float(angle_diff(self.turn, turned))
-            if abs(remaining) > ctx.config.rotate_tolerance:
+            if abs(remaining) > ctx.config.decide_turn_tolerance:
                 return self._wait(
                     ctx,
                     inp,
