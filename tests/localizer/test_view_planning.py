@@ -77,3 +77,19 @@ def test_counts_are_capped_per_hypothesis() -> None:
     poses = np.array([[0.0, 0.0, 0.0]])
     plan = plan_turn(poses, _along(0.0, count=50))
     assert plan.expected == COUNT_CAP
+
+
+def test_a_turn_lands_where_a_short_stop_still_covers_the_hypothesis() -> None:
+    # keyframes seen looking within 40 deg of -95 deg: turns from -135 to -55 deg cover the
+    # hypothesis. The smallest, -60, is at the edge: a turn that stops 10 deg short (at -50)
+    # sees nothing and must turn again; with the margin the plan sends it to -90
+    poses = np.array([[0.0, 0.0, 0.0]])
+    counts = _along(math.radians(-95.0))
+    plain = plan_turn(poses, counts)
+    assert plain.covered == 1
+    assert plain.turn == pytest.approx(math.radians(-60.0))
+    robust = plan_turn(poses, counts, margin=math.radians(10.0))
+    assert robust.covered == 1
+    assert robust.turn == pytest.approx(math.radians(-90.0))
+    for stop in (robust.turn - math.radians(10.0), robust.turn + math.radians(10.0)):
+        assert counts(poses + np.array([0.0, 0.0, stop]))[0] > 0

@@ -563,6 +563,7 @@ class DecideHere:
             expected,
             seen=[float(angle_diff(h, heading)) for h in self.seen],
             spacing=cfg.decide_turn,
+            margin=cfg.decide_turn_tolerance,
         )
         if not plan.useful:
             where = "in any direction" if not self.seen else "in a direction not yet seen"

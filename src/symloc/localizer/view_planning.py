@@ -12,7 +12,11 @@ one keyframe, and how many keyframes in all (each hypothesis' count capped, so t
 hypothesis near many keyframes does not outweigh two near a few). The best turn wins, the
 smallest one among equals; headings the camera has already seen (within ``spacing`` of them)
 are not candidates. A plan whose best turn covers no hypothesis says that no image will
-decide here.
+decide here. A turn stops within some ``margin`` of where it was sent (the localizer's
+``decide_turn_tolerance``), and a hypothesis sees a keyframe only within 40 deg of the
+keyframe's heading: so a turn first counts the hypotheses still covered ``margin`` short of
+it and beyond it, and a heading in the middle of where they are covered beats one at its
+edge, which the robot would stop short of and then turn again.
 """
 
 from __future__ import annotations
@@ -59,6 +63,7 @@ def plan_turn(
     seen: Sequence[float] = (),
     step: float = math.radians(30.0),
     spacing: float = math.radians(45.0),
+    margin: float = 0.0,
 ) -> ViewPlan:
     """The turn in place after which an image can verify the most hypotheses.
 
@@ -75,6 +80,10 @@ def plan_turn(
         Spacing [rad] of the candidate turns over the full circle, in (0, pi].
     spacing : float
         A candidate within this angle [rad] of a heading in ``seen`` is skipped.
+    margin : float
+        How far [rad] short of or beyond a turn the robot may stop: candidates are ranked
+        first by the hypotheses covered at all of ``turn - margin``, ``turn`` and
+        ``turn + margin`` (0: at ``turn`` only).
 
     Returns
     -------
@@ -89,13 +98,18 @@ def plan_turn(
         turns = turns[(gap > spacing).all(axis=1)]
     if p.shape[0] == 0 or turns.size == 0:
         return ViewPlan(0.0, 0, 0)
-    turned = np.repeat(p[None, :, :], turns.size, axis=0)  # (M, K, 3)
-    turned[:, :, 2] = wrap_angle(turned[:, :, 2] + turns[:, None])
+    offsets = np.array([0.0, -margin, margin]) if margin > 0.0 else np.zeros(1)
+    turned = np.repeat(p[None, None, :, :], turns.size * offsets.size, axis=0).reshape(
+        offsets.size, turns.size, p.shape[0], 3
+    )  # (O, M, K, 3)
+    turned[..., 2] = wrap_angle(turned[..., 2] + (offsets[:, None] + turns[None, :])[..., None])
     counts = np.asarray(expected_counts(turned.reshape(-1, 3)), dtype=np.int64)
-    counts = counts.reshape(turns.size, p.shape[0])
-    covered = (counts > 0).sum(axis=1)
-    expected = np.minimum(counts, COUNT_CAP).sum(axis=1)
-    # lexicographic: hypotheses covered, then keyframes expected, then the smallest turn
-    key = np.lexsort((np.abs(turns), -expected, -covered))
+    counts = counts.reshape(offsets.size, turns.size, p.shape[0])
+    covered = (counts[0] > 0).sum(axis=1)
+    robust = (counts > 0).all(axis=0).sum(axis=1)
+    expected = np.minimum(counts[0], COUNT_CAP).sum(axis=1)
+    # lexicographic: hypotheses covered wherever the turn stops, then covered where it was
+    # sent, then keyframes expected, then the smallest turn
+    key = np.lexsort((np.abs(turns), -expected, -covered, -robust))
     best = int(key[0])
     return ViewPlan(float(turns[best]), int(covered[best]), int(expected[best]))
