@@ -92,7 +92,7 @@ def build_map(log: Any, resolution: float = 0.05, cache: Path | None = None) -> 
     from symloc.grid import OccupancyGrid
     from symloc.grid.log_odds import LogOddsGrid
 
-    key = _map_key(log, resolution)
+    key = _map_key(log, resolution) if cache is not None else ""
     if cache is not None and cache.is_file():
         try:
             with np.load(cache) as z:

@@ -529,7 +529,12 @@ class ClaimGate:
         """Forget the last confirmed pose (tracking ended), and a suspension waiting for it to
         fit again; the filter's anchor stays."""
         self._chain = None
-        self._suspended = False
+        self._suspension(False)
+
+    def _suspension(self, suspended: bool) -> None:
+        """A suspension begins (``suspended``) or ends: no place followed, no reseed yet, the
+        patience and resume streaks afresh."""
+        self._suspended = suspended
         self._elsewhere = None
         self._reseeded = False
         self._patience.reset()
@@ -541,11 +546,7 @@ class ClaimGate:
         """Forget the claim's lifecycle (the localizer starts over): the operator's pose and
         any suspension. The anchor and the chain stay (:meth:`reset` forgets those)."""
         self._operator = None
-        self._suspended = False
-        self._elsewhere = None
-        self._reseeded = False
-        self._patience.reset()
-        self._resume.reset()
+        self._suspension(False)
         self._gross.reset()
 
     def start_at_operator_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
@@ -620,12 +621,8 @@ class ClaimGate:
         return Ruling(Standing.HOLD, claim, claim.reason)
 
     def _suspend(self, why: str, tracker: Tracker, note: Callable[[str], None]) -> None:
-        self._suspended = True
-        self._elsewhere = None
-        self._reseeded = False
+        self._suspension(True)
         self._operator = None  # the operator chose among copies before whatever this was
-        self._patience.reset()
-        self._resume.reset()
         self._gross.reset()
         note(f"claims suspended: {why}")
         tracker.force_update()

@@ -99,9 +99,7 @@ def plan_turn(
     if p.shape[0] == 0 or turns.size == 0:
         return ViewPlan(0.0, 0, 0)
     offsets = np.array([0.0, -margin, margin]) if margin > 0.0 else np.zeros(1)
-    turned = np.repeat(p[None, None, :, :], turns.size * offsets.size, axis=0).reshape(
-        offsets.size, turns.size, p.shape[0], 3
-    )  # (O, M, K, 3)
+    turned = np.broadcast_to(p, (offsets.size, turns.size, *p.shape)).copy()  # (O, M, K, 3)
     turned[..., 2] = wrap_angle(turned[..., 2] + (offsets[:, None] + turns[None, :])[..., None])
     counts = np.asarray(expected_counts(turned.reshape(-1, 3)), dtype=np.int64)
     counts = counts.reshape(offsets.size, turns.size, p.shape[0])
