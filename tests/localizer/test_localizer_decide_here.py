@@ -92,6 +92,9 @@ def test_on_by_default_and_a_setting() -> None:
         LocalizerConfig(decide_laser_margin=1.5)
     with pytest.raises(ConfigurationError, match="decide_views"):
         LocalizerConfig(decide_views=0)
+    for bad in (0.0, -0.1, math.nan, math.inf):
+        with pytest.raises(ConfigurationError, match="decide_turn_tolerance"):
+            LocalizerConfig(decide_turn_tolerance=bad)
 
 
 def test_one_pose_left_by_the_laser_goes_to_amcl() -> None:
