@@ -198,6 +198,14 @@ class ClaimConfig:
         the places elsewhere must also go on explaining the scans over this much path [m] or
         turning [rad]: on freiburg-079 one look-alike of a cluttered corridor explained three
         more scans 10 cm apart.
+    operator_reach : (float, float)
+        The operator's initial pose chooses among the map's rotated copies (its first claim
+        skips the copy check) only until the robot has driven this much path [m] or turning
+        [rad] from it unconfirmed: the click vouches for where the robot stood, and a robot
+        carried meanwhile onto a copy of its pose changes nothing the laser or the odometry
+        sees (the bench's heavy regime published such a copy 4.2 m and 180 deg off after 19 s
+        of claims withheld for the map's scale). Beyond it the first claim passes the copy
+        check like any other. (0, 0): never trusted over any motion.
     odometry_alphas : (4,) floats
         Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
         grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
@@ -230,6 +238,7 @@ class ClaimConfig:
     local_window: tuple[float, float] = (1.0, math.radians(45.0))
     elsewhere_scans: int = 3
     elsewhere_motion: tuple[float, float] = (1.0, math.radians(90.0))
+    operator_reach: tuple[float, float] = (1.0, math.radians(90.0))
     min_beams: int = 20
 
     def __post_init__(self) -> None:
@@ -248,7 +257,7 @@ class ClaimConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigurationError(f"ClaimConfig.{name}: expected a value > 0, got {v!r}")
-        for name in ("local_window", "elsewhere_motion"):
+        for name in ("local_window", "elsewhere_motion", "operator_reach"):
             self._check_pair(name)
         m = self.elsewhere_margin
         if not (isinstance(m, (int, float)) and 0.0 <= m < 1.0):
@@ -360,6 +369,9 @@ class Standing(enum.Enum):
     FIRST = "first"  # a first claim (no chain, not the operator's pose; or the tracked pose
     # fitting again after a suspension): check rotated copies, then publish it and call
     # ClaimGate.confirmed
+    OPERATOR = "operator"  # a first claim at the operator's pose carried by odometry: the
+    # operator chose among the copies (the camera may veto it,
+    # symloc.localizer.operator_veto), then publish it and call ClaimGate.confirmed
     HOLD = "hold"  # publish nothing (withheld, or claims suspended); the pose is kept
     UNEARNED = "unearned"  # a pose the laser never confirmed is given up: the pose is lost
     RELOCALIZE = "relocalize"  # suspended for ``patience`` scans: the tracker was spread
@@ -531,6 +543,11 @@ class ClaimGate:
         self._chain = None
         self._suspension(False)
 
+    def forget_operator(self) -> None:
+        """The operator's pose no longer chooses among the map's copies (the camera saw a
+        copy of it): the next first claim passes the copy check like any other."""
+        self._operator = None
+
     def _suspension(self, suspended: bool) -> None:
         """A suspension begins (``suspended``) or ends: no place followed, no reseed yet, the
         patience and resume streaks afresh."""
@@ -610,7 +627,9 @@ class ClaimGate:
             # whatever the filter finds next is not the operator's choice among copies
             self._operator = None
         if claim.ok:
-            if not self.has_chain and not self._at_operator_pose(claim.pose, odom):
+            if not self.has_chain:
+                if self._at_operator_pose(claim.pose, odom):
+                    return Ruling(Standing.OPERATOR, claim, claim.reason)
                 return Ruling(Standing.FIRST, claim, claim.reason)
             self.confirmed(claim, odom)
             return Ruling(Standing.PUBLISH, claim, claim.reason)
@@ -783,14 +802,20 @@ class ClaimGate:
 
     def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:
         """True when ``pose`` is the operator's initial pose carried by odometry (squared
-        Mahalanobis distance within ``max_pull`` under the gate's odometry model): the
-        operator chose among symmetric copies, so no copy check is needed. A pose the filter
-        found elsewhere (the robot was carried off) is not the operator's choice, and the
-        operator's pose is forgotten."""
+        Mahalanobis distance within ``max_pull`` under the gate's odometry model) and the
+        robot has not gone beyond ``operator_reach`` from it: the operator chose among
+        symmetric copies, so no copy check is needed. A pose the filter found elsewhere (the
+        robot was carried off), or a pose not confirmed within that reach, is not the
+        operator's choice, and the operator's pose is forgotten."""
         if self._operator is None or pose is None:
             return False
         held = self._operator[2]
         if held is None:
+            return False
+        path, turning = self._odometer.since(held.reading)
+        reach_path, reach_turn = self.config.operator_reach
+        if path > reach_path or turning > reach_turn:
+            self._operator = None
             return False
         carried, ccov = self._carry(held, odom)
         e = np.asarray(pose, dtype=np.float64) - carried

@@ -69,6 +69,10 @@ class LocalizerConfig:
         (:mod:`symloc.localizer.centering`: 1.5 / s) spends most of a turn on its last
         degrees: 1.7 s of a 60 deg turn to reach 3 deg (``rotate_tolerance``), 0.9 s to reach
         10 deg.
+    operator_image_wait : scans the first claim at the operator's pose waits for the image
+        asked for where a rotated copy explains the scan as well
+        (:mod:`symloc.localizer.operator_veto`); without one the operator's choice stands (0: no
+        image is asked for).
     decide_theta_std : how well a verified hypothesis' heading is known before the laser
         sets it [rad] (its position: ``decision_xy_std``).
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
@@ -141,6 +145,7 @@ class LocalizerConfig:
     decide_turn: float = math.radians(45.0)
     decide_turn_tolerance: float = math.radians(10.0)
     decide_theta_std: float = math.radians(5.0)
+    operator_image_wait: int = 3
     decide_max_hypotheses: int = 16
     decide_rest: int = 100
     decide_watch_evidence: float = 0.5
@@ -222,3 +227,9 @@ class LocalizerConfig:
                 raise ConfigurationError(
                     f"LocalizerConfig.{name}: expected an integer >= 1, got {value!r}"
                 )
+        wait = self.operator_image_wait
+        if not isinstance(wait, int) or isinstance(wait, bool) or wait < 0:
+            raise ConfigurationError(
+                f"LocalizerConfig.operator_image_wait: expected an integer >= 0 (0: never "
+                f"asked), got {wait!r}"
+            )

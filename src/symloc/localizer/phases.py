@@ -17,7 +17,7 @@ place (:meth:`symloc.localizer.localizer.Localizer.update`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, cast
 
 import numpy as np
@@ -49,6 +49,7 @@ from .copies import (
     rotated_copies,
     symmetry_consistent,
 )
+from .operator_veto import OperatorVeto, VetoKind
 from .rules import Streak
 from .types import (
     Estimate,
@@ -156,6 +157,7 @@ class Tracking:
 
     name: ClassVar[str] = "tracking"
     lost: Lost
+    veto: OperatorVeto = field(default_factory=OperatorVeto)
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         cfg = ctx.config
@@ -192,7 +194,30 @@ class Tracking:
             if found is not None:
                 return found
             gate.confirmed(claim, inp.odom_pose)
-        if ruling.standing in (Standing.FIRST, Standing.PUBLISH):
+        if ruling.standing is Standing.OPERATOR:
+            assert claim is not None
+            assert claim.pose is not None
+            veto = self.veto.judge(ctx, inp, claim.pose)
+            if veto.kind is VetoKind.LOOK:
+                why = "a rotated copy of the operator's pose fits the scan as well: image requested"
+                return (
+                    Estimate(
+                        status=Status.LOST,
+                        hypotheses=result.hypotheses,
+                        request=Request(RequestKind.CAPTURE_IMAGE),
+                        reason=why,
+                    ),
+                    self,
+                )
+            if veto.kind is VetoKind.VETOED:
+                gate.forget_operator()
+                ctx.note(veto.reason)
+                found = copies_ambiguity(ctx, inp, self.lost, claim.pose)
+                if found is not None:
+                    return found
+                return lost(veto.reason, result), restart(ctx)
+            gate.confirmed(claim, inp.odom_pose)
+        if ruling.standing in (Standing.FIRST, Standing.OPERATOR, Standing.PUBLISH):
             assert claim is not None
             assert claim.pose is not None
             assert claim.covariance is not None
