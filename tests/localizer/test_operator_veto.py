@@ -26,8 +26,16 @@ COV = np.diag([0.03**2, 0.03**2, math.radians(1.0) ** 2])
 
 
 class _NoPlaces:
-    def places(self):  # pragma: no cover - never asked without symmetric scans
+    """No symmetric place was mapped (the copies are the map's own symmetry)."""
+
+    def candidates(self, gv_distance, order):  # type: ignore[no-untyped-def]
         return []
+
+    def decide(self, place, image):  # type: ignore[no-untyped-def]
+        raise AssertionError("no place to decide")
+
+    def add_place(self, *args, **kw):  # type: ignore[no-untyped-def]
+        raise AssertionError("no mapping here")
 
 
 @dataclass
@@ -144,3 +152,35 @@ def test_operator_image_wait_must_be_a_count() -> None:
     for bad in (-1, 1.5, True):
         with pytest.raises(ConfigurationError, match="operator_image_wait"):
             LocalizerConfig(operator_image_wait=bad)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("blind", "trusted"), [(20, True), (70, False)])
+def test_the_operator_pose_chooses_among_copies_only_within_its_reach(
+    blind: int, trusted: bool
+) -> None:
+    """A lidar that returns almost nothing withholds every claim while the robot turns on the
+    spot from the operator's pose (0.3 rad/s). Back within ``operator_reach`` (90 deg), the
+    first claim is the operator's choice and is published at once; beyond it, it passes the
+    map's copy check like any other first claim, and in a rectangle no camera, nothing,
+    decides between the copies: nothing is published."""
+    room, robot, loc, _ = _rectangle(lambda robot: None)
+    loc.set_pose(robot.pose.copy(), COV)
+    rng = np.random.default_rng(12)
+    published = []
+    for k in range(blind + 15):
+        scan = simulate_scan(room.world, robot.pose, RPLIDAR_A2, rng)
+        if k < blind:
+            r = scan.ranges.copy()
+            r[10:] = 0.0
+            scan = scan.with_ranges(r)
+        est = loc.update(robot.odometry(), scan)
+        if est.status is Status.TRACKING:
+            assert k >= blind
+            assert float(np.hypot(*(est.pose[:2] - robot.pose[:2]))) <= 0.1
+            published.append(k)
+        robot.step(0.0, 0.3, 0.1)
+    if trusted:
+        assert published and published[0] <= blind + 1
+    else:
+        assert published == []
+        assert any("rotated copy" in line for line in loc.log)
