@@ -455,7 +455,12 @@ def _play(sim: Any, side: Nav2Side, rec: Run, proc: Any) -> None:
         req.pose = build_rclpy(type(req.pose), fields)
         rec.services["set_initial_pose"] = side.call(side.set_pose, req) is not None
         for _ in range(3):
-            rec.after_set_pose.append(_step(robot, rec))
+            st = _step(robot, rec)
+            rec.after_set_pose.append(st)
+            if st.request is not None and st.request.kind.value == "capture_image":
+                # the room is symmetric: the camera may veto the operator's choice of copy
+                side.send("image", image_to_fields(sim.image(), stamp=sim.time, frame_id="camera"))
+                side.spin_until(lambda: False, 0.3)
         side.spin_until(lambda: False, 0.5)
     rec.parameter_get = _get_parameter(side, "alpha1")
     rec.states.append(("deactivate", side.state() if side.transition(DEACTIVATE) else -1))
