@@ -268,7 +268,7 @@ class Localizer:
         if self.claim_gate is not None:
             # the operator chose among any symmetric copies (the laser still confirms the pose)
             self.claim_gate.start_at_operator_pose(pose, covariance)
-        self._enter(Tracking(fresh))
+        self._enter(Tracking(fresh, from_operator=True))
         self.log("pose set by the operator")
 
     def force_update(self) -> None:

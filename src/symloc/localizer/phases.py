@@ -59,6 +59,7 @@ from .types import (
     RequestKind,
     Status,
 )
+from .withheld_axis import withheld_axis
 
 __all__ = [
     "Capture",
@@ -158,6 +159,9 @@ class Tracking:
     name: ClassVar[str] = "tracking"
     lost: Lost
     veto: OperatorVeto = field(default_factory=OperatorVeto)
+    #: entered at an operator's pose: earned only once a claim is confirmed (its copies
+    #: were never checked)
+    from_operator: bool = False
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         cfg = ctx.config
@@ -239,6 +243,9 @@ class Tracking:
             fresh = restart(ctx)
             ctx.note(ruling.reason)
             return lost(ruling.reason, result), fresh
+        axis = withheld_axis(gate, claim, not self.from_operator or gate.has_chain)
+        if axis is not None:
+            return axis, self
         return lost(ruling.reason, result), self
 
 
