@@ -115,3 +115,29 @@ def test_tracking_far_from_the_middle_reports_the_heading_and_an_operator_pose_d
     ]
     assert Status.AXIS not in statuses
     assert Status.TRACKING not in statuses
+
+
+def test_no_axis_from_scans_taken_while_turning_fast() -> None:
+    """Withheld far from the middle, the robot turns on the spot: at 0.7 rad/s (above
+    ``axis_max_turn``) nothing is reported, at 0.1 rad/s the axis is."""
+    room, centre, loc = _localizer()
+    robot = DiffDriveRobot(
+        np.array([centre[0] + 0.5, centre[1], 0.0]),
+        RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)),
+        5,
+    )
+    loc.set_pose(robot.pose.copy(), COV)
+    rng = np.random.default_rng(14)
+
+    def statuses(v: float, w: float, n: int) -> list[Status]:
+        out = []
+        for _ in range(n):
+            odom = robot.odometry()
+            scan = simulate_scan(room.world, robot.pose, RPLIDAR_A2, rng, stamp=odom.stamp)
+            out.append(loc.update(odom, scan).status)
+            robot.step(v, w, 0.1)
+        return out
+
+    statuses(0.45, 0.0, 100)  # out to 5 m from the middle, claims withheld there
+    assert Status.AXIS not in statuses(0.0, 0.7, 8)[1:]
+    assert statuses(0.0, 0.1, 8)[-1] is Status.AXIS

@@ -69,6 +69,11 @@ class LocalizerConfig:
         (:mod:`symloc.localizer.centering`: 1.5 / s) spends most of a turn on its last
         degrees: 1.7 s of a 60 deg turn to reach 3 deg (``rotate_tolerance``), 0.9 s to reach
         10 deg.
+    axis_max_turn : a withheld claim is reported as an axis estimate
+        (:mod:`symloc.localizer.withheld_axis`) only from scans taken while odometry turns
+        slower than this [rad/s]: a sweep is deskewed with the odometry's turn, which slips on
+        turns, and the gate's heading std does not know it (the heavy test split,
+        t_shape#1000001 #5: 3-6 deg off at 0.7 rad/s with a std of 0.6-1.2 deg).
     operator_image_wait : scans the first claim at the operator's pose waits for the image
         asked for where a rotated copy explains the scan as well
         (:mod:`symloc.localizer.operator_veto`); without one the operator's choice stands (0: no
@@ -146,6 +151,7 @@ class LocalizerConfig:
     decide_turn_tolerance: float = math.radians(10.0)
     decide_theta_std: float = math.radians(5.0)
     operator_image_wait: int = 3
+    axis_max_turn: float = 0.25
     decide_max_hypotheses: int = 16
     decide_rest: int = 100
     decide_watch_evidence: float = 0.5
@@ -181,6 +187,7 @@ class LocalizerConfig:
             "decision_theta_std",
             "decide_turn",
             "decide_turn_tolerance",
+            "axis_max_turn",
             "decide_theta_std",
             "decide_watch_evidence",
             "axis_max_spread",
