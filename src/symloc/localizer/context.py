@@ -134,13 +134,16 @@ class Context:
 @dataclass(frozen=True, eq=False)
 class Inputs:
     """One scan: the tracker's ``result``, the judge's ``verdict``, the (deskewed) ``scan``,
-    the ``image`` if one was requested, and the odometry pose ``odom_pose`` (3,)."""
+    the ``image`` if one was requested, the odometry pose ``odom_pose`` (3,) and the odometry's
+    ``turn_rate`` [rad/s] since the previous scan (the one the scan was deskewed with; 0 when
+    unknown)."""
 
     result: TrackerResult
     verdict: SymmetryVerdict
     scan: object
     image: NDArray[np.uint8] | None
     odom_pose: FloatArray
+    turn_rate: float = 0.0
 
     def centre_in_map(self) -> FloatArray:
         """The scan's symmetry centre (2,) in the map frame, seen from the tracker's estimate."""

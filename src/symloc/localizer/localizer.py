@@ -286,10 +286,12 @@ class Localizer:
         take (a :class:`~symloc.scan.LaserScan`).
         """
         odom_pose = np.asarray(odom.pose, dtype=np.float64)
+        turn_rate = 0.0
         if isinstance(scan, LaserScan) and isinstance(odom, OdometryReading):
             # a spinning lidar's beams were taken along the last motion: undo it
             if self._last_odom is not None:
                 v, w = twist_between(self._last_odom, odom)
+                turn_rate = abs(w)
                 vx, vy, w = sensor_twist(v, w, self.laser_pose)
                 scan = deskew(scan, vx, w, vy=vy)
             self._last_odom = odom
@@ -298,7 +300,7 @@ class Localizer:
         if self.claim_gate is not None:
             self.claim_gate.observe(result, odom_pose)
         verdict = self.judge(scan)
-        inputs = Inputs(result, verdict, scan, image, odom_pose)
+        inputs = Inputs(result, verdict, scan, image, odom_pose, turn_rate)
         phase = self._phase
         if self._router is not None:
             phase = self._router.route(self._ctx, inputs, phase)

@@ -162,8 +162,6 @@ class Tracking:
     #: entered at an operator's pose: earned only once a claim is confirmed (its copies
     #: were never checked)
     from_operator: bool = False
-    #: the previous scan's stamp [s] and odometry heading [rad], for the turn rate
-    before: tuple[float, float] | None = None
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         cfg = ctx.config
@@ -185,21 +183,8 @@ class Tracking:
             return lost("AMCL has no well-weighted cluster", result), Lost.fresh(cfg)
         return self.claim(ctx, inp, "AMCL tracking")
 
-    def _turn_rate(self, inp: Inputs) -> float:
-        """|odometry turn| [rad/s] since the previous scan of this phase (0 at its first, or
-        without scan stamps)."""
-        stamp = getattr(inp.scan, "stamp", None)
-        if stamp is None:
-            return 0.0
-        heading = float(inp.odom_pose[2])
-        before, self.before = self.before, (float(stamp), heading)
-        if before is None or float(stamp) <= before[0]:
-            return 0.0
-        return abs(float(angle_diff(heading, before[1]))) / (float(stamp) - before[0])
-
     def claim(self, ctx: Context, inp: Inputs, reason: str) -> Step:
         """Publish the tracker's estimate if the claim gate confirms it at this scan."""
-        turn = self._turn_rate(inp)
         result = inp.result
         gate = ctx.gate
         if gate is None:
@@ -260,7 +245,7 @@ class Tracking:
             return lost(ruling.reason, result), fresh
         axis = (
             withheld_axis(gate, claim, not self.from_operator or gate.has_chain)
-            if turn <= ctx.config.axis_max_turn
+            if inp.turn_rate <= ctx.config.axis_max_turn
             else None
         )
         if axis is not None:
