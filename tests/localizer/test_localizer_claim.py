@@ -439,9 +439,9 @@ def test_a_passing_occlusion_withholds_then_resumes_without_relocalizing(
     assert not any("global relocalization" in line for line in loc.log)
 
 
-def _rectangle_localizer() -> tuple[Room, Localizer]:
+def _rectangle_localizer(keyframes=None) -> tuple[Room, Localizer]:  # type: ignore[no-untyped-def]
     """A 4 x 2 m rectangle room and a localizer on its rasterised map that knows the map's
-    rotated copies (order 2)."""
+    rotated copies (order 2) and verifies with ``keyframes`` (None: no camera)."""
     from symloc.localizer.map_symmetry import map_symmetries
 
     room = rectangle_room(4.0, 2.0)
@@ -454,6 +454,7 @@ def _rectangle_localizer() -> tuple[Room, Localizer]:
         scorer=GridScorer(grid),
         claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
         map_symmetries=map_symmetries(grid),
+        keyframes=keyframes,
     )
     return room, loc
 

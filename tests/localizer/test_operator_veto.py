@@ -7,44 +7,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
+from test_localizer_claim import _rectangle_localizer
 
 from symloc.errors import ConfigurationError
-from symloc.grid.fields import surface_distance_field
 from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
-from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
-from symloc.localizer.claim import ClaimGate
-from symloc.localizer.map_symmetry import map_symmetries
 from symloc.localizer.types import Verification
-from symloc.mcl import Amcl, AmclParams
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
-from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room, rectangle_room
 
-ALPHAS = (0.05, 0.05, 0.05, 0.05)
 COV = np.diag([0.03**2, 0.03**2, math.radians(1.0) ** 2])
-
-
-class _NoPlaces:
-    """No symmetric place was mapped (the copies are the map's own symmetry)."""
-
-    def candidates(self, gv_distance, order):  # type: ignore[no-untyped-def]
-        return []
-
-    def decide(self, place, image):  # type: ignore[no-untyped-def]
-        raise AssertionError("no place to decide")
-
-    def add_place(self, *args, **kw):  # type: ignore[no-untyped-def]
-        raise AssertionError("no mapping here")
 
 
 @dataclass
 class TruthCamera:
-    """A camera and visual map that verify the hypothesis nearest the robot's true pose
-    (``lies``: the one farthest from it), and record what they were shown."""
+    """A camera and visual map that verify the hypothesis nearest the robot's true pose,
+    and record what they were shown."""
 
     robot: DiffDriveRobot
-    lies: bool = False
     shown: list[np.ndarray] = field(default_factory=list)
 
     def keyframe_count(self) -> int:
@@ -57,33 +37,20 @@ class TruthCamera:
         p = np.asarray(poses, float).reshape(-1, 3)
         self.shown.append(p.copy())
         d = np.hypot(*(p[:, :2] - self.robot.pose[:2]).T)
-        i = int(np.argmax(d) if self.lies else np.argmin(d))
+        i = int(np.argmin(d))
         return Verification(i, p[i], "scripted", {})
 
 
-def _rectangle(camera_for) -> tuple[Room, DiffDriveRobot, Localizer, TruthCamera]:
+def _rectangle(camera_for) -> tuple[Room, DiffDriveRobot, Localizer, TruthCamera]:  # type: ignore[no-untyped-def]
     """A 4 x 2 m rectangle (the map's copies: order 2), a robot in it, and a localizer that
     knows the copies and verifies with ``camera_for(robot)``."""
-    room = rectangle_room(4.0, 2.0)
-    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
     robot = DiffDriveRobot(
-        np.array([*(room.center + np.array([-1.1, 0.4])), 0.4]),
+        np.array([*(rectangle_room(4.0, 2.0).center + np.array([-1.1, 0.4])), 0.4]),
         RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)),
         5,
     )
     camera = camera_for(robot)
-    amcl = Amcl(grid, AmclParams(alpha1=0.05, alpha2=0.05, alpha3=0.05, alpha4=0.05), 3)
-    from symloc.symmetry import SymmetryConfig, judge_symmetry
-
-    loc = Localizer(
-        AmclTracker(amcl),
-        ReportJudge(judge_symmetry, config=SymmetryConfig.from_lidar(RPLIDAR_A2)),
-        _NoPlaces(),
-        scorer=GridScorer(grid),
-        claim_gate=ClaimGate(surface_distance_field(grid), ALPHAS),
-        map_symmetries=map_symmetries(grid),
-        keyframes=camera,
-    )
+    room, loc = _rectangle_localizer(camera)
     return room, robot, loc, camera
 
 

@@ -79,11 +79,8 @@ def _localizer():
     return room, centre, loc
 
 
-def test_tracking_far_from_the_middle_reports_the_heading_and_an_operator_pose_does_not() -> None:
-    """From a confirmed pose near the hallway's middle the robot drives 4.5 m along it: claims
-    are withheld for the map's scale, and the heading and the position across the hallway are
-    reported (status axis), right. An operator's pose given out there was never confirmed:
-    its half-turned copy was never ruled out, so nothing is reported."""
+def _tracking_near_the_middle():  # type: ignore[no-untyped-def]
+    """The hallway's localizer, and a robot 0.5 m from its middle whose pose the operator gave."""
     room, centre, loc = _localizer()
     robot = DiffDriveRobot(
         np.array([centre[0] + 0.5, centre[1], 0.0]),
@@ -91,6 +88,15 @@ def test_tracking_far_from_the_middle_reports_the_heading_and_an_operator_pose_d
         5,
     )
     loc.set_pose(robot.pose.copy(), COV)
+    return room, centre, loc, robot
+
+
+def test_tracking_far_from_the_middle_reports_the_heading_and_an_operator_pose_does_not() -> None:
+    """From a confirmed pose near the hallway's middle the robot drives 4.5 m along it: claims
+    are withheld for the map's scale, and the heading and the position across the hallway are
+    reported (status axis), right. An operator's pose given out there was never confirmed:
+    its half-turned copy was never ruled out, so nothing is reported."""
+    room, centre, loc, robot = _tracking_near_the_middle()
     rng = np.random.default_rng(13)
     seen = []
     for _ in range(100):
@@ -120,13 +126,7 @@ def test_tracking_far_from_the_middle_reports_the_heading_and_an_operator_pose_d
 def test_no_axis_from_scans_taken_while_turning_fast() -> None:
     """Withheld far from the middle, the robot turns on the spot: at 0.7 rad/s (above
     ``axis_max_turn``) nothing is reported, at 0.1 rad/s the axis is."""
-    room, centre, loc = _localizer()
-    robot = DiffDriveRobot(
-        np.array([centre[0] + 0.5, centre[1], 0.0]),
-        RobotConfig(noise=OdometryNoise(0.01, 0.01, 0.01, 0.01)),
-        5,
-    )
-    loc.set_pose(robot.pose.copy(), COV)
+    room, _, loc, robot = _tracking_near_the_middle()
     rng = np.random.default_rng(14)
 
     def statuses(v: float, w: float, n: int) -> list[Status]:
