@@ -152,3 +152,11 @@ def test_the_operator_pose_chooses_among_copies_only_within_its_reach(
     else:
         assert published == []
         assert any("rotated copy" in line for line in loc.log)
+
+
+@pytest.mark.parametrize("bad", [(-1.0, 1.0), (1.0, math.nan), (1.0,), "far"])
+def test_operator_reach_must_be_metres_and_radians(bad) -> None:  # type: ignore[no-untyped-def]
+    from symloc.localizer.claim import ClaimConfig
+
+    with pytest.raises(ConfigurationError, match="operator_reach"):
+        ClaimConfig(operator_reach=bad)

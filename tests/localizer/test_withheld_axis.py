@@ -141,3 +141,14 @@ def test_no_axis_from_scans_taken_while_turning_fast() -> None:
     statuses(0.45, 0.0, 100)  # out to 5 m from the middle, claims withheld there
     assert Status.AXIS not in statuses(0.0, 0.7, 8)[1:]
     assert statuses(0.0, 0.1, 8)[-1] is Status.AXIS
+
+
+def test_axis_max_turn_must_be_a_positive_rate() -> None:
+    import pytest
+
+    from symloc.errors import ConfigurationError
+    from symloc.localizer import LocalizerConfig
+
+    for bad in (0.0, -0.1, math.nan, math.inf):
+        with pytest.raises(ConfigurationError, match="axis_max_turn"):
+            LocalizerConfig(axis_max_turn=bad)
