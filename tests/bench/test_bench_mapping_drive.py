@@ -1,4 +1,5 @@
-"""The mapping trip's driver: around furniture, along a whole corridor (bench.exploration)."""
+"""The mapping trip's driver: around furniture, along a whole corridor, stopping to look
+around where the lap did not pass (bench.exploration, bench.episode)."""
 
 from __future__ import annotations
 
@@ -7,8 +8,8 @@ import itertools
 import numpy as np
 import pytest
 
-from symloc.bench.episode import RobotBody, drive_waypoints
-from symloc.bench.exploration import _line_free, exploration_path, free_route
+from symloc.bench.episode import RobotBody, drive_waypoints, look_around_at
+from symloc.bench.exploration import _line_free, coverage_stops, exploration_path, free_route
 from symloc.sim.generator import generate_world
 from symloc.sim.regimes import get_regime
 from symloc.sim.robot import DiffDriveRobot
@@ -72,3 +73,70 @@ def test_mapping_drive_covers_the_whole_corridor_past_the_box(corridor, seed):
     length = float(np.hypot(*(path[1] - path[0])))
     assert along.min() < 0.05 * length
     assert along.max() > 0.95 * length
+
+
+def _lap(room, margin=0.5, per_edge=20):
+    """Points along the outline lap, ``per_edge`` per edge."""
+    path = exploration_path(room, margin=margin)
+    return np.vstack(
+        [np.linspace(p, q, per_edge) for p, q in zip(path, np.roll(path, -1, axis=0), strict=True)]
+    )
+
+
+def test_coverage_stops_leave_no_reachable_place_farther_than_reach():
+    """A large regular room: the lap along the walls leaves its middle metres from the trip;
+    with the stops every free place the lap's component holds is within reach, each stop is
+    free and off the lap, and they come nearest first."""
+    room = generate_world("regular", 1).build()
+    lap = _lap(room)
+    clearance, reach = 0.33, 1.0
+    free = room.free_space(clearance)
+    rr, cc = np.nonzero(free.free & (free.labels == free.reachable_label))
+    cells = free.origin + (np.column_stack([cc, rr]) + 0.5) * free.resolution
+    far = np.min(np.hypot(*(cells[:, None, :] - lap[None, :, :]).transpose(2, 0, 1)), axis=1)
+    assert far.max() > 2.0  # the lap alone leaves the middle far from the trip
+    start = lap[-1]
+    stops = coverage_stops(room, lap, reach=reach, clearance=clearance, start=start)
+    assert 3 <= stops.shape[0] < 60
+    trip = np.vstack([lap, stops])
+    gap = np.min(np.hypot(*(cells[:, None, :] - trip[None, :, :]).transpose(2, 0, 1)), axis=1)
+    assert gap.max() <= reach + free.resolution
+    row, col = free.cells(stops)
+    assert free.free[row, col].all()
+    off = np.min(np.hypot(*(stops[:, None, :] - lap[None, :, :]).transpose(2, 0, 1)), axis=1)
+    assert off.min() > reach
+    hops = np.hypot(*(stops - np.vstack([start[None], stops[:-1]])).T)
+    assert hops[0] <= np.hypot(*(stops - start).T).min() + 1e-9  # nearest first
+    # a trip that already passed everywhere needs no stop; nothing driven, nothing to extend
+    assert coverage_stops(room, cells, reach=reach, clearance=clearance).shape == (0, 2)
+    assert coverage_stops(room, np.zeros((0, 2)), reach=reach, clearance=clearance).shape == (
+        0,
+        2,
+    )
+    with pytest.raises(Exception, match="reach"):
+        coverage_stops(room, lap, reach=0.0, clearance=clearance)
+
+
+def test_look_around_turns_a_full_circle_at_each_stop_and_skips_what_it_cannot_reach(corridor):
+    rng = np.random.default_rng(3)
+    config = get_regime("ideal").robot_config(rng)
+    start = np.array([-6.45, 20.83, 1.85])
+    robot = RobotBody(DiffDriveRobot(start, config, rng, world=corridor.world, odom_origin=start))
+    route = free_route(corridor, config.radius + 0.15)
+    nowhere = np.array([500.0, 500.0])
+
+    def planner(a, g):  # no route leads to ``nowhere``
+        return np.zeros((0, 2)) if np.allclose(g, nowhere) else route(a, g)
+
+    axis = np.array([-7.57 - 9.45, 27.8 + 27.22])
+    axis /= np.hypot(*axis)
+    stops = np.array([start[:2] + 1.0 * axis, nowhere, start[:2] - 1.5 * axis])
+    trace: list[np.ndarray] = []
+    skipped = look_around_at(robot, stops, dt=0.1, on_step=trace.append, route=planner)
+    assert skipped == 1
+    poses = np.asarray(trace)
+    for stop, way in zip(stops[[0, 2]], (1.0, -1.0), strict=True):
+        near = np.hypot(*(poses[:, :2] - stop).T) < 0.05
+        turned = np.diff(np.unwrap(poses[near, 2]))
+        assert way * np.sum(turned) >= 2 * np.pi - 0.1  # anticlockwise, then clockwise
+    assert np.hypot(*(robot.pose[:2] - stops[2])) < 0.05

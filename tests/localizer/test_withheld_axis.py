@@ -11,7 +11,7 @@ from symloc.localizer import Localizer, Status
 from symloc.localizer.adapters import AmclTracker, GridScorer, ReportJudge
 from symloc.localizer.claim import ClaimConfig, ClaimGate
 from symloc.localizer.map_symmetry import map_symmetries
-from symloc.localizer.withheld_axis import withheld_axis
+from symloc.localizer.withheld_axis import across_outside_probability, withheld_axis
 from symloc.mcl import Amcl, AmclParams
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
@@ -62,6 +62,32 @@ def test_a_pose_withheld_for_the_maps_scale_is_an_axis_along_the_radius() -> Non
     r[: int(0.5 * r.size)] = 0.5  # a person right in front of the lidar
     partly = gate.confirm(far, COV, scan.with_ranges(r))
     assert withheld_axis(gate, partly, True) is None
+
+
+def test_the_position_across_is_held_to_the_gates_chance_in_one_direction() -> None:
+    """The across std may reach 2.79 cm for a 10 cm tolerance at four sigmas (the gate's
+    chance, 3.4e-4, in one direction), not the 2.5 cm of the 2-D pose's circular bound; a
+    heading std past the gate's bound reports nothing."""
+    import dataclasses
+
+    room, _, centre, gate = _hallway()
+    far = np.array([centre[0] + 5.0, centre[1] + 0.1, 0.05])
+    claim = gate.confirm(far, COV, simulate_scan(room.world, far, RPLIDAR_A2, 0))
+    cfg = gate.config
+    assert across_outside_probability(0.0275, 0.1) < cfg.max_outside_probability
+    assert across_outside_probability(0.0285, 0.1) > cfg.max_outside_probability
+    assert across_outside_probability(0.0, 0.1) == 0.0
+
+    def with_std(across: float, heading_deg: float = 0.3):  # type: ignore[no-untyped-def]
+        cov = np.diag([0.06**2, across**2, math.radians(heading_deg) ** 2])
+        return dataclasses.replace(claim, covariance=cov)
+
+    assert cfg.max_std_xy < 0.027  # past the circular bound, within the 1-D one
+    est = withheld_axis(gate, with_std(0.027), True)
+    assert est is not None
+    assert est.status is Status.AXIS
+    assert withheld_axis(gate, with_std(0.029), True) is None
+    assert withheld_axis(gate, with_std(0.02, heading_deg=1.4), True) is None
 
 
 def _localizer():

@@ -37,6 +37,7 @@ __all__ = [
     "drive_command",
     "drive_waypoints",
     "go_to_centre",
+    "look_around_at",
     "run_episode",
 ]
 
@@ -304,6 +305,41 @@ def drive_waypoints(
             if not _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None):
                 skipped += 1
                 break
+    return skipped
+
+
+def look_around_at(
+    body: Body,
+    stops: FloatArray,
+    *,
+    dt: float = 0.1,
+    speed: float = 0.3,
+    turn_rate: float = 0.8,
+    on_step: Callable[[FloatArray], Any] | None = None,
+    route: Callable[[FloatArray, FloatArray], FloatArray] | None = None,
+) -> int:
+    """Drive ``body`` to each of ``stops`` (S, 2) [m] in turn (through ``route`` as
+    :func:`drive_waypoints` does) and turn a full circle on the spot there, so that a camera
+    sees the room from there in every direction. The circles alternate anticlockwise and
+    clockwise: a gyro's scale error (0.2-1 % for a MEMS unit) over dozens of full turns one
+    way would turn the heading by degrees where the laser cannot correct it (a round room);
+    turned both ways, it cancels. ``on_step(true_pose)`` after every step of ``dt`` [s].
+    Returns how many stops could not be reached (skipped)."""
+    skipped = 0
+    way = 1.0
+    for stop in np.asarray(stops, dtype=np.float64).reshape(-1, 2):
+        via = stop[None] if route is None else route(body.pose[:2], stop)
+        if via.shape[0] == 0 or not all(
+            _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None)
+            for goal in via
+        ):
+            skipped += 1
+            continue
+        for _ in range(math.ceil(2.0 * math.pi / (turn_rate * dt))):
+            body.drive(0.0, way * turn_rate, dt)
+            if on_step is not None:
+                on_step(body.pose)
+        way = -way
     return skipped
 
 

@@ -27,7 +27,13 @@ from symloc.sim.odometry_noise import DEFAULT_ALPHAS
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
 from symloc.sim.rooms import Room
 
-__all__ = ["ExplorationRun", "exploration_path", "free_route", "simulate_exploration"]
+__all__ = [
+    "ExplorationRun",
+    "coverage_stops",
+    "exploration_path",
+    "free_route",
+    "simulate_exploration",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -77,6 +83,62 @@ def exploration_path(room: Room, margin: float = 0.5) -> FloatArray:
     if not np.all(room.contains(path)):
         raise WorldError(f"exploration_path: margin {m} m puts the path outside room {room.name!r}")
     return np.asarray(path, dtype=np.float64)
+
+
+def coverage_stops(
+    room: Room,
+    covered: FloatArray,
+    *,
+    reach: float,
+    clearance: float,
+    start: FloatArray | None = None,
+) -> FloatArray:
+    """Stops ``(S, 2)`` [m] that bring a mapping trip within ``reach`` [m] of every place of
+    the room a robot of radius ``clearance`` [m] can reach from where it drove.
+
+    ``covered`` ``(P, 2)`` [m] is where the trip already drove (the lap along the walls). The
+    stops are chosen greedily, each the free cell farthest from the trip and the stops so far
+    (the farthest-point rule of the k-centre problem), until none is farther than ``reach``;
+    only cells of the free-space components the trip drove in count. They are returned in
+    nearest-neighbour order from ``start`` (default the last point of ``covered``). A lap
+    along the walls leaves a large room's middle metres from any keyframe; a robot that stops
+    at these and looks around leaves no reachable place farther than ``reach`` from keyframes
+    facing every way.
+    """
+    r = check_positive(reach, "reach")
+    done = np.asarray(covered, dtype=np.float64).reshape(-1, 2)
+    if done.shape[0] == 0:
+        return np.zeros((0, 2))
+    free = room.free_space(clearance)
+    h, w = free.free.shape
+    row, col = free.cells(done)
+    inside = (row >= 0) & (row < h) & (col >= 0) & (col < w)
+    labels = np.unique(free.labels[row[inside], col[inside]])
+    labels = labels[labels > 0]
+    rr, cc = np.nonzero(free.free & np.isin(free.labels, labels))
+    if rr.size == 0:
+        return np.zeros((0, 2))
+    cells = free.origin + (np.column_stack([cc, rr]).astype(np.float64) + 0.5) * free.resolution
+    from scipy.spatial import cKDTree
+
+    gap, _ = cKDTree(done).query(cells)
+    chosen: list[int] = []
+    while True:
+        k = int(np.argmax(gap))
+        if gap[k] <= r:
+            break
+        chosen.append(k)
+        gap = np.minimum(gap, np.hypot(*(cells - cells[k]).T))
+    pts = cells[chosen]
+    here = np.asarray(start, dtype=np.float64)[:2] if start is not None else done[-1]
+    left = list(range(pts.shape[0]))
+    order: list[int] = []
+    while left:
+        k = min(left, key=lambda i: float(np.hypot(*(pts[i] - here))))
+        order.append(k)
+        left.remove(k)
+        here = pts[k]
+    return np.asarray(pts[order], dtype=np.float64).reshape(-1, 2)
 
 
 def _line_free(free: FreeSpace, a: FloatArray, b: FloatArray) -> bool:

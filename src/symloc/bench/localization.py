@@ -30,6 +30,7 @@ import numpy as np
 
 from symloc.localizer.config import LocalizerConfig
 from symloc.sim.rooms import Room
+from symloc.vision.verification import VerificationSettings
 
 from .grading import GRADES
 from .scenario import build_scenario
@@ -45,7 +46,13 @@ from .trial import (
 )
 from .world_sources import WorldRef, build_world, world_spec
 
-__all__ = ["WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
+__all__ = ["MAPPING_REACH", "WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
+
+
+#: The mapping trip's reach [m] (:attr:`WorldTask.mapping_reach`): the keyframes' own
+#: (:attr:`symloc.vision.verification.VerificationSettings.max_distance`), so that a robot
+#: anywhere it can go has keyframes within it, facing every way.
+MAPPING_REACH: float = VerificationSettings().max_distance
 
 
 @dataclass(frozen=True)
@@ -53,7 +60,10 @@ class WorldTask:
     """One world of a sweep: how to build it, its seed, and its trials.
 
     ``seed`` drives the mapping run; trial ``i`` gets seed ``seed * 1000 + i`` (independent
-    of the others and of the worker that runs it).
+    of the others and of the worker that runs it). ``mapping_reach`` [m]: on SLAM maps, after
+    its lap along the walls the mapping robot stops and looks around until no place it can
+    reach is farther than this from its trip (``build_scenario``'s ``explore_stops``; 0: the
+    lap only).
     """
 
     ref: WorldRef
@@ -64,6 +74,7 @@ class WorldTask:
     map_source: str = "slam"
     config: TrialConfig = field(default_factory=TrialConfig)
     methods: tuple[str, ...] = DEFAULT_METHODS
+    mapping_reach: float = MAPPING_REACH
 
 
 @dataclass(frozen=True)
@@ -98,6 +109,7 @@ def run_world(task: WorldTask) -> WorldResult:
             workdir=Path(tmp),
             map_source=task.map_source,
             explore_laps=1.0,
+            explore_stops=task.mapping_reach,
             regime=task.regime,
             # deciding where the robot stands verifies against keyframes of the mapping trip;
             # recording them draws from their own stream, so the map and the other methods'

@@ -51,6 +51,7 @@ from symloc.sim.rooms import Room, build_room, hallway, with_lab
 from symloc.sim.symmetry_truth import truth_order
 from symloc.sim.world import World
 from symloc.slam import run_slam
+from symloc.slam.localize_in_map import localize_in_map
 from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
@@ -58,8 +59,8 @@ from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
 
-from .episode import Episode, RobotBody, drive_waypoints, run_episode
-from .exploration import exploration_path, free_route
+from .episode import Episode, RobotBody, drive_waypoints, look_around_at, run_episode
+from .exploration import coverage_stops, exploration_path, free_route
 from .explore import ExploreDrive
 from .mapping_trip import KeyframeRecorder, MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
@@ -293,6 +294,7 @@ def build_scenario(
     keyframes: KeyframeSettings | bool | None = None,
     align_headings: HeadingAlignmentSettings | bool = False,
     explore_route: bool = True,
+    explore_stops: float = 0.0,
 ) -> Scenario:
     """Build the room (inside a lab), its occupancy grid and its visual map.
 
@@ -303,7 +305,11 @@ def build_scenario(
     SLAM sees rooms that the trip to the centre does not (concave rooms, furniture); with
     ``explore_route`` the driver steers around what stands in the way
     (:func:`~symloc.bench.exploration.free_route`), else it drives straight at each waypoint
-    and skips the ones it cannot reach.
+    and skips the ones it cannot reach. ``explore_stops`` > 0 (with ``explore_laps``): after
+    the lap the robot stops at the points of a lattice of that spacing [m] that the lap did
+    not pass near (:func:`~symloc.bench.exploration.coverage_stops`) and turns a full circle at
+    each (:func:`~symloc.bench.episode.look_around_at`), so that the keyframes of the trip see
+    the room's middle from every direction, not only its walls along the lap.
     ``regime`` names the sensors of the mapping robot (:func:`symloc.bench.sensors.sensor_setup`).
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
@@ -429,6 +435,7 @@ def build_scenario(
             spec,
             explore_laps=explore_laps,
             explore_route=explore_route,
+            explore_stops=explore_stops,
             keyframes=kf_settings,
             align=align,
         )
@@ -457,6 +464,7 @@ def _map_with_slam(
     *,
     explore_laps: float = 0.0,
     explore_route: bool = True,
+    explore_stops: float = 0.0,
     keyframes: KeyframeSettings | None = None,
     align: HeadingAlignmentSettings | None = None,
 ) -> MappedPlace | None:
@@ -542,6 +550,7 @@ def _map_with_slam(
         dt=dt,
         true_centre=scen.room.center,
     )
+    lap_end: int | None = None
     if explore_laps > 0:
         try:
             path = exploration_path(scen.room, margin=0.5)
@@ -558,10 +567,35 @@ def _map_with_slam(
                 f"mapping stage: drove {explore_laps:g} lap(s) along the room outline"
                 + (f" ({refused} waypoints unreachable)" if refused else "")
             )
+            lap_end = len(truths)
+            if explore_stops > 0:
+                stops = coverage_stops(
+                    scen.room,
+                    np.asarray(truths, dtype=np.float64)[:, :2],
+                    reach=explore_stops,
+                    clearance=radius + 0.15,
+                    start=np.asarray(robot.pose, dtype=np.float64),
+                )
+                missed = look_around_at(robot, stops, dt=dt, on_step=scan_rec, route=route)
+                scen.notes.append(
+                    f"mapping stage: looked around at {stops.shape[0] - missed} stop(s), none "
+                    f"farther than {explore_stops:g} m from a reachable place"
+                    + (f" ({missed} unreachable)" if missed else "")
+                )
+    # SLAM draws the map from the trip up to the end of its lap; the stops to look around are
+    # placed in that map (localize_in_map): minutes of turning in the middle of a round room
+    # drift SLAM by a metre there (circle#0 of the dev split) and smear the walls
+    lap_end = len(scans) if lap_end is None else lap_end
     t0 = time.perf_counter()
-    slam = run_slam(scans, np.array(odoms), progress=False)
+    slam = run_slam(scans[:lap_end], np.array(odoms[:lap_end]), progress=False)
     scen.slam_seconds = time.perf_counter() - t0
     scen.grid = slam.grid
+    trip_poses = np.asarray(slam.poses, dtype=np.float64).reshape(-1, 3)
+    if lap_end < len(scans):
+        looked = localize_in_map(
+            slam.grid, scans[lap_end:], np.array(odoms[lap_end - 1 :]), trip_poses[-1]
+        )
+        trip_poses = np.vstack([trip_poses, looked])
     # a map built with this lidar is a scaled copy of the room by the unit's range scale
     # error, which SLAM cannot see: the claim gate is told its data-sheet spread
     # (ClaimConfig.map_scale_std), as a user sets it for their lidar
@@ -577,28 +611,39 @@ def _map_with_slam(
             f" cm std, p95 {100 * slam.map_error.p95_xy:.1f} cm over {slam.map_error.nodes} nodes"
         )
     # The truth is expressed in the SLAM map frame by the rigid transform that best fits the
-    # whole trip (least squares over its positions, as ATE aligns trajectories), not by the
-    # first pose alone: anchoring at the first pose would put all the drift SLAM left at the
-    # far side of the room. Whatever distortion remains is error the localizer inherits.
-    scen.map_from_world = umeyama_se2(
-        np.asarray(truths, dtype=np.float64)[:, :2], np.asarray(slam.poses)[:, :2]
-    )
+    # trip SLAM mapped (least squares over its positions, as ATE aligns trajectories), not by
+    # the first pose alone: anchoring at the first pose would put all the drift SLAM left at
+    # the far side of the room. Whatever distortion remains is error the localizer inherits.
+    lap_truths = np.asarray(truths[:lap_end], dtype=np.float64)
+    scen.map_from_world = umeyama_se2(lap_truths[:, :2], trip_poses[:lap_end, :2])
     in_map = np.asarray(_compose(scen.map_from_world, np.array(truths)), dtype=np.float64)
-    slam_err = np.hypot(*(np.asarray(slam.poses)[:, :2] - in_map[:, :2]).T)
+    trip_err = np.hypot(*(trip_poses[:, :2] - in_map[:, :2]).T)
+    slam_err = trip_err[:lap_end]
     scen.slam_error_p95 = float(np.percentile(slam_err, 95))
     scen.notes.append(
         f"mapping trip: SLAM pose error in the map frame mean {100 * slam_err.mean():.1f} cm, "
         f"p95 {100 * scen.slam_error_p95:.1f} cm, max {100 * slam_err.max():.1f} cm"
     )
+    if lap_end < len(truths):
+        looks = trip_err[lap_end:]
+        scen.notes.append(
+            f"mapping trip: the stops' {looks.size} scans placed in the lap's map, pose error "
+            f"mean {100 * looks.mean():.1f} cm, p95 {100 * np.percentile(looks, 95):.1f} cm"
+        )
     scen.notes[0] = (
-        f"occupancy grid: symloc.slam.run_slam over {len(scans)} scans of the mapping trip; "
+        f"occupancy grid: symloc.slam.run_slam over {lap_end} scans of the mapping trip; "
         "visual map poses: SLAM poses"
+        + (
+            f" (the {len(scans) - lap_end} scans of the stops: placed in that map)"
+            if lap_end < len(scans)
+            else ""
+        )
     )
     if recorder is not None:
         vm = scen.store.visual_map
         vocab = scen.store.vocabulary
         kfs = recorder.keyframes(
-            lambda i: np.asarray(slam.poses[i], dtype=np.float64),
+            lambda i: trip_poses[i],
             lambda f: vocab.bow(f.descriptors),
         )
         scen.keyframe_slam_poses = np.array([kf.pose for kf in kfs], np.float64).reshape(-1, 3)

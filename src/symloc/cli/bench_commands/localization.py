@@ -18,6 +18,7 @@ __all__ = ["register", "run"]
 
 def register(subparsers: Any) -> None:
     """Add ``localization`` to ``symloc bench``."""
+    from symloc.bench.localization import MAPPING_REACH
     from symloc.bench.trial import DEFAULT_METHODS, METHODS, TRIAL_KINDS
     from symloc.bench.world_sources import BUILTIN_ROOMS
     from symloc.sim.generator import FAMILIES
@@ -91,6 +92,15 @@ def register(subparsers: Any) -> None:
         help="occupancy grid and visual-map poses from SLAM (default) or ground truth",
     )
     parser.add_argument(
+        "--mapping-reach",
+        type=float,
+        default=MAPPING_REACH,
+        metavar="M",
+        help="after its lap along the walls the mapping robot stops and looks around until no "
+        f"place it can reach is farther than M metres from where it was (default {MAPPING_REACH:g}, "
+        "the keyframes' reach; 0: the lap only)",
+    )
+    parser.add_argument(
         "--regime",
         choices=REGIMES,
         default="ideal",
@@ -141,6 +151,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.worlds < 1 or args.trials < 1:
         raise ConfigurationError("--worlds and --trials: expected integers >= 1")
+    if not (math.isfinite(args.mapping_reach) and args.mapping_reach >= 0):
+        raise ConfigurationError(
+            f"--mapping-reach: expected a distance >= 0 m, got {args.mapping_reach}"
+        )
     seeds = args.seeds if args.seeds else split_seeds(args.split, args.worlds)
     if args.world:
         families = [f"file:{p}" for p in args.world]
@@ -157,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
             kinds=tuple(args.kinds),
             regime=args.regime,
             map_source=args.map,
+            mapping_reach=args.mapping_reach,
             config=config,
             methods=tuple(args.methods),
         )
@@ -172,6 +187,7 @@ def run(args: argparse.Namespace) -> int:
         "methods": list(args.methods),
         "regime": args.regime,
         "map": args.map,
+        "mapping_reach_m": args.mapping_reach,
         "tolerance": config.tolerance.describe(),
         "claim_timeout_s": config.claim_timeout,
         "track_time_s": config.track_time,
