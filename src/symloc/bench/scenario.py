@@ -468,10 +468,13 @@ def _map_with_slam(
     keyframes: KeyframeSettings | None = None,
     align: HeadingAlignmentSettings | None = None,
 ) -> MappedPlace | None:
-    """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre and of the
-    turn for the M images goes to :func:`symloc.slam.run_slam`; the place's centre and image
-    headings, measured in the odometry frame, are moved into the SLAM map frame with the SLAM
-    pose of the scan taken at that moment.
+    """The mapping stage with SLAM (Figure 2): every scan of the trip to the centre, of the
+    turn for the M images and of the lap along the walls goes to
+    :func:`symloc.slam.run_slam`; the place's centre and image headings, measured in the
+    odometry frame, are moved into the SLAM map frame with the SLAM pose of the scan taken at
+    that moment. The scans of the stops to look around (``explore_stops``) are placed in the
+    map SLAM drew (:func:`symloc.slam.localize_in_map.localize_in_map`), for their keyframes'
+    poses; they do not change the map.
 
     The odometry starts at the robot's true start pose, so the SLAM map frame is anchored there
     and errors can be graded in world coordinates.

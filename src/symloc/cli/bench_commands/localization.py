@@ -94,11 +94,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--mapping-reach",
         type=float,
-        default=MAPPING_REACH,
+        default=0.0,
         metavar="M",
         help="after its lap along the walls the mapping robot stops and looks around until no "
-        f"place it can reach is farther than M metres from where it was (default {MAPPING_REACH:g}, "
-        "the keyframes' reach; 0: the lap only)",
+        "place it can reach is farther than M metres from where it was (default 0: the lap "
+        f"only; {MAPPING_REACH:g}, the keyframes' reach, leaves keyframes near every place)",
     )
     parser.add_argument(
         "--regime",
