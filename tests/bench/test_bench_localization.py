@@ -213,3 +213,16 @@ def test_keyframes_are_recorded_for_the_methods_that_decide_where_the_robot_stan
     assert not needs_keyframes(("symloc", "amcl"), default_decide_here=False)
     assert not needs_keyframes(("centre", "amcl"), default_decide_here=True)
     assert needs_keyframes(("decide",), default_decide_here=False)
+
+
+def test_mapping_reach_is_zero_or_a_quarter_metre_at_least(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A reach below 0.25 m would leave a stop every few cells: refused by name, before any
+    world is mapped; a negative one by argparse."""
+    args = ["bench", "localization", "--families", "square", "--out", str(tmp_path)]
+    assert main([*args, "--mapping-reach", "0.1"]) == 2
+    assert "--mapping-reach" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*args, "--mapping-reach", "-1"])
+    assert "--mapping-reach" in capsys.readouterr().err

@@ -397,6 +397,15 @@ directions = bounded(
 symmetry_order = bounded(positive_int, high=256, why="the largest order symloc judges")
 #: A camera's horizontal field of view [deg] (argparse type): (0, 179].
 field_of_view = bounded(positive_float, high=179.0, why="a pinhole camera sees less than 180 deg")
+#: A mapping trip's reach [m] (argparse type): [0, 100]; below :data:`MIN_MAPPING_REACH` only 0.
+mapping_reach = bounded(
+    nonnegative_float,
+    high=MAX_GV,
+    why="a stop is left where the trip passed farther than this from a reachable place",
+    unit="m",
+)
+#: Shortest non-zero mapping reach [m]: a stop for every 0.2 m^2 of floor at most.
+MIN_MAPPING_REACH = 0.25
 #: Loops of a simulated mapping run (argparse type): (0, 100].
 laps = bounded(
     positive_float,

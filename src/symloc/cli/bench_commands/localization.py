@@ -93,7 +93,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--mapping-reach",
-        type=float,
+        type=options.mapping_reach,
         default=0.0,
         metavar="M",
         help="after its lap along the walls the mapping robot stops and looks around until no "
@@ -151,9 +151,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.worlds < 1 or args.trials < 1:
         raise ConfigurationError("--worlds and --trials: expected integers >= 1")
-    if not (math.isfinite(args.mapping_reach) and args.mapping_reach >= 0):
+    if 0 < args.mapping_reach < options.MIN_MAPPING_REACH:
         raise ConfigurationError(
-            f"--mapping-reach: expected a distance >= 0 m, got {args.mapping_reach}"
+            f"--mapping-reach: expected 0 (the lap only) or at least "
+            f"{options.MIN_MAPPING_REACH} m, got {args.mapping_reach}"
         )
     seeds = args.seeds if args.seeds else split_seeds(args.split, args.worlds)
     if args.world:
