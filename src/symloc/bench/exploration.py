@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from symloc._checks import as_rng, check_positive
 from symloc.errors import ConfigurationError, WorldError
@@ -119,8 +120,6 @@ def coverage_stops(
     if rr.size == 0:
         return np.zeros((0, 2))
     cells = free.origin + (np.column_stack([cc, rr]).astype(np.float64) + 0.5) * free.resolution
-    from scipy.spatial import cKDTree
-
     gap, _ = cKDTree(done).query(cells)
     chosen: list[int] = []
     while True:

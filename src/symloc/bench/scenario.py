@@ -306,10 +306,11 @@ def build_scenario(
     ``explore_route`` the driver steers around what stands in the way
     (:func:`~symloc.bench.exploration.free_route`), else it drives straight at each waypoint
     and skips the ones it cannot reach. ``explore_stops`` > 0 (with ``explore_laps``): after
-    the lap the robot stops at the points of a lattice of that spacing [m] that the lap did
-    not pass near (:func:`~symloc.bench.exploration.coverage_stops`) and turns a full circle at
-    each (:func:`~symloc.bench.episode.look_around_at`), so that the keyframes of the trip see
-    the room's middle from every direction, not only its walls along the lap.
+    the lap the robot stops wherever it can reach a place farther than that [m] from its trip
+    (:func:`~symloc.bench.exploration.coverage_stops`) and turns a full circle at each
+    (:func:`~symloc.bench.episode.look_around_at`), so that the keyframes of the trip see the
+    room's middle from every direction, not only its walls along the lap; the stops' scans are
+    placed in the lap's map and do not change it.
     ``regime`` names the sensors of the mapping robot (:func:`symloc.bench.sensors.sensor_setup`).
 
     The mapping robot starts at ``mapping_start`` (default: a random pose in the room), goes to
