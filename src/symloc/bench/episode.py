@@ -295,17 +295,7 @@ def drive_waypoints(
         return 0
     first = int(np.argmin(np.hypot(*(wp - body.pose[:2]).T)))
     order = [(first + k) % wp.shape[0] for k in range(math.ceil(laps * wp.shape[0]) + 1)]
-    skipped = 0
-    for k in order:
-        via = wp[k][None] if route is None else route(body.pose[:2], wp[k])
-        if via.shape[0] == 0:
-            skipped += 1
-            continue
-        for goal in via:
-            if not _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None):
-                skipped += 1
-                break
-    return skipped
+    return sum(not _reach(body, wp[k], dt, speed, turn_rate, on_step, route) for k in order)
 
 
 def look_around_at(
@@ -328,11 +318,7 @@ def look_around_at(
     skipped = 0
     way = 1.0
     for stop in np.asarray(stops, dtype=np.float64).reshape(-1, 2):
-        via = stop[None] if route is None else route(body.pose[:2], stop)
-        if via.shape[0] == 0 or not all(
-            _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None)
-            for goal in via
-        ):
+        if not _reach(body, stop, dt, speed, turn_rate, on_step, route):
             skipped += 1
             continue
         for _ in range(math.ceil(2.0 * math.pi / (turn_rate * dt))):
@@ -341,6 +327,27 @@ def look_around_at(
                 on_step(body.pose)
         way = -way
     return skipped
+
+
+def _reach(
+    body: Body,
+    point: FloatArray,
+    dt: float,
+    speed: float,
+    turn_rate: float,
+    on_step: Callable[[FloatArray], Any] | None,
+    route: Callable[[FloatArray, FloatArray], FloatArray] | None,
+) -> bool:
+    """Drive ``body`` to ``point`` (2,) [m]: straight at it, or through the points ``route``
+    returns, each in turn, steering on the way; False when no route leads there or a motion
+    was refused (the rest of the route is then not driven)."""
+    via = point[None] if route is None else route(body.pose[:2], point)
+    if via.shape[0] == 0:
+        return False
+    return all(
+        _drive_straight(body, goal, dt, speed, turn_rate, on_step, route is not None)
+        for goal in via
+    )
 
 
 def _drive_straight(
