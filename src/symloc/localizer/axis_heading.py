@@ -11,8 +11,9 @@ hypothesis is verified with margin; what must be unique here is the heading clas
   weak match never decides);
 - its best verified inliers are at least the store's ``margin`` times the best *rival* fit of
   the other class: any of its fits, verified or not, except one whose measured camera heading
-  agrees with the winner's (within the store's ``heading_tolerance``), which is evidence for
-  the winner (as :func:`~symloc.localizer.vision_store.single_verified` counts rivals).
+  agrees with the winner's (within the store's ``heading_tolerance``) on a keyframe that a
+  verified hypothesis of the winner should be seeing too, which is evidence for the winner
+  (as :func:`~symloc.localizer.vision_store.single_verified` counts rivals).
 
 The winner's camera heading (its best verified hypothesis' heading plus the measured offset)
 agrees with the laser's heading of the class within the tolerance, since verified means so.
@@ -29,6 +30,7 @@ from numpy.typing import NDArray
 from symloc.geometry import wrap_angle
 
 from .types import Verification
+from .verified_together import same_view
 
 __all__ = ["HeadingVote", "vote_heading"]
 
@@ -79,7 +81,11 @@ def vote_heading(
     k = int(mine[np.argmax(inliers[mine])])
     heading = float(wrap_angle(p[k, 2] + offsets[k]))
     measured = np.asarray(wrap_angle(p[:, 2] + offsets - heading), dtype=np.float64)
-    agrees = np.isfinite(offsets) & (np.abs(np.nan_to_num(measured, nan=math.pi)) <= tol)
+    seen = [checks[j].expected for j in mine]
+    here = np.array(
+        [same_view(c.keyframe, seen) if any(seen) else True for c in checks], dtype=bool
+    )
+    agrees = np.isfinite(offsets) & (np.abs(np.nan_to_num(measured, nan=math.pi)) <= tol) & here
     rivals = (cls != lead) & ~agrees
     rival = int(inliers[rivals].max(initial=0))
     share = (best[0], best[1])

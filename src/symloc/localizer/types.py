@@ -390,11 +390,15 @@ class HypothesisVerdict:
     """What one image says about one hypothesis: ``status`` ``"verified"``,
     ``"contradicted"`` or ``"unknown"``; ``inliers`` of its best geometric fit (0 without
     one); ``heading_offset`` [rad] the camera's heading measured by that fit minus the
-    hypothesis' heading (NaN without a fit)."""
+    hypothesis' heading (NaN without a fit); ``keyframe`` the id of the keyframe of that fit
+    (None: no fit, or the store does not say) and ``expected`` the ids of the keyframes the
+    hypothesis should be seeing (empty: none, or the store does not say)."""
 
     status: str
     inliers: int
     heading_offset: float = math.nan
+    keyframe: int | None = None
+    expected: tuple[int, ...] = ()
 
     @property
     def verified(self) -> bool:

@@ -32,7 +32,7 @@ from symloc.vision.verification import (
 )
 
 from .types import Decision, DecisionStatus, HypothesisVerdict, Place, Verification
-from .verified_together import is_rival
+from .verified_together import is_rival, same_view
 
 __all__ = ["UNANCHORED_LABEL", "VisionPlaceStore", "single_verified"]
 
@@ -48,21 +48,30 @@ def single_verified(
     with ``margin`` times the inliers of every rival), except for what counts as a rival. A
     hypothesis turned away from the verified one (by more than ``heading_tolerance`` [rad])
     whose best fit measures the camera's map heading as the verified one's (within the
-    tolerance) is no rival: that fit is evidence for the verified heading (near a symmetric
-    room's centre every rotated copy sees the same keyframes, and the measurement tells them
-    apart). Every other hypothesis with a fit is a rival: one with the verified heading (the
-    camera does not measure position), and one whose fit measures another heading."""
+    tolerance), on a keyframe the verified hypothesis should be seeing too, is no rival: that
+    fit is evidence for the verified heading (near a symmetric room's centre every rotated copy
+    sees the same keyframes, and the measurement tells them apart). Every other hypothesis with
+    a fit is a rival: one with the verified heading (the camera does not measure position), one
+    whose fit measures another heading, and one whose fit is on a keyframe elsewhere."""
     checks = dec.checks
     verified = [i for i, c in enumerate(checks) if c.verified]
     if len(verified) != 1:
         return None, dec.reason
     i = verified[0]
     heading = float(checks[i].corrected_pose[2])
+    seen = (checks[i].expected,)
     best_rival = max(
         (
             c.inliers
             for j, c in enumerate(checks)
-            if j != i and is_rival(float(c.pose[2]), c.heading_offset, heading, heading_tolerance)
+            if j != i
+            and is_rival(
+                float(c.pose[2]),
+                c.heading_offset,
+                heading,
+                heading_tolerance,
+                same_view=same_view(c.keyframe_id, seen),
+            )
         ),
         default=0,
     )
@@ -231,7 +240,10 @@ class VisionPlaceStore:
         cfg = self.verification
         index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
         pose = None if index is None else dec.checks[index].corrected_pose
-        checks = tuple(HypothesisVerdict(c.status, c.inliers, c.heading_offset) for c in dec.checks)
+        checks = tuple(
+            HypothesisVerdict(c.status, c.inliers, c.heading_offset, c.keyframe_id, c.expected)
+            for c in dec.checks
+        )
         return Verification(
             index,
             pose,
