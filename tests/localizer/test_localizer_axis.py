@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -212,6 +213,26 @@ def test_the_camera_decides_the_heading_class_with_margin() -> None:
     agree = _verification(["verified", "unknown", "unknown", "contradicted", "unknown", "unknown"],
                           [60, 0, 0, 40, 0, 0], [0.0, nan, nan, -math.pi, nan, nan])  # fmt: skip
     assert vote_heading(poses, classes, agree, min_inliers=30).winner == 0
+    # ... unless that fit is on a keyframe no verified hypothesis of the winner should see
+    look_alike = Verification(
+        None,
+        None,
+        "",
+        {},
+        (
+            HypothesisVerdict("verified", 60, 0.0, 3, (3, 4)),
+            *agree.checks[1:3],
+            HypothesisVerdict("contradicted", 40, -math.pi, 9, (9,)),
+            *agree.checks[4:],
+        ),
+        2.0,
+        math.radians(15.0),
+    )
+    assert vote_heading(poses, classes, look_alike, min_inliers=30).winner is None
+    seen = dataclasses.replace(look_alike.checks[3], keyframe=4)
+    checks = (*look_alike.checks[:3], seen, *look_alike.checks[4:])
+    assert vote_heading(poses, classes, dataclasses.replace(look_alike, checks=checks),
+                        min_inliers=30).winner == 0  # fmt: skip
     # both classes verified alike: no decision
     both = _verification(["verified", "unknown", "unknown", "verified", "unknown", "unknown"],
                          [60, 0, 0, 55, 0, 0], [0.0, nan, nan, 0.0, nan, nan])  # fmt: skip

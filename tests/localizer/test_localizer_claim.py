@@ -58,6 +58,32 @@ def test_claim_withdraw_and_withhold(l_room) -> None:
     assert "claim withdrawn" in claim.reason
 
 
+def test_a_scan_of_walls_the_map_never_observed_is_withheld(l_room) -> None:
+    room, grid = l_room
+    truth = np.array([-0.6, -0.8, 0.4])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 1)
+    full = ClaimGate(surface_distance_field(grid), ALPHAS)
+    claim = full.confirm(truth, COV, scan)
+    assert claim.ok, claim.reason
+    assert full.unmapped_share(claim.pose, full.points(scan)) < 0.01
+    # the map never observed the part of the room beyond x = 0.6 m: its walls are unknown
+    xs = grid.cell_to_world(np.argwhere(np.ones(grid.data.shape, bool)))[:, 0]
+    data = grid.data.copy()
+    data[(xs > 0.6).reshape(grid.data.shape)] = -1
+    partial = ClaimGate(surface_distance_field(dataclasses.replace(grid, data=data)), ALPHAS)
+    share = partial.unmapped_share(truth, partial.points(scan))
+    assert share > 0.1
+    claim = partial.confirm(truth, COV, scan)
+    assert claim.verdict is Verdict.WITHHELD
+    assert "never observed" in claim.reason
+    # 1 leaves the test out
+    lax = ClaimConfig(max_unmapped_share=1.0)
+    gate = ClaimGate(surface_distance_field(dataclasses.replace(grid, data=data)), ALPHAS, lax)
+    assert "never observed" not in gate.confirm(truth, COV, scan).reason
+    with pytest.raises(ConfigurationError, match="max_unmapped_share"):
+        ClaimConfig(max_unmapped_share=0.0)
+
+
 def test_a_corridor_pose_is_withheld_not_claimed() -> None:
     room = hallway(30.0, 2.0)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])

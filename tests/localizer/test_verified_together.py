@@ -84,6 +84,33 @@ def test_a_rival_measuring_another_heading_keeps_them_apart(round_room) -> None:
     assert one_pose_verified(gate, scan, poses, answer, PRIOR) is None
 
 
+def test_a_fit_measuring_the_group_heading_on_a_keyframe_no_member_sees_is_a_rival(
+    round_room,
+) -> None:
+    room, gate = round_room
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] + 1.2, centre[1] + 0.5, 2.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 0)
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5 - 8.0))
+    head = truth[2] + math.radians(0.4)
+    answer = _answer(poses, head, {0, 1}, {0: 80, 1: 60})
+    checks = list(answer.checks)
+    checks[0] = HypothesisVerdict("verified", 80, checks[0].heading_offset, 10, (10, 11))
+    checks[1] = HypothesisVerdict("verified", 60, checks[1].heading_offset, 11, (11, 12))
+    # hypothesis 9, half a turn away, fits 50 inliers measuring the group's heading
+    off = float(wrap_angle(head - poses[8, 2]))
+
+    def with_fit(keyframe: int) -> Verification:
+        c = list(checks)
+        c[8] = HypothesisVerdict("contradicted", 50, off, keyframe, (40, 41))
+        return Verification(None, None, "", checks=tuple(c), margin=2.0, heading_tolerance=TOL)
+
+    # on a keyframe a member sees: evidence for the group
+    assert one_pose_verified(gate, scan, poses, with_fit(12), PRIOR) is not None
+    # on a keyframe elsewhere: a look-alike, a rival within 2x
+    assert one_pose_verified(gate, scan, poses, with_fit(41), PRIOR) is None
+
+
 def test_symmetric_copies_measuring_different_headings_are_not_merged() -> None:
     room = regular_polygon_room(4, 2.0)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])

@@ -33,7 +33,11 @@ scan goes through :meth:`ClaimGate.check`:
    the robot moves. A scan that fits nowhere is the scan's fault (clutter, people, a wrong
    map) and a place near the carried pose means the alignment, not the robot, lost its way
    (the filter is reseeded there); claims then stay suspended.
-4. **Gate**: the pose is published only while its published covariance puts it inside the
+4. **A map that has what the scan sees**: the claim is *withheld* while more than
+   ``max_unmapped_share`` of the aligned beams end in cells the map never observed, away from
+   every wall it has: the map has those walls only in part, and an alignment leaning on the
+   part it has is biased by more than its covariance says.
+5. **Gate**: the pose is published only while its published covariance puts it inside the
    tolerance with a margin of ``gate_sigmas`` standard deviations in heading and, in
    position, a chance of lying outside at most that of a circular covariance with that
    margin (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans,
