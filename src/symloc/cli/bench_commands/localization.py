@@ -94,11 +94,11 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--mapping-reach",
         type=options.mapping_reach,
-        default=0.0,
+        default=MAPPING_REACH,
         metavar="M",
         help="after its lap along the walls the mapping robot stops and looks around until no "
-        "place it can reach is farther than M metres from where it was (default 0: the lap "
-        f"only; {MAPPING_REACH:g}, the keyframes' reach, leaves keyframes near every place)",
+        "place it can reach is farther than M metres from where it was (default "
+        f"{MAPPING_REACH:g}, the keyframes' reach: keyframes near every place; 0: the lap only)",
     )
     parser.add_argument(
         "--regime",
