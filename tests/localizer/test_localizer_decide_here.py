@@ -405,7 +405,7 @@ def test_a_rival_that_measures_the_verified_heading_is_no_rival() -> None:
 def test_a_fit_measuring_the_verified_heading_on_a_keyframe_elsewhere_is_a_rival() -> None:
     """A look-alike: the turned copy's best fit measures nearly the verified heading, but on a
     keyframe the verified hypothesis should not be seeing (furnished#1000004: 31 inliers
-    verified, 71 on a keyframe 1.6 m away, the truth matching nothing)."""
+    verified, 71 on a keyframe it did not expect, the truth matching nothing)."""
     tol = math.radians(15.0)
     good = _check([0, 0, 0.0], "verified", 31, math.radians(-8.6), 54)
     elsewhere = _check([1.5, 1.5, math.pi / 2], "contradicted", 71, math.radians(-89.0), 73)

@@ -151,7 +151,8 @@ def is_rival(
     copy sees the same keyframes. On a keyframe elsewhere it is a look-alike of the view,
     measuring a heading by chance: in a furnished square (test world furnished#1000004, a
     kidnapping) a wrong copy verified with 31 inliers was let through by a 71-inlier fit of a
-    keyframe 1.6 m away that measured nearly its heading, while the truth matched nothing."""
+    keyframe it did not expect that measured nearly its heading, while the truth matched
+    nothing."""
     if abs(float(wrap_angle(theta - heading))) <= tolerance:
         return True
     if not math.isfinite(heading_offset) or not same_view:
