@@ -76,6 +76,18 @@ def test_a_scan_of_walls_the_map_never_observed_is_withheld(l_room) -> None:
     claim = partial.confirm(truth, COV, scan)
     assert claim.verdict is Verdict.WITHHELD
     assert "never observed" in claim.reason
+    # beams that end beyond one of the map's walls are a misfit, not a wall the map lacks:
+    # seen from 25 cm off, a fifth of the beams end behind walls, and none counts
+    off = truth + np.array([0.25, 0.0, 0.0])
+    pts = full.points(scan)
+    c, s_ = math.cos(off[2]), math.sin(off[2])
+    ends = off[:2] + pts @ np.array([[c, s_], [-s_, c]])
+    cells = grid.world_to_cell(ends)
+    behind = ~grid.in_bounds(cells) | (
+        grid.data[cells[:, 0].clip(0, grid.height - 1), cells[:, 1].clip(0, grid.width - 1)] < 0
+    )
+    assert np.mean(behind & (full.field.lookup(ends) > 0.1)) > 0.1
+    assert full.unmapped_share(off, pts) < 0.01  # a few slip through a corner
     # 1 leaves the test out
     lax = ClaimConfig(max_unmapped_share=1.0)
     gate = ClaimGate(surface_distance_field(dataclasses.replace(grid, data=data)), ALPHAS, lax)

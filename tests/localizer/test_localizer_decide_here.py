@@ -413,8 +413,6 @@ def test_a_fit_measuring_the_verified_heading_on_a_keyframe_elsewhere_is_a_rival
     assert index is None
     assert "71" in why
     # the same fit on a keyframe the verified hypothesis expects is support, as before
-    near = HypothesisCheck(
-        "verified", np.zeros(3), 0.5, 31, math.radians(-8.6), 54, (54, 73), ""
-    )
+    near = HypothesisCheck("verified", np.zeros(3), 0.5, 31, math.radians(-8.6), 54, (54, 73), "")
     index, _ = single_verified(VerificationDecision(None, (near, elsewhere), ""), 2.0, tol)
     assert index == 0
