@@ -218,16 +218,16 @@ class ClaimConfig:
     min_beams : int
         Fewer returning beams than this cannot confirm anything (the claim is withheld).
     max_unmapped_share : float
-        Above this share of returning beams that end, aligned, in cells the map never observed
-        and away from every wall it has (beyond the match's ``inlier_distance``), having
-        crossed none of its walls on the way (a beam beyond a wall is the scan's misfit, which
-        the fit tests judge), the claim is withheld: the scan sees walls the map has only in
-        part, and an alignment leaning on the part it has is biased. In the bench's dev cross#0 (its arms mapped only through
-        their openings, an end wall unknown between two mapped corners) a scan aligned from
-        the true pose landed 8-9 cm along the arm with 70 % of beams fitting and a 1.7 cm
-        match std; 20 % of its beams ended in never-observed cells. At the gate's claims
-        within the tolerance in seven other dev worlds whose maps include stops around the
-        whole floor that share was at most 0.03 (p99 0.00). 1 to leave it out.
+        Above this share of returning beams that end, aligned, in cells the map never observed and
+        away from every wall it has (beyond the match's ``inlier_distance``), having crossed none
+        of its walls on the way (a beam beyond a wall is the scan's misfit, which the fit tests
+        judge), the claim is withheld: the scan sees walls the map has only in part, and an
+        alignment leaning on the part it has is biased. In the bench's dev cross#0 (its arms mapped
+        only through their openings, an end wall unknown between two mapped corners) a scan aligned
+        from the true pose landed 8-9 cm along the arm with 70 % of beams fitting and a 1.7 cm
+        match std; 20 % of its beams ended in never-observed cells. At the gate's claims within the
+        tolerance in seven other dev worlds whose maps include stops around the whole floor that
+        share was at most 0.03 (p99 0.00). 1 to leave it out.
     """
 
     tolerance_position: float = 0.1

@@ -152,7 +152,9 @@ def is_rival(
     measuring a heading by chance: in a furnished square (test world furnished#1000004, a
     kidnapping) a wrong copy verified with 31 inliers was let through by a 71-inlier fit of a
     keyframe it did not expect that measured nearly its heading, while the truth matched
-    nothing."""
+    nothing. The rule is conservative rather than discriminating: right decisions on the dev
+    split have such fits too (up to 1.7 m away, some stronger than the verified fit), and it
+    made five regular-polygon trials there claim later (no grade changed)."""
     if abs(float(wrap_angle(theta - heading))) <= tolerance:
         return True
     if not math.isfinite(heading_offset) or not same_view:
