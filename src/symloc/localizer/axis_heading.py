@@ -82,9 +82,7 @@ def vote_heading(
     heading = float(wrap_angle(p[k, 2] + offsets[k]))
     measured = np.asarray(wrap_angle(p[:, 2] + offsets - heading), dtype=np.float64)
     seen = [checks[j].expected for j in mine]
-    here = np.array(
-        [same_view(c.keyframe, seen) if any(seen) else True for c in checks], dtype=bool
-    )
+    here = np.array([same_view(c.keyframe, seen) for c in checks], dtype=bool)
     agrees = np.isfinite(offsets) & (np.abs(np.nan_to_num(measured, nan=math.pi)) <= tol) & here
     rivals = (cls != lead) & ~agrees
     rival = int(inliers[rivals].max(initial=0))

@@ -74,7 +74,7 @@ from numpy.typing import NDArray
 from scipy.special import erfc
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
@@ -971,8 +971,7 @@ class ClaimGate:
         pts = self.points(scan)
         if pts.shape[0] < self.config.min_beams:
             return 0.0
-        c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
-        world = np.asarray(pose[:2], dtype=np.float64) + pts @ np.array([[c, s], [-s, c]])
+        world = transform_points(pose, pts)
         return float(np.mean(np.abs(self.field.lookup(world)) <= distance))
 
     def confirm(self, candidate: FloatArray, covariance: FloatArray, scan: LaserScan) -> Claim:
@@ -1014,10 +1013,7 @@ class ClaimGate:
         n = points.shape[0]
         if n == 0:
             return 0.0
-        c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
-        rot = np.array([[c, s], [-s, c]])
-        origin = np.asarray(pose[:2], dtype=np.float64)
-        world = origin + points @ rot
+        world = transform_points(pose, points)
         grid = self.field.grid
         cells = grid.world_to_cell(world)
         inside = grid.in_bounds(cells)
@@ -1030,7 +1026,7 @@ class ClaimGate:
             return 0.0
         # walk each such beam from the laser at half-cell steps up to inlier_distance short of
         # its end; a sample within half a cell of an occupied cell is a wall it crossed
-        sensor = origin + self.laser_pose[:2] @ rot
+        sensor = transform_points(pose, self.laser_pose[None, :2])[0]
         ends = world[idx]
         length = np.hypot(*(ends - sensor).T)
         step = 0.5 * grid.resolution

@@ -22,7 +22,7 @@ over the same rivals (:func:`is_rival`).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,7 +105,7 @@ def one_pose_verified(
             c.heading_offset,
             heading,
             tolerance,
-            same_view=same_view(c.keyframe, seen) if any(seen) else True,
+            same_view=same_view(c.keyframe, seen),
         )
     ]
     top = checks[members[best]].inliers
@@ -162,10 +162,10 @@ def is_rival(
     return abs(float(wrap_angle(theta + heading_offset - heading))) > tolerance
 
 
-def same_view(keyframe: int | None, expected: Iterable[Iterable[int]]) -> bool:
+def same_view(keyframe: int | None, expected: Sequence[Sequence[int]]) -> bool:
     """Whether a fit on ``keyframe`` (None: the store does not say) is on a keyframe one of
     the decided poses should be seeing (``expected``: each decided pose's expected keyframe
-    ids)."""
-    if keyframe is None:
+    ids; all empty: the store does not say, and the fit counts as the same view)."""
+    if keyframe is None or not any(expected):
         return True
     return any(keyframe in ids for ids in expected)
