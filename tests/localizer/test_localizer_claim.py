@@ -92,8 +92,9 @@ def test_a_scan_of_walls_the_map_never_observed_is_withheld(l_room) -> None:
     lax = ClaimConfig(max_unmapped_share=1.0)
     gate = ClaimGate(surface_distance_field(dataclasses.replace(grid, data=data)), ALPHAS, lax)
     assert "never observed" not in gate.confirm(truth, COV, scan).reason
-    with pytest.raises(ConfigurationError, match="max_unmapped_share"):
-        ClaimConfig(max_unmapped_share=0.0)
+    for bad in (0.0, -0.1, 1.5, math.nan, "0.1"):
+        with pytest.raises(ConfigurationError, match="max_unmapped_share"):
+            ClaimConfig(max_unmapped_share=bad)  # type: ignore[arg-type]
 
 
 def test_a_corridor_pose_is_withheld_not_claimed() -> None:
