@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from conftest import make_scan
 
+from conftest import make_scan
 from symloc.errors import ConfigurationError
 from symloc.geometry import angle_diff
 from symloc.grid.log_odds import LogOddsGrid

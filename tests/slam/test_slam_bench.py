@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import make_scan
 
+from conftest import make_scan
 from symloc.bench.measure import run_measured
 from symloc.bench.peers import GMappingPeer, PeerUnavailableError, write_peer_log
 from symloc.bench.slam_bench import check_targets

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from conftest import make_scan
 
+from conftest import make_scan
 from symloc.bench.slam_metrics import ate
 from symloc.geometry import compose, relative
 from symloc.sim.odometry_noise import regime_odometry

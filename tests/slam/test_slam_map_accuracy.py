@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from conftest import raycast
 
+from conftest import raycast
 from symloc.scan import LaserScan
 from symloc.slam import SlamParams, run_slam
 from symloc.slam.map_refinement import density_table

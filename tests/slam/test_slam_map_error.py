@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import raycast, room_segments
 
+from conftest import raycast, room_segments
 from symloc.errors import MapFileError
 from symloc.grid import OccupancyGrid
 from symloc.grid.log_odds import LogOddsGrid
