@@ -470,8 +470,9 @@ class ClaimGate:
         The laser in the robot frame (``base_from_laser``).
     scale_centre : (2,) array, optional
         Where the map's scale error vanishes [m] (map frame; ``config.map_scale_std``): the
-        middle of the mapped area, where a map aligned to the room as a whole fits it best.
-        Default the map frame's origin.
+        middle of the mapped room, where a map aligned to the room as a whole fits it best
+        (:func:`~symloc.localizer.build.build_localizer` passes
+        :func:`~symloc.localizer.build.enclosed_centroid`). Default the map frame's origin.
     rotation_centre : (2,) array, optional
         The centre [m] (map frame) of a round map
         (:func:`~symloc.localizer.map_symmetry.round_centre`), about which the map's rotation
