@@ -137,7 +137,7 @@ def build_localizer(
             fields.surface(),
             config=_with_map_error(settings.claim, map_std_xy),
             laser_pose=laser,
-            scale_centre=enclosed_centroid(grid),
+            scale_centre=fields.derived("enclosed_centroid", enclosed_centroid),
             rotation_centre=grid_round_centre(grid),
             proposer=proposer,
         ),
