@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
+from symloc.geometry import transform_points
 from symloc.grid.fields import MapFields, surface_distance_field
 from symloc.localizer import Localizer, Status
 from symloc.localizer.adapters import AmclTracker, GlobalSearchProposer, GridScorer, ReportJudge
@@ -80,8 +81,7 @@ def test_a_scan_of_walls_the_map_never_observed_is_withheld(l_room) -> None:
     # seen from 25 cm off, a fifth of the beams end behind walls, and none counts
     off = truth + np.array([0.25, 0.0, 0.0])
     pts = full.points(scan)
-    c, s_ = math.cos(off[2]), math.sin(off[2])
-    ends = off[:2] + pts @ np.array([[c, s_], [-s_, c]])
+    ends = transform_points(off, pts)
     cells = grid.world_to_cell(ends)
     behind = ~grid.in_bounds(cells) | (
         grid.data[cells[:, 0].clip(0, grid.height - 1), cells[:, 1].clip(0, grid.width - 1)] < 0
