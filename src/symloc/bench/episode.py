@@ -15,10 +15,11 @@ The robot is anything with a true ``pose`` and ``drive(v, w, dt) -> OdometryRead
 
 from __future__ import annotations
 
+
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -245,14 +246,18 @@ def drive_command(
     scan: Any,
     centering: Any,
     explore_w: float = 0.6,
+    travel_speed: float = 0.3,
 ) -> tuple[float, float]:
-    """Velocity (v [m/s], w [rad/s]) carrying out ``request`` (Algorithm 2's controller).
+    """Velocity (v [m/s], w [rad/s]) carrying out ``request`` (Algorithm 2's controller;
+    ``GO_TO`` with it at up to ``travel_speed`` [m/s], the mapping trip's speed).
 
     Lost with no request: turn on the spot so AMCL sees new scans. Capture: stand still.
     """
     if request is None:
         return (0.0, explore_w) if status is Status.LOST else (0.0, 0.0)
-    if request.kind is RequestKind.GO_TO_CENTRE:
+    if request.kind in (RequestKind.GO_TO_CENTRE, RequestKind.GO_TO):
+        if request.kind is RequestKind.GO_TO:
+            centering = replace(centering, max_linear_speed=travel_speed)
         cmd = centering_command(request.target, None, scan, centering)
         return float(cmd.v), float(cmd.w)
     if request.kind in (RequestKind.FACE_DIRECTION, RequestKind.ROTATE):

@@ -82,6 +82,7 @@ from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map
 from symloc.scan import LaserScan
 
 from .elsewhere import Places, nearest_within, places_explaining
+from .precision_route import FreeRoute
 from .rules import Streak
 from .types import PoseProposer, Tracker, TrackerResult
 
@@ -376,6 +377,8 @@ class Claim:
     covariance: FloatArray | None
     reason: str
     match: ScanMatch | None = None
+    #: withheld for its precision alone (the scan fits, the covariance is too wide)
+    imprecise: bool = False
 
     @property
     def ok(self) -> bool:
@@ -531,6 +534,8 @@ class ClaimGate:
         self._gross = Streak(max(1, self.config.gross_after))
         self._elsewhere: Places | None = None
         self._reseeded = False  # the filter reseeded near the carried pose in this suspension
+        self._precise_places: dict[float, FloatArray | None] = {}
+        self._routes: dict[float, FreeRoute | None] = {}
 
     def reset(self) -> None:
         """Forget the anchor and the last confirmed pose (the pose is no longer believed)."""
@@ -987,14 +992,15 @@ class ClaimGate:
         match = match_scan_to_map(self.field, pts, cand, self.match_config, prior=(cand, cov))
         return self._judge(cand, cov, match, pts)
 
-    def map_error(self, pose: FloatArray) -> FloatArray:
+    def map_error(self, pose: FloatArray, *, scale: bool = True) -> FloatArray:
         """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction and
         ``map_std_theta``, plus the scale error ``map_scale_std`` times the distance from
-        :attr:`scale_centre`, along that direction, plus on a round map the rotation error
-        ``map_rotation_std`` about :attr:`rotation_centre` (heading and position together)."""
+        :attr:`scale_centre`, along that direction (``scale`` False: without it), plus on a
+        round map the rotation error ``map_rotation_std`` about :attr:`rotation_centre`
+        (heading and position together)."""
         cfg = self.config
         out = np.diag([cfg.map_std_xy**2, cfg.map_std_xy**2, cfg.map_std_theta**2])
-        if cfg.map_scale_std > 0.0:
+        if scale and cfg.map_scale_std > 0.0:
             r = np.asarray(pose[:2], dtype=np.float64) - self.scale_centre
             out[:2, :2] += cfg.map_scale_std**2 * np.outer(r, r)
         if self.rotation_centre is not None and cfg.map_rotation_std > 0.0:
@@ -1090,9 +1096,9 @@ class ClaimGate:
                 "walls only in part",
                 match,
             )
-        major, minor, sth = _std(cov)
-        outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
-        if outside > cfg.max_outside_probability or sth > cfg.max_std_theta:
+        if not self._precise(cov):
+            major, minor, sth = _std(cov)
+            outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
             return Claim(
                 Verdict.WITHHELD,
                 pose,
@@ -1104,5 +1110,56 @@ class ClaimGate:
                 f"({cfg.gate_sigmas:g} sigma inside {100 * cfg.tolerance_position:.0f} cm / "
                 f"{math.degrees(cfg.tolerance_heading):.0f} deg)",
                 match,
+                imprecise=True,
             )
         return Claim(Verdict.CLAIM, pose, cov, "confirmed by the laser", match)
+
+    def _precise(self, cov: FloatArray) -> bool:
+        """Whether a claim's covariance (3, 3) is precise enough to publish: outside the
+        position tolerance at most with the gate's chance, its heading std within bounds."""
+        cfg = self.config
+        outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
+        return outside <= cfg.max_outside_probability and _std(cov)[2] <= cfg.max_std_theta
+
+    def scale_bound(self, claim: Claim) -> bool:
+        """True when ``claim`` was withheld for its precision alone and the map's scale error
+        is what holds it back: the same match with every other term of the map's error
+        would be precise enough (:meth:`map_error` without the scale term). Nearer
+        :attr:`scale_centre` the scale term shrinks (:meth:`precise_place`)."""
+        if not claim.imprecise or claim.match is None or self.config.map_scale_std <= 0.0:
+            return False
+        cfg = self.config
+        pose = claim.match.pose
+        cov = claim.match.covariance + self.map_error(pose, scale=False)
+        return self._precise(_floored(cov, cfg.floor_xy, cfg.floor_theta))
+
+    def precise_place(self, clearance: float) -> FloatArray | None:
+        """The point [m] (2,) of the map's free space nearest :attr:`scale_centre` that is at
+        least ``clearance`` [m] from every obstacle the map has: where the map's scale error
+        is smallest for a robot of that size (map frame). None when no free cell is that
+        clear. Computed once per clearance (a strided scan of the free cells on a large
+        map)."""
+        key = round(float(clearance), 6)
+        if key not in self._precise_places:
+            grid = self.field.grid
+            free = grid.free_mask
+            step = max(1, int(np.sqrt(free.size / 1_000_000)))
+            cells = np.argwhere(free[::step, ::step]) * step
+            place: FloatArray | None = None
+            if cells.shape[0]:
+                world = np.asarray(grid.cell_to_world(cells), dtype=np.float64)
+                clear = world[self.field.lookup(world) >= clearance]
+                if clear.shape[0]:
+                    near = int(np.argmin(np.hypot(*(clear - self.scale_centre).T)))
+                    place = clear[near].copy()
+            self._precise_places[key] = place
+        return self._precise_places[key]
+
+    def precise_route(self, clearance: float) -> FreeRoute | None:
+        """Routes through the map's free space to :meth:`precise_place` (``clearance`` [m]),
+        computed once per clearance; None without such a place."""
+        key = round(float(clearance), 6)
+        if key not in self._routes:
+            place = self.precise_place(clearance)
+            self._routes[key] = None if place is None else FreeRoute(self.field, place, clearance)
+        return self._routes[key]

@@ -17,7 +17,7 @@ place (:meth:`symloc.localizer.localizer.Localizer.update`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar, Protocol, cast
 
 import numpy as np
@@ -29,7 +29,7 @@ from symloc.symmetry.order import SymmetryOrder
 
 from . import deciding
 from .centering import CentreFilter
-from .claim import Standing, Verdict
+from .claim import Claim, Standing, Verdict
 from .config import LocalizerConfig
 from .context import (
     Context,
@@ -243,14 +243,38 @@ class Tracking:
             fresh = restart(ctx)
             ctx.note(ruling.reason)
             return lost(ruling.reason, result), fresh
+        earned = not self.from_operator or gate.has_chain
         axis = (
-            withheld_axis(gate, claim, not self.from_operator or gate.has_chain)
+            withheld_axis(gate, claim, earned)
             if inp.turn_rate <= ctx.config.axis_max_turn
             else None
         )
-        if axis is not None:
-            return axis, self
-        return lost(ruling.reason, result), self
+        estimate = axis if axis is not None else lost(ruling.reason, result)
+        request = precision_request(ctx, claim, earned)
+        if request is not None:
+            estimate = replace(estimate, request=request)
+        return estimate, self
+
+
+def precision_request(ctx: Context, claim: Claim | None, earned: bool) -> Request | None:
+    """A ``GO_TO`` request towards where the map's scale error vanishes (the next waypoint,
+    in the robot frame of ``claim``'s pose, of the route through free space to
+    :meth:`ClaimGate.precise_place`: :meth:`ClaimGate.precise_route`) when ``claim``
+    (of an ``earned`` pose, claims not suspended) was withheld because that error alone makes
+    it too imprecise (:meth:`ClaimGate.scale_bound`); else None
+    (``LocalizerConfig.precision_drive``)."""
+    gate = ctx.gate
+    cfg = ctx.config
+    if not cfg.precision_drive or gate is None or claim is None or claim.pose is None:
+        return None
+    if not earned or gate.suspended or not gate.scale_bound(claim):
+        return None
+    route = gate.precise_route(cfg.precision_clearance)
+    place = None if route is None else route.waypoint(claim.pose[:2], cfg.precision_lookahead)
+    if place is None:
+        return None
+    target = compose(inverse(claim.pose), np.array([place[0], place[1], 0.0]))[:2]
+    return Request(RequestKind.GO_TO, target=np.asarray(target, dtype=np.float64))
 
 
 def copies_ambiguity(

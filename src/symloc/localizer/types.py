@@ -72,9 +72,15 @@ class Status(enum.Enum):
 
 
 class RequestKind(enum.Enum):
-    """What the localizer asks the driver to do next."""
+    """What the localizer asks the driver to do next.
+
+    ``GO_TO_CENTRE`` is Algorithm 2's drive to a symmetric place's centre (slow, to stop within
+    millimetres); ``GO_TO`` a drive at travelling speed to where the map is precise enough for a
+    claim the gate withholds (:func:`symloc.localizer.phases.precision_request`): the claim is
+    published from the first scan that passes on the way."""
 
     GO_TO_CENTRE = "go_to_centre"
+    GO_TO = "go_to"
     FACE_DIRECTION = "face_direction"
     CAPTURE_IMAGE = "capture_image"
     ROTATE = "rotate"
@@ -89,6 +95,7 @@ class Request:
     kind : RequestKind
     target : ndarray of shape (2,) or None
         For ``GO_TO_CENTRE``: the centre in the base frame [m], re-estimated from every scan.
+        For ``GO_TO``: the place to drive to in the base frame [m], re-computed at every scan.
     angle : float or None
         For ``FACE_DIRECTION``: the bearing to face in the base frame [rad] (turn by this much).
         For ``ROTATE``: the rotation still to do [rad], counter-clockwise positive (the visual
@@ -100,9 +107,11 @@ class Request:
     angle: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind is RequestKind.GO_TO_CENTRE:
+        if self.kind in (RequestKind.GO_TO_CENTRE, RequestKind.GO_TO):
             if self.target is None:
-                raise ConfigurationError("Request.target: GO_TO_CENTRE needs a (2,) target")
+                raise ConfigurationError(
+                    f"Request.target: {self.kind.value} needs a (2,) target"
+                )
             t = np.array(self.target, dtype=np.float64)
             if t.shape != (2,) or not np.all(np.isfinite(t)):
                 raise ConfigurationError(

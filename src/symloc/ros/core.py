@@ -987,7 +987,7 @@ class NodeCore:
         if req is not None:
             # goals are for the robot: in its own (uncorrected) odometry frame
             o = self._odom_gate.uncorrect(np.asarray(odom.pose, dtype=np.float64))
-            if req.kind is RequestKind.GO_TO_CENTRE and req.target is not None:
+            if req.kind in (RequestKind.GO_TO_CENTRE, RequestKind.GO_TO) and req.target is not None:
                 t = np.asarray(req.target, dtype=np.float64)
                 goal = compose(o, np.array([t[0], t[1], math.atan2(t[1], t[0])]))
                 out.goal = pose_stamped_to_fields(goal, stamp=stamp, frame_id=p.odom_frame_id)

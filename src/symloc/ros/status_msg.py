@@ -23,8 +23,8 @@ key                 value
 ``axis_open_ends``  status ``axis`` only: ends lengthened into space the map does not cover
 ``candidates``      number of candidate poses
 ``candidate_<i>``   "x y theta weight" of candidate i (map frame)
-``request``         go_to_centre, face_direction, capture_image, rotate or ""
-``request_target``  "x y" [m] of a go_to_centre target in the robot (base) frame
+``request``         go_to_centre, go_to, face_direction, capture_image, rotate or ""
+``request_target``  "x y" [m] of a go_to_centre or go_to target in the robot (base) frame
 ``request_angle``   [rad] of a face_direction / rotate request (CCW positive)
 ``stamp``           the scan stamp [s] this status answers
 ``scan``            ``used``, or ``dropped`` when the localizer did not take this scan (then
@@ -117,7 +117,7 @@ def _request_values(req: Request | None) -> list[tuple[str, str]]:
     if req is None:
         return [("request", "")]
     out = [("request", req.kind.value)]
-    if req.kind is RequestKind.GO_TO_CENTRE and req.target is not None:
+    if req.kind in (RequestKind.GO_TO_CENTRE, RequestKind.GO_TO) and req.target is not None:
         out.append(("request_target", _fmt(req.target)))
     if req.angle is not None:
         out.append(("request_angle", f"{req.angle:.6g}"))
