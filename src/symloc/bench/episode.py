@@ -15,7 +15,6 @@ The robot is anything with a true ``pose`` and ``drive(v, w, dt) -> OdometryRead
 
 from __future__ import annotations
 
-
 import math
 import time
 from collections.abc import Callable
