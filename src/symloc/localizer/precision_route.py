@@ -94,4 +94,5 @@ class FreeRoute:
         points = np.asarray(self.grid.cell_to_world(path[::-1] * self.step), dtype=np.float64)
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
         k = int(np.searchsorted(along, lookahead))
-        return points[min(k, points.shape[0] - 1)].copy()
+        out: FloatArray = points[min(k, points.shape[0] - 1)].copy()
+        return out
