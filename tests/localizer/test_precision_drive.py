@@ -133,7 +133,7 @@ def test_no_route_from_a_place_cut_off_from_the_goal() -> None:
 
 
 def test_go_to_needs_a_target_and_is_driven_at_travelling_speed() -> None:
-    with pytest.raises(ConfigurationError, match="go_to needs a"):
+    with pytest.raises(ConfigurationError, match="GO_TO needs a"):
         Request(RequestKind.GO_TO)
     scan = simulate_scan(rectangle_room(12.0, 3.0).world, np.zeros(3), RPLIDAR_A2, 0)
     target = np.array([3.0, 0.0])

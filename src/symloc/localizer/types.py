@@ -109,7 +109,7 @@ class Request:
     def __post_init__(self) -> None:
         if self.kind in (RequestKind.GO_TO_CENTRE, RequestKind.GO_TO):
             if self.target is None:
-                raise ConfigurationError(f"Request.target: {self.kind.value} needs a (2,) target")
+                raise ConfigurationError(f"Request.target: {self.kind.name} needs a (2,) target")
             t = np.array(self.target, dtype=np.float64)
             if t.shape != (2,) or not np.all(np.isfinite(t)):
                 raise ConfigurationError(
