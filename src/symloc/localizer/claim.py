@@ -82,7 +82,7 @@ from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map
 from symloc.scan import LaserScan
 
 from .elsewhere import Places, nearest_within, places_explaining
-from .precision_route import FreeRoute
+from .precision_route import FreeRoute, clear_free_cells
 from .rules import Streak
 from .types import PoseProposer, Tracker, TrackerResult
 
@@ -1049,7 +1049,7 @@ class ClaimGate:
     ) -> Claim:
         cfg = self.config
         pose = match.pose
-        cov = _floored(match.covariance + self.map_error(pose), cfg.floor_xy, cfg.floor_theta)
+        cov = self._claim_covariance(match)
         e = pose - prior
         e[2] = float(wrap_angle(e[2]))
         pull = float(e @ np.linalg.solve(prior_cov, e))
@@ -1128,10 +1128,14 @@ class ClaimGate:
         :attr:`scale_centre` the scale term shrinks (:meth:`precise_place`)."""
         if not claim.imprecise or claim.match is None or self.config.map_scale_std <= 0.0:
             return False
+        return self._precise(self._claim_covariance(claim.match, scale=False))
+
+    def _claim_covariance(self, match: ScanMatch, *, scale: bool = True) -> FloatArray:
+        """A claim's covariance (3, 3): the match's plus the map's own error at its pose
+        (:meth:`map_error`, with or without the scale term), floored."""
         cfg = self.config
-        pose = claim.match.pose
-        cov = claim.match.covariance + self.map_error(pose, scale=False)
-        return self._precise(_floored(cov, cfg.floor_xy, cfg.floor_theta))
+        cov = match.covariance + self.map_error(match.pose, scale=scale)
+        return _floored(cov, cfg.floor_xy, cfg.floor_theta)
 
     def precise_place(self, clearance: float) -> FloatArray | None:
         """The point [m] (2,) of the map's free space nearest :attr:`scale_centre` that is at
@@ -1141,17 +1145,12 @@ class ClaimGate:
         map)."""
         key = round(float(clearance), 6)
         if key not in self._precise_places:
-            grid = self.field.grid
-            free = grid.free_mask
-            step = max(1, int(np.sqrt(free.size / 1_000_000)))
-            cells = np.argwhere(free[::step, ::step]) * step
+            step = max(1, int(np.sqrt(self.field.grid.data.size / 1_000_000)))
+            _, world, clear = clear_free_cells(self.field, clearance, step)
             place: FloatArray | None = None
-            if cells.shape[0]:
-                world = np.asarray(grid.cell_to_world(cells), dtype=np.float64)
-                clear = world[self.field.lookup(world) >= clearance]
-                if clear.shape[0]:
-                    near = int(np.argmin(np.hypot(*(clear - self.scale_centre).T)))
-                    place = clear[near].copy()
+            if np.any(clear):
+                near = int(np.argmin(np.hypot(*(world[clear] - self.scale_centre).T)))
+                place = world[clear][near].copy()
             self._precise_places[key] = place
         return self._precise_places[key]
 

@@ -123,7 +123,7 @@ class LocalizerConfig:
         longer fits the line with the decided heading) before it is given up.
     precision_drive : while a claim is withheld only because the map's scale error
         (``ClaimConfig.map_scale_std``, which grows with the distance from the map's middle) makes
-        it too imprecise, ask the driver to go where that error vanishes (a ``GO_TO_CENTRE``
+        it too imprecise, ask the driver to go where that error vanishes (a ``GO_TO``
         request towards :meth:`~symloc.localizer.claim.ClaimGate.precise_place`); the claim is
         published from the first scan that passes on the way. False: no request (a lost robot
         turns on the spot, an axis estimate stands). On the dev split (realistic sensors) 28 of

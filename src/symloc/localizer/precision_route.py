@@ -23,9 +23,24 @@ from skimage.graph import MCP_Geometric
 
 from symloc.grid.distance_field import DistanceField
 
-__all__ = ["FreeRoute"]
+__all__ = ["FreeRoute", "clear_free_cells"]
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def clear_free_cells(
+    field: DistanceField, clearance: float, step: int
+) -> tuple[IntArray, FloatArray, NDArray[np.bool_]]:
+    """The free cells of ``field``'s grid strided by ``step``: their (row, col) on the strided
+    grid (N, 2), their centres [m] (N, 2) (map frame), and which of them lie at least
+    ``clearance`` [m] from every obstacle (N,)."""
+    grid = field.grid
+    cells = np.argwhere(grid.free_mask[::step, ::step]).astype(np.int64)
+    if cells.shape[0] == 0:
+        return cells, np.zeros((0, 2)), np.zeros(0, dtype=bool)
+    world = np.asarray(grid.cell_to_world(cells * step), dtype=np.float64)
+    return cells, world, field.lookup(world) >= clearance
 
 
 class FreeRoute:
@@ -57,24 +72,17 @@ class FreeRoute:
         max_cells: int = 1_000_000,
     ) -> None:
         grid = field.grid
-        free = grid.free_mask
-        self.step = max(1, int(np.ceil(np.sqrt(free.size / max_cells))))
+        self.step = max(1, int(np.ceil(np.sqrt(grid.data.size / max_cells))))
         self.grid = grid
-        sub = free[:: self.step, :: self.step]
-        self.shape = sub.shape
-        rows, cols = np.nonzero(sub)
-        cost = np.full(sub.shape, -1.0)  # negative: impassable
-        if rows.size:
-            world = np.asarray(
-                grid.cell_to_world(np.column_stack([rows, cols]) * self.step), dtype=np.float64
-            )
-            clear = field.lookup(world) >= clearance
-            cost[rows, cols] = np.where(clear, 1.0, narrow_cost)
+        self.shape = grid.data[:: self.step, :: self.step].shape
+        cells, _, clear = clear_free_cells(field, clearance, self.step)
+        cost = np.full(self.shape, -1.0)  # negative: impassable
+        cost[cells[:, 0], cells[:, 1]] = np.where(clear, 1.0, narrow_cost)
         self._mcp = MCP_Geometric(cost)
         goal_cell = self._cell(np.asarray(goal, dtype=np.float64).reshape(2))
         self.reachable = cost[goal_cell] > 0
         self._costs = (
-            self._mcp.find_costs([goal_cell])[0] if self.reachable else np.full(sub.shape, np.inf)
+            self._mcp.find_costs([goal_cell])[0] if self.reachable else np.full(self.shape, np.inf)
         )
 
     def _cell(self, point: FloatArray) -> tuple[int, int]:
