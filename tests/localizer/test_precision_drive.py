@@ -15,6 +15,7 @@ from symloc.grid import OccupancyGrid
 from symloc.grid.fields import surface_distance_field
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.claim import ClaimConfig, ClaimGate, Verdict
+from symloc.localizer.config import LocalizerConfig
 from symloc.localizer.precision_route import FreeRoute
 from symloc.localizer.types import Request, RequestKind, Status
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
@@ -145,3 +146,17 @@ def test_go_to_needs_a_target_and_is_driven_at_travelling_speed() -> None:
     )
     assert slow[0] == pytest.approx(CenteringConfig().max_linear_speed)
     assert fast[0] == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("precision_drive", "yes"),
+        ("precision_clearance", 0.0),
+        ("precision_clearance", -0.4),
+        ("precision_lookahead", float("nan")),
+    ],
+)
+def test_bad_precision_settings_are_refused_by_name(field: str, value: object) -> None:
+    with pytest.raises(ConfigurationError, match=f"LocalizerConfig.{field}"):
+        LocalizerConfig(**{field: value})
