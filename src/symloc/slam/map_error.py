@@ -99,7 +99,12 @@ def estimate_map_error(
     3 nodes are usable. The default ``config`` is the localizer's, in NumPy
     (``compiled=False``: the same numbers without loading numba into a mapping process).
     """
-    cfg = config if config is not None else ScanMatchConfig(compiled=False)
+    # the node filter (max_std) was set on the position information at information_scale
+    cfg = (
+        config
+        if config is not None
+        else ScanMatchConfig(compiled=False, position_information_scale=0.1)
+    )
     p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
     if len(scans) != p.shape[0]:
         raise ValueError(f"poses: expected one per scan ({len(scans)}), got {p.shape[0]}")
