@@ -17,16 +17,18 @@ What it returns, besides the pose:
   optimum (a rippled cost has curvature but no information at that scale); neighbouring
   end points are not independent (the same wall, the same map error), so the Gauss-Newton
   information of N points overstates what they know; the scale is calibrated on the bench's
-  dev split (the published 95 % ellipse must hold 90-99 % of the errors). 0.1 is
-  conservative on the dev split's claims (their 95 % ellipses hold every error, mean NEES
-  0.6 for 3 dof), but 0.2 (3 more of 84 dev trials claimed, none wrong) let a round room
-  with one table claim poses 14-18 cm / 5-7 deg off on the test split: the rasterised
-  circle's ripple and the table gave the heading information the map's own rotation error
-  does not have. The position's share is calibrated apart (``position_information_scale``):
-  on 50 dev trials in eight worlds of seven families (realistic sensors; every scan the
-  claim gate judged near the truth, once a world's map scale error was removed) the position
-  error along the match's widest axis had 0.23-0.65 of the std that 0.1 gives (0.31-0.34 in
-  the short corridors), the heading 0.47-0.75. Directions the scan cannot constrain (along a corridor, the heading in a round room) have (near) zero
+  dev split (the published 95 % ellipse must hold 90-99 % of the errors): 0.3. At 0.1, on
+  every scan the claim gate judged near the truth in 50 dev trials (eight worlds of seven
+  families, realistic sensors), the position error along the match's widest axis had
+  0.23-0.65 of the std (0.31-0.34 in the short corridors), once each world's map scale error
+  was removed, and the heading 0.47-0.75; at 0.3 the published covariance (the map's error
+  and the floors added) still holds 99.8-100 % of those errors at its 95 % ellipse, the
+  heading alone 98.2-100 % at its 95 % interval. 0.2 once let a round room with one table
+  claim poses 14-18 cm / 5-7 deg off on the test split (the rasterised circle's ripple and
+  the table gave the heading information the map's own rotation error does not have); the
+  claim gate's ``map_rotation_std`` has carried that rotation on round maps since.
+  Directions the scan
+  cannot constrain (along a corridor, the heading in a round room) have (near) zero
   information: :meth:`ScanMatch.covariance` is huge there, and a prior fills them in.
 - ``inlier_fraction``: the share of the scan's returning beams that end within
   ``inlier_distance`` of an obstacle at the final pose (all beams, not the sub-sample): the
@@ -71,15 +73,8 @@ class ScanMatchConfig:
     inlier_distance : float
         End points within this [m] of an obstacle count as agreeing with the map.
     information_scale : float
-        Fraction in (0, 1] of the Gauss-Newton information that is real (correlated points):
-        the scan's weight against a prior in the alignment, and the heading's information.
-    position_information_scale : float
-        The same fraction for the position's information (the rows and columns of x and y of
-        :attr:`ScanMatch.information`, cross terms by the geometric mean): 0.4, four times
-        ``information_scale``, halves the position's std, which the dev split measured at two
-        to four times the errors (module docstring); its 95 % ellipse, with the claim gate's
-        map error added, still held every error there. The heading keeps ``information_scale``
-        (a round room's ripple once gave it information it did not have).
+        Fraction in (0, 1] of the Gauss-Newton information that is real (correlated points;
+        calibrated on the dev split, module docstring).
     max_points : int
         End points used by the optimisation (evenly sub-sampled).
     iterations : int
@@ -99,8 +94,7 @@ class ScanMatchConfig:
     huber: float = 0.05
     outlier_distance: float = 0.3
     inlier_distance: float = 0.1
-    information_scale: float = 0.1
-    position_information_scale: float = 0.4
+    information_scale: float = 0.3
     max_points: int = 180
     iterations: int = 12
     secant_position: float = 0.1
@@ -121,12 +115,11 @@ class ScanMatchConfig:
                 raise ConfigurationError(
                     f"ScanMatchConfig.{name}: expected a value > 0 m, got {v!r}"
                 )
-        for name in ("information_scale", "position_information_scale"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and 0.0 < v <= 1.0):
-                raise ConfigurationError(
-                    f"ScanMatchConfig.{name}: expected a value in (0, 1], got {v!r}"
-                )
+        if not 0.0 < self.information_scale <= 1.0:
+            raise ConfigurationError(
+                "ScanMatchConfig.information_scale: expected a value in (0, 1], got "
+                f"{self.information_scale!r}"
+            )
         for name in ("max_points", "iterations"):
             v = getattr(self, name)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
@@ -302,14 +295,6 @@ def _secant_information(
     return np.asarray(m * np.outer(inv, inv), dtype=np.float64)
 
 
-def _position_calibrated(information: FloatArray, cfg: ScanMatchConfig) -> FloatArray:
-    """``information`` (3, 3), measured with ``information_scale``, with the position's rows
-    and columns rescaled to ``position_information_scale`` (``D I D``, ``D`` diagonal)."""
-    r = math.sqrt(cfg.position_information_scale / cfg.information_scale)
-    d = np.array([r, r, 1.0])
-    return np.asarray(information * np.outer(d, d), dtype=np.float64)
-
-
 def _covariance(information: FloatArray) -> FloatArray:
     """Inverse of a (3, 3) information matrix; directions with (almost) no information get
     variance ``1e6``."""
@@ -391,7 +376,6 @@ def match_scan_to_map(
         if abs(delta[0]) < 1e-4 and abs(delta[1]) < 1e-4 and abs(delta[2]) < 1e-4:
             break
     info = _secant_information(field, pts, p, cfg) if pts.shape[0] else h_scan
-    info = _position_calibrated(info, cfg)
     cov_info = info + (prior_info if prior_info is not None else 0.0)
     c, s = math.cos(p[2]), math.sin(p[2])
     wx = c * pts_all[:, 0] - s * pts_all[:, 1] + p[0]
