@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 from pathlib import Path
@@ -15,6 +16,7 @@ from symloc.bench.scenario import build_scenario
 from symloc.bench.sweep import run_sweep
 from symloc.bench.trial import (
     DEFAULT_METHODS,
+    MethodResult,
     TrialConfig,
     TrialSpec,
     needs_keyframes,
@@ -126,6 +128,37 @@ def test_trial_grades_every_scan_and_both_methods_share_the_start(tmp_path: Path
         assert r.collisions == 0
     start = np.array(res.start)
     assert float(room.world.distance(start[None, :2])[0]) >= cfg.clearance
+
+
+def _outcome(r: MethodResult) -> str:
+    """Everything a method's run of a trial reports but its wall time, as text (NaN == NaN)."""
+    d = dataclasses.asdict(r)
+    d.pop("wall_time")
+    return json.dumps(d, sort_keys=True)
+
+
+def test_a_trial_is_the_same_whatever_ran_before_it_in_the_process(tmp_path: Path) -> None:
+    """Each method's run of a trial follows its world and seed alone: plain AMCL alone, after
+    another trial of every method, and beside symloc's methods gives the same run (the plain
+    AMCL trials of a sweep depend neither on the trials a worker ran before nor on the other
+    methods; the state shared across trials -- the scenario's map and its cached fields, the
+    room's free-space cache, the kernels -- is read only)."""
+    room = build_world(WorldRef("builtin", "square", 0))
+    scen = build_scenario(room, rng=0, workdir=tmp_path, map_source="raster")
+    cfg = TrialConfig(claim_timeout=3.0, track_time=1.0, kidnap_after=1.0)
+    spec = TrialSpec("square#0", "square", 0, "kidnap", 11)
+    other = TrialSpec("square#0", "square", 1, "global", 12)
+    try:
+        alone = run_trial(scen, spec, cfg, methods=("amcl",))
+        run_trial(scen, other, cfg)  # every default method, another seed
+        first = run_trial(scen, spec, cfg)
+        run_trial(scen, other, cfg, methods=("amcl",))
+        again = run_trial(scen, spec, cfg)
+    finally:
+        scen.close()
+    assert _outcome(alone.results["amcl"]) == _outcome(first.results["amcl"])
+    for method in DEFAULT_METHODS:
+        assert _outcome(first.results[method]) == _outcome(again.results[method]), method
 
 
 def test_start_poses_cover_the_room_near_walls_too(tmp_path: Path) -> None:
