@@ -97,15 +97,44 @@ def _memory_gib() -> float | None:
     return round(pages * size / 2**30, 1)
 
 
+def _cpu_model() -> str | None:
+    """The processor's model name (Linux's ``/proc/cpuinfo``), None where it is not said."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return None
+
+
+def _numpy_simd() -> list[str]:
+    """NumPy's dispatched SIMD targets this processor runs (``X86_V4``, ``AVX512_SPR``, ...):
+    trials amplify last-bit differences between them, so two machines with the same code can
+    grade a particle filter's trial differently."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+    except ImportError:
+        return []
+    return [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
+
+
 def machine() -> dict[str, Any]:
-    """The machine as a reader needs it to weigh a timing: cores, memory, processor, system and
-    Python (no host name)."""
+    """The machine as a reader needs it to weigh a timing or compare a run: cores, memory,
+    processor (and its model), system, Python, NumPy and the SIMD targets NumPy dispatches to
+    here (no host name)."""
+    import numpy
+
     return {
         "cpus": os.cpu_count(),
         "memory_gib": _memory_gib(),
         "processor": platform.processor() or platform.machine(),
+        "cpu_model": _cpu_model(),
         "system": f"{platform.system()} {platform.release()}",
         "python": platform.python_version(),
+        "numpy": numpy.__version__,
+        "numpy_simd": _numpy_simd(),
     }
 
 
