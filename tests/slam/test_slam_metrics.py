@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from symloc.bench.slam_metrics import ate, rpe, umeyama_se2
+from symloc.bench.slam_metrics import ate, rpe, umeyama_se2, umeyama_sim2
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 
@@ -77,3 +77,19 @@ def test_errors() -> None:
         rpe(_traj(5), _traj(5), delta=10)
     with pytest.raises(ConfigurationError, match="reference: expected shape"):
         ate(np.zeros((4, 2)), np.zeros((4, 2)))
+
+
+def test_umeyama_sim2_recovers_a_scaled_rigid_motion() -> None:
+    rng = np.random.default_rng(3)
+    src = rng.uniform(-4.0, 4.0, size=(40, 2))
+    pose = np.array([0.7, -1.2, 0.4])
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    dst = 1.0075 * src @ np.array([[c, -s], [s, c]]).T + pose[:2]
+    got, scale = umeyama_sim2(src, dst)
+    np.testing.assert_allclose(got, pose, atol=1e-12)
+    assert scale == pytest.approx(1.0075, abs=1e-12)
+    # the rigid alignment cannot take the 0.75 % out: it leaves centimetres at 4 m
+    rigid = umeyama_se2(src, dst)
+    cr, sr = np.cos(rigid[2]), np.sin(rigid[2])
+    left = dst - (src @ np.array([[cr, -sr], [sr, cr]]).T + rigid[:2])
+    assert np.max(np.hypot(*left.T)) > 0.01
