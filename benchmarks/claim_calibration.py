@@ -1,0 +1,216 @@
+"""How honest is the claim gate's covariance? Every claim it judges, against the truth.
+
+Runs symloc's trials on bench worlds (realistic sensors, the bench's mapping trip) and records,
+for every scan the claim gate judges (:meth:`symloc.localizer.claim.ClaimGate._judge`, wrapped
+here, evaluation only), the claim's pose and covariance, the scan match's covariance and the
+map's error terms, with the robot's true pose in the map frame. Then, over the judged claims
+near the truth (within 0.5 m and 15 deg: the copy check, not the covariance, handles the rest)
+that reached the gate's precision test, per world:
+
+- the lidar's scale error fitted from the errors (``e_xy = s (p - c)``, ``c`` the gate's scale
+  centre) and removed, and the position error along the match's widest axis (map terms and
+  floors left out) in units of its std (``z``), and the heading's (``z_theta``): 1 is honest,
+  below 1 the match's covariance is wider than its errors;
+- for the match's information times ``k`` (the published covariance rebuilt as the gate
+  builds it: match / k + map error, floored), the share of errors inside the 95 % ellipse, the
+  share of claims that would pass the gate's precision test and how many of those are outside
+  the tolerance.
+
+This is how ``ScanMatchConfig.information_scale`` was set (0.1 -> 0.3). Tune on dev only.
+
+    python benchmarks/claim_calibration.py --out claims.jsonl \\
+        corridor_short:0:0-9 corridor_short:1:0-9 regular:0:0-4 u_shape:1:0-4
+
+(``FAMILY:WORLD_SEED:TRIALS``, trials ``a-b`` or ``a,b,c``; the dev split's world seeds are 0
+and 1.) ``--analyse`` only reads an existing ``--out``. The JSON lines are written as the
+trials run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symloc.bench import grading
+from symloc.bench.localization import MAPPING_REACH
+from symloc.bench.scenario import build_scenario
+from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
+from symloc.bench.world_sources import WorldRef, build_world, world_spec
+from symloc.geometry import wrap_angle
+from symloc.localizer import claim as claim_module
+from symloc.localizer.claim import ClaimConfig, _floored, outside_probability
+
+log = logging.getLogger("claim_calibration")
+
+#: chi-square 95 % quantile, 3 dof
+CHI2_3_95 = 7.815
+MULTIPLES = (1.0, 2.0, 3.0, 4.0)
+
+
+def _trials(text: str) -> list[int]:
+    if "-" in text:
+        a, b = text.split("-")
+        return list(range(int(a), int(b) + 1))
+    return [int(x) for x in text.split(",")]
+
+
+def record(out: Path, worlds: list[str], regime: str) -> None:
+    """Run the trials of ``worlds`` and append every judged claim to ``out`` (JSON lines)."""
+    pending: list[dict[str, Any]] = []
+    context: dict[str, Any] = {}
+    judge = claim_module.ClaimGate._judge
+    append = grading.ScanLog.append
+
+    def judged(self: Any, prior: Any, prior_cov: Any, match: Any, points: Any) -> Any:
+        c = judge(self, prior, prior_cov, match, points)
+        if c.pose is None or c.covariance is None:
+            return c
+        pending.append(
+            {
+                "verdict": c.verdict.name,
+                "reason": (c.reason or "")[:60],
+                "pose": [float(x) for x in c.pose],
+                "cov": np.asarray(c.covariance).tolist(),
+                "map_error": np.asarray(self.map_error(c.pose)).tolist(),
+                "map_error_no_scale": np.asarray(self.map_error(c.pose, scale=False)).tolist(),
+                "match_cov": np.asarray(match.covariance).tolist(),
+                "scale_centre": [float(x) for x in self.scale_centre],
+            }
+        )
+        return c
+
+    with out.open("a", encoding="utf-8") as sink:
+
+        def logged(self: Any, t: float, truth: Any, *args: Any, **kwargs: Any) -> Any:
+            for row in pending:
+                row.update(t=t, truth=[float(x) for x in truth], **context)
+                sink.write(json.dumps(row) + "\n")
+            pending.clear()
+            sink.flush()
+            return append(self, t, truth, *args, **kwargs)
+
+        claim_module.ClaimGate._judge = judged  # type: ignore[method-assign]
+        grading.ScanLog.append = logged  # type: ignore[method-assign]
+        try:
+            for spec_text in worlds:
+                family, seed_text, trials = spec_text.split(":")
+                seed = int(seed_text)
+                ref = WorldRef("generated", family, seed)
+                world = world_spec(ref)
+                room = world.build() if world is not None else build_world(ref)
+                t0 = time.perf_counter()
+                with tempfile.TemporaryDirectory() as tmp:
+                    scen = build_scenario(
+                        room,
+                        rng=seed,
+                        workdir=Path(tmp),
+                        map_source="slam",
+                        explore_laps=1.0,
+                        explore_stops=MAPPING_REACH,
+                        regime=regime,
+                        keyframes=True,
+                    )
+                    for i in _trials(trials):
+                        kind = TRIAL_KINDS[i % len(TRIAL_KINDS)]
+                        spec = TrialSpec(ref.world_id, family, i, kind, seed * 1000 + i)
+                        context.update(family=family, world=ref.world_id, trial=i)
+                        res = run_trial(scen, spec, TrialConfig(), methods=("symloc",))
+                        grade = res.results["symloc"].grade
+                        log.info(
+                            "%s trial %d: %s, first claim %.1f s (%.0f s)",
+                            ref.world_id,
+                            i,
+                            grade.grade,
+                            grade.time_to_claim,
+                            time.perf_counter() - t0,
+                        )
+                    scen.close()
+        finally:
+            claim_module.ClaimGate._judge = judge  # type: ignore[method-assign]
+            grading.ScanLog.append = append  # type: ignore[method-assign]
+
+
+def analyse(path: Path, config: ClaimConfig | None = None) -> None:
+    """Print the per-world table of the module docstring from the JSON lines at ``path``."""
+    cfg = config if config is not None else ClaimConfig()
+    by_world: dict[str, list[dict[str, Any]]] = defaultdict(list)
+    for line in path.read_text(encoding="utf-8").splitlines():
+        row = json.loads(line)
+        if "truth" not in row:
+            continue
+        e = np.array(row["pose"]) - np.array(row["truth"])
+        e[2] = float(wrap_angle(e[2]))
+        if math.hypot(e[0], e[1]) > 0.5 or abs(e[2]) > math.radians(15.0):
+            continue
+        if row["verdict"] != "CLAIM" and not row["reason"].startswith("claim withheld: std"):
+            continue
+        row["e"] = e
+        by_world[row["world"]].append(row)
+    head = "  ".join(f"k={k:g}: cov95 pass wrong" for k in MULTIPLES)
+    print(f"{'world':22s} {'n':>5s} {'scale':>7s} {'z':>5s} {'z_th':>5s}  {head}")
+    for world, rows in sorted(by_world.items()):
+        err = np.array([r["e"] for r in rows])
+        r_vec = np.array([np.array(r["pose"][:2]) - r["scale_centre"] for r in rows])
+        scale = float(np.sum(err[:, :2] * r_vec) / max(float(np.sum(r_vec * r_vec)), 1e-12))
+        rest = err[:, :2] - scale * r_vec
+        z, z_th = [], []
+        for r, d in zip(rows, rest, strict=True):
+            m = np.array(r["match_cov"])
+            w, v = np.linalg.eigh(m[:2, :2])
+            z.append(float(d @ v[:, 1]) / math.sqrt(w[1]))
+            z_th.append(r["e"][2] / math.sqrt(m[2, 2]))
+        cells = []
+        for k in MULTIPLES:
+            cov95 = passed = wrong = 0
+            for r in rows:
+                c = _floored(
+                    np.array(r["match_cov"]) / k + np.array(r["map_error"]),
+                    cfg.floor_xy,
+                    cfg.floor_theta,
+                )
+                e = r["e"]
+                cov95 += float(e @ np.linalg.solve(c, e)) <= CHI2_3_95
+                ok = (
+                    outside_probability(c[:2, :2], cfg.tolerance_position)
+                    <= cfg.max_outside_probability
+                    and math.sqrt(c[2, 2]) <= cfg.max_std_theta
+                )
+                passed += ok
+                wrong += ok and (
+                    math.hypot(e[0], e[1]) > cfg.tolerance_position
+                    or abs(e[2]) > cfg.tolerance_heading
+                )
+            n = len(rows)
+            cells.append(f"      {cov95 / n:.3f} {passed / n:.2f} {wrong:4d}")
+        print(
+            f"{world:22s} {len(rows):5d} {100 * scale:+6.2f}% {np.std(z):5.2f} "
+            f"{np.std(z_th):5.2f}" + "".join(cells)
+        )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("worlds", nargs="*", help="FAMILY:WORLD_SEED:TRIALS")
+    parser.add_argument("--out", type=Path, required=True, help="JSON lines, appended to")
+    parser.add_argument("--regime", default="realistic")
+    parser.add_argument("--analyse", action="store_true", help="only analyse --out")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    print(f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}")
+    print("# trial seeds: world_seed * 1000 + trial index (the bench's)")
+    if not args.analyse:
+        record(args.out, args.worlds, args.regime)
+    analyse(args.out)
+
+
+if __name__ == "__main__":
+    main()
