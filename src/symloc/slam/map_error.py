@@ -97,11 +97,9 @@ def estimate_map_error(
     ``max_std`` [m]: a node whose alignment leaves a position std above it along some direction
     is skipped; ``min_points``: so is a scan with fewer returning beams. None when fewer than
     3 nodes are usable. The default ``config`` is the localizer's, in NumPy
-    (``compiled=False``: the same numbers without loading numba into a mapping process), at
-    the information scale ``max_std`` was set with (0.1).
+    (``compiled=False``: the same numbers without loading numba into a mapping process).
     """
-    # the node filter (max_std) was set on the information at information_scale 0.1
-    cfg = config if config is not None else ScanMatchConfig(compiled=False, information_scale=0.1)
+    cfg = config if config is not None else ScanMatchConfig(compiled=False)
     p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
     if len(scans) != p.shape[0]:
         raise ValueError(f"poses: expected one per scan ({len(scans)}), got {p.shape[0]}")
