@@ -16,6 +16,11 @@ that reached the gate's precision test, per world:
   share of claims that would pass the gate's precision test and how many of those are outside
   the tolerance.
 
+``--profile D``: for every judged claim more than ``D`` metres from the truth with the heading
+within 0.1 rad, log the whole scan's fit to the map (mean squared distance of every beam's end,
+clipped at 0.3 m) at offsets along the error's direction from the truth, at the claim, and
+where a prior-free alignment from the claim ends: whether the claim is the scan's best fit.
+
 With it ``ScanMatchConfig.information_scale`` 0.3 was chosen on dev and undone on the test split
 (see its module docstring): a calibration on these claims does not see every error the
 gate's margin covers. Tune on dev only.
@@ -47,9 +52,10 @@ from symloc.bench.localization import MAPPING_REACH
 from symloc.bench.scenario import build_scenario
 from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world, world_spec
-from symloc.geometry import wrap_angle
+from symloc.geometry import transform_points, wrap_angle
 from symloc.localizer import claim as claim_module
 from symloc.localizer.claim import ClaimConfig, _floored, outside_probability
+from symloc.mcl.scan_to_map import match_scan_to_map
 
 log = logging.getLogger("claim_calibration")
 
@@ -65,9 +71,38 @@ def _trials(text: str) -> list[int]:
     return [int(x) for x in text.split(",")]
 
 
-def record(out: Path, worlds: list[str], regime: str) -> None:
-    """Run the trials of ``worlds`` and append every judged claim to ``out`` (JSON lines)."""
+def _fit(gate: Any, pose: np.ndarray, points: np.ndarray) -> float:
+    """Mean squared distance [m^2] of ``points`` (N, 2, robot frame) placed at ``pose`` to the
+    gate's map surfaces, each clipped at 0.3 m."""
+    d = np.minimum(np.abs(gate.field.lookup(transform_points(pose, points))), 0.3)
+    return float(np.mean(d * d))
+
+
+def _profile(gate: Any, pose: np.ndarray, truth: np.ndarray, points: np.ndarray) -> str:
+    """The fit along the claim's error direction from the truth, at the claim, and where a
+    prior-free alignment from the claim ends (cm^2)."""
+    e = pose[:2] - truth[:2]
+    u = e / math.hypot(e[0], e[1])
+    steps = np.linspace(-0.6, 0.6, 13)
+    at = [np.array([truth[0] + o * u[0], truth[1] + o * u[1], pose[2]]) for o in steps]
+    free = match_scan_to_map(gate.field, points, pose, gate.match_config)
+    profile = " ".join(
+        f"{o:+.1f}:{1e4 * _fit(gate, p, points):.1f}" for o, p in zip(steps, at, strict=True)
+    )
+    return (
+        f"error {100 * math.hypot(e[0], e[1]):.0f} cm; fit at the truth "
+        f"{1e4 * _fit(gate, np.array([*truth[:2], pose[2]]), points):.1f}, at the claim "
+        f"{1e4 * _fit(gate, pose, points):.1f} cm^2; a prior-free alignment from the claim ends "
+        f"{100 * math.hypot(*(free.pose[:2] - truth[:2])):.0f} cm from the truth; along the "
+        f"error from the truth [m:cm^2] {profile}"
+    )
+
+
+def record(out: Path, worlds: list[str], regime: str, profile: float | None = None) -> None:
+    """Run the trials of ``worlds`` and append every judged claim to ``out`` (JSON lines);
+    with ``profile`` [m], log the fit profile of claims that far from the truth."""
     pending: list[dict[str, Any]] = []
+    scans: list[tuple[Any, np.ndarray, np.ndarray]] = []
     context: dict[str, Any] = {}
     judge = claim_module.ClaimGate._judge
     append = grading.ScanLog.append
@@ -76,6 +111,8 @@ def record(out: Path, worlds: list[str], regime: str) -> None:
         c = judge(self, prior, prior_cov, match, points)
         if c.pose is None or c.covariance is None:
             return c
+        if profile is not None:
+            scans.append((self, np.asarray(c.pose, dtype=np.float64), np.asarray(points)))
         pending.append(
             {
                 "verdict": c.verdict.name,
@@ -97,6 +134,12 @@ def record(out: Path, worlds: list[str], regime: str) -> None:
                 row.update(t=t, truth=[float(x) for x in truth], **context)
                 sink.write(json.dumps(row) + "\n")
             pending.clear()
+            for gate, pose, points in scans:
+                e = pose - np.asarray(truth, dtype=np.float64)
+                turned = abs(float(wrap_angle(e[2])))
+                if math.hypot(e[0], e[1]) > (profile or math.inf) and turned < 0.1:
+                    log.info("t %.1f s: %s", t, _profile(gate, pose, np.asarray(truth), points))
+            scans.clear()
             sink.flush()
             return append(self, t, truth, *args, **kwargs)
 
@@ -205,12 +248,18 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True, help="JSON lines, appended to")
     parser.add_argument("--regime", default="realistic")
     parser.add_argument("--analyse", action="store_true", help="only analyse --out")
+    parser.add_argument(
+        "--profile", type=float, metavar="D", help="log the fit profile of claims D m off"
+    )
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    print(f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}")
+    print(
+        f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}, "
+        f"profile {args.profile}"
+    )
     print("# trial seeds: world_seed * 1000 + trial index (the bench's)")
     if not args.analyse:
-        record(args.out, args.worlds, args.regime)
+        record(args.out, args.worlds, args.regime, args.profile)
     analyse(args.out)
 
 
