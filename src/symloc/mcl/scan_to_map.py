@@ -26,12 +26,11 @@ What it returns, besides the pose:
   claim poses 14-18 cm / 5-7 deg off on the test split (the rasterised circle's ripple and
   the table gave the heading information the map's own rotation error does not have; the
   claim gate's ``map_rotation_std`` carries that rotation since). 0.3 claimed 11 more of 280
-  dev trials, none wrong, but on the test split a short corridor (its lidar reading 1.2 %
-  short) was claimed 14 cm off along its axis with a match std of 1.3 cm there: the margin
-  0.1 leaves covers errors of the map and of the along-axis match that the gate's model
-  does not name yet.
-  Directions the scan
-  cannot constrain (along a corridor, the heading in a round room) have (near) zero
+  dev trials, none wrong, but on the test split a plain short corridor (its lidar reading
+  1.2 % short) was claimed 14 cm off along its axis with a match std of 1.3 cm there: the
+  alignment had stopped at a stationary point of this robust, sub-sampled cost 20-30 cm from
+  where the whole scan fits best, which 0.1's wider std happened to withhold. Directions the
+  scan cannot constrain (along a corridor, the heading in a round room) have (near) zero
   information: :meth:`ScanMatch.covariance` is huge there, and a prior fills them in.
 - ``inlier_fraction``: the share of the scan's returning beams that end within
   ``inlier_distance`` of an obstacle at the final pose (all beams, not the sub-sample): the
