@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from symloc.bench.scenario import build_scenario
-from symloc.bench.world_sources import WorldRef, build_world, world_spec
+from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
 from symloc.localizer.copies import rotated_copies
 from symloc.symmetry.order import SymmetryOrder
@@ -55,8 +55,7 @@ def run_world(
 ) -> dict[str, Any]:
     """Map one world and verify ``views`` random true poses at each ``max_distance`` [m]."""
     ref = WorldRef("generated", family, seed)
-    spec = world_spec(ref)
-    room = spec.build() if spec is not None else build_world(ref)
+    room = build_world(ref)
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         scen = build_scenario(

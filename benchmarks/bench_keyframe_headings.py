@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from symloc.bench.scenario import build_scenario
-from symloc.bench.world_sources import WorldRef, build_world, world_spec
+from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
 
 WORLDS = ("circle:0", "circle:1", "regular:0", "regular:1", "rectangle:0", "rectangle:1")
@@ -53,8 +53,7 @@ SEED = 0
 def run_world(family: str, seed: int) -> dict[str, Any]:
     """Map one world with aligned keyframe headings; the errors before and after [deg]."""
     ref = WorldRef("generated", family, seed)
-    spec = world_spec(ref)
-    room = spec.build() if spec is not None else build_world(ref)
+    room = build_world(ref)
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         scen = build_scenario(

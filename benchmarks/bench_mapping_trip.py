@@ -52,7 +52,7 @@ from scipy.spatial import cKDTree
 import symloc.bench.scenario as scenario_module
 from symloc.bench.scenario import build_scenario
 from symloc.bench.slam_metrics import umeyama_se2
-from symloc.bench.world_sources import WorldRef, build_world, world_spec
+from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import compose, inverse
 from symloc.sim.generator import FAMILIES
 from symloc.sim.lidar import LIDAR_MOUNT_HEIGHT
@@ -166,8 +166,7 @@ class _TripRecorder:
 
 def _room(family: str, seed: int) -> Any:
     ref = WorldRef("generated" if family in FAMILIES else "builtin", family, seed)
-    spec = world_spec(ref)
-    return spec.build() if spec is not None else build_world(ref)
+    return build_world(ref)
 
 
 def _pose_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -51,7 +51,7 @@ from symloc.bench import grading
 from symloc.bench.localization import MAPPING_REACH
 from symloc.bench.scenario import build_scenario
 from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
-from symloc.bench.world_sources import WorldRef, build_world, world_spec
+from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import transform_points, wrap_angle
 from symloc.localizer import claim as claim_module
 from symloc.localizer.claim import ClaimConfig, _floored, outside_probability
@@ -150,8 +150,7 @@ def record(out: Path, worlds: list[str], regime: str, profile: float | None = No
                 family, seed_text, trials = spec_text.split(":")
                 seed = int(seed_text)
                 ref = WorldRef("generated", family, seed)
-                world = world_spec(ref)
-                room = world.build() if world is not None else build_world(ref)
+                room = build_world(ref)
                 t0 = time.perf_counter()
                 with tempfile.TemporaryDirectory() as tmp:
                     scen = build_scenario(

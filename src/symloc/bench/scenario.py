@@ -52,6 +52,7 @@ from symloc.sim.symmetry_truth import truth_order
 from symloc.sim.world import World
 from symloc.slam import run_slam
 from symloc.slam.localize_in_map import localize_in_map
+from symloc.slam.map_error import R95
 from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
@@ -745,10 +746,7 @@ def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> N
     scen.slam_scale_error = scale - 1.0
     covered = ""
     if scen.map_std_xy is not None:
-        # a circular 2-D Gaussian of std sigma holds 95 % within sqrt(-2 ln 0.05) sigma
-        scen.map_error_coverage = float(
-            np.mean(local <= math.sqrt(-2.0 * math.log(0.05)) * scen.map_std_xy)
-        )
+        scen.map_error_coverage = float(np.mean(local <= R95 * scen.map_std_xy))
         covered = (
             f"; the map's own error estimate covers {100 * scen.map_error_coverage:.0f} % "
             "of them at its 95 % circle"

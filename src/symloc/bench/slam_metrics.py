@@ -77,32 +77,9 @@ def _pair(reference: ArrayLike, estimate: ArrayLike) -> tuple[FloatArray, FloatA
     return ref, est
 
 
-def umeyama_se2(source: ArrayLike, target: ArrayLike) -> FloatArray:
-    """Least-squares rigid alignment (no scale) of points ``source`` (N, 2) onto ``target``.
-
-    Returns the pose ``(3,)`` ``target_from_source`` minimising
-    ``sum ||target_i - R source_i - t||^2`` (Umeyama 1991, with the reflection guard).
-    """
-    src = check_array(source, "source", shape=(None, 2))
-    dst = check_array(target, "target", shape=(None, 2))
-    if src.shape != dst.shape or src.shape[0] < 2:
-        raise ConfigurationError("source/target: expected the same number (>= 2) of points")
-    mu_s = src.mean(axis=0)
-    mu_d = dst.mean(axis=0)
-    cov = (dst - mu_d).T @ (src - mu_s) / src.shape[0]
-    u, _, vt = np.linalg.svd(cov)
-    s = np.eye(2)
-    if np.linalg.det(u) * np.linalg.det(vt) < 0:
-        s[1, 1] = -1.0
-    rot = u @ s @ vt
-    t = mu_d - rot @ mu_s
-    return np.array([t[0], t[1], np.arctan2(rot[1, 0], rot[0, 0])])
-
-
-def umeyama_sim2(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, float]:
-    """Least-squares similarity alignment of points ``source`` (N, 2) onto ``target``: the
-    pose ``(3,)`` and scale ``c`` minimising ``sum ||target_i - c R source_i - t||^2``
-    (Umeyama 1991, with the reflection guard; evo's ``--correct_scale``)."""
+def _umeyama(source: ArrayLike, target: ArrayLike, *, scaled: bool) -> tuple[FloatArray, float]:
+    """Umeyama's (1991) least-squares alignment of points ``source`` (N, 2) onto ``target``
+    with the reflection guard: the pose ``(3,)`` and the scale (1 unless ``scaled``)."""
     src = check_array(source, "source", shape=(None, 2))
     dst = check_array(target, "target", shape=(None, 2))
     if src.shape != dst.shape or src.shape[0] < 2:
@@ -115,12 +92,30 @@ def umeyama_sim2(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, floa
     if np.linalg.det(u) * np.linalg.det(vt) < 0:
         s[1, 1] = -1.0
     rot = u @ s @ vt
-    var_s = float(np.mean(np.sum((src - mu_s) ** 2, axis=1)))
-    if var_s <= 0.0:
-        raise ConfigurationError("source: expected points that are not all the same")
-    scale = float(np.trace(np.diag(d) @ s)) / var_s
+    scale = 1.0
+    if scaled:
+        var_s = float(np.mean(np.sum((src - mu_s) ** 2, axis=1)))
+        if var_s <= 0.0:
+            raise ConfigurationError("source: expected points that are not all the same")
+        scale = float(np.trace(np.diag(d) @ s)) / var_s
     t = mu_d - scale * rot @ mu_s
     return np.array([t[0], t[1], np.arctan2(rot[1, 0], rot[0, 0])]), scale
+
+
+def umeyama_se2(source: ArrayLike, target: ArrayLike) -> FloatArray:
+    """Least-squares rigid alignment (no scale) of points ``source`` (N, 2) onto ``target``.
+
+    Returns the pose ``(3,)`` ``target_from_source`` minimising
+    ``sum ||target_i - R source_i - t||^2`` (Umeyama 1991, with the reflection guard).
+    """
+    return _umeyama(source, target, scaled=False)[0]
+
+
+def umeyama_sim2(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, float]:
+    """Least-squares similarity alignment of points ``source`` (N, 2) onto ``target``: the
+    pose ``(3,)`` and scale ``c`` minimising ``sum ||target_i - c R source_i - t||^2``
+    (Umeyama 1991, with the reflection guard; evo's ``--correct_scale``)."""
+    return _umeyama(source, target, scaled=True)
 
 
 def ate(reference: ArrayLike, estimate: ArrayLike, *, align: bool = True) -> AteResult:

@@ -36,14 +36,14 @@ from symloc.grid.occupancy_grid import OccupancyGrid
 from symloc.mcl.scan_to_map import ScanMatchConfig, match_scan_to_map
 from symloc.scan import LaserScan
 
-__all__ = ["MapError", "estimate_map_error"]
+__all__ = ["R95", "MapError", "estimate_map_error"]
 
 FloatArray = NDArray[np.float64]
 
 logger = logging.getLogger(__name__)
 
 #: The 95 % radius of a circular 2-D Gaussian, in stds: sqrt(chi2.ppf(0.95, 2)).
-_R95 = math.sqrt(-2.0 * math.log(0.05))
+R95 = math.sqrt(-2.0 * math.log(0.05))
 
 
 @dataclass(frozen=True)
@@ -126,7 +126,7 @@ def estimate_map_error(
     rest = np.hypot(*(d - shift).T)
     p95 = float(np.percentile(rest, 95))
     return MapError(
-        std_xy=p95 / _R95,
+        std_xy=p95 / R95,
         p95_xy=p95,
         shift=shift,
         moves=rest,
