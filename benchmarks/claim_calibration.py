@@ -54,7 +54,7 @@ from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import transform_points, wrap_angle
 from symloc.localizer import claim as claim_module
-from symloc.localizer.claim import ClaimConfig, _floored, outside_probability
+from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
 
 log = logging.getLogger("claim_calibration")
@@ -223,11 +223,7 @@ def analyse(path: Path, config: ClaimConfig | None = None) -> None:
                 )
                 e = r["e"]
                 cov95 += float(e @ np.linalg.solve(c, e)) <= CHI2_3_95
-                ok = (
-                    outside_probability(c[:2, :2], cfg.tolerance_position)
-                    <= cfg.max_outside_probability
-                    and math.sqrt(c[2, 2]) <= cfg.max_std_theta
-                )
+                ok = cfg.precise(c)
                 passed += ok
                 wrong += ok and (
                     math.hypot(e[0], e[1]) > cfg.tolerance_position

@@ -345,6 +345,13 @@ class ClaimConfig:
         """Largest heading std [rad] the gate accepts."""
         return self.tolerance_heading / self.gate_sigmas
 
+    def precise(self, cov: FloatArray) -> bool:
+        """Whether a claim's covariance (3, 3) is precise enough to publish: outside the
+        position tolerance at most with the gate's chance (:attr:`max_outside_probability`),
+        its heading std at most :attr:`max_std_theta`."""
+        outside = outside_probability(cov[:2, :2], self.tolerance_position)
+        return outside <= self.max_outside_probability and _std(cov)[2] <= self.max_std_theta
+
     @property
     def max_outside_probability(self) -> float:
         """Largest probability the gate accepts that the position lies outside the tolerance:
@@ -1096,7 +1103,7 @@ class ClaimGate:
                 "walls only in part",
                 match,
             )
-        if not self._precise(cov):
+        if not self.config.precise(cov):
             major, minor, sth = _std(cov)
             outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
             return Claim(
@@ -1114,13 +1121,6 @@ class ClaimGate:
             )
         return Claim(Verdict.CLAIM, pose, cov, "confirmed by the laser", match)
 
-    def _precise(self, cov: FloatArray) -> bool:
-        """Whether a claim's covariance (3, 3) is precise enough to publish: outside the
-        position tolerance at most with the gate's chance, its heading std within bounds."""
-        cfg = self.config
-        outside = outside_probability(cov[:2, :2], cfg.tolerance_position)
-        return outside <= cfg.max_outside_probability and _std(cov)[2] <= cfg.max_std_theta
-
     def scale_bound(self, claim: Claim) -> bool:
         """True when ``claim`` was withheld for its precision alone and the map's scale error
         is what holds it back: the same match with every other term of the map's error
@@ -1128,7 +1128,7 @@ class ClaimGate:
         :attr:`scale_centre` the scale term shrinks (:meth:`precise_place`)."""
         if not claim.imprecise or claim.match is None or self.config.map_scale_std <= 0.0:
             return False
-        return self._precise(self._claim_covariance(claim.match, scale=False))
+        return self.config.precise(self._claim_covariance(claim.match, scale=False))
 
     def _claim_covariance(self, match: ScanMatch, *, scale: bool = True) -> FloatArray:
         """A claim's covariance (3, 3): the match's plus the map's own error at its pose
