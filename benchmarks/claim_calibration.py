@@ -56,6 +56,7 @@ from symloc.geometry import transform_points, wrap_angle
 from symloc.localizer import claim as claim_module
 from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
+from symloc.sim.generator import FAMILIES
 
 log = logging.getLogger("claim_calibration")
 
@@ -64,11 +65,36 @@ CHI2_3_95 = 7.815
 MULTIPLES = (1.0, 2.0, 3.0, 4.0)
 
 
-def _trials(text: str) -> list[int]:
-    if "-" in text:
-        a, b = text.split("-")
-        return list(range(int(a), int(b) + 1))
-    return [int(x) for x in text.split(",")]
+def world_arg(text: str) -> tuple[str, int, list[int]]:
+    """``FAMILY:WORLD_SEED:TRIALS`` (trials ``a-b`` or ``a,b,c``) as (family, seed, trials);
+    a malformed one raises :class:`argparse.ArgumentTypeError` naming the part."""
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(
+            f"world {text!r}: expected FAMILY:WORLD_SEED:TRIALS, e.g. corridor_short:0:0-9"
+        )
+    family, seed_text, trials_text = parts
+    if family not in FAMILIES:
+        raise argparse.ArgumentTypeError(
+            f"world {text!r}: FAMILY {family!r} is not a generated family "
+            f"(one of {', '.join(sorted(FAMILIES))})"
+        )
+    try:
+        seed = int(seed_text)
+        if "-" in trials_text:
+            a, b = trials_text.split("-")
+            trials = list(range(int(a), int(b) + 1))
+        else:
+            trials = [int(x) for x in trials_text.split(",")]
+    except ValueError:
+        trials = []
+        seed = -1
+    if seed < 0 or not trials or min(trials) < 0:
+        raise argparse.ArgumentTypeError(
+            f"world {text!r}: expected WORLD_SEED an integer >= 0 and TRIALS as a-b or "
+            "a,b,c of integers >= 0 (a <= b)"
+        )
+    return family, seed, trials
 
 
 def _fit(gate: Any, pose: np.ndarray, points: np.ndarray) -> float:
@@ -98,7 +124,12 @@ def _profile(gate: Any, pose: np.ndarray, truth: np.ndarray, points: np.ndarray)
     )
 
 
-def record(out: Path, worlds: list[str], regime: str, profile: float | None = None) -> None:
+def record(
+    out: Path,
+    worlds: list[tuple[str, int, list[int]]],
+    regime: str,
+    profile: float | None = None,
+) -> None:
     """Run the trials of ``worlds`` and append every judged claim to ``out`` (JSON lines);
     with ``profile`` [m], log the fit profile of claims that far from the truth."""
     pending: list[dict[str, Any]] = []
@@ -146,9 +177,7 @@ def record(out: Path, worlds: list[str], regime: str, profile: float | None = No
         claim_module.ClaimGate._judge = judged  # type: ignore[method-assign]
         grading.ScanLog.append = logged  # type: ignore[method-assign]
         try:
-            for spec_text in worlds:
-                family, seed_text, trials = spec_text.split(":")
-                seed = int(seed_text)
+            for family, seed, trials in worlds:
                 ref = WorldRef("generated", family, seed)
                 room = build_world(ref)
                 t0 = time.perf_counter()
@@ -163,7 +192,7 @@ def record(out: Path, worlds: list[str], regime: str, profile: float | None = No
                         regime=regime,
                         keyframes=True,
                     )
-                    for i in _trials(trials):
+                    for i in trials:
                         kind = TRIAL_KINDS[i % len(TRIAL_KINDS)]
                         spec = TrialSpec(ref.world_id, family, i, kind, seed * 1000 + i)
                         context.update(family=family, world=ref.world_id, trial=i)
@@ -239,7 +268,7 @@ def analyse(path: Path, config: ClaimConfig | None = None) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("worlds", nargs="*", help="FAMILY:WORLD_SEED:TRIALS")
+    parser.add_argument("worlds", nargs="*", type=world_arg, help="FAMILY:WORLD_SEED:TRIALS")
     parser.add_argument("--out", type=Path, required=True, help="JSON lines, appended to")
     parser.add_argument("--regime", default="realistic")
     parser.add_argument("--analyse", action="store_true", help="only analyse --out")
@@ -247,6 +276,8 @@ def main() -> None:
         "--profile", type=float, metavar="D", help="log the fit profile of claims D m off"
     )
     args = parser.parse_args()
+    if args.analyse and not args.out.is_file():
+        parser.error(f"--out {args.out}: --analyse reads an existing JSON-lines file; none there")
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     print(
         f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}, "
