@@ -60,7 +60,7 @@ def run_world(
         t0 = time.perf_counter()
         scen = build_scenario(
             room,
-            rng=seed,
+            rng=ref.robot_seed,
             workdir=Path(tmp),
             map_source="slam",
             explore_laps=1.0,

@@ -3,7 +3,7 @@
 For each (family, dev world seed) the world is built and mapped exactly as
 ``symloc bench localization --regime realistic`` maps it
 (:func:`symloc.bench.localization.run_world`: :func:`symloc.bench.scenario.build_scenario`
-with ``rng`` = the world seed, ``map_source="slam"``, one exploration lap, the ``realistic``
+with ``rng`` = ``WorldRef.robot_seed``, ``map_source="slam"``, one exploration lap, the ``realistic``
 sensors; keyframes, which the ``decide`` method records, draw from a stream of their own and do
 not change the map, so they are off unless ``--keyframes``). Printed per world:
 
@@ -164,9 +164,12 @@ class _TripRecorder:
         scenario_module.umeyama_se2 = self._umeyama  # type: ignore[assignment]
 
 
+def _ref(family: str, seed: int) -> WorldRef:
+    return WorldRef("generated" if family in FAMILIES else "builtin", family, seed)
+
+
 def _room(family: str, seed: int) -> Any:
-    ref = WorldRef("generated" if family in FAMILIES else "builtin", family, seed)
-    return build_world(ref)
+    return build_world(_ref(family, seed))
 
 
 def _pose_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -248,7 +251,7 @@ def map_world(
     with tempfile.TemporaryDirectory(prefix="bench-mapping-") as tmp, _TripRecorder() as rec:
         scen = build_scenario(
             room,
-            rng=seed,
+            rng=_ref(family, seed).robot_seed,
             workdir=Path(tmp),
             map_source="slam",
             explore_laps=args.explore_laps,
@@ -324,7 +327,7 @@ def main() -> int:
     worlds = [(f, s) for f in args.families for s in args.seeds]
     print("# bench_mapping_trip")
     print(f"#   families: {' '.join(args.families)}")
-    print(f"#   world seeds (build_scenario rng = world seed): {args.seeds}")
+    print(f"#   world seeds (build_scenario rng = WorldRef.robot_seed): {args.seeds}")
     if args.replay is not None:
         print(f"#   replay: SLAM only, on the trips stored in {args.replay}")
     else:

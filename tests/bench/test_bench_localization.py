@@ -54,6 +54,26 @@ def test_splits_never_overlap() -> None:
         split_seeds("train", 3)
 
 
+def test_every_world_of_a_split_has_its_own_robot_and_noise() -> None:
+    from symloc.bench.sensors import robot_hardware
+    from symloc.lidar_spec import RPLIDAR_A2
+    from symloc.sim.camera import Camera
+    from symloc.sim.generator import FAMILIES
+
+    refs = [WorldRef("generated", f, s) for f in FAMILIES for s in split_seeds("dev", 2)]
+    robots = [r.robot_seed for r in refs]
+    assert len(set(robots)) == len(refs)
+    assert robots == [r.robot_seed for r in refs]  # the same on every call
+    trials = {r.trial_seed(i) for r in refs for i in range(10)}
+    assert len(trials) == 10 * len(refs)
+    scales = {
+        robot_hardware("realistic", RPLIDAR_A2, Camera(), r.robot_seed).lidar_scale for r in refs
+    }
+    assert len(scales) == len(refs)  # one lidar unit per world, not per seed
+    with pytest.raises(ConfigurationError, match="index"):
+        refs[0].trial_seed(-1)
+
+
 def test_sweep_json_is_identical_for_one_and_two_workers(tmp_path: Path) -> None:
     assert main([*SMALL, "--workers", "1", "--out", str(tmp_path / "w1")]) == 0
     assert main([*SMALL, "--workers", "2", "--out", str(tmp_path / "w2")]) == 0
@@ -178,7 +198,6 @@ def test_start_poses_cover_the_room_near_walls_too(tmp_path: Path) -> None:
 def test_summary_counts_per_family_and_all(tmp_path: Path) -> None:
     task = WorldTask(
         WorldRef("builtin", "square", 5),
-        seed=5,
         trials=1,
         kinds=("global",),
         map_source="raster",
@@ -221,7 +240,6 @@ def test_a_furnished_world_runs_a_trial_and_records_its_near_symmetry() -> None:
 
     task = WorldTask(
         WorldRef("generated", "furnished", 0),
-        seed=0,
         trials=1,
         kinds=("global",),
         map_source="raster",

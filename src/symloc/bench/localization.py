@@ -62,17 +62,17 @@ MAPPING_REACH: float = VerificationSettings().max_distance
 
 @dataclass(frozen=True)
 class WorldTask:
-    """One world of a sweep: how to build it, its seed, and its trials.
+    """One world of a sweep: how to build it and its trials.
 
-    ``seed`` drives the mapping run; trial ``i`` gets seed ``seed * 1000 + i`` (independent
-    of the others and of the worker that runs it). ``mapping_reach`` [m]: on SLAM maps, after
+    The world's robot and mapping run are seeded by ``ref.robot_seed``, trial ``i`` by
+    ``ref.trial_seed(i)`` (:class:`~symloc.bench.world_sources.WorldRef`: independent of the
+    other worlds and trials and of the worker that runs it). ``mapping_reach`` [m]: on SLAM maps, after
     its lap along the walls the mapping robot stops and looks around until no place it can
     reach is farther than this from its trip (``build_scenario``'s ``explore_stops``; 0: the
     lap only; the default :data:`MAPPING_REACH` covers every place with keyframes).
     """
 
     ref: WorldRef
-    seed: int
     trials: int
     kinds: tuple[str, ...] = ("global", "kidnap")
     regime: str = "ideal"
@@ -110,7 +110,7 @@ def run_world(task: WorldTask) -> WorldResult:
     with tempfile.TemporaryDirectory(prefix="symloc-bench-") as tmp:
         scen = build_scenario(
             room,
-            rng=task.seed,
+            rng=task.ref.robot_seed,
             workdir=Path(tmp),
             map_source=task.map_source,
             explore_laps=1.0,
@@ -135,7 +135,7 @@ def run_world(task: WorldTask) -> WorldResult:
                     family=task.ref.family,
                     index=i,
                     kind=task.kinds[i % len(task.kinds)],
-                    seed=task.seed * 1000 + i,
+                    seed=task.ref.trial_seed(i),
                 )
                 trials.append(run_trial(scen, spec, task.config, methods=task.methods))
         finally:

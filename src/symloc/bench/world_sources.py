@@ -9,12 +9,22 @@ builds the world itself with :func:`build_world`.
 The split: world ``i`` of a family gets seed ``SPLIT_BASE[split] + i``; the ``dev`` seeds
 (0, 1, 2, ...) are the only ones thresholds and defaults are tuned on, the ``test`` seeds
 (1,000,000, 1,000,001, ...) are where figures are reported. The two never overlap.
+
+A world's robot (its lidar unit, camera lens and wheel calibration, drawn from the sensor
+regime) and its mapping run are seeded by :attr:`WorldRef.robot_seed`, trial ``i`` by
+:meth:`WorldRef.trial_seed`: both from the world's family and seed together, so each world of a
+split has a robot of its own and no two worlds share a noise stream. (Until 2026-11-29 both came
+from the seed alone: every family's world of one seed had the same lidar, and a split of two
+seeds had two lidars.)
 """
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from symloc.errors import ConfigurationError
 from symloc.sim.generator import FAMILIES, generate_world
@@ -71,6 +81,27 @@ class WorldRef:
     def world_id(self) -> str:
         """Unique within a sweep: ``family#seed``."""
         return f"{self.family}#{self.seed}"
+
+    @property
+    def robot_seed(self) -> int:
+        """Seed of this world's robot and mapping run (``build_scenario``'s ``rng``): from the
+        family and the seed together, so two families' worlds of one seed get different
+        robots."""
+        return _derived_seed(self.family, self.seed)
+
+    def trial_seed(self, index: int) -> int:
+        """Seed of trial ``index`` (>= 0) on this world, independent of every other world's
+        and trial's."""
+        if index < 0:
+            raise ConfigurationError(f"index: expected a trial index >= 0, got {index}")
+        return _derived_seed(self.family, self.seed, index)
+
+
+def _derived_seed(family: str, *keys: int) -> int:
+    """A 32-bit seed from ``family`` and the non-negative integers ``keys`` (NumPy's
+    ``SeedSequence`` hashing: stable across runs, machines and NumPy versions)."""
+    entropy = [zlib.crc32(family.encode("utf-8")), *keys]
+    return int(np.random.SeedSequence(entropy).generate_state(1, np.uint32)[0])
 
 
 def split_seeds(split: str, count: int, offset: int = 0) -> list[int]:

@@ -167,7 +167,6 @@ def run(args: argparse.Namespace) -> int:
     tasks = [
         WorldTask(
             ref=ref,
-            seed=ref.seed,
             trials=args.trials,
             kinds=tuple(args.kinds),
             regime=args.regime,
@@ -194,7 +193,8 @@ def run(args: argparse.Namespace) -> int:
         "track_time_s": config.track_time,
         "kidnap_after_s": config.kidnap_after,
         "start_clearance_m": config.clearance,
-        "trial_seed": "world_seed * 1000 + trial index",
+        "robot_seed": "WorldRef.robot_seed: SeedSequence([crc32(family), world_seed])",
+        "trial_seed": "WorldRef.trial_seed: SeedSequence([crc32(family), world_seed, trial index])",
     }
     print("# symloc bench localization")
     for key, value in settings.items():
