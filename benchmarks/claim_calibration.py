@@ -52,8 +52,9 @@ from symloc.bench.localization import MAPPING_REACH
 from symloc.bench.scenario import build_scenario
 from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
-from symloc.geometry import transform_points, wrap_angle
+from symloc.geometry import wrap_angle
 from symloc.localizer import claim as claim_module
+from symloc.localizer.best_fit import best_offset, fit_profile
 from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
 from symloc.sim.generator import FAMILIES
@@ -100,8 +101,20 @@ def world_arg(text: str) -> tuple[str, int, list[int]]:
 def _fit(gate: Any, pose: np.ndarray, points: np.ndarray) -> float:
     """Mean squared distance [m^2] of ``points`` (N, 2, robot frame) placed at ``pose`` to the
     gate's map surfaces, each clipped at 0.3 m."""
-    d = np.minimum(np.abs(gate.field.lookup(transform_points(pose, points))), 0.3)
-    return float(np.mean(d * d))
+    return float(fit_profile(gate.field, points, pose, np.zeros(2), np.zeros(1), 0.3)[0])
+
+
+#: Offsets [m] along a claim's widest axis at which ``axis_profile`` records the scan's fit.
+AXIS_OFFSETS = np.round(np.arange(-0.3, 0.3001, 0.025), 3)
+
+
+def _axis_profile(gate: Any, pose: np.ndarray, cov: Any, points: np.ndarray) -> dict[str, Any]:
+    """The whole scan's fit [m^2] (:func:`_fit`) at :data:`AXIS_OFFSETS` along the widest axis
+    of the claim's covariance ``cov`` (3, 3) (the gate's best-fit check,
+    :mod:`symloc.localizer.best_fit`, on a fixed grid), the axis (2,) and the std along it [m]."""
+    w, v = np.linalg.eigh(np.asarray(cov)[:2, :2])
+    fits = fit_profile(gate.field, np.asarray(points), pose, v[:, 1], AXIS_OFFSETS, 0.3)
+    return {"axis": v[:, 1].tolist(), "std": float(math.sqrt(w[1])), "fit": fits.tolist()}
 
 
 def _profile(gate: Any, pose: np.ndarray, truth: np.ndarray, points: np.ndarray) -> str:
@@ -154,6 +167,7 @@ def record(
                 "map_error_no_scale": np.asarray(self.map_error(c.pose, scale=False)).tolist(),
                 "match_cov": np.asarray(match.covariance).tolist(),
                 "scale_centre": [float(x) for x in self.scale_centre],
+                "axis_profile": _axis_profile(self, np.asarray(c.pose), c.covariance, points),
             }
         )
         return c
@@ -184,7 +198,7 @@ def record(
                 with tempfile.TemporaryDirectory() as tmp:
                     scen = build_scenario(
                         room,
-                        rng=seed,
+                        rng=ref.robot_seed,
                         workdir=Path(tmp),
                         map_source="slam",
                         explore_laps=1.0,
@@ -194,7 +208,7 @@ def record(
                     )
                     for i in trials:
                         kind = TRIAL_KINDS[i % len(TRIAL_KINDS)]
-                        spec = TrialSpec(ref.world_id, family, i, kind, seed * 1000 + i)
+                        spec = TrialSpec(ref.world_id, family, i, kind, ref.trial_seed(i))
                         context.update(family=family, world=ref.world_id, trial=i)
                         res = run_trial(scen, spec, TrialConfig(), methods=("symloc",))
                         grade = res.results["symloc"].grade
@@ -266,6 +280,46 @@ def analyse(path: Path, config: ClaimConfig | None = None) -> None:
         )
 
 
+#: Displacements [m] along a claim's widest axis at which :func:`analyse_best_fit` tests the
+#: gate's best-fit check.
+DISPLACEMENTS = (0.0, 0.05, 0.075, 0.1, 0.15, 0.2)
+
+
+def analyse_best_fit(path: Path, config: ClaimConfig | None = None) -> None:
+    """How often the gate's best-fit check (:mod:`symloc.localizer.best_fit`) would withhold
+    the claims published within 5 cm of the truth as they were (displacement 0: false alarms)
+    and displaced by each of :data:`DISPLACEMENTS` along their widest axis, either way (its
+    power). A displaced claim's profile is the recorded one shifted (``axis_profile``, so the
+    side towards the displacement is cut short)."""
+    cfg = (config if config is not None else ClaimConfig()).best_fit
+    step = float(AXIS_OFFSETS[1] - AXIS_OFFSETS[0])
+    rows = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        row = json.loads(line)
+        if "truth" not in row or "axis_profile" not in row or row["verdict"] != "CLAIM":
+            continue
+        e = np.array(row["pose"]) - np.array(row["truth"])
+        if math.hypot(e[0], e[1]) <= 0.05:
+            rows.append(row)
+    print(f"# best-fit check ({cfg}) on {len(rows)} claims published within 5 cm of the truth")
+    families = sorted({r["family"] for r in rows})
+    print(f"{'displaced':>9s} {'all':>13s} " + " ".join(f"{f:>17s}" for f in families))
+    for d in DISPLACEMENTS:
+        k = round(d / step)
+        fired: dict[str, list[bool]] = defaultdict(list)
+        for r in rows:
+            fits = np.array(r["axis_profile"]["fit"])
+            std = float(r["axis_profile"]["std"])
+            for profile in (fits, fits[::-1])[: 1 if k == 0 else 2]:
+                shifted = profile[k:]
+                at, gain = best_offset(AXIS_OFFSETS[: len(shifted)], shifted)
+                hit = abs(at) > max(cfg.sigmas * std, cfg.floor) and gain >= cfg.gain
+                fired[r["family"]].append(hit)
+                fired["all"].append(hit)
+        cells = [f"{sum(fired[f])}/{len(fired[f])}" for f in ["all", *families]]
+        print(f"{100 * d:7.1f}cm {cells[0]:>13s} " + " ".join(f"{c:>17s}" for c in cells[1:]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("worlds", nargs="*", type=world_arg, help="FAMILY:WORLD_SEED:TRIALS")
@@ -283,10 +337,11 @@ def main() -> None:
         f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}, "
         f"profile {args.profile}"
     )
-    print("# trial seeds: world_seed * 1000 + trial index (the bench's)")
+    print("# robot and trial seeds: WorldRef.robot_seed and .trial_seed (the bench's)")
     if not args.analyse:
         record(args.out, args.worlds, args.regime, args.profile)
     analyse(args.out)
+    analyse_best_fit(args.out)
 
 
 if __name__ == "__main__":

@@ -76,6 +76,7 @@ from scipy.special import erfc
 from symloc.errors import ConfigurationError
 from symloc.geometry import transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
+from symloc.localizer.best_fit import BestFitConfig, off_best_fit
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
@@ -229,6 +230,12 @@ class ClaimConfig:
         match std; 20 % of its beams ended in never-observed cells. At the gate's claims within the
         tolerance in seven other dev worlds whose maps include stops around the whole floor that
         share was at most 0.03 (p99 0.00). 1 to leave it out.
+    best_fit_reach, best_fit_step, best_fit_sigmas, best_fit_floor, best_fit_gain : float
+        The best-fit check (:mod:`symloc.localizer.best_fit`, the fields of
+        :class:`~symloc.localizer.best_fit.BestFitConfig` without the prefix): a claim that
+        would pass every other test is withheld when the whole scan fits the map clearly
+        better a few of its stds along its widest axis (the alignment stopped short of the
+        scan's best fit). ``best_fit_reach`` 0 leaves it out.
     """
 
     tolerance_position: float = 0.1
@@ -257,6 +264,11 @@ class ClaimConfig:
     operator_reach: tuple[float, float] = (1.0, math.radians(90.0))
     min_beams: int = 20
     max_unmapped_share: float = 0.1
+    best_fit_reach: float = BestFitConfig.reach
+    best_fit_step: float = BestFitConfig.step
+    best_fit_sigmas: float = BestFitConfig.sigmas
+    best_fit_floor: float = BestFitConfig.floor
+    best_fit_gain: float = BestFitConfig.gain
 
     def __post_init__(self) -> None:
         for name in (
@@ -302,6 +314,12 @@ class ClaimConfig:
             raise ConfigurationError(
                 f"ClaimConfig.max_unmapped_share: expected a share in (0, 1], got {u!r}"
             )
+        try:
+            self.best_fit  # noqa: B018 (validates the best_fit_* fields)
+        except ConfigurationError as exc:
+            raise ConfigurationError(
+                str(exc).replace("BestFitConfig.", "ClaimConfig.best_fit_")
+            ) from None
         if not (isinstance(self.gross_fit, (int, float)) and 0.0 <= self.gross_fit < 1.0):
             raise ConfigurationError(
                 f"ClaimConfig.gross_fit: expected a share in [0, 1), got {self.gross_fit!r}"
@@ -344,6 +362,17 @@ class ClaimConfig:
     def max_std_theta(self) -> float:
         """Largest heading std [rad] the gate accepts."""
         return self.tolerance_heading / self.gate_sigmas
+
+    @property
+    def best_fit(self) -> BestFitConfig:
+        """The best-fit check's settings (the ``best_fit_*`` fields)."""
+        return BestFitConfig(
+            reach=self.best_fit_reach,
+            step=self.best_fit_step,
+            sigmas=self.best_fit_sigmas,
+            floor=self.best_fit_floor,
+            gain=self.best_fit_gain,
+        )
 
     def precise(self, cov: FloatArray) -> bool:
         """Whether a claim's covariance (3, 3) is precise enough to publish: outside the
@@ -1118,6 +1147,20 @@ class ClaimGate:
                 f"{math.degrees(cfg.tolerance_heading):.0f} deg)",
                 match,
                 imprecise=True,
+            )
+        elsewhere = off_best_fit(
+            self.field, points, pose, cov, self.match_config.outlier_distance, cfg.best_fit
+        )
+        if elsewhere is not None:
+            offset, gain = elsewhere
+            return Claim(
+                Verdict.WITHHELD,
+                pose,
+                cov,
+                f"claim withheld: the whole scan fits the map {100 * gain:.0f} % better "
+                f"{100 * offset:+.0f} cm along the pose's least certain axis (std "
+                f"{100 * _std(cov)[0]:.1f} cm): the alignment stopped short of the scan's best fit",
+                match,
             )
         return Claim(Verdict.CLAIM, pose, cov, "confirmed by the laser", match)
 
