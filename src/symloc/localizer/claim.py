@@ -43,6 +43,10 @@ scan goes through :meth:`ClaimGate.check`:
    margin (four sigmas: a 2-D Gaussian error leaves a circle of 4 sigma once in 3,000 scans,
    and the scans of a run are far from independent; :func:`outside_probability`); otherwise
    the claim is *withheld* and the status says which bound failed.
+6. **Best fit**: a claim that passed the gate is still *withheld* when the whole scan fits the
+   map clearly better a few of its stds along its least certain axis
+   (:mod:`symloc.localizer.best_fit`): the alignment's robust, sub-sampled cost stopped short
+   of the scan's best fit, which its covariance does not say.
 
 The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
