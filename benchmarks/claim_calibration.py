@@ -16,6 +16,11 @@ that reached the gate's precision test, per world:
   share of claims that would pass the gate's precision test and how many of those are outside
   the tolerance.
 
+Each judged claim also records the whole scan's fit along its widest covariance axis
+(``axis_profile``), and a last table gives the claim gate's best-fit check
+(:mod:`symloc.localizer.best_fit`) on the claims published within 5 cm of the truth: how many
+it would withhold as they are (false alarms) and displaced 5-20 cm along that axis (its power).
+
 ``--profile D``: for every judged claim more than ``D`` metres from the truth with the heading
 within 0.1 rad, log the whole scan's fit to the map (mean squared distance of every beam's end,
 clipped at 0.3 m) at offsets along the error's direction from the truth, at the claim, and
