@@ -35,7 +35,8 @@ def corridor():  # type: ignore[no-untyped-def]
 
 def test_best_offset_refines_between_samples() -> None:
     offsets = BestFitConfig().offsets
-    assert offsets[0] == pytest.approx(-0.3) and offsets[-1] == pytest.approx(0.3)
+    assert offsets[0] == pytest.approx(-0.3)
+    assert offsets[-1] == pytest.approx(0.3)
     assert np.count_nonzero(offsets == 0.0) == 1
     fits = (offsets - 0.112) ** 2 + 1e-3
     at, gain = best_offset(offsets, fits)
@@ -82,7 +83,8 @@ def test_the_gate_withholds_a_claim_off_the_best_fit(corridor) -> None:  # type:
     prior_cov = np.diag([0.1**2, 0.1**2, 0.05**2])
     judged = gate._judge(off, prior_cov, stopped, pts)
     assert judged.verdict is Verdict.WITHHELD
-    assert "best fit" in judged.reason and "along the pose's least certain axis" in judged.reason
+    assert "best fit" in judged.reason
+    assert "along the pose's least certain axis" in judged.reason
     lax = ClaimGate(field, ALPHAS, ClaimConfig(best_fit_reach=0.0))
     assert lax._judge(off, prior_cov, stopped, pts).verdict is Verdict.CLAIM
     # at the truth the same match is claimed
