@@ -59,7 +59,7 @@ from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
 from symloc.localizer import claim as claim_module
-from symloc.localizer.best_fit import best_offset, fit_profile
+from symloc.localizer.best_fit import best_offset, fit_profile, widest_axis
 from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
 from symloc.sim.generator import FAMILIES
@@ -117,9 +117,9 @@ def _axis_profile(gate: Any, pose: np.ndarray, cov: Any, points: np.ndarray) -> 
     """The whole scan's fit [m^2] (:func:`_fit`) at :data:`AXIS_OFFSETS` along the widest axis
     of the claim's covariance ``cov`` (3, 3) (the gate's best-fit check,
     :mod:`symloc.localizer.best_fit`, on a fixed grid), the axis (2,) and the std along it [m]."""
-    w, v = np.linalg.eigh(np.asarray(cov)[:2, :2])
-    fits = fit_profile(gate.field, np.asarray(points), pose, v[:, 1], AXIS_OFFSETS, 0.3)
-    return {"axis": v[:, 1].tolist(), "std": float(math.sqrt(w[1])), "fit": fits.tolist()}
+    axis, std = widest_axis(np.asarray(cov))
+    fits = fit_profile(gate.field, np.asarray(points), pose, axis, AXIS_OFFSETS, 0.3)
+    return {"axis": axis.tolist(), "std": std, "fit": fits.tolist()}
 
 
 def _profile(gate: Any, pose: np.ndarray, truth: np.ndarray, points: np.ndarray) -> str:
@@ -318,7 +318,7 @@ def analyse_best_fit(path: Path, config: ClaimConfig | None = None) -> None:
             for profile in (fits, fits[::-1])[: 1 if k == 0 else 2]:
                 shifted = profile[k:]
                 at, gain = best_offset(AXIS_OFFSETS[: len(shifted)], shifted)
-                hit = abs(at) > max(cfg.sigmas * std, cfg.floor) and gain >= cfg.gain
+                hit = cfg.contradicts(at, gain, std)
                 fired[r["family"]].append(hit)
                 fired["all"].append(hit)
         cells = [f"{sum(fired[f])}/{len(fired[f])}" for f in ["all", *families]]

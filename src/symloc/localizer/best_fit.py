@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,7 +29,7 @@ from symloc.errors import ConfigurationError
 from symloc.geometry import transform_points
 from symloc.grid.distance_field import DistanceField
 
-__all__ = ["BestFitConfig", "best_offset", "fit_profile", "off_best_fit"]
+__all__ = ["BestFitConfig", "best_offset", "fit_profile", "off_best_fit", "widest_axis"]
 
 FloatArray = NDArray[np.float64]
 
@@ -86,11 +87,23 @@ class BestFitConfig:
                 f"BestFitConfig.gain: expected a fraction in [0, 1), got {self.gain}"
             )
 
-    @property
+    @cached_property
     def offsets(self) -> FloatArray:
         """The profiled offsets [m] (2K+1,), symmetric about 0."""
         k = math.floor(self.reach / self.step + 1e-9)
         return self.step * np.arange(-k, k + 1, dtype=np.float64)
+
+    def contradicts(self, at: float, gain: float, std: float) -> bool:
+        """Whether a profile minimum ``at`` [m] from the claim, fitting ``gain`` (a fraction)
+        better, contradicts a claim of ``std`` [m] along that axis."""
+        return abs(at) > max(self.sigmas * std, self.floor) and gain >= self.gain
+
+
+def widest_axis(cov: FloatArray) -> tuple[FloatArray, float]:
+    """The unit direction (2,) of the widest axis of the position block of ``cov`` (3, 3) and
+    the std [m] along it."""
+    w, v = np.linalg.eigh(np.asarray(cov, dtype=np.float64)[:2, :2])
+    return v[:, 1], math.sqrt(max(float(w[1]), 0.0))
 
 
 def fit_profile(
@@ -104,11 +117,10 @@ def fit_profile(
     """The scan's fit at ``pose`` (3,) shifted by each of ``offsets`` (K,) [m] along the unit
     ``direction`` (2,): the mean over ``points`` (N, 2, robot frame) of the squared distance
     [m^2] from each beam end to the map's walls, clipped at ``clip`` [m]. Returns (K,)."""
-    shifted = np.repeat(np.asarray(pose, dtype=np.float64)[None, :], len(offsets), axis=0)
-    shifted[:, :2] += np.outer(offsets, direction)
     # every offset moves the same rotated points: rotate once, translate per offset
     local = transform_points(np.array([0.0, 0.0, pose[2]]), points)
-    world = local[None, :, :] + shifted[:, None, :2]
+    origins = np.asarray(pose, dtype=np.float64)[:2] + np.outer(offsets, direction)
+    world = local[None, :, :] + origins[:, None, :]
     d = np.minimum(np.abs(field.lookup(world.reshape(-1, 2))), clip).reshape(len(offsets), -1)
     return np.asarray(np.mean(d * d, axis=1), dtype=np.float64)
 
@@ -142,10 +154,7 @@ def off_best_fit(
     ``config``'s bounds, or the check is off (``reach`` 0)."""
     if config.reach <= 0.0 or points.shape[0] == 0:
         return None
-    w, v = np.linalg.eigh(np.asarray(cov, dtype=np.float64)[:2, :2])
-    std = math.sqrt(max(float(w[1]), 0.0))
+    axis, std = widest_axis(cov)
     offsets = config.offsets
-    at, gain = best_offset(offsets, fit_profile(field, points, pose, v[:, 1], offsets, clip))
-    if abs(at) > max(config.sigmas * std, config.floor) and gain >= config.gain:
-        return at, gain
-    return None
+    at, gain = best_offset(offsets, fit_profile(field, points, pose, axis, offsets, clip))
+    return (at, gain) if config.contradicts(at, gain, std) else None

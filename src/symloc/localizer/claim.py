@@ -72,6 +72,7 @@ import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -367,9 +368,10 @@ class ClaimConfig:
         """Largest heading std [rad] the gate accepts."""
         return self.tolerance_heading / self.gate_sigmas
 
-    @property
+    @cached_property
     def best_fit(self) -> BestFitConfig:
-        """The best-fit check's settings (the ``best_fit_*`` fields)."""
+        """The best-fit check's settings (the ``best_fit_*`` fields; built once, the gate reads
+        it for every claim)."""
         return BestFitConfig(
             reach=self.best_fit_reach,
             step=self.best_fit_step,
