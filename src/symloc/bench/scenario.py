@@ -33,7 +33,7 @@ from symloc.geometry import angle_diff
 from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
 from symloc.localizer.adapters import ReportJudge
-from symloc.localizer.build import build_localizer, grid_symmetries
+from symloc.localizer.build import build_localizer, grid_round_centre, grid_symmetries
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
 from symloc.localizer.settings import LocalizerSettings
@@ -56,6 +56,8 @@ from symloc.slam.map_error import R95
 from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
+from symloc.vision.gyro_drift import META_KEY as ROTATION_STD_META
+from symloc.vision.gyro_drift import round_room_keyframes
 from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
@@ -501,6 +503,7 @@ def _map_with_slam(
         robot = GyroOdometryBody(robot, SimulatedGyro(gyro, gen))
     scans: list[Any] = []
     odoms: list[FloatArray] = []
+    stamps: list[float] = []
     truths: list[FloatArray] = []
 
     last_odom: list[OdometryReading] = []
@@ -533,6 +536,7 @@ def _map_with_slam(
         last_odom[:] = [odom]
         scans.append(s)
         odoms.append(np.asarray(odom.pose))
+        stamps.append(float(odom.stamp))
         truths.append(np.asarray(pose, dtype=np.float64))
         if recorder is not None:
             recorder.frame(len(scans) - 1, np.asarray(odom.pose), truths[-1], float(odom.stamp))
@@ -653,6 +657,8 @@ def _map_with_slam(
             else ""
         )
     )
+    drift = None
+    odom_turn = np.unwrap(np.array([o[2] for o in odoms], np.float64))  # continuous heading
     if recorder is not None:
         vm = scen.store.visual_map
         vocab = scen.store.vocabulary
@@ -668,6 +674,34 @@ def _map_with_slam(
             ),
             dtype=np.float64,
         ).reshape(-1, 3)
+        centre = grid_round_centre(slam.grid) if gyro is not None and kfs else None
+        if centre is not None:
+            # a round room: SLAM's headings wander, the gyro's drift smoothly; the images fit
+            # its drift, and the claim gate is told how sure the result is
+            kfs, drift = round_room_keyframes(
+                kfs,
+                odom_turn[recorder.indices],
+                centre,
+                scen.hardware.calibration,
+                anchor=np.asarray(recorder.indices) < lap_end,
+            )
+            if drift is not None:
+                scen.settings = dataclasses.replace(
+                    scen.settings,
+                    claim=dataclasses.replace(
+                        scen.settings.claim, map_rotation_std=drift.heading_std
+                    ),
+                )
+                vm.set_meta(ROTATION_STD_META, repr(drift.heading_std))
+            scen.notes.append(
+                "mapping trip: "
+                + (
+                    drift.summary()
+                    if drift is not None
+                    else "a round room whose images do not fix the gyro's drift: keyframe "
+                    "headings from SLAM"
+                )
+            )
         if align is not None and kfs:
             aligned = align_keyframe_headings(kfs, scen.hardware.calibration, align)
             kfs = aligned.apply(kfs)
@@ -692,7 +726,12 @@ def _map_with_slam(
     t_c = to_map(0)
     centre = _compose(t_c, np.array([centre_o[0], centre_o[1], 0.0]))[:2]
     round_room = kind == "circle" or order.is_circle
-    if round_room and gyro is not None:
+    if drift is not None:
+        # the keyframes' fitted gyro drift, at the moments the images were taken
+        k = np.asarray(marks[: len(headings_o)], np.int64)
+        offset = np.asarray(angle_diff(np.asarray(headings_o), odom_turn[k]), np.float64)
+        headings = drift.correct(odom_turn[k] + offset, np.asarray(stamps)[k]).tolist()
+    elif round_room and gyro is not None:
         # laser SLAM cannot observe heading in a round room; the gyro-odometry frame is the map
         # frame at the start (both start at the robot's start pose), so its headings are used
         headings = [float(h) for h in headings_o]
@@ -704,6 +743,7 @@ def _map_with_slam(
         scen.notes.append(
             "mapping stage: a round room gives laser SLAM no heading; image headings from "
             f"gyro-odometry ({gyro.source.split(':')[0]})"
+            + (", its drift fitted to the keyframes' images" if drift is not None else "")
         )
     if label is not None:
         scen.notes.append(

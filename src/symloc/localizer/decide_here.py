@@ -803,6 +803,16 @@ class DecideHere:
                 "against the axis decided before: neither is trusted",
             )
         gate = ctx.gate
+        if (
+            gate is not None
+            and gate.rotation_centre is not None
+            and index == answer.index
+            and math.isfinite(answer.heading_std)
+        ):
+            # a round map: the laser cannot set the heading, so the camera's own measurement
+            # of it (planar motion against the keyframes) is what the claim's heading rests on
+            pose = np.array([pose[0], pose[1], answer.refined_heading])
+            cov = cov_from_std(cfg.decision_xy_std, answer.heading_std)
         claim = None
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))

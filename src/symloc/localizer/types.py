@@ -424,6 +424,10 @@ class Verification:
     store does not say), with the store's ``margin`` (how many times a rival's inliers the
     winner needs) and ``heading_tolerance`` [rad] (NaN: not given); deciding a corridor's
     heading class needs all three (:mod:`symloc.localizer.axis_heading`).
+    ``refined_heading`` [rad] and ``heading_std`` [rad]: ``pose``'s heading measured again by
+    planar motion (:mod:`symloc.vision.heading_refinement`) and its standard deviation; NaN:
+    not measured (``pose`` has the verification's coarse heading, which the localizer trusts
+    to ``decide_theta_std``).
     """
 
     index: int | None
@@ -433,6 +437,8 @@ class Verification:
     checks: tuple[HypothesisVerdict, ...] = ()
     margin: float = math.nan
     heading_tolerance: float = math.nan
+    refined_heading: float = math.nan
+    heading_std: float = math.nan
 
 
 @runtime_checkable

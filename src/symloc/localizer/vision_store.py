@@ -23,8 +23,11 @@ from numpy.typing import NDArray
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
 from symloc.symmetry.order import SymmetryOrder
+from symloc.vision.heading_refinement import RefinedHeading, RefinementSettings, refine_heading
+from symloc.vision.orb import OrbFeatures
 from symloc.vision.place import UNANCHORED_LABEL
 from symloc.vision.verification import (
+    HypothesisCheck,
     VerificationDecision,
     VerificationSettings,
     expected_counts,
@@ -142,6 +145,9 @@ class VisionPlaceStore:
         self.verification = verification if verification is not None else VerificationSettings()
         #: the last :meth:`verify`'s full answer (every hypothesis' check), for notes and tests
         self.last_verification: VerificationDecision | None = None
+        #: how :meth:`verify` measures a verified heading again
+        #: (:class:`symloc.vision.heading_refinement.RefinementSettings`)
+        self.refinement = RefinementSettings()
         self._kf_poses: FloatArray | None = None
 
     def _vplace(self, place_id: int) -> Place:
@@ -226,9 +232,10 @@ class VisionPlaceStore:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
         ``image`` with this store's vocabulary, camera and :attr:`verification` settings (the
         expected keyframes up to ``reach`` [m] further away)."""
+        query = self.extractor.extract(image)
         dec = verify_hypotheses(
             np.asarray(poses, dtype=np.float64).reshape(-1, 3),
-            image,
+            query,
             self.visual_map,
             self.vocabulary,
             self.intrinsics,
@@ -240,6 +247,9 @@ class VisionPlaceStore:
         cfg = self.verification
         index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
         pose = None if index is None else dec.checks[index].corrected_pose
+        refined = (
+            None if pose is None or index is None else self.refine(pose, query, dec.checks[index])
+        )
         checks = tuple(
             HypothesisVerdict(c.status, c.inliers, c.heading_offset, c.keyframe_id, c.expected)
             for c in dec.checks
@@ -252,7 +262,23 @@ class VisionPlaceStore:
             checks=checks,
             margin=cfg.margin,
             heading_tolerance=cfg.heading_tolerance,
+            refined_heading=math.nan if refined is None else refined.heading,
+            heading_std=math.nan if refined is None else refined.std,
         )
+
+    def refine(
+        self, pose: FloatArray, query: OrbFeatures, check: HypothesisCheck
+    ) -> RefinedHeading | None:
+        """The heading of a verified ``pose`` (3,) measured again by planar motion
+        (:func:`symloc.vision.heading_refinement.refine_heading`) against the keyframes
+        ``check`` expected, the one that verified it first (None: no fit counts, or they
+        disagree)."""
+        ids = list(check.expected)
+        if check.keyframe_id is not None:
+            ids = [check.keyframe_id] + [i for i in ids if i != check.keyframe_id]
+        cfg = self.refinement
+        kfs = [self.visual_map.keyframe(i) for i in ids[: cfg.max_keyframes]]
+        return refine_heading(pose, query, kfs, self.intrinsics, cfg, dist_coeffs=self.dist_coeffs)
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc.errors import ConfigurationError
 
-__all__ = ["PlanarYaw", "planar_yaw", "sampson_planar"]
+__all__ = ["PlanarYaw", "planar_yaw", "sampson_planar", "travel_prior"]
 
 FloatArray = NDArray[np.float64]
 
@@ -311,3 +311,32 @@ def planar_yaw(
     sigma = _half_width(yaws, (prof - prof[j]) / var, j)
     travel = float((travel + math.pi / 2) % math.pi - math.pi / 2)
     return PlanarYaw(yaw, sigma, int(inl.sum()), int(x1.shape[0]), travel, math.sqrt(var))
+
+
+def travel_prior(
+    relative_poses: ArrayLike, position_sigma: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """The direction of travel (``phi`` of :func:`planar_yaw`) that map poses predict, and how
+    sure it is.
+
+    Parameters
+    ----------
+    relative_poses : (M, 3) array
+        The query view's robot pose in the stored view's robot frame (forward [m], left [m],
+        turn [rad]; :func:`symloc.geometry.relative` of the two map poses).
+    position_sigma : float or (M,) array
+        Standard deviation [m] of that relative position.
+
+    Returns
+    -------
+    direction, direction_sigma : (M,) float64
+        ``phi`` [rad] in the stored camera's frame (x right, z forward; ``t = -R c``, ``c``
+        the query camera's centre) and its standard deviation [rad], the position's std over
+        the distance between the views.
+    """
+    rel = np.asarray(relative_poses, np.float64).reshape(-1, 3)
+    c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
+    cx, cz = -rel[:, 1], rel[:, 0]
+    direction = np.arctan2(-(c * cx + sn * cz), -(-sn * cx + c * cz))
+    sigma = np.arctan2(np.asarray(position_sigma, np.float64), np.hypot(rel[:, 0], rel[:, 1]))
+    return np.asarray(direction, np.float64), np.broadcast_to(sigma, direction.shape).copy()

@@ -57,7 +57,7 @@ from symloc.geometry import relative, wrap_angle
 from symloc.vision.keyframes import Keyframe
 from symloc.vision.orb import OrbFeatures
 from symloc.vision.orientation import dist_coeffs_of, intrinsics_matrix
-from symloc.vision.planar_motion import planar_yaw
+from symloc.vision.planar_motion import planar_yaw, travel_prior
 from symloc.vision.two_view import ratio_matches, undistorted
 from symloc.vision.visual_map import VisualMap
 
@@ -393,13 +393,10 @@ def measure_pairs(
     # camera's centre) a prior, as sure as SLAM's relative position over the distance
     rel = np.asarray(relative(p[pr[:, 0]], p[pr[:, 1]]), np.float64).reshape(-1, 3)
     expected = rel[:, 2]
-    c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
-    cx, cz = -rel[:, 1], rel[:, 0]
-    travel = np.arctan2(-(c * cx + sn * cz), -(-sn * cx + c * cz))
     pos_sd = np.where(
         np.abs(pr[:, 1] - pr[:, 0]) <= s.trip_neighbours, s.position_sigma, s.loop_position_sigma
     )
-    travel_sd = np.arctan2(pos_sd, np.hypot(rel[:, 0], rel[:, 1]))
+    travel, travel_sd = travel_prior(rel, pos_sd)
     refused = {"features": 0, "inliers": 0, "sigma": 0}
     kept: list[tuple[int, int, float, float, int]] = []
     for (i, j), y0, ph0, ph_sd in zip(

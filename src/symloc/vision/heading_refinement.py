@@ -1,0 +1,206 @@
+"""A verified pose's heading measured again, by planar motion against its keyframes.
+
+Verification (:mod:`symloc.vision.verification`) chooses between hypotheses; the heading it
+reads off a homography or a five-point essential matrix is coarse (regular#0 of the dev split:
+a verified truth's camera heading off by a median 1.8 deg, 11 deg at the 95th percentile), so
+the localizer trusts it to ``decide_theta_std`` (5 deg) and lets the laser set the heading.
+Where the laser cannot (a round room) that leaves every claim withheld. The planar-motion fit
+(:func:`symloc.vision.planar_motion.planar_yaw`: a level camera turning about the vertical
+and moving on the floor) measures relative headings between two views to 0.15-0.7 deg and
+gives its own uncertainty. :func:`refine_heading` fits the query against the keyframes the
+verified pose should be seeing, searched around the pose's heading, with the direction of
+travel the pose predicts as a prior, and combines them when at least two agree.
+
+Measured on a textured round room (50 random query poses, three keyframes each within about
+0.5 m, a coarse heading up to 9 deg off, the ideal camera): single fits are off by a median
+0.26 deg but 1.8 deg at the 90th percentile, often with a profile that claims far less; with
+two or more fits agreeing within 0.75 deg of their mean, 32 of 50 were measured, off by a median
+0.18 deg, 0.59 deg at the 95th percentile, 0.70 deg at most.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from symloc.errors import ConfigurationError
+from symloc.geometry import relative, wrap_angle
+from symloc.vision.keyframes import Keyframe
+from symloc.vision.orb import OrbFeatures
+from symloc.vision.orientation import dist_coeffs_of, intrinsics_matrix
+from symloc.vision.planar_motion import planar_yaw, travel_prior
+from symloc.vision.two_view import ratio_matches, undistorted
+
+__all__ = ["RefinedHeading", "RefinementSettings", "refine_heading"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RefinementSettings:
+    """How a verified heading is measured again (see the module docstring).
+
+    Attributes
+    ----------
+    window : float
+        The heading is searched within this angle [rad] of the pose's, in (0, pi/2]: the
+        verification's coarse heading is off by up to 11 deg (its 95th percentile).
+    position_sigma : float
+        Standard deviation [m] of the pose's position relative to a keyframe (the prior on
+        the direction of travel), > 0.
+    min_inliers : int
+        Fewest inlier matches of a fit that counts, >= 8.
+    max_sigma : float
+        Fits whose profile standard deviation [rad] exceeds this do not count, > 0.
+    floor : float
+        Standard deviation [rad] added in quadrature to the combined profile, > 0: the
+        profile alone is optimistic (simulated realistic camera pairs are off by 0.2-0.7 deg
+        median, :mod:`symloc.vision.rotation_averaging`), and the keyframes' fits share one
+        query image, so their agreement does not shrink it.
+    agreement : float
+        A fit further than this angle [rad] from the combined heading: the views disagree and
+        nothing is returned, > 0. A single fit's profile can claim 0.05 deg and be 1.5-3.5 deg
+        off (sideways travel trades against yaw); fits of different keyframes rarely agree on
+        such an error.
+    min_fits : int
+        Fewest keyframes whose fits count and agree, >= 1 (one fit has no check).
+    max_keyframes : int
+        Most keyframes fitted, >= ``min_fits``.
+    lowe_ratio : float
+        Lowe's ratio of the ORB matching, in (0, 1).
+    threshold : float
+        Expected Sampson distance [px] of a correct match, > 0.
+    """
+
+    window: float = math.radians(12.0)
+    position_sigma: float = 0.05
+    min_inliers: int = 40
+    max_sigma: float = math.radians(1.0)
+    floor: float = math.radians(0.5)
+    agreement: float = math.radians(0.75)
+    min_fits: int = 2
+    max_keyframes: int = 3
+    lowe_ratio: float = 0.8
+    threshold: float = 1.0
+
+    def __post_init__(self) -> None:
+        def bad(name: str, what: str) -> ConfigurationError:
+            return ConfigurationError(
+                f"RefinementSettings.{name}: expected {what}, got {getattr(self, name)!r}"
+            )
+
+        for name in ("position_sigma", "max_sigma", "floor", "agreement", "threshold"):
+            v = getattr(self, name)
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, (int, float))
+                or not (math.isfinite(v) and v > 0)
+            ):
+                raise bad(name, "a finite value > 0")
+        w = self.window
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w <= math.pi / 2:
+            raise bad("window", "an angle in (0, pi/2] rad")
+        r = self.lowe_ratio
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not 0 < r < 1:
+            raise bad("lowe_ratio", "a value in (0, 1)")
+        for name, low in (
+            ("min_inliers", 8),
+            ("min_fits", 1),
+            ("max_keyframes", max(1, self.min_fits)),
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise bad(name, f"an integer >= {low}")
+
+
+@dataclass(frozen=True)
+class RefinedHeading:
+    """A heading measured by planar motion.
+
+    ``heading`` [rad] (map frame, wrapped), ``std`` [rad] (floor included), ``keyframes`` the
+    ids of the keyframes whose fits count, ``inliers`` their inlier matches in total.
+    """
+
+    heading: float
+    std: float
+    keyframes: tuple[int, ...]
+    inliers: int
+
+
+def refine_heading(
+    pose: ArrayLike,
+    query: OrbFeatures,
+    keyframes: Sequence[Keyframe],
+    intrinsics: ArrayLike | object,
+    settings: RefinementSettings | None = None,
+    *,
+    dist_coeffs: ArrayLike | None = None,
+) -> RefinedHeading | None:
+    """Measure the heading of ``pose`` from the query image against ``keyframes``.
+
+    Parameters
+    ----------
+    pose : (3,) array
+        The verified pose (x [m], y [m], theta [rad]), map frame.
+    query : OrbFeatures
+        The query image's features, keypoints as the camera gave them (undistorted here).
+    keyframes : sequence of Keyframe
+        Those the pose should be seeing, best first (the first ``max_keyframes`` are fitted).
+    intrinsics : (3, 3) array or camera object
+    settings : RefinementSettings, optional
+    dist_coeffs : sequence of 4 or 5 floats, optional
+        Lens distortion (default: ``intrinsics.dist_coeffs`` if any).
+
+    Returns
+    -------
+    RefinedHeading or None
+        None when fewer than ``min_fits`` fits count or those that count disagree.
+    """
+    s = settings if settings is not None else RefinementSettings()
+    p = np.asarray(pose, np.float64).reshape(-1)
+    if p.size != 3 or not np.all(np.isfinite(p)):
+        raise ConfigurationError(f"pose: expected 3 finite values (x, y, theta), got {p}")
+    K = intrinsics_matrix(intrinsics)
+    dist = dist_coeffs_of(intrinsics, dist_coeffs)
+    q = undistorted(query, K, dist)
+    headings: list[float] = []
+    sigmas: list[float] = []
+    ids: list[int] = []
+    inliers = 0
+    for kf in list(keyframes)[: s.max_keyframes]:
+        rel = np.asarray(relative(kf.pose, p), np.float64).reshape(1, 3)
+        phi, phi_sd = travel_prior(rel, s.position_sigma)
+        src, dst = ratio_matches(q, undistorted(kf.features, K, dist), s.lowe_ratio)
+        fit = planar_yaw(
+            src,
+            dst,
+            K,
+            float(rel[0, 2]),
+            s.window,
+            threshold=s.threshold,
+            min_matches=s.min_inliers,
+            direction=float(phi[0]),
+            direction_sigma=float(phi_sd[0]),
+        )
+        if not fit.fitted or fit.inliers < s.min_inliers or not fit.sigma <= s.max_sigma:
+            continue
+        headings.append(float(kf.pose[2]) + float(fit.yaw))
+        sigmas.append(float(fit.sigma))
+        ids.append(int(kf.keyframe_id))
+        inliers += int(fit.inliers)
+    if len(headings) < s.min_fits:
+        return None
+    h = np.asarray(headings)
+    profile = np.asarray(sigmas)
+    # each fit weighted with its floor: a profile that claims 0.05 deg must not outvote
+    w = 1.0 / (np.square(profile) + s.floor**2)
+    offsets = np.asarray(wrap_angle(h - h[0]), np.float64)
+    mean = float(h[0] + (w @ offsets) / w.sum())
+    if np.any(np.abs(np.asarray(wrap_angle(h - mean))) > s.agreement):
+        return None
+    std = math.hypot(1.0 / math.sqrt(float(np.sum(1.0 / np.square(profile)))), s.floor)
+    return RefinedHeading(float(wrap_angle(mean)), std, tuple(ids), inliers)
