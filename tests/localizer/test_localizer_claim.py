@@ -731,3 +731,33 @@ def test_the_gate_bounds_the_chance_of_lying_outside_not_the_longest_axis() -> N
     # but not 2.6 cm in every direction, nor 3 cm along
     assert outside_probability(np.eye(2) * 0.026**2, 0.1) > cfg.max_outside_probability
     assert outside_probability(np.diag([0.03**2, 0.01**2]), 0.1) > cfg.max_outside_probability
+
+
+def test_a_round_maps_turn_about_the_centre_comes_from_the_prior():
+    """In a round room the scan cannot tell a turn about the centre: the claim keeps the
+    prior's heading (the camera's, carried by odometry) and its uncertainty, whatever the
+    match made of the wall's ripples, and its position moves along that turn with it."""
+    from symloc.sim.rooms import build_room
+
+    room = build_room("circle", 2.0, lab=False)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    centre = np.asarray(room.center, dtype=np.float64)
+    field = surface_distance_field(grid)
+    truth = np.array([centre[0] + 1.2, centre[1] + 0.4, 0.7])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 0)
+    turn = math.radians(1.5)  # the prior: the truth turned about the centre, off the truth
+    c, s = math.cos(turn), math.sin(turn)
+    d = truth[:2] - centre
+    prior = np.array([centre[0] + c * d[0] - s * d[1], centre[1] + s * d[0] + c * d[1], 0.7 + turn])
+    cov = np.diag([0.05**2, 0.05**2, math.radians(0.5) ** 2])
+    cfg = ClaimConfig(map_rotation_std=math.radians(0.3))
+    round_ = ClaimGate(field, ALPHAS, cfg, rotation_centre=centre).confirm(prior, cov, scan)
+    assert round_.pose is not None
+    assert round_.covariance is not None
+    assert abs(round_.pose[2] - prior[2]) < 1e-9
+    assert np.hypot(*(round_.pose[:2] - centre)) == pytest.approx(np.hypot(*d), abs=0.03)
+    heading_std = math.sqrt(round_.covariance[2, 2])
+    assert heading_std >= math.sqrt(math.radians(0.5) ** 2 + math.radians(0.3) ** 2) - 1e-12
+    # the position along the wall is as unsure as the heading times the distance
+    along = np.array([-d[1], d[0]]) / np.hypot(*d)
+    assert math.sqrt(along @ round_.covariance[:2, :2] @ along) >= 0.9 * np.hypot(*d) * heading_std

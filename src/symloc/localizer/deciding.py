@@ -96,6 +96,28 @@ class Reseed:
     why: str = ""
 
 
+def _measured_again(
+    ctx: Context, inp: Inputs, pose: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], float] | None:
+    """A round map: the laser cannot set the heading, and a place decision's is coarse
+    (``decision_theta_std``). The decided pose (3,) with its heading measured again by the
+    keyframes it should be seeing, and that heading's std [rad]
+    (:attr:`~symloc.localizer.types.Verification.heading_std`); None without keyframes, an
+    image, or a measurement, and when the localizer does not decide from where it stands
+    (``LocalizerConfig.decide_here`` off: the paper's path alone)."""
+    if (
+        not ctx.config.decide_here  # the paper's path alone stays the paper's
+        or ctx.keyframes is None
+        or inp.image is None
+        or ctx.keyframes.keyframe_count() == 0
+    ):
+        return None
+    answer = ctx.keyframes.verify(pose[None, :], inp.image)
+    if answer.index != 0 or not math.isfinite(answer.heading_std):
+        return None
+    return np.array([pose[0], pose[1], answer.refined_heading]), float(answer.heading_std)
+
+
 def reseed(ctx: Context, inp: Inputs, visit: Visit, place: Place, dec: Decision) -> Reseed:
     """The decision picked the copy; the laser sets the pose from it, then AMCL reseeds."""
     cfg = ctx.config
@@ -111,6 +133,14 @@ def reseed(ctx: Context, inp: Inputs, visit: Visit, place: Place, dec: Decision)
         f"visual decision: place {place.place_id}, direction {people(dec.direction)} of {place.m}"
     )
     gate = ctx.gate
+    if gate is not None and gate.rotation_centre is not None:
+        measured = _measured_again(ctx, inp, pose)
+        if measured is not None:
+            pose, theta_std = measured
+            cov = cov_from_std(cfg.decision_xy_std, theta_std)
+            reason += (
+                f" (heading measured again by the keyframes, std {math.degrees(theta_std):.2f} deg)"
+            )
     claim = None
     if gate is not None:
         claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))

@@ -20,6 +20,7 @@ two or more fits agreeing within 0.75 deg of their mean, 32 of 50 were measured,
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -38,6 +39,8 @@ from symloc.vision.two_view import ratio_matches, undistorted
 __all__ = ["RefinedHeading", "RefinementSettings", "refine_heading"]
 
 FloatArray = NDArray[np.float64]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -185,6 +188,14 @@ def refine_heading(
             min_matches=s.min_inliers,
             direction=float(phi[0]),
             direction_sigma=float(phi_sd[0]),
+        )
+        log.debug(
+            "keyframe %d: yaw %.2f deg (predicted %.2f), sigma %.2f deg, %d inliers",
+            kf.keyframe_id,
+            math.degrees(fit.yaw),
+            math.degrees(rel[0, 2]),
+            math.degrees(fit.sigma),
+            fit.inliers,
         )
         if not fit.fitted or fit.inliers < s.min_inliers or not fit.sigma <= s.max_sigma:
             continue
