@@ -53,8 +53,7 @@ from typing import Any
 import numpy as np
 
 from symloc.bench import grading
-from symloc.bench.localization import MAPPING_REACH
-from symloc.bench.scenario import build_scenario
+from symloc.bench.localization import bench_scenario
 from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
@@ -201,16 +200,7 @@ def record(
                 room = build_world(ref)
                 t0 = time.perf_counter()
                 with tempfile.TemporaryDirectory() as tmp:
-                    scen = build_scenario(
-                        room,
-                        rng=ref.robot_seed,
-                        workdir=Path(tmp),
-                        map_source="slam",
-                        explore_laps=1.0,
-                        explore_stops=MAPPING_REACH,
-                        regime=regime,
-                        keyframes=True,
-                    )
+                    scen = bench_scenario(ref, room, Path(tmp), regime=regime)
                     for i in trials:
                         kind = TRIAL_KINDS[i % len(TRIAL_KINDS)]
                         spec = TrialSpec(ref.world_id, family, i, kind, ref.trial_seed(i))

@@ -33,7 +33,7 @@ from symloc.sim.rooms import Room
 from symloc.vision.verification import VerificationSettings
 
 from .grading import GRADES
-from .scenario import build_scenario
+from .scenario import Scenario, build_scenario
 from .stats import wilson_interval
 from .trial import (
     DEFAULT_METHODS,
@@ -46,7 +46,15 @@ from .trial import (
 )
 from .world_sources import WorldRef, build_world, world_spec
 
-__all__ = ["MAPPING_REACH", "WorldResult", "WorldTask", "run_world", "summarize", "trial_rows"]
+__all__ = [
+    "MAPPING_REACH",
+    "WorldResult",
+    "WorldTask",
+    "bench_scenario",
+    "run_world",
+    "summarize",
+    "trial_rows",
+]
 
 
 #: A mapping trip's reach [m] that leaves keyframes within the camera's check of every place
@@ -101,6 +109,32 @@ class WorldResult:
     metadata: dict[str, Any] = field(default_factory=dict)
 
 
+def bench_scenario(
+    ref: WorldRef,
+    room: Room,
+    workdir: Path,
+    *,
+    regime: str,
+    map_source: str = "slam",
+    mapping_reach: float = MAPPING_REACH,
+    keyframes: bool = True,
+) -> Scenario:
+    """Map ``room`` (the world ``ref`` names) as the bench does: its own robot
+    (:attr:`WorldRef.robot_seed`), one lap along the walls, then stops to look around until no
+    reachable place is farther than ``mapping_reach`` [m] from the trip, with keyframes
+    (SLAM maps only) when ``keyframes``. Benchmarks that study the bench's maps build them here."""
+    return build_scenario(
+        room,
+        rng=ref.robot_seed,
+        workdir=workdir,
+        map_source=map_source,
+        explore_laps=1.0,
+        explore_stops=mapping_reach,
+        regime=regime,
+        keyframes=True if keyframes and map_source == "slam" else None,
+    )
+
+
 def run_world(task: WorldTask) -> WorldResult:
     """Build, map and run one world (the function each worker runs)."""
     t0 = time.perf_counter()
@@ -108,23 +142,17 @@ def run_world(task: WorldTask) -> WorldResult:
     room: Room = world.build() if world is not None else build_world(task.ref)
     order = int(room.order)
     with tempfile.TemporaryDirectory(prefix="symloc-bench-") as tmp:
-        scen = build_scenario(
+        scen = bench_scenario(
+            task.ref,
             room,
-            rng=task.ref.robot_seed,
-            workdir=Path(tmp),
-            map_source=task.map_source,
-            explore_laps=1.0,
-            explore_stops=task.mapping_reach,
+            Path(tmp),
             regime=task.regime,
+            map_source=task.map_source,
+            mapping_reach=task.mapping_reach,
             # deciding where the robot stands verifies against keyframes of the mapping trip;
             # recording them draws from their own stream, so the map and the other methods'
             # trials are the same with and without them
-            keyframes=(
-                True
-                if task.map_source == "slam"
-                and needs_keyframes(task.methods, LocalizerConfig().decide_here)
-                else None
-            ),
+            keyframes=needs_keyframes(task.methods, LocalizerConfig().decide_here),
         )
         t1 = time.perf_counter()
         trials = []
