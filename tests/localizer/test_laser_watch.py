@@ -112,7 +112,9 @@ class _KeyframesOutOfView:
     def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         return np.zeros(len(poses), np.int64)
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         raise AssertionError("no image is asked for: no keyframe is in view")
 
 

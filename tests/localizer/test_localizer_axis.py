@@ -288,7 +288,9 @@ class CorridorKeyframes:
         along = (off <= math.radians(40)) | (off >= math.pi - math.radians(40))
         return along.astype(np.int64) * 2
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         poses = np.asarray(poses, float)
         self.shown.append(poses.copy())
         self.reaches.append(reach)

@@ -49,7 +49,9 @@ class FakeKeyframes:
         """Every pose sees ``count`` keyframes in every direction (no view planning)."""
         return np.full(len(np.asarray(poses).reshape(-1, 3)), self.count, np.int64)
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         i = self.answer.pop(0) if self.answer else None
         pose = None if i is None else np.asarray(poses[i], float)
@@ -148,7 +150,9 @@ class UncheckedKeyframes(FakeKeyframes):
     """The image verifies the copy (a look-alike view) and cannot check the true pose: no
     keyframe looks where the true pose says the camera looks."""
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
         checks = tuple(
@@ -195,7 +199,9 @@ class TwoViewKeyframes(FakeKeyframes):
     """The first view verifies both hypotheses (keyframes that look alike from either, as a
     short corridor's two ends); the second verifies the copy alone and contradicts the truth."""
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
         if len(self.shown) == 1:

@@ -33,7 +33,9 @@ class TruthCamera:
     def expected_counts(self, poses: np.ndarray, reach: float = 0.0) -> np.ndarray:
         return np.full(len(np.asarray(poses).reshape(-1, 3)), 10, np.int64)
 
-    def verify(self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0) -> Verification:
+    def verify(
+        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+    ) -> Verification:
         p = np.asarray(poses, float).reshape(-1, 3)
         self.shown.append(p.copy())
         d = np.hypot(*(p[:, :2] - self.robot.pose[:2]).T)

@@ -25,7 +25,7 @@ class _KeyframePlaces(MemoryPlaces):
     def expected_counts(self, poses: Any, reach: float = 0.0) -> Any:
         raise AssertionError("not called while building")
 
-    def verify(self, poses: Any, image: Any, reach: float = 0.0) -> Any:
+    def verify(self, poses: Any, image: Any, reach: float = 0.0, *, refine: bool = False) -> Any:
         raise AssertionError("not called while building")
 
 

@@ -80,8 +80,9 @@ def test_bad_settings_name_the_field() -> None:
 
 
 def test_the_store_measures_a_verified_heading_again(views, tmp_path) -> None:
-    """VisionPlaceStore.verify names the verified hypothesis with the coarse heading and adds
-    the heading measured again and its std; with one keyframe there is nothing to agree."""
+    """VisionPlaceStore.verify names the verified hypothesis with the coarse heading and, when
+    asked, adds the heading measured again and its std; with one keyframe there is nothing to
+    agree."""
     from symloc.localizer.vision_store import VisionPlaceStore
     from symloc.sim.rooms import build_room as _room
     from symloc.vision.default_vocabulary import default_vocabulary
@@ -99,7 +100,11 @@ def test_the_store_measures_a_verified_heading_again(views, tmp_path) -> None:
                 [Keyframe(k.pose, k.features, voc.bow(k.features.descriptors)) for k in kfs[:count]]
             )
             store = VisionPlaceStore(vm, voc, calib)
-            answer = store.verify(np.stack([coarse, elsewhere]), image)
+            # measured again only when asked (about a second of CPU)
+            plain = store.verify(np.stack([coarse, elsewhere]), image)
+            assert plain.index == 0
+            assert math.isnan(plain.heading_std)
+            answer = store.verify(np.stack([coarse, elsewhere]), image, refine=True)
         assert answer.index == 0, answer.reason
         assert answer.pose is not None
         assert answer.pose[2] != pytest.approx(truth[2], abs=math.radians(0.1))  # coarse

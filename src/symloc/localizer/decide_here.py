@@ -714,7 +714,13 @@ class DecideHere:
         counts.images += 1
         moved = relative(self.odom0, inp.odom_pose)
         carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
-        answer = ctx.keyframes.verify(carried, image, self.reach if self.classes else 0.0)
+        answer = ctx.keyframes.verify(
+            carried,
+            image,
+            self.reach if self.classes else 0.0,
+            # a round map: the laser cannot set the heading, the camera measures it again
+            refine=ctx.gate is not None and ctx.gate.rotation_centre is not None,
+        )
         ctx.record.last_camera_check = (carried, answer)
         if self.classes is not None and self.labels is not None:
             vote = vote_heading(carried, self.labels, answer, cfg.axis_min_inliers)

@@ -456,8 +456,15 @@ class KeyframeStore(Protocol):
         sampled along a line), so its keyframes may lie that much further away."""
 
     def verify(
-        self, poses: FloatArray, image: NDArray[np.uint8], reach: float = 0.0
+        self,
+        poses: FloatArray,
+        image: NDArray[np.uint8],
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
     ) -> Verification:
         """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
         taken) against the keyframes it predicts the camera sees; name the single one verified
-        with margin, or none. ``reach`` [m] as in :meth:`expected_counts`."""
+        with margin, or none. ``reach`` [m] as in :meth:`expected_counts`. ``refine``: also
+        measure the verified one's heading again (:attr:`Verification.refined_heading`; about
+        a second of CPU, so only where the laser cannot set the heading)."""

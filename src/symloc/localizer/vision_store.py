@@ -227,11 +227,17 @@ class VisionPlaceStore:
         return self._kf_poses
 
     def verify(
-        self, poses: FloatArray, image: NDArray[np.uint8], reach: float = 0.0
+        self,
+        poses: FloatArray,
+        image: NDArray[np.uint8],
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
     ) -> Verification:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
         ``image`` with this store's vocabulary, camera and :attr:`verification` settings (the
-        expected keyframes up to ``reach`` [m] further away)."""
+        expected keyframes up to ``reach`` [m] further away); with ``refine`` the verified
+        hypothesis' heading measured again (:meth:`refine`)."""
         query = self.extractor.extract(image)
         dec = verify_hypotheses(
             np.asarray(poses, dtype=np.float64).reshape(-1, 3),
@@ -248,7 +254,9 @@ class VisionPlaceStore:
         index, reason = single_verified(dec, cfg.margin, cfg.heading_tolerance)
         pose = None if index is None else dec.checks[index].corrected_pose
         refined = (
-            None if pose is None or index is None else self.refine(pose, query, dec.checks[index])
+            None
+            if not refine or pose is None or index is None
+            else self.refine(pose, query, dec.checks[index])
         )
         checks = tuple(
             HypothesisVerdict(c.status, c.inliers, c.heading_offset, c.keyframe_id, c.expected)
