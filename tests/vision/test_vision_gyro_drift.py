@@ -139,3 +139,9 @@ def test_round_room_keyframes_without_evidence_stay(monkeypatch: pytest.MonkeyPa
     out, fit = round_room_keyframes(kfs, [0.1 * i for i in range(5)], [0.0, 0.0], np.eye(3))
     assert fit is None
     assert all(np.array_equal(a.pose, b.pose) for a, b in zip(out, kfs, strict=True))
+
+
+def test_anchor_flags_must_match_the_keyframes() -> None:
+    kfs = [_keyframe(np.array([float(i), 0.0, 0.1 * i]), float(i)) for i in range(5)]
+    with pytest.raises(ConfigurationError, match="anchor"):
+        round_room_keyframes(kfs, [0.1 * i for i in range(5)], [0.0, 0.0], np.eye(3), anchor=[1, 0])

@@ -257,7 +257,7 @@ def fit_drift(
     offsets = np.asarray(wrap_angle(raw - slam), np.float64)
     gauge = float(math.atan2(w @ np.sin(offsets), w @ np.cos(offsets)))
     headings = np.asarray(wrap_angle(raw - gauge), np.float64)
-    # the fit's uncertainty at each keyframe, about the gauge (the mean over keyframes)
+    # the fit's uncertainty at each keyframe, about the gauge (the weighted mean)
     basis = np.column_stack([t, turned])
     centred = basis - w @ basis
     fit_var = float(np.max(np.einsum("ni,ij,nj->n", centred, cov, centred)))
@@ -331,6 +331,12 @@ def round_room_keyframes(
     odom = _vector(odom_headings, "odom_headings", len(kfs))
     s = settings if settings is not None else DriftSettings()
     ps = pairs if pairs is not None else HeadingAlignmentSettings()
+    lever = np.sum(np.square(poses[:, :2] - c), axis=1)
+    if anchor is not None:
+        flags = np.asarray(anchor, bool).reshape(-1)
+        if flags.size != lever.size:
+            raise ConfigurationError(f"anchor: expected {lever.size} flags, got {flags.size}")
+        lever = lever * flags
     # the search for each pair's relative heading is centred on SLAM's (off by a few degrees
     # here, within the search's gate), not the gyro's (off by up to its bias times the time
     # between the two keyframes)
@@ -341,9 +347,6 @@ def round_room_keyframes(
     meas = measure_pairs(
         [kf.features for kf in kfs], poses, found, intrinsics, ps, dist_coeffs=dist_coeffs
     )
-    lever = np.sum(np.square(poses[:, :2] - c), axis=1)
-    if anchor is not None:
-        lever = lever * np.asarray(anchor, bool).reshape(-1)
     fit = fit_drift(odom, [kf.stamp for kf in kfs], poses[:, 2], meas, s, gauge_weights=lever)
     if fit is None:
         log.info("round-room keyframe headings: the images do not fix the gyro's drift")
