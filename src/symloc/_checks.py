@@ -18,7 +18,9 @@ __all__ = [
     "check_array",
     "check_finite_scalar",
     "check_in_range",
+    "check_integer",
     "check_positive",
+    "exact_real",
 ]
 
 
@@ -49,6 +51,22 @@ def check_positive(value: Any, name: str, *, allow_zero: bool = False) -> float:
         bound = ">= 0" if allow_zero else "> 0"
         raise ConfigurationError(f"{name}: expected a value {bound}, got {out}")
     return out
+
+
+def exact_real(value: Any) -> float:
+    """``value`` as a float when it is an int or a float (not a bool, not a numeric string:
+    a settings field typed wrong is refused, not converted); NaN otherwise, which fails every
+    range test."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return math.nan
+    return float(value)
+
+
+def check_integer(value: Any, name: str, low: int) -> int:
+    """Return ``value`` when it is an int (not a bool) >= ``low``."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+        raise ConfigurationError(f"{name}: expected an integer >= {low}, got {value!r}")
+    return value
 
 
 def check_in_range(value: Any, name: str, low: float, high: float) -> float:

@@ -43,6 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from symloc._checks import check_integer, exact_real
 from symloc.errors import ConfigurationError
 from symloc.geometry import wrap_angle
 from symloc.vision.keyframes import Keyframe
@@ -99,24 +100,14 @@ class DriftSettings:
             ("outlier_threshold", 0.0, True),
             ("gauge_decorrelation", 0.0, True),
         ):
-            v = getattr(self, name)
-            ok = (
-                not isinstance(v, bool)
-                and isinstance(v, (int, float))
-                and math.isfinite(v)
-                and (v > low if strict else v >= low)
-            )
-            if not ok:
+            v = exact_real(getattr(self, name))
+            if not (math.isfinite(v) and (v > low if strict else v >= low)):
                 raise ConfigurationError(
                     f"DriftSettings.{name}: expected a finite value {'>' if strict else '>='} "
-                    f"{low:g}, got {v!r}"
+                    f"{low:g}, got {getattr(self, name)!r}"
                 )
-        for name, low in (("min_pairs", 3), ("max_pairs", max(3, self.min_pairs))):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise ConfigurationError(
-                    f"DriftSettings.{name}: expected an integer >= {low}, got {v!r}"
-                )
+        check_integer(self.min_pairs, "DriftSettings.min_pairs", 3)
+        check_integer(self.max_pairs, "DriftSettings.max_pairs", max(3, self.min_pairs))
 
 
 @dataclass(frozen=True)
@@ -164,8 +155,8 @@ class DriftFit:
         [s] of the same trip: e.g. images that are not keyframes."""
         odom = _vector(odom_headings, "odom_headings")
         t = _vector(stamps, "stamps", odom.size)
-        drift = self.bias * t + self.scale * (odom - self.origin) + self.gauge
-        return np.asarray(wrap_angle(odom - drift), np.float64)
+        raw = _without_drift(odom, t, self.bias, self.scale, self.origin)
+        return np.asarray(wrap_angle(raw - self.gauge), np.float64)
 
     def summary(self) -> str:
         """One line in words."""
@@ -183,6 +174,14 @@ def _vector(v: ArrayLike, name: str, n: int | None = None) -> FloatArray:
         want = f"{n} " if n is not None else ""
         raise ConfigurationError(f"{name}: expected {want}finite values, got shape {a.shape}")
     return a
+
+
+def _without_drift(
+    odom: FloatArray, stamps: FloatArray, bias: float, scale: float, origin: float
+) -> FloatArray:
+    """Gyro headings (continuous) less the drift ``bias t + scale (odom - origin)``, before
+    the gauge."""
+    return odom - bias * stamps - scale * (odom - origin)
 
 
 def fit_drift(
@@ -247,8 +246,7 @@ def fit_drift(
     dof = max(int(used.sum()) - 2, 1)
     chi2 = float(np.sum(weights[used] * res[used] ** 2)) / dof
     cov = np.linalg.inv(normal) * max(chi2, 1.0)
-    drift = coef[0] * t + coef[1] * turned
-    raw = odom - drift
+    raw = _without_drift(odom, t, float(coef[0]), float(coef[1]), float(odom[0]))
     w = np.ones(n) if gauge_weights is None else _vector(gauge_weights, "gauge_weights", n)
     if np.any(w < 0) or not np.any(w > 0):
         raise ConfigurationError("gauge_weights: expected weights >= 0, some > 0")

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from symloc._checks import check_integer, exact_real
 from symloc.errors import ConfigurationError
 from symloc.geometry import relative, wrap_angle
 from symloc.vision.keyframes import Keyframe
@@ -97,27 +98,16 @@ class RefinementSettings:
             )
 
         for name in ("position_sigma", "max_sigma", "floor", "agreement", "threshold"):
-            v = getattr(self, name)
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, (int, float))
-                or not (math.isfinite(v) and v > 0)
-            ):
+            v = exact_real(getattr(self, name))
+            if not (math.isfinite(v) and v > 0):
                 raise bad(name, "a finite value > 0")
-        w = self.window
-        if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w <= math.pi / 2:
+        if not 0 < exact_real(self.window) <= math.pi / 2:
             raise bad("window", "an angle in (0, pi/2] rad")
-        r = self.lowe_ratio
-        if isinstance(r, bool) or not isinstance(r, (int, float)) or not 0 < r < 1:
+        if not 0 < exact_real(self.lowe_ratio) < 1:
             raise bad("lowe_ratio", "a value in (0, 1)")
-        for name, low in (
-            ("min_inliers", 8),
-            ("min_fits", 1),
-            ("max_keyframes", max(1, self.min_fits)),
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise bad(name, f"an integer >= {low}")
+        check_integer(self.min_inliers, "RefinementSettings.min_inliers", 8)
+        check_integer(self.min_fits, "RefinementSettings.min_fits", 1)
+        check_integer(self.max_keyframes, "RefinementSettings.max_keyframes", max(1, self.min_fits))
 
 
 @dataclass(frozen=True)

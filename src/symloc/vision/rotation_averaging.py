@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from symloc._checks import check_integer, exact_real
 from symloc.errors import ConfigurationError
 from symloc.geometry import relative, wrap_angle
 from symloc.vision.keyframes import Keyframe
@@ -156,18 +157,10 @@ class HeadingAlignmentSettings:
                 )
 
         def number(name: str) -> float:
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                return math.nan
-            return float(v)
+            return exact_real(getattr(self, name))
 
         def integer(name: str, low: int) -> None:
-            v = getattr(self, name)
-            check(
-                name,
-                not isinstance(v, bool) and isinstance(v, int) and v >= low,
-                f"an integer >= {low}",
-            )
+            check_integer(getattr(self, name), f"HeadingAlignmentSettings.{name}", low)
 
         for name in (
             "max_distance",
