@@ -28,6 +28,7 @@ import numpy as np
 from symloc.bench.localization import bench_scenario
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
+from symloc.vision.gyro_drift import declared_rotation_std
 
 WORLDS = ("circle:0", "circle:1")
 
@@ -59,7 +60,10 @@ def run_world(family: str, seed: int, split: str) -> dict[str, Any]:
             truth = scen.keyframe_true_poses
             before = _errors(scen.keyframe_slam_poses, truth)
             after = _errors(np.asarray(stored, np.float64), truth)
-            std = math.degrees(scen.settings.claim.map_rotation_std)
+            declared = declared_rotation_std(scen.store.visual_map)
+            std = math.degrees(
+                scen.settings.claim.map_rotation_std if declared is None else declared
+            )
             head = np.abs(
                 np.degrees(np.asarray(wrap_angle(stored[:, 2] - truth[:, 2]), np.float64))
             )

@@ -116,6 +116,19 @@ def relative(world_from_a: ArrayLike, world_from_b: ArrayLike) -> FloatArray:
     return compose(inverse(world_from_a), world_from_b)
 
 
+def turn_about(poses: ArrayLike, centre: ArrayLike, turn: ArrayLike) -> FloatArray:
+    """``poses`` (..., 3) turned by ``turn`` [rad] (broadcast) about the point ``centre`` (2,)
+    [m]: position and heading together, as a rigid rotation of the plane."""
+    c = np.asarray(centre, dtype=np.float64).reshape(2)
+    t = np.asarray(turn, dtype=np.float64)
+    cos, sin = np.cos(t), np.sin(t)
+    about = np.stack(
+        np.broadcast_arrays(c[0] - (cos * c[0] - sin * c[1]), c[1] - (sin * c[0] + cos * c[1]), t),
+        axis=-1,
+    )
+    return compose(about, poses)
+
+
 def transform_points(a_from_b: ArrayLike, points_b: ArrayLike) -> FloatArray:
     """Map points from frame b into frame a.
 

@@ -113,7 +113,13 @@ class _KeyframesOutOfView:
         return np.zeros(len(poses), np.int64)
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         raise AssertionError("no image is asked for: no keyframe is in view")
 

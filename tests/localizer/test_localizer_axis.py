@@ -289,7 +289,13 @@ class CorridorKeyframes:
         return along.astype(np.int64) * 2
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         poses = np.asarray(poses, float)
         self.shown.append(poses.copy())

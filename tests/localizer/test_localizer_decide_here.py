@@ -50,7 +50,13 @@ class FakeKeyframes:
         return np.full(len(np.asarray(poses).reshape(-1, 3)), self.count, np.int64)
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         i = self.answer.pop(0) if self.answer else None
@@ -151,7 +157,13 @@ class UncheckedKeyframes(FakeKeyframes):
     keyframe looks where the true pose says the camera looks."""
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
@@ -200,7 +212,13 @@ class TwoViewKeyframes(FakeKeyframes):
     short corridor's two ends); the second verifies the copy alone and contradicts the truth."""
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))

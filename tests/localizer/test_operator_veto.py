@@ -34,7 +34,13 @@ class TruthCamera:
         return np.full(len(np.asarray(poses).reshape(-1, 3)), 10, np.int64)
 
     def verify(
-        self, poses: np.ndarray, image: np.ndarray, reach: float = 0.0, *, refine: bool = False
+        self,
+        poses: np.ndarray,
+        image: np.ndarray,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: object = None,
     ) -> Verification:
         p = np.asarray(poses, float).reshape(-1, 3)
         self.shown.append(p.copy())

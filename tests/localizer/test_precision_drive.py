@@ -51,17 +51,17 @@ def test_far_from_the_middle_the_scale_error_alone_withholds_the_claim(long_room
     gate, claim = _claim(room, grid, far, 0.02)
     assert claim.verdict is Verdict.WITHHELD, claim.reason
     assert claim.imprecise, claim.reason
-    assert gate.scale_bound(claim)
+    assert gate.middle_bound(claim)
     # the same pose on a map of known scale is claimed: nothing else held it back
     _, exact = _claim(room, grid, far, 0.0)
     assert exact.ok, exact.reason
-    assert not gate.scale_bound(exact)
+    assert not gate.middle_bound(exact)
     # near the middle the same scale error is no obstacle
     _, near = _claim(room, grid, np.array([*room.center, 0.3]), 0.02)
     assert near.ok, near.reason
 
 
-def test_a_claim_withheld_for_its_fit_is_not_scale_bound(long_room) -> None:  # type: ignore[no-untyped-def]
+def test_a_claim_withheld_for_its_fit_is_not_middle_bound(long_room) -> None:  # type: ignore[no-untyped-def]
     room, grid = long_room
     truth = np.array([room.center[0] + 5.0, room.center[1], 0.3])
     gate, _ = _claim(room, grid, truth, 0.02)
@@ -71,7 +71,39 @@ def test_a_claim_withheld_for_its_fit_is_not_scale_bound(long_room) -> None:  # 
     partly = gate.check(np.zeros(3), scan.with_ranges(ranges))
     assert partly.verdict is not Verdict.CLAIM
     assert not partly.imprecise, partly.reason
-    assert not gate.scale_bound(partly)
+    assert not gate.middle_bound(partly)
+
+
+def test_on_a_round_map_the_heading_alone_far_from_the_centre_is_middle_bound() -> None:
+    """In a round room the camera's heading costs r times as much in position: 2.5 m from
+    the centre a 0.6 deg heading std is 2.6 cm along the wall, too much to claim, at the
+    centre nothing; the gate says the distance from the middle holds it back."""
+    from symloc.sim.rooms import build_room
+
+    room = build_room("circle", 3.0, lab=False)
+    grid = world_to_grid(room.world, RES, free_seeds=room.center[None, :])
+    centre = np.asarray(room.center, dtype=np.float64)
+    cfg = ClaimConfig(map_rotation_std=math.radians(0.25))
+    prior_cov = np.diag([0.03**2, 0.03**2, math.radians(0.6) ** 2])
+
+    def claim_at(radius: float, heading_std: float):  # type: ignore[no-untyped-def]
+        truth = np.array([centre[0] + radius, centre[1], 1.0])
+        gate = ClaimGate(surface_distance_field(grid), ALPHAS, cfg, rotation_centre=centre)
+        cov = prior_cov.copy()
+        cov[2, 2] = math.radians(heading_std) ** 2
+        scan = simulate_scan(room.world, truth, RPLIDAR_A2, 0)
+        return gate, gate.confirm(truth, cov, scan)
+
+    gate, far = claim_at(2.5, 0.6)
+    assert far.verdict is Verdict.WITHHELD, far.reason
+    assert far.imprecise, far.reason
+    assert gate.middle_bound(far)
+    _, near = claim_at(0.3, 0.6)
+    assert near.ok, near.reason
+    # a heading too unsure even at the centre (5 deg against the gate's 1.25): no drive
+    gate, lost = claim_at(2.5, 5.0)
+    assert lost.verdict is Verdict.WITHHELD
+    assert not gate.middle_bound(lost)
 
 
 def test_the_precise_place_is_clear_of_walls_and_nearest_the_middle(long_room) -> None:  # type: ignore[no-untyped-def]

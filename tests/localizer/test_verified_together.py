@@ -11,7 +11,7 @@ from symloc.geometry import wrap_angle
 from symloc.grid.fields import surface_distance_field
 from symloc.localizer.claim import ClaimGate
 from symloc.localizer.types import HypothesisVerdict, Verification
-from symloc.localizer.verified_together import one_pose_verified
+from symloc.localizer.verified_together import implied_pose, one_pose_verified
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.rooms import circular_room, regular_polygon_room
@@ -136,3 +136,72 @@ def test_one_verified_or_no_margin_settings_is_not_this_case(round_room) -> None
     pair = _answer(poses, truth[2], {0, 1}, {0: 80, 1: 70})
     unknown = Verification(None, None, "", checks=pair.checks)
     assert one_pose_verified(gate, scan, poses, unknown, PRIOR) is None
+
+
+# ---------------------------------------------------------------- a round map's gate
+
+
+@pytest.fixture(scope="module")
+def round_gate(round_room):
+    room, gate = round_room
+    centre = np.asarray(room.center, dtype=np.float64)
+    return room, ClaimGate(gate.field, ALPHAS, rotation_centre=centre)
+
+
+def _fit(pose: np.ndarray, heading: float, inliers: int, keyframe: int, verified: bool):
+    """A check of hypothesis ``pose`` whose fit on ``keyframe`` measures ``heading``."""
+    status = "verified" if verified else "contradicted"
+    off = float(wrap_angle(heading - pose[2]))
+    return HypothesisVerdict(status, inliers, off, keyframe, (keyframe,))
+
+
+def test_implied_pose_turns_about_a_round_maps_centre() -> None:
+    centre = np.array([1.0, -2.0])
+    pose = np.array([3.0, -2.0, 0.5])
+    turned = implied_pose(pose, math.pi / 2, centre)
+    assert np.allclose(turned, [1.0, 0.0, 0.5 + math.pi / 2])
+    # no centre: the heading alone
+    assert np.allclose(implied_pose(pose, 0.1), [3.0, -2.0, 0.6])
+
+
+def test_on_a_round_map_fits_anywhere_measuring_one_heading_decide_one_member(round_gate) -> None:
+    room, gate = round_gate
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] + 1.2, centre[1] + 0.5, 2.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 0)
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5 - 8.0))
+    head = truth[2] + math.radians(2.0)
+    checks = [HypothesisVerdict("contradicted", 0, math.nan) for _ in range(16)]
+    checks[0] = _fit(poses[0], head, 80, 10, verified=True)
+    # the same keyframe fitted for a sample 37 deg away (its own heading out of tolerance),
+    # and a keyframe no sample expects: both measure the truth's heading, and are support
+    checks[15] = _fit(poses[15], head, 80, 10, verified=False)
+    checks[3] = _fit(poses[3], head - math.radians(4.0), 120, 30, verified=False)
+    # a look-alike measuring another heading, under half the best verified fit
+    checks[8] = _fit(poses[8], head + math.radians(60.0), 39, 50, verified=False)
+    answer = Verification(None, None, "", checks=tuple(checks), margin=2.0, heading_tolerance=TOL)
+    one = one_pose_verified(gate, scan, poses, answer, PRIOR)
+    assert one is not None
+    assert one.index == 0
+    assert set(one.members) == {0, 3, 15}
+    # the member of the family with the measured heading: 2 deg about the centre from the truth
+    r = math.hypot(*(truth[:2] - centre))
+    chord = 2.0 * r * math.sin(math.radians(1.0))
+    assert math.hypot(*(one.pose[:2] - truth[:2])) == pytest.approx(chord, abs=1e-9)
+    assert float(wrap_angle(one.pose[2] - head)) == pytest.approx(0.0, abs=1e-9)
+    # a rival with more than half the inliers keeps it undecided
+    checks[8] = _fit(poses[8], head + math.radians(60.0), 41, 50, verified=False)
+    answer = Verification(None, None, "", checks=tuple(checks), margin=2.0, heading_tolerance=TOL)
+    assert one_pose_verified(gate, scan, poses, answer, PRIOR) is None
+
+
+def test_on_a_round_map_no_verified_fit_decides_nothing(round_gate) -> None:
+    room, gate = round_gate
+    centre = np.asarray(room.center, dtype=np.float64)
+    truth = np.array([centre[0] - 0.8, centre[1] + 1.0, -1.0])
+    scan = simulate_scan(room.world, truth, RPLIDAR_A2, 1)
+    poses = _family(centre, truth, np.radians(np.arange(16) * 22.5 - 5.0))
+    checks = [HypothesisVerdict("contradicted", 0, math.nan) for _ in range(16)]
+    checks[2] = _fit(poses[2], truth[2], 200, 7, verified=False)
+    answer = Verification(None, None, "", checks=tuple(checks), margin=2.0, heading_tolerance=TOL)
+    assert one_pose_verified(gate, scan, poses, answer, PRIOR) is None

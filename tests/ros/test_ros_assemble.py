@@ -25,7 +25,15 @@ class _KeyframePlaces(MemoryPlaces):
     def expected_counts(self, poses: Any, reach: float = 0.0) -> Any:
         raise AssertionError("not called while building")
 
-    def verify(self, poses: Any, image: Any, reach: float = 0.0, *, refine: bool = False) -> Any:
+    def verify(
+        self,
+        poses: Any,
+        image: Any,
+        reach: float = 0.0,
+        *,
+        refine: bool = False,
+        round_centre: Any = None,
+    ) -> Any:
         raise AssertionError("not called while building")
 
 
@@ -51,6 +59,32 @@ def test_a_visual_map_with_keyframes_reaches_the_localizer(
     assert (seen["keyframes"] is store) is has_keyframes
     assert seen["settings"].localizer.decide_here
     assert started == [True]  # a global start: nothing earned
+
+
+def test_a_visual_maps_declared_rotation_error_reaches_the_claim_gate(tmp_path: Path) -> None:
+    """A round room's measured map rotation (the mapping gyro's drift fitted to the images)
+    is what the node's claim gate assumes, as the bench's (not the 1.9 deg default)."""
+    import math
+
+    from symloc.localizer.claim import ClaimConfig
+    from symloc.vision import VisualMap
+    from symloc.vision.gyro_drift import META_KEY
+
+    room = np.zeros((8, 8), np.int8)
+    room[0] = 100
+    params = NodeParams.from_dict({})
+    with VisualMap(tmp_path / "places.db", create=True) as vm:
+        store = SimpleNamespace(visual_map=vm, all_places=list)
+        gate = assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store).claim_gate
+        assert gate is not None
+        assert gate.config.map_rotation_std == ClaimConfig().map_rotation_std
+        vm.set_meta(META_KEY, repr(math.radians(0.3)))
+        gate = assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store).claim_gate
+        assert gate is not None
+        assert gate.config.map_rotation_std == pytest.approx(math.radians(0.3))
+        vm.set_meta(META_KEY, "a lot")
+        with pytest.raises(ConfigurationError, match=META_KEY):
+            assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store)
 
 
 # ------------------------------------------------- files named by parameters (issue 31)

@@ -145,3 +145,17 @@ def test_anchor_flags_must_match_the_keyframes() -> None:
     kfs = [_keyframe(np.array([float(i), 0.0, 0.1 * i]), float(i)) for i in range(5)]
     with pytest.raises(ConfigurationError, match="anchor"):
         round_room_keyframes(kfs, [0.1 * i for i in range(5)], [0.0, 0.0], np.eye(3), anchor=[1, 0])
+
+
+def test_a_visual_maps_declared_rotation_std_is_read_back_and_checked(tmp_path) -> None:
+    from symloc.vision.gyro_drift import META_KEY, declared_rotation_std
+    from symloc.vision.visual_map import VisualMap
+
+    with VisualMap(tmp_path / "map.sqlite") as vm:
+        assert declared_rotation_std(vm) is None
+        vm.set_meta(META_KEY, repr(math.radians(0.4)))
+        assert declared_rotation_std(vm) == pytest.approx(math.radians(0.4))
+        for bad in ("nan", "-0.01", "0", "half a degree"):
+            vm.set_meta(META_KEY, bad)
+            with pytest.raises(ConfigurationError, match=f"map.sqlite: meta '{META_KEY}'"):
+                declared_rotation_std(vm)

@@ -57,7 +57,7 @@ from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.gyro_drift import META_KEY as ROTATION_STD_META
-from symloc.vision.gyro_drift import round_room_keyframes
+from symloc.vision.gyro_drift import declared_rotation_std, round_room_keyframes
 from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
@@ -255,6 +255,7 @@ class Scenario:
             rng=rng,
             keyframes=self.store,
             map_std_xy=self.map_std_xy,
+            map_rotation_std=declared_rotation_std(self.store.visual_map),
         )
 
     def map_symmetries(self) -> list[Any]:
@@ -703,12 +704,7 @@ def _map_with_slam(
             else:
                 kfs = fitted
             if drift is not None:
-                scen.settings = dataclasses.replace(
-                    scen.settings,
-                    claim=dataclasses.replace(
-                        scen.settings.claim, map_rotation_std=drift.heading_std
-                    ),
-                )
+                # the localizer reads it back as the node does (Scenario.localizer)
                 vm.set_meta(ROTATION_STD_META, repr(drift.heading_std))
                 scen.notes.append("mapping trip: " + drift.summary())
         if align is not None and kfs:

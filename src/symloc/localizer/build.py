@@ -12,7 +12,9 @@ what ``symloc ros node`` runs when both are given the same settings.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -75,6 +77,7 @@ def build_localizer(
     rng: np.random.Generator | None = None,
     keyframes: KeyframeStore | None = None,
     map_std_xy: float | None = None,
+    map_rotation_std: float | None = None,
 ) -> Localizer:
     """The localizer on ``grid`` configured by ``settings``; not initialised yet.
 
@@ -102,6 +105,11 @@ def build_localizer(
         :func:`symloc.grid.map_io.read_map_error`). The claim gate adds the larger of it and
         ``settings.claim.map_std_xy`` to every match's covariance, so on a map that disagrees
         with itself claims are withheld rather than wrong.
+    map_rotation_std : float, optional
+        A round map's rotation error about its centre [rad] (std) as measured where it was
+        built (a visual map's declaration,
+        :func:`symloc.vision.gyro_drift.declared_rotation_std`); it replaces the assumed
+        ``settings.claim.map_rotation_std``.
 
     The caller starts it: :meth:`Localizer.reset_global` (lost, AMCL over the whole map) or
     :meth:`Localizer.set_pose`. ``settings.laser_pose`` goes to every part that reads scans:
@@ -135,7 +143,7 @@ def build_localizer(
         map_symmetries=grid_symmetries(grid),
         claim_gate=ClaimGate(
             fields.surface(),
-            config=_with_map_error(settings.claim, map_std_xy),
+            config=_with_map_error(settings.claim, map_std_xy, map_rotation_std),
             laser_pose=laser,
             scale_centre=fields.derived("enclosed_centroid", enclosed_centroid),
             rotation_centre=grid_round_centre(grid),
@@ -193,8 +201,11 @@ def _inside_hull(points: FloatArray, hull_of: NDArray[np.int64]) -> NDArray[np.b
     return out
 
 
-def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig:
-    """``claim`` with its map error raised to ``map_std_xy`` [m] when that is larger, logged."""
+def _with_map_error(
+    claim: ClaimConfig, map_std_xy: float | None, map_rotation_std: float | None
+) -> ClaimConfig:
+    """``claim`` with its map error raised to ``map_std_xy`` [m] when that is larger and its
+    round-map rotation error replaced by ``map_rotation_std`` [rad] when given, logged."""
     raised = claim.with_map_error(map_std_xy)
     if raised is not claim:
         logger.info(
@@ -202,6 +213,14 @@ def _with_map_error(claim: ClaimConfig, map_std_xy: float | None) -> ClaimConfig
             raised.map_std_xy,
             claim.map_std_xy,
         )
+    if map_rotation_std is not None:
+        logger.info(
+            "claim gate: a round map's rotation error %.2f deg (std, measured) replaces the "
+            "assumed %.2f deg",
+            math.degrees(map_rotation_std),
+            math.degrees(claim.map_rotation_std),
+        )
+        raised = dataclasses.replace(raised, map_rotation_std=float(map_rotation_std))
     return raised
 
 

@@ -1197,14 +1197,26 @@ class ClaimGate:
         cov = drop @ match.covariance @ drop.T + float(prior_cov[2, 2]) * np.outer(turn, turn)
         return dataclasses.replace(match, pose=pose, covariance=cov)
 
-    def scale_bound(self, claim: Claim) -> bool:
-        """True when ``claim`` was withheld for its precision alone and the map's scale error
-        is what holds it back: the same match with every other term of the map's error
-        would be precise enough (:meth:`map_error` without the scale term). Nearer
-        :attr:`scale_centre` the scale term shrinks (:meth:`precise_place`)."""
-        if not claim.imprecise or claim.match is None or self.config.map_scale_std <= 0.0:
+    def middle_bound(self, claim: Claim) -> bool:
+        """True when ``claim`` was withheld for its precision alone and its distance from the
+        map's middle is what holds it back: the same match would be precise enough where
+        the map's scale error vanishes (:meth:`map_error` without the scale term) and, on a
+        round map, where a turn about :attr:`rotation_centre` no longer moves the robot (the
+        heading's uncertainty, the camera's and the map's, costs r times as much in position
+        at r from the centre, nothing at it). Nearer :attr:`scale_centre` both shrink
+        (:meth:`precise_place`; a round room's centre is its middle)."""
+        if not claim.imprecise or claim.match is None:
             return False
-        return self.config.precise(self._claim_covariance(claim.match, scale=False))
+        if self.config.map_scale_std <= 0.0 and self.rotation_centre is None:
+            return False
+        cov = self._claim_covariance(claim.match, scale=False)
+        if self.rotation_centre is not None:
+            r = np.asarray(claim.match.pose[:2], dtype=np.float64) - self.rotation_centre
+            # a heading error turns the pose about the centre: take its pull on the position
+            # out (J maps the turn vector (-r_y, r_x, 1) to (0, 0, 1))
+            at_centre = np.array([[1.0, 0.0, r[1]], [0.0, 1.0, -r[0]], [0.0, 0.0, 1.0]])
+            cov = at_centre @ cov @ at_centre.T
+        return self.config.precise(cov)
 
     def _claim_covariance(self, match: ScanMatch, *, scale: bool = True) -> FloatArray:
         """A claim's covariance (3, 3): the match's plus the map's own error at its pose

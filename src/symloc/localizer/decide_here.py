@@ -92,7 +92,7 @@ from .types import (
     Status,
     Verification,
 )
-from .verified_together import one_pose_verified
+from .verified_together import implied_pose, one_pose_verified
 from .view_planning import plan_turn
 
 __all__ = ["DecideHere", "DecideRouter", "Hypotheses", "propose"]
@@ -192,14 +192,40 @@ class Checked:
     contradicted: bool
 
 
-def checked_by(poses: FloatArray, odom: FloatArray, answer: Verification) -> list[Checked]:
+def checked_by(
+    poses: FloatArray,
+    odom: FloatArray,
+    answer: Verification,
+    centre: FloatArray | None = None,
+) -> list[Checked]:
     """The verdicts of ``answer`` on the hypotheses ``poses`` (K, 3) the image checked
-    (verified or contradicted; not those it could not check), at odometry pose ``odom``."""
-    return [
-        Checked(poses[i].copy(), np.asarray(odom, dtype=np.float64).copy(), c.status != "verified")
-        for i, c in enumerate(answer.checks)
-        if c.status in ("verified", "contradicted")
-    ]
+    (verified or contradicted; not those it could not check), at odometry pose ``odom``. On
+    a round map (``centre`` (2,) [m], its rotation centre) a verified hypothesis is recorded
+    as the member of the room's family its fit measured (:func:`implied_pose`)."""
+    out = []
+    for i, c in enumerate(answer.checks):
+        if c.status not in ("verified", "contradicted"):
+            continue
+        pose = poses[i].copy()
+        if centre is not None and c.verified and math.isfinite(c.heading_offset):
+            pose = implied_pose(pose, c.heading_offset, centre)
+        out.append(Checked(pose, np.asarray(odom, dtype=np.float64).copy(), not c.verified))
+    return out
+
+
+def _other_members(
+    before: list[Checked], pose: FloatArray, odom: FloatArray, tolerance: float
+) -> list[int]:
+    """On a round map, which earlier verified members (1-based, in ``before``'s order),
+    carried by odometry to ``odom`` (3,), are another member of the family than the decided
+    ``pose`` (3,): their heading more than ``tolerance`` [rad] from its (a heading is a
+    member)."""
+    out = []
+    for k, c in enumerate(before):
+        now = np.asarray(compose(c.pose, relative(c.odom, odom)), dtype=np.float64)
+        if abs(float(angle_diff(now[2], pose[2]))) > tolerance:
+            out.append(k + 1)
+    return out
 
 
 def contradicted_before(
@@ -714,13 +740,8 @@ class DecideHere:
         counts.images += 1
         moved = relative(self.odom0, inp.odom_pose)
         carried = np.asarray(compose(self.poses, moved), dtype=np.float64).reshape(-1, 3)
-        answer = ctx.keyframes.verify(
-            carried,
-            image,
-            self.reach if self.classes else 0.0,
-            # a round map: the laser cannot set the heading, the camera measures it again
-            refine=ctx.gate is not None and ctx.gate.rotation_centre is not None,
-        )
+        centre = None if ctx.gate is None else ctx.gate.rotation_centre
+        answer = ctx.keyframes.verify(carried, image, self.reach if self.classes else 0.0)
         ctx.record.last_camera_check = (carried, answer)
         if self.classes is not None and self.labels is not None:
             vote = vote_heading(carried, self.labels, answer, cfg.axis_min_inliers)
@@ -748,16 +769,25 @@ class DecideHere:
         cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
         # verified before this image, carried to now: a pose the camera vouched for once
         # is not ruled out by a later view that fails to see it
-        seen = checked_by(carried, inp.odom_pose, answer)
+        seen = checked_by(carried, inp.odom_pose, answer, centre)
         before = list(self.verified)
         self.verified.extend(c for c in seen if not c.contradicted)
         index, pose_or_none, verdict = answer.index, answer.pose, answer.reason
-        if index is None and ctx.gate is not None and isinstance(inp.scan, LaserScan):
-            together = one_pose_verified(ctx.gate, inp.scan, carried, answer, cov)
-            if together is not None:
-                index, pose_or_none, verdict = together.index, together.pose, together.reason
+        if (index is None or centre is not None) and ctx.gate is not None:
+            # a round map always: its fits measure members of the room's family, wherever
+            # they are (verified_together)
+            together = (
+                one_pose_verified(ctx.gate, inp.scan, carried, answer, cov)
+                if isinstance(inp.scan, LaserScan)
+                else None
+            )
+            index, pose_or_none, verdict = (
+                (together.index, together.pose, together.reason)
+                if together is not None
+                else (None, None, answer.reason)
+            )
         if index is None or pose_or_none is None:
-            return self._look_elsewhere(ctx, inp, f"image {self.views}: {answer.reason}")
+            return self._look_elsewhere(ctx, inp, f"image {self.views}: {verdict}")
         if self.classes is None:
             self.checked.extend(seen)
             fits = self.fits
@@ -780,11 +810,15 @@ class DecideHere:
                     f"image {self.views}: hypothesis {index + 1} verified, but no image could "
                     f"check {_listed(unchecked)}, which the laser ranks at least as high",
                 )
-            also = [
-                j + 1
-                for j in range(carried.shape[0])
-                if j != index and checked_before(before, carried[j], inp.odom_pose, cfg)
-            ]
+            also = (
+                _other_members(before, pose_or_none, inp.odom_pose, answer.heading_tolerance)
+                if centre is not None
+                else [
+                    j + 1
+                    for j in range(carried.shape[0])
+                    if j != index and checked_before(before, carried[j], inp.odom_pose, cfg)
+                ]
+            )
             if also:
                 # the camera's views disagree: an earlier one verified another hypothesis
                 # (keyframes that look alike from both, a short corridor's two ends); the
@@ -793,7 +827,11 @@ class DecideHere:
                     ctx,
                     inp,
                     f"image {self.views}: hypothesis {index + 1} verified, but an earlier "
-                    f"image verified {_listed(also)} too",
+                    + (
+                        f"image verified {len(also)} other member(s) of the round room's family"
+                        if centre is not None
+                        else f"image verified {_listed(also)} too"
+                    ),
                 )
         counts.verified += 1
         pose = np.asarray(pose_or_none, dtype=np.float64)
@@ -809,16 +847,16 @@ class DecideHere:
                 "against the axis decided before: neither is trusted",
             )
         gate = ctx.gate
-        if (
-            gate is not None
-            and gate.rotation_centre is not None
-            and index == answer.index
-            and math.isfinite(answer.heading_std)
-        ):
+        if centre is not None:
             # a round map: the laser cannot set the heading, so the camera's own measurement
-            # of it (planar motion against the keyframes) is what the claim's heading rests on
-            pose = np.array([pose[0], pose[1], answer.refined_heading])
-            cov = cov_from_std(cfg.decision_xy_std, answer.heading_std)
+            # of it (planar motion against the keyframes the decided member should be
+            # seeing) is what the claim's heading rests on
+            again = ctx.keyframes.verify(
+                pose.reshape(1, 3), image, refine=True, round_centre=centre
+            )
+            if again.index == 0 and math.isfinite(again.heading_std):
+                pose = np.array([pose[0], pose[1], again.refined_heading])
+                cov = cov_from_std(cfg.decision_xy_std, again.heading_std)
         claim = None
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))

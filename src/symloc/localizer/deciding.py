@@ -112,7 +112,9 @@ def _measured_again(
         or ctx.keyframes.keyframe_count() == 0
     ):
         return None
-    answer = ctx.keyframes.verify(pose[None, :], inp.image, refine=True)
+    gate = ctx.gate
+    centre = None if gate is None else gate.rotation_centre
+    answer = ctx.keyframes.verify(pose[None, :], inp.image, refine=True, round_centre=centre)
     if answer.index != 0 or not math.isfinite(answer.heading_std):
         return None
     return np.array([pose[0], pose[1], answer.refined_heading]), float(answer.heading_std)

@@ -257,17 +257,17 @@ class Tracking:
 
 
 def precision_request(ctx: Context, claim: Claim | None, earned: bool) -> Request | None:
-    """A ``GO_TO`` request towards where the map's scale error vanishes (the next waypoint,
-    in the robot frame of ``claim``'s pose, of the route through free space to
-    :meth:`ClaimGate.precise_place`: :meth:`ClaimGate.precise_route`) when ``claim``
-    (of an ``earned`` pose, claims not suspended) was withheld because that error alone makes
-    it too imprecise (:meth:`ClaimGate.scale_bound`); else None
-    (``LocalizerConfig.precision_drive``)."""
+    """A ``GO_TO`` request towards the map's middle, where its scale error and a round map's
+    rotation cost nothing in position (the next waypoint, in the robot frame of ``claim``'s
+    pose, of the route through free space to :meth:`ClaimGate.precise_place`:
+    :meth:`ClaimGate.precise_route`) when ``claim`` (of an ``earned`` pose, claims not
+    suspended) was withheld because its distance from there alone makes it too imprecise
+    (:meth:`ClaimGate.middle_bound`); else None (``LocalizerConfig.precision_drive``)."""
     gate = ctx.gate
     cfg = ctx.config
     if not cfg.precision_drive or gate is None or claim is None or claim.pose is None:
         return None
-    if not earned or gate.suspended or not gate.scale_bound(claim):
+    if not earned or gate.suspended or not gate.middle_bound(claim):
         return None
     route = gate.precise_route(cfg.precision_clearance)
     place = None if route is None else route.waypoint(claim.pose[:2], cfg.precision_lookahead)

@@ -1,7 +1,8 @@
 """A route through the map's free space to one goal, for the drive where a claim is precise.
 
-The claim gate withholds a claim whose only fault is the map's scale error, which grows with
-the distance from the map's middle (:meth:`~symloc.localizer.claim.ClaimGate.scale_bound`);
+The claim gate withholds a claim whose only fault is its distance from the map's middle (the
+map's scale error grows with it, and on a round map so does the position cost of a heading
+error: :meth:`~symloc.localizer.claim.ClaimGate.middle_bound`);
 the localizer then asks the driver to go towards the middle
 (:func:`~symloc.localizer.phases.precision_request`). A straight line there crosses walls in
 a U- or L-shaped room (on the dev split a U-shaped room stopped the robot 4.8 m short, facing

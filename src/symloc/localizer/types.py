@@ -462,9 +462,11 @@ class KeyframeStore(Protocol):
         reach: float = 0.0,
         *,
         refine: bool = False,
+        round_centre: FloatArray | None = None,
     ) -> Verification:
         """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
         taken) against the keyframes it predicts the camera sees; name the single one verified
         with margin, or none. ``reach`` [m] as in :meth:`expected_counts`. ``refine``: also
         measure the verified one's heading again (:attr:`Verification.refined_heading`; about
-        a second of CPU, so only where the laser cannot set the heading)."""
+        a second of CPU, so only where the laser cannot set the heading), on a round map
+        with its position turning about ``round_centre`` (2,) [m] with the heading."""

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
+from symloc.geometry import turn_about
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.heading_refinement import RefinedHeading, RefinementSettings, refine_heading
 from symloc.vision.orb import OrbFeatures
@@ -233,11 +234,13 @@ class VisionPlaceStore:
         reach: float = 0.0,
         *,
         refine: bool = False,
+        round_centre: FloatArray | None = None,
     ) -> Verification:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
         ``image`` with this store's vocabulary, camera and :attr:`verification` settings (the
         expected keyframes up to ``reach`` [m] further away); with ``refine`` the verified
-        hypothesis' heading measured again (:meth:`refine`)."""
+        hypothesis' heading measured again (:meth:`refine`), on a round map about its
+        ``round_centre`` (2,) [m]."""
         query = self.extractor.extract(image)
         dec = verify_hypotheses(
             np.asarray(poses, dtype=np.float64).reshape(-1, 3),
@@ -256,7 +259,7 @@ class VisionPlaceStore:
         refined = (
             None
             if not refine or pose is None or index is None
-            else self.refine(pose, query, dec.checks[index])
+            else self.refine(pose, query, dec.checks[index], round_centre)
         )
         checks = tuple(
             HypothesisVerdict(c.status, c.inliers, c.heading_offset, c.keyframe_id, c.expected)
@@ -275,18 +278,33 @@ class VisionPlaceStore:
         )
 
     def refine(
-        self, pose: FloatArray, query: OrbFeatures, check: HypothesisCheck
+        self,
+        pose: FloatArray,
+        query: OrbFeatures,
+        check: HypothesisCheck,
+        round_centre: FloatArray | None = None,
     ) -> RefinedHeading | None:
         """The heading of a verified ``pose`` (3,) measured again by planar motion
         (:func:`symloc.vision.heading_refinement.refine_heading`) against the keyframes
         ``check`` expected, the one that verified it first (None: no fit counts, or they
-        disagree)."""
+        disagree). On a round map (``round_centre`` (2,) [m]) the pose is first turned about
+        the centre to the check's heading, and its position follows the heading there."""
+        if round_centre is not None:
+            pose = turn_about(check.pose, round_centre, check.heading_offset)
         ids = list(check.expected)
         if check.keyframe_id is not None:
             ids = [check.keyframe_id] + [i for i in ids if i != check.keyframe_id]
         cfg = self.refinement
         kfs = [self.visual_map.keyframe(i) for i in ids[: cfg.max_keyframes]]
-        return refine_heading(pose, query, kfs, self.intrinsics, cfg, dist_coeffs=self.dist_coeffs)
+        return refine_heading(
+            pose,
+            query,
+            kfs,
+            self.intrinsics,
+            cfg,
+            dist_coeffs=self.dist_coeffs,
+            centre=round_centre,
+        )
 
     def stored_image(self, place_id: int, direction: int) -> NDArray[np.uint8] | None:
         """The stored image of one direction (None if images were not kept)."""

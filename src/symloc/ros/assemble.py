@@ -136,6 +136,23 @@ def make_localizer(
     # a visual map with keyframes lets the camera decide where the robot stands
     # (localizer.decide_here); a store without them leaves that to the paper's path
     keyframes = store if isinstance(store, KeyframeStore) else None
-    loc = build_localizer(grid, params.settings(), places=store, keyframes=keyframes)
+    loc = build_localizer(
+        grid,
+        params.settings(),
+        places=store,
+        keyframes=keyframes,
+        map_rotation_std=_declared_rotation_std(store),
+    )
     loc.reset_global()
     return loc
+
+
+def _declared_rotation_std(store: PlaceStore) -> float | None:
+    """The round-map rotation error [rad] the store's visual map declares (None: no visual
+    map, or none declared; :func:`symloc.vision.gyro_drift.declared_rotation_std`)."""
+    vmap = getattr(store, "visual_map", None)
+    if vmap is None:
+        return None
+    from symloc.vision.gyro_drift import declared_rotation_std
+
+    return declared_rotation_std(vmap)

@@ -53,8 +53,16 @@ from symloc.vision.rotation_averaging import (
     candidate_pairs,
     measure_pairs,
 )
+from symloc.vision.visual_map import VisualMap
 
-__all__ = ["META_KEY", "DriftFit", "DriftSettings", "fit_drift", "round_room_keyframes"]
+__all__ = [
+    "META_KEY",
+    "DriftFit",
+    "DriftSettings",
+    "declared_rotation_std",
+    "fit_drift",
+    "round_room_keyframes",
+]
 
 log = logging.getLogger(__name__)
 
@@ -359,3 +367,28 @@ def round_room_keyframes(
     ]
     log.info("%s", fit.summary())
     return out, fit
+
+
+def declared_rotation_std(visual_map: VisualMap) -> float | None:
+    """The rotation error [rad] (std) about a round map's centre that ``visual_map`` declares
+    (its ``meta`` key :data:`META_KEY`, written where the mapping gyro's drift was fitted to
+    the images: :attr:`DriftFit.heading_std`); None when it declares none.
+
+    Raises
+    ------
+    ConfigurationError
+        The value is not a finite positive number (naming the file and the key).
+    """
+    raw = visual_map.get_meta(META_KEY)
+    if raw is None:
+        return None
+    try:
+        value = float(raw)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0.0:
+        raise ConfigurationError(
+            f"{visual_map.path}: meta {META_KEY!r}: expected a finite positive angle [rad] "
+            f"(std), got {raw!r}"
+        )
+    return value
