@@ -107,6 +107,10 @@ IMAGE_PATIENCE = 3
 #: Turns in place per image allowed before the path gives up (re-planned views that never
 #: settle).
 TURNS_PER_VIEW = 2
+#: Scans a drive to a round room's centre may take (30 s at 10 Hz; the bench drives 0.3 m/s
+#: in rooms up to 8 m across) before deciding from wherever the robot got to (a table at the
+#: centre, a person in the way).
+ROUND_PATIENCE = 300
 #: A heading class of a new axis family is the axis' own when within this [rad] of it.
 SAME_CLASS = math.pi / 4
 
@@ -395,6 +399,10 @@ class DecideHere:
     #: why the camera is done here (its views used up, no keyframe in view): the laser's
     #: proposals go to the watch from then on; empty while the camera may still decide
     camera_done: str = ""
+    #: a round map's centre (3,) in the odometry frame while driving to it before deciding
+    #: (``LocalizerConfig.decide_round_reach``); True once this episode went there
+    round_target: FloatArray | None = None
+    centred: bool = False
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         if self.watch is not None:
@@ -410,6 +418,19 @@ class DecideHere:
                     f"deciding here: turning to look elsewhere (view {self.views + 1})",
                 ), self
             self.turn_start = None
+        if self.round_target is not None:
+            target = relative(inp.odom_pose, self.round_target)[:2]
+            self.waited += 1
+            if math.hypot(*target) > ctx.config.decide_round_reach and (
+                self.waited <= ROUND_PATIENCE
+            ):
+                request = Request(RequestKind.GO_TO_CENTRE, target=np.asarray(target))
+                why = (
+                    "deciding here: a round room: going to its centre first "
+                    f"({math.hypot(*target):.1f} m away)"
+                )
+                return self._wait(ctx, inp, request, why), self
+            self.round_target, self.waited = None, 0
         if self.poses is None:
             return self._propose(ctx, inp)
         if inp.image is None:
@@ -454,6 +475,9 @@ class DecideHere:
         found = axis_classes(ctx, inp, poses)
         if found is not None:
             return self._axis(ctx, inp, found[1], len(poses))
+        going = self._to_round_centre(ctx, inp, poses)
+        if going is not None:
+            return going
         keyframes = ctx.keyframes
         if keyframes is None or keyframes.keyframe_count() == 0:
             self.camera_done = "no keyframes to tell them apart"
@@ -482,6 +506,25 @@ class DecideHere:
         request = Request(RequestKind.CAPTURE_IMAGE)
         why = f"{len(poses)} poses explain the scan; image requested"
         return self._wait(ctx, inp, request, why), self
+
+    def _to_round_centre(self, ctx: Context, inp: Inputs, poses: FloatArray) -> Step | None:
+        """On a round map, survivors (K, 3) further than ``decide_round_reach`` from its
+        centre: the drive there starts (once an episode; the centre carried by odometry from
+        where the best survivor puts it) and this is its first step; else None."""
+        gate = ctx.gate
+        if gate is None or gate.rotation_centre is None or self.centred:
+            return None
+        centre = gate.rotation_centre
+        if math.hypot(*(poses[0, :2] - centre)) <= ctx.config.decide_round_reach:
+            return None
+        self.centred, self.waited = True, 0
+        in_robot = relative(poses[0], np.array([centre[0], centre[1], 0.0]))
+        self.round_target = np.asarray(compose(inp.odom_pose, in_robot), dtype=np.float64)
+        ctx.note(
+            f"deciding here: {len(poses)} poses of a round room explain the scan, "
+            f"{math.hypot(*(poses[0, :2] - centre)):.1f} m from its centre: going there first"
+        )
+        return self.step(ctx, inp)
 
     def _laser_claim(
         self, ctx: Context, inp: Inputs, pose: FloatArray, cov: FloatArray, single: str
