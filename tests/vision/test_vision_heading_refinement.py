@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import turn_about, wrap_angle
 from symloc.sim.camera import Camera
 from symloc.sim.rooms import build_room
 from symloc.vision.bow import BowVector
@@ -68,6 +68,61 @@ def test_disagreeing_views_give_none(views) -> None:
     # one fit alone has nothing to agree with
     assert refine_heading(truth, query, kfs[:1], calib) is None
     assert refine_heading(truth, query, kfs[:1], calib, RefinementSettings(min_fits=1)) is not None
+
+
+def test_two_of_three_that_agree_outvote_one_that_does_not(views) -> None:
+    kfs, truth, query, calib = views
+    turned = kfs[1].pose + np.array([0.0, 0.0, math.radians(3.0)])
+    bent = [kfs[0], Keyframe(turned, kfs[1].features, kfs[1].bow, keyframe_id=1), kfs[2]]
+    got = refine_heading(truth, query, bent, calib)
+    assert got is not None
+    assert set(got.keyframes) == {0, 2}
+    assert abs(math.degrees(float(wrap_angle(got.heading - truth[2])))) < 0.5
+    # two groups of two that each agree (0-1 and 1-2, not 0-2): no majority, nothing
+    both = [
+        Keyframe(
+            kfs[0].pose - np.array([0.0, 0.0, math.radians(0.5)]),
+            kfs[0].features,
+            kfs[0].bow,
+            keyframe_id=0,
+        ),
+        kfs[1],
+        Keyframe(
+            kfs[2].pose + np.array([0.0, 0.0, math.radians(0.5)]),
+            kfs[2].features,
+            kfs[2].bow,
+            keyframe_id=2,
+        ),
+    ]
+    assert (
+        refine_heading(truth, query, both, calib, RefinementSettings(agreement=math.radians(0.3)))
+        is None
+    )
+
+
+@pytest.mark.parametrize("off_deg", [5.0, -8.0])
+def test_on_a_round_map_the_position_follows_the_heading(off_deg: float) -> None:
+    """2.5 m from a round room's centre a coarse heading 5-8 deg off puts the position 22-35
+    cm along the wall too, and the fits made from there are 0.9-1.3 deg off or disagree;
+    with the centre they are made again from where their heading puts the pose."""
+    room = build_room("circle", 4.0, lab=False, textured=True)
+    cam, ex = Camera(), OrbExtractor()
+    c = np.asarray(room.center, np.float64)
+    kfs = []
+    for i, (dx, dy, th) in enumerate(((0.1, -2.43, 0.28), (0.3, -2.4, 0.38), (-0.12, -2.38, 0.25))):
+        pose = np.array([c[0] + dx, c[1] + dy, th])
+        feats = ex.extract(cam.render(room.world, pose, i))
+        kfs.append(Keyframe(pose, feats, BowVector.from_dict({i: 1.0}), keyframe_id=i))
+    truth = np.array([c[0] + 0.1, c[1] - 2.5, 0.32])
+    query = ex.extract(cam.render(room.world, truth, 99))
+    coarse = turn_about(truth, c, math.radians(off_deg))
+    got = refine_heading(coarse, query, kfs, cam.calibration, centre=c)
+    assert got is not None
+    assert abs(math.degrees(float(wrap_angle(got.heading - truth[2])))) < 0.6
+    alone = refine_heading(coarse, query, kfs, cam.calibration)
+    assert alone is None or abs(math.degrees(float(wrap_angle(alone.heading - truth[2])))) > 0.8
+    with pytest.raises(ConfigurationError, match="centre"):
+        refine_heading(truth, query, kfs, cam.calibration, centre=[0.0, math.nan])
 
 
 def test_bad_settings_name_the_field() -> None:

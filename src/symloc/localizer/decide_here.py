@@ -108,9 +108,11 @@ IMAGE_PATIENCE = 3
 #: settle).
 TURNS_PER_VIEW = 2
 #: Scans a drive to a round room's centre may take (30 s at 10 Hz; the bench drives 0.3 m/s
-#: in rooms up to 8 m across) before deciding from wherever the robot got to (a table at the
-#: centre, a person in the way).
+#: in rooms up to 8 m across) before deciding from wherever the robot got to ...
 ROUND_PATIENCE = 300
+#: ... or scans without getting 2 cm closer (a table at the centre, a person in the way: the
+#: driver stops short of obstacles; a turn in place first takes 2-3 s).
+ROUND_STALL = 50
 #: A heading class of a new axis family is the axis' own when within this [rad] of it.
 SAME_CLASS = math.pi / 4
 
@@ -403,6 +405,9 @@ class DecideHere:
     #: (``LocalizerConfig.decide_round_reach``); True once this episode went there
     round_target: FloatArray | None = None
     centred: bool = False
+    #: the least distance [m] to that centre so far, and scans since it last shrank by 2 cm
+    round_best: float = math.inf
+    round_stall: int = 0
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         if self.watch is not None:
@@ -420,9 +425,15 @@ class DecideHere:
             self.turn_start = None
         if self.round_target is not None:
             target = relative(inp.odom_pose, self.round_target)[:2]
+            left = math.hypot(*target)
             self.waited += 1
-            if math.hypot(*target) > ctx.config.decide_round_reach and (
-                self.waited <= ROUND_PATIENCE
+            if left < self.round_best - 0.02:
+                self.round_best, self.round_stall = left, 0
+            self.round_stall += 1
+            if (
+                left > ctx.config.decide_round_reach
+                and self.waited <= ROUND_PATIENCE
+                and self.round_stall <= ROUND_STALL
             ):
                 request = Request(RequestKind.GO_TO_CENTRE, target=np.asarray(target))
                 why = (

@@ -27,6 +27,7 @@ the pose is turned about it to the fits' median heading and fitted again, up to
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from collections.abc import Sequence
@@ -73,10 +74,11 @@ class RefinementSettings:
         median, :mod:`symloc.vision.rotation_averaging`), and the keyframes' fits share one
         query image, so their agreement does not shrink it.
     agreement : float
-        A fit further than this angle [rad] from the combined heading: the views disagree and
-        nothing is returned, > 0. A single fit's profile can claim 0.05 deg and be 1.5-3.5 deg
-        off (sideways travel trades against yaw); fits of different keyframes rarely agree on
-        such an error.
+        A fit further than this angle [rad] from the combined heading disagrees, > 0. A
+        single fit's profile can claim 0.05 deg and be 1.5-3.5 deg off (sideways travel
+        trades against yaw); fits of different keyframes rarely agree on such an error. When
+        not all agree, a strict majority that does (two of three) is the measurement; else
+        nothing is returned.
     min_fits : int
         Fewest keyframes whose fits count and agree, >= 1 (one fit has no check).
     max_keyframes : int
@@ -235,9 +237,29 @@ def _fit(
 def _combined(
     fits: Sequence[tuple[float, float, int, int]], s: RefinementSettings
 ) -> RefinedHeading | None:
-    """The fits' heading and std when at least ``min_fits`` agree within ``agreement``."""
-    if len(fits) < s.min_fits:
-        return None
+    """The heading and std of the fits that agree within ``agreement``: all of them, or else
+    the one largest group of at least ``min_fits`` that is a strict majority of them (one
+    fit of three off by 1.5-3 deg, as a single planar fit often is, does not void the other
+    two; two groups that agree as well do)."""
+    for size in range(len(fits), s.min_fits - 1, -1):
+        if 2 * size <= len(fits):
+            break
+        agreeing = [
+            g
+            for g in (_agreed(group, s) for group in itertools.combinations(fits, size))
+            if g is not None
+        ]
+        if len(agreeing) == 1:
+            return agreeing[0]
+        if agreeing:
+            return None
+    return None
+
+
+def _agreed(
+    fits: Sequence[tuple[float, float, int, int]], s: RefinementSettings
+) -> RefinedHeading | None:
+    """The fits' heading and std when every one lies within ``agreement`` of their mean."""
     h = np.asarray([f[0] for f in fits])
     profile = np.asarray([f[1] for f in fits])
     # each fit weighted with its floor: a profile that claims 0.05 deg must not outvote
