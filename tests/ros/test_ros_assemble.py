@@ -61,14 +61,15 @@ def test_a_visual_map_with_keyframes_reaches_the_localizer(
     assert started == [True]  # a global start: nothing earned
 
 
-def test_a_visual_maps_declared_rotation_error_reaches_the_claim_gate(tmp_path: Path) -> None:
+def test_a_visual_maps_declared_round_map_error_reaches_the_claim_gate(tmp_path: Path) -> None:
     """A round room's measured map rotation (the mapping gyro's drift fitted to the images)
-    is what the node's claim gate assumes, as the bench's (not the 1.9 deg default)."""
+    and placement (its trip's distortion) are what the node's claim gate assumes, as the
+    bench's (not the 1.9 deg default)."""
     import math
 
     from symloc.localizer.claim import ClaimConfig
     from symloc.vision import VisualMap
-    from symloc.vision.gyro_drift import META_KEY
+    from symloc.vision.gyro_drift import META_KEY, POSITION_META_KEY
 
     room = np.zeros((8, 8), np.int8)
     room[0] = 100
@@ -82,6 +83,11 @@ def test_a_visual_maps_declared_rotation_error_reaches_the_claim_gate(tmp_path: 
         gate = assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store).claim_gate
         assert gate is not None
         assert gate.config.map_rotation_std == pytest.approx(math.radians(0.3))
+        # how far the map is placed, from its trip's distortion: the gate's map error floor
+        vm.set_meta(POSITION_META_KEY, repr(0.12))
+        gate = assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store).claim_gate
+        assert gate is not None
+        assert gate.config.map_std_xy == pytest.approx(0.12)
         vm.set_meta(META_KEY, "a lot")
         with pytest.raises(ConfigurationError, match=META_KEY):
             assemble.make_localizer(OccupancyGrid(room, 0.05), params, places=store)

@@ -131,6 +131,11 @@ def test_round_room_keyframes_turn_about_the_centre(monkeypatch: pytest.MonkeyPa
     assert moved.max() < radius * math.radians(0.6)
     assert before.max() > 2.5 * moved.max()
     assert np.allclose(np.hypot(*(new[:, :2] - centre).T), radius)
+    # how far SLAM's trip was off along the wall, its common turn left out, as the fit sees it
+    along = radius * np.asarray(wrap_angle(err - np.mean(err)), np.float64)
+    truth_rms = math.sqrt(float(np.mean(np.square(along))))
+    assert fit.position_std == pytest.approx(truth_rms, rel=0.25, abs=0.004)
+    assert "off along the wall" in fit.summary()
 
 
 def test_round_room_keyframes_without_evidence_stay(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -147,15 +152,26 @@ def test_anchor_flags_must_match_the_keyframes() -> None:
         round_room_keyframes(kfs, [0.1 * i for i in range(5)], [0.0, 0.0], np.eye(3), anchor=[1, 0])
 
 
-def test_a_visual_maps_declared_rotation_std_is_read_back_and_checked(tmp_path) -> None:
-    from symloc.vision.gyro_drift import META_KEY, declared_rotation_std
+@pytest.mark.parametrize("which", ["rotation", "position"])
+def test_a_visual_maps_declared_error_is_read_back_and_checked(tmp_path, which: str) -> None:
+    from symloc.vision.gyro_drift import (
+        META_KEY,
+        POSITION_META_KEY,
+        declared_position_std,
+        declared_rotation_std,
+    )
     from symloc.vision.visual_map import VisualMap
 
+    key, read = (
+        (META_KEY, declared_rotation_std)
+        if which == "rotation"
+        else (POSITION_META_KEY, declared_position_std)
+    )
     with VisualMap(tmp_path / "map.sqlite") as vm:
-        assert declared_rotation_std(vm) is None
-        vm.set_meta(META_KEY, repr(math.radians(0.4)))
-        assert declared_rotation_std(vm) == pytest.approx(math.radians(0.4))
+        assert read(vm) is None
+        vm.set_meta(key, repr(0.007))
+        assert read(vm) == pytest.approx(0.007)
         for bad in ("nan", "-0.01", "0", "half a degree"):
-            vm.set_meta(META_KEY, bad)
-            with pytest.raises(ConfigurationError, match=f"map.sqlite: meta '{META_KEY}'"):
-                declared_rotation_std(vm)
+            vm.set_meta(key, bad)
+            with pytest.raises(ConfigurationError, match=f"map.sqlite: meta '{key}'"):
+                read(vm)

@@ -57,7 +57,12 @@ from symloc.symmetry import SymmetryConfig, SymmetryOrder, judge_symmetry
 from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.gyro_drift import META_KEY as ROTATION_STD_META
-from symloc.vision.gyro_drift import declared_rotation_std, round_room_keyframes
+from symloc.vision.gyro_drift import POSITION_META_KEY as POSITION_STD_META
+from symloc.vision.gyro_drift import (
+    declared_position_std,
+    declared_rotation_std,
+    round_room_keyframes,
+)
 from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
@@ -254,7 +259,7 @@ class Scenario:
             places=self.store,
             rng=rng,
             keyframes=self.store,
-            map_std_xy=self.map_std_xy,
+            map_std_xy=_larger(self.map_std_xy, declared_position_std(self.store.visual_map)),
             map_rotation_std=declared_rotation_std(self.store.visual_map),
         )
 
@@ -704,8 +709,10 @@ def _map_with_slam(
             else:
                 kfs = fitted
             if drift is not None:
-                # the localizer reads it back as the node does (Scenario.localizer)
+                # the localizer reads them back as the node does (Scenario.localizer)
                 vm.set_meta(ROTATION_STD_META, repr(drift.heading_std))
+                if math.isfinite(drift.position_std) and drift.position_std > 0.0:
+                    vm.set_meta(POSITION_STD_META, repr(drift.position_std))
                 scen.notes.append("mapping trip: " + drift.summary())
         if align is not None and kfs:
             aligned = align_keyframe_headings(kfs, scen.hardware.calibration, align)
@@ -1017,3 +1024,9 @@ def run_symloc(
 def odom_zero() -> OdometryReading:
     """An odometry reading at the origin (helper)."""
     return OdometryReading(np.zeros(3))
+
+
+def _larger(a: float | None, b: float | None) -> float | None:
+    """The larger of two optional stds (None: not given)."""
+    given = [v for v in (a, b) if v is not None]
+    return max(given) if given else None

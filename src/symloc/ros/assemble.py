@@ -136,23 +136,26 @@ def make_localizer(
     # a visual map with keyframes lets the camera decide where the robot stands
     # (localizer.decide_here); a store without them leaves that to the paper's path
     keyframes = store if isinstance(store, KeyframeStore) else None
+    rotation_std, position_std = _declared_round_map_error(store)
     loc = build_localizer(
         grid,
         params.settings(),
         places=store,
         keyframes=keyframes,
-        map_rotation_std=_declared_rotation_std(store),
+        map_std_xy=position_std,
+        map_rotation_std=rotation_std,
     )
     loc.reset_global()
     return loc
 
 
-def _declared_rotation_std(store: PlaceStore) -> float | None:
-    """The round-map rotation error [rad] the store's visual map declares (None: no visual
-    map, or none declared; :func:`symloc.vision.gyro_drift.declared_rotation_std`)."""
+def _declared_round_map_error(store: PlaceStore) -> tuple[float | None, float | None]:
+    """The round map's rotation error [rad] and position error [m] the store's visual map
+    declares (None: no visual map, or none declared;
+    :func:`symloc.vision.gyro_drift.declared_rotation_std`, ``declared_position_std``)."""
     vmap = getattr(store, "visual_map", None)
     if vmap is None:
-        return None
-    from symloc.vision.gyro_drift import declared_rotation_std
+        return None, None
+    from symloc.vision.gyro_drift import declared_position_std, declared_rotation_std
 
-    return declared_rotation_std(vmap)
+    return declared_rotation_std(vmap), declared_position_std(vmap)
