@@ -185,7 +185,7 @@ def _one_round_pose(poses: FloatArray, answer: Verification, centre: FloatArray)
     group = np.array([implied[i] for i in agree])
     far = float(np.max(np.hypot(*(group[:, :2] - implied[best][:2]).T)))
     turn = float(np.max(np.abs(wrap_angle(group[:, 2] - heading))))
-    support = sorted({checks[i].keyframe for i in agree if checks[i].keyframe is not None})
+    support = {k for i in agree if (k := checks[i].keyframe) is not None}
     return OnePose(
         index=best,
         pose=implied[best],

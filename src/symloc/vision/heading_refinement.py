@@ -202,7 +202,7 @@ def _fit(
     q: OrbFeatures,
     kf: Keyframe,
     K: FloatArray,
-    dist: FloatArray | None,
+    dist: tuple[float, ...],
     s: RefinementSettings,
 ) -> tuple[float, float, int, int] | None:
     """The query's heading [rad] from one keyframe with its profile std [rad], the keyframe's
