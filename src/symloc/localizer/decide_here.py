@@ -908,9 +908,23 @@ class DecideHere:
             again = ctx.keyframes.verify(
                 pose.reshape(1, 3), image, refine=True, round_centre=centre
             )
-            if again.index == 0 and math.isfinite(again.heading_std):
-                pose = np.array([pose[0], pose[1], again.refined_heading])
-                cov = cov_from_std(cfg.decision_xy_std, again.heading_std)
+            if again.index != 0 or not math.isfinite(again.heading_std):
+                # the coarse heading (decide_theta_std) can never be claimed in a round room,
+                # and once AMCL is reseeded on it nothing there sharpens it: another view
+                # may measure it (dev seeds 2-3: half the decisions at the centre ended so)
+                return self._look_elsewhere(
+                    ctx,
+                    inp,
+                    f"image {self.views}: hypothesis {index + 1} verified, but its heading "
+                    "was not measured again ("
+                    + (
+                        "the planar-motion fits disagree)"
+                        if again.index == 0
+                        else f"the decided member alone: {again.reason})"
+                    ),
+                )
+            pose = np.array([pose[0], pose[1], again.refined_heading])
+            cov = cov_from_std(cfg.decision_xy_std, again.heading_std)
         claim = None
         if gate is not None:
             claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
