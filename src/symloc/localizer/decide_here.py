@@ -23,7 +23,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    (:class:`~symloc.localizer.types.KeyframeStore`). Exactly one verified with margin, or
    several that are one pose (:mod:`~symloc.localizer.verified_together`: neighbouring
    samples of a round room's family, which the laser sets within the tolerance of each other
-   from the camera's heading): the laser sets the pose from it (:meth:`ClaimGate.confirm`),
+   from the camera's heading; on a round map every fit measures a member of the family, and
+   the robot first drives to within ``decide_round_reach`` of the centre, where the heading
+   costs nothing in position, and the decided member's heading must be measured again by
+   planar motion or another view is taken): the laser sets the pose from it
+   (:meth:`ClaimGate.confirm`),
    AMCL is reseeded there, and the pose is published only if the gate claims it. The camera
    cannot overrule the laser about a hypothesis no image checked: a survivor that no image of
    this episode could check (no keyframe where it says the camera looks; none contradicted
