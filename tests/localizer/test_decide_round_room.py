@@ -55,7 +55,7 @@ def test_far_from_a_round_rooms_centre_deciding_here_drives_there_first() -> Non
     assert "going to its centre first" in est.reason, est.reason
     assert est.status is not Status.TRACKING
     assert est.request is not None
-    assert est.request.kind is RequestKind.GO_TO_CENTRE
+    assert est.request.kind is RequestKind.GO_TO
     # the target is the centre in the robot's frame, whichever rotated copy the robot is
     want = relative(truth, centre)[:2]
     assert math.hypot(*(est.request.target - want)) < 0.1
@@ -66,7 +66,7 @@ def test_far_from_a_round_rooms_centre_deciding_here_drives_there_first() -> Non
         OdometryReading(odom.copy(), 1.0), simulate_scan(room.world, truth, RPLIDAR_A2, 1)
     )
     assert est.request is not None
-    assert est.request.kind is not RequestKind.GO_TO_CENTRE, est.reason
+    assert est.request.kind is not RequestKind.GO_TO, est.reason
 
 
 class _MeasuringKeyframes(_Keyframes):

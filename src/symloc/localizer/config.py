@@ -87,9 +87,9 @@ class LocalizerConfig:
         along the wall, beyond the gate's 2.5 cm, and odometry carries the withheld pose's
         heading off by 5 % of every turn on the way in (dev circle#1, realistic sensors: every
         such decision withheld, the carried heading 3 deg off after 4 s). So deciding here on
-        a round map first drives to within this distance [m] of the centre (the laser finds
-        it in the robot's frame: every survivor puts it in the same place), where 1 deg of
-        heading is 0.9 cm.
+        a round map first drives (``GO_TO``, at travelling speed) to within this distance [m]
+        of the centre (the laser finds it in the robot's frame: every survivor puts it in the
+        same place), where 1 deg of heading is 0.9 cm.
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
     decide_rest : scans left to the other phases (AMCL's convergence, the drive to the centre)
         after deciding here handed over or gave up, before it is tried again.

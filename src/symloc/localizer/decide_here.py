@@ -439,7 +439,8 @@ class DecideHere:
                 and self.waited <= ROUND_PATIENCE
                 and self.round_stall <= ROUND_STALL
             ):
-                request = Request(RequestKind.GO_TO_CENTRE, target=np.asarray(target))
+                # at travelling speed: within decide_round_reach is enough, not millimetres
+                request = Request(RequestKind.GO_TO, target=np.asarray(target))
                 why = (
                     "deciding here: a round room: going to its centre first "
                     f"({math.hypot(*target):.1f} m away)"

@@ -77,7 +77,8 @@ class RequestKind(enum.Enum):
     ``GO_TO_CENTRE`` is Algorithm 2's drive to a symmetric place's centre (slow, to stop within
     millimetres); ``GO_TO`` a drive at travelling speed to where the map is precise enough for a
     claim the gate withholds (:func:`symloc.localizer.phases.precision_request`): the claim is
-    published from the first scan that passes on the way."""
+    published from the first scan that passes on the way; also deciding here's drive towards a
+    round room's centre (``LocalizerConfig.decide_round_reach``)."""
 
     GO_TO_CENTRE = "go_to_centre"
     GO_TO = "go_to"
