@@ -58,11 +58,7 @@ from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.gyro_drift import META_KEY as ROTATION_STD_META
 from symloc.vision.gyro_drift import POSITION_META_KEY as POSITION_STD_META
-from symloc.vision.gyro_drift import (
-    declared_position_std,
-    declared_rotation_std,
-    round_room_keyframes,
-)
+from symloc.vision.gyro_drift import declared_round_map_error, round_room_keyframes
 from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
@@ -253,14 +249,15 @@ class Scenario:
         settings = self.settings
         if config is not None:
             settings = dataclasses.replace(settings, localizer=config)
+        rotation_std, position_std = declared_round_map_error(self.store.visual_map)
         return build_localizer(
             self.grid,
             settings,
             places=self.store,
             rng=rng,
             keyframes=self.store,
-            map_std_xy=_larger(self.map_std_xy, declared_position_std(self.store.visual_map)),
-            map_rotation_std=declared_rotation_std(self.store.visual_map),
+            map_std_xy=_larger(self.map_std_xy, position_std),
+            map_rotation_std=rotation_std,
         )
 
     def map_symmetries(self) -> list[Any]:

@@ -96,6 +96,10 @@ __all__ = ["Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
 
 FloatArray = NDArray[np.float64]
 
+#: The heading axis of a pose (x, y, theta): a turn in place.
+_HEADING = np.array([0.0, 0.0, 1.0])
+_HEADING.setflags(write=False)
+
 
 @dataclass(frozen=True)
 class _Held:
@@ -1046,8 +1050,7 @@ class ClaimGate:
             r = np.asarray(pose[:2], dtype=np.float64) - self.scale_centre
             out[:2, :2] += cfg.map_scale_std**2 * np.outer(r, r)
         if self.rotation_centre is not None and cfg.map_rotation_std > 0.0:
-            r = np.asarray(pose[:2], dtype=np.float64) - self.rotation_centre
-            turn = np.array([-r[1], r[0], 1.0])  # d(pose) / d(rotation about the centre)
+            turn = self._turn_vector(pose, self.rotation_centre)
             out += cfg.map_rotation_std**2 * np.outer(turn, turn)
         return out
 
@@ -1188,12 +1191,11 @@ class ClaimGate:
         """
         if self.rotation_centre is None:
             return match
-        r = np.asarray(match.pose[:2], dtype=np.float64) - self.rotation_centre
-        turn = np.array([-r[1], r[0], 1.0])  # d(pose) / d(turn about the centre)
+        turn = self._turn_vector(match.pose, self.rotation_centre)
         dtheta = float(wrap_angle(match.pose[2] - prior[2]))
         pose = np.asarray(match.pose, dtype=np.float64) - dtheta * turn
         pose[2] = float(wrap_angle(pose[2]))
-        drop = np.eye(3) - np.outer(turn, [0.0, 0.0, 1.0])  # removes the heading part
+        drop = np.eye(3) - np.outer(turn, _HEADING)  # removes the heading part
         cov = drop @ match.covariance @ drop.T + float(prior_cov[2, 2]) * np.outer(turn, turn)
         return dataclasses.replace(match, pose=pose, covariance=cov)
 
@@ -1211,12 +1213,19 @@ class ClaimGate:
             return False
         cov = self._claim_covariance(claim.match, scale=False)
         if self.rotation_centre is not None:
-            r = np.asarray(claim.match.pose[:2], dtype=np.float64) - self.rotation_centre
             # a heading error turns the pose about the centre: take its pull on the position
-            # out (J maps the turn vector (-r_y, r_x, 1) to (0, 0, 1))
-            at_centre = np.array([[1.0, 0.0, r[1]], [0.0, 1.0, -r[0]], [0.0, 0.0, 1.0]])
+            # out (this maps the turn vector to (0, 0, 1), a turn at the centre)
+            pull = self._turn_vector(claim.match.pose, self.rotation_centre) - _HEADING
+            at_centre = np.eye(3) - np.outer(pull, _HEADING)
             cov = at_centre @ cov @ at_centre.T
         return self.config.precise(cov)
+
+    @staticmethod
+    def _turn_vector(pose: FloatArray, centre: FloatArray) -> FloatArray:
+        """d(pose) / d(turn about ``centre``) (3,) at ``pose`` (3,): (-r_y, r_x, 1), r the
+        position relative to the centre."""
+        r = np.asarray(pose[:2], dtype=np.float64) - centre
+        return np.array([-r[1], r[0], 1.0])
 
     def _claim_covariance(self, match: ScanMatch, *, scale: bool = True) -> FloatArray:
         """A claim's covariance (3, 3): the match's plus the map's own error at its pose

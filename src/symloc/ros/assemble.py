@@ -152,10 +152,10 @@ def make_localizer(
 def _declared_round_map_error(store: PlaceStore) -> tuple[float | None, float | None]:
     """The round map's rotation error [rad] and position error [m] the store's visual map
     declares (None: no visual map, or none declared;
-    :func:`symloc.vision.gyro_drift.declared_rotation_std`, ``declared_position_std``)."""
+    :func:`symloc.vision.gyro_drift.declared_round_map_error`)."""
     vmap = getattr(store, "visual_map", None)
     if vmap is None:
         return None, None
-    from symloc.vision.gyro_drift import declared_position_std, declared_rotation_std
+    from symloc.vision.gyro_drift import declared_round_map_error
 
-    return declared_rotation_std(vmap), declared_position_std(vmap)
+    return declared_round_map_error(vmap)

@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import check_integer, exact_real
 from symloc.errors import ConfigurationError
-from symloc.geometry import wrap_angle
+from symloc.geometry import turn_about, wrap_angle
 from symloc.vision.keyframes import Keyframe
 from symloc.vision.rotation_averaging import (
     HeadingAlignmentSettings,
@@ -62,6 +62,7 @@ __all__ = [
     "DriftSettings",
     "declared_position_std",
     "declared_rotation_std",
+    "declared_round_map_error",
     "fit_drift",
     "round_room_keyframes",
 ]
@@ -378,9 +379,7 @@ def round_room_keyframes(
         return kfs, None
     turn = np.asarray(wrap_angle(fit.headings - poses[:, 2]), np.float64)
     fit = replace(fit, position_std=_along_the_wall(turn, lever))
-    cos, sin = np.cos(turn), np.sin(turn)
-    d = poses[:, :2] - c
-    xy = c + np.column_stack([cos * d[:, 0] - sin * d[:, 1], sin * d[:, 0] + cos * d[:, 1]])
+    xy = turn_about(poses, c, turn)[:, :2]
     out = [
         replace(kf, pose=np.array([x, y, h]))
         for kf, (x, y), h in zip(kfs, xy.tolist(), fit.headings.tolist(), strict=True)
@@ -417,6 +416,14 @@ def declared_position_std(visual_map: VisualMap) -> float | None:
     from, off along the wall); None when it declares none. Raises as
     :func:`declared_rotation_std`."""
     return _declared(visual_map, POSITION_META_KEY, "distance [m]")
+
+
+def declared_round_map_error(visual_map: VisualMap) -> tuple[float | None, float | None]:
+    """The rotation error [rad] and position error [m] (stds) a round map's ``visual_map``
+    declares (:func:`declared_rotation_std`, :func:`declared_position_std`), what
+    :func:`symloc.localizer.build.build_localizer` takes as ``map_rotation_std`` and as a
+    floor of ``map_std_xy``."""
+    return declared_rotation_std(visual_map), declared_position_std(visual_map)
 
 
 def _declared(visual_map: VisualMap, key: str, what: str) -> float | None:
