@@ -103,6 +103,8 @@ def test_on_by_default_and_a_setting() -> None:
     for bad in (0.0, -0.1, math.nan, math.inf):
         with pytest.raises(ConfigurationError, match="decide_turn_tolerance"):
             LocalizerConfig(decide_turn_tolerance=bad)
+        with pytest.raises(ConfigurationError, match="decide_round_reach"):
+            LocalizerConfig(decide_round_reach=bad)
 
 
 def test_one_pose_left_by_the_laser_goes_to_amcl() -> None:

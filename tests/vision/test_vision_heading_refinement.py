@@ -130,6 +130,8 @@ def test_bad_settings_name_the_field() -> None:
         RefinementSettings(window=2.0)
     with pytest.raises(ConfigurationError, match=r"RefinementSettings\.min_inliers"):
         RefinementSettings(min_inliers=3)
+    with pytest.raises(ConfigurationError, match=r"RefinementSettings\.round_attempts"):
+        RefinementSettings(round_attempts=0)
     with pytest.raises(ConfigurationError, match="pose"):
         refine_heading([0.0, 1.0], None, [], np.eye(3))  # type: ignore[arg-type]
 
