@@ -249,3 +249,46 @@ def test_a_circle_is_round_and_a_polygon_is_not(sides, radius, round_):
 def test_a_circle_with_a_box_inside_is_still_round():
     grid = _walls(_polygon(96, 3.0) + _box(1.0, 0.2, 1.3, 0.5), -4.0, 4.0)
     assert map_symmetry.round_centre(grid, map_symmetries(grid)) is not None
+
+
+def _shelf_against_the_wall(radius: float, width: float, depth: float) -> OccupancyGrid:
+    """A round room of ``radius`` [m] about the origin with a shelf ``width`` x ``depth`` [m]
+    against its wall at +x, the wall behind the shelf unseen (as laser SLAM maps it)."""
+    back = math.sqrt(radius**2 - (width / 2) ** 2)
+    front = back - depth
+    grid = _walls(
+        _polygon(96, radius)
+        + [((front, -width / 2), (front, width / 2))]
+        + [((front, y), (back, y)) for y in (-width / 2, width / 2)],
+        -radius - 1.0,
+        radius + 1.0,
+    )
+    xy = grid.cell_to_world(np.argwhere(grid.data == 100))
+    hidden = (xy[:, 0] > back) & (np.abs(xy[:, 1]) < width / 2 - grid.resolution)
+    data = grid.data.copy()
+    rc = np.argwhere(grid.data == 100)[hidden]
+    data[rc[:, 0], rc[:, 1]] = 0
+    return OccupancyGrid(data, grid.resolution, grid.origin)
+
+
+def test_a_round_room_with_a_shelf_against_its_wall_is_round():
+    grid = _shelf_against_the_wall(3.0, 2.0, 0.5)
+    syms = map_symmetries(grid)
+    fields = MapFields.of(grid)
+    cells = map_symmetry._Cells.of(fields.grid, fields.near_obstacle(0.05), 2)
+    # the whole map no longer overlaps itself turned (the shelf and the wall it hides) ...
+    assert map_symmetry._overlap(grid, cells, map_symmetry.ROUND_TURNS[0], np.zeros(2)) < 0.88
+    # ... its enclosing wall does, but for the shelf's sectors
+    found = map_symmetry.round_centre(grid, syms)
+    assert found is not None
+    assert np.hypot(*found) < 0.05
+    share = map_symmetry._round_wall_share(grid, cells, found, 0.88)
+    assert map_symmetry.ROUND_WALL_SHARE <= share < 1.0
+
+
+def test_a_room_half_round_half_square_is_not_round():
+    # a semicircle of radius 3 m closed by three sides of a 6 m x 3 m rectangle: its straight
+    # walls show the laser (and SLAM) the turn about the centre
+    half = [s for s in _polygon(96, 3.0) if s[0][1] >= -1e-9 and s[1][1] >= -1e-9]
+    grid = _walls(half + [((-3, 0), (-3, -3)), ((-3, -3), (3, -3)), ((3, -3), (3, 0))], -4.0, 4.0)
+    assert map_symmetry.round_centre(grid, [MapSymmetry(np.zeros(2), 12, 0.9)]) is None
