@@ -290,5 +290,6 @@ def test_a_room_half_round_half_square_is_not_round():
     # a semicircle of radius 3 m closed by three sides of a 6 m x 3 m rectangle: its straight
     # walls show the laser (and SLAM) the turn about the centre
     half = [s for s in _polygon(96, 3.0) if s[0][1] >= -1e-9 and s[1][1] >= -1e-9]
-    grid = _walls(half + [((-3, 0), (-3, -3)), ((-3, -3), (3, -3)), ((3, -3), (3, 0))], -4.0, 4.0)
+    square = [((-3, 0), (-3, -3)), ((-3, -3), (3, -3)), ((3, -3), (3, 0))]
+    grid = _walls([*half, *square], -4.0, 4.0)
     assert map_symmetry.round_centre(grid, [MapSymmetry(np.zeros(2), 12, 0.9)]) is None
