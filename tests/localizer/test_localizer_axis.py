@@ -433,6 +433,63 @@ def test_the_heading_class_needs_two_views_that_agree() -> None:
     assert len(kf.shown) == 2
 
 
+@dataclass
+class OnceKeyframes(CorridorKeyframes):
+    """Keyframes that verify the right class at the images ``seen`` (call numbers, from 0) and
+    nothing at the others (every hypothesis contradicted)."""
+
+    seen: tuple[int, ...] = ()
+    calls: int = 0
+
+    def verify(self, poses, image, reach=0.0, *, refine=False, round_centre=None):  # type: ignore[no-untyped-def]
+        self.facing = TRUTH[2] if self.calls in self.seen else TRUTH[2] + 0.5 * math.pi
+        self.calls += 1
+        return super().verify(poses, image, reach, refine=refine, round_centre=round_centre)
+
+
+def _drive(loc: Localizer, est: Estimate, heading: float, until, limit: int = 80):  # type: ignore[no-untyped-def]
+    """Carry out the localizer's turns and give it images until ``until(est)``; the last
+    estimate and odometry heading."""
+    for _ in range(limit):
+        if until(est):
+            break
+        req = est.request
+        if req is not None and req.kind is RequestKind.ROTATE:
+            assert req.angle is not None
+            heading += req.angle
+        image = IMAGE if req is not None and req.kind is RequestKind.CAPTURE_IMAGE else None
+        est = _step(loc, odom=(0.0, 0.0, heading), image=image)
+    return est, heading
+
+
+def test_a_vote_from_an_earlier_episode_counts_towards_the_heading_class() -> None:
+    # the first image decides the class, the episode's other three verify nothing and it gives
+    # up; the next episode's first image, taken at another heading, decides the same class and
+    # its other views again nothing: the two views agree across the episodes
+    kf = OnceKeyframes(everywhere=True, seen=(0, 4))
+    proposer = FakeProposer(list(_corridor_poses()), complete=False)
+    loc = _corridor_localizer(_spread(), proposer, kf, axis_views=2, decide_rest=3)
+    est, _ = _drive(loc, _step(loc), 0.0, lambda e: kf.calls == 4)
+    assert any("1 of 2 views agree" in s for s in loc.log)
+    assert any(s.startswith("not decided here") for s in loc.log)
+    assert loc.decide_counts.axis == 0
+    # the scripted laser proposes the same map poses whatever odometry says: odometry turned
+    # 45 deg since the first vote (another view; its rotation within the class' half turn)
+    est, _ = _drive(loc, est, math.radians(45.0), lambda e: e.status is Status.AXIS)
+    assert est.status is Status.AXIS
+    assert kf.calls == 5  # decided at the second episode's first image
+    assert loc.decide_counts.axis == 1
+    # after a reset (a kidnapping, start-up) an earlier vote counts for nothing
+    kf = OnceKeyframes(everywhere=True, seen=(0, 4))
+    proposer = FakeProposer(list(_corridor_poses()), complete=False)
+    loc = _corridor_localizer(_spread(), proposer, kf, axis_views=2, decide_rest=3)
+    est, _ = _drive(loc, _step(loc), 0.0, lambda e: kf.calls == 4)
+    loc.reset_global()
+    _drive(loc, est, math.radians(45.0), lambda e: kf.calls == 6)
+    assert kf.calls == 6
+    assert loc.decide_counts.axis == 0
+
+
 def test_views_that_disagree_on_the_heading_class_decide_nothing() -> None:
     kf = CorridorKeyframes(everywhere=True)
     proposer = FakeProposer(list(_corridor_poses()), complete=False)
