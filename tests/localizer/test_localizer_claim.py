@@ -416,9 +416,6 @@ class _NoPlaces:
     def add_place(self, *args, **kw):  # type: ignore[no-untyped-def]
         raise AssertionError("no mapping here")
 
-    def all_places(self):  # type: ignore[no-untyped-def]
-        return []
-
 
 def test_a_kidnapped_robot_stops_claiming_at_once_and_relocalizes(l_room) -> None:
     room, grid = l_room

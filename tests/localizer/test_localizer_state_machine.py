@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
@@ -114,9 +114,6 @@ class FakeStore:
 
     def decide(self, place, image) -> Decision:
         return self.decisions.pop(0) if self.decisions else Decision("refused", reason="empty")
-
-    def all_places(self) -> list[Place]:
-        return list(self.places)
 
     def add_place(self, center, heading0, order, gv_distance, kind, images, headings=None) -> Place:
         self.added.append((center, heading0, order, gv_distance, kind, len(images)))
@@ -287,10 +284,7 @@ def test_symmetric_verdict_that_flips_back_abandons_the_trip_and_is_lost():
     judge.flip = [True] + [False] * 10
     tracker = _ambiguous_tracker(true)
     loc = Localizer(
-        tracker,
-        judge,
-        FakeStore(places=[PLACE]),
-        LocalizerConfig(decide_here=False, flip_patience=3),
+        tracker, judge, FakeStore(), LocalizerConfig(decide_here=False, flip_patience=3)
     )
     drv = Driver(loc, true)
     first = drv.step()
@@ -313,7 +307,7 @@ def test_a_single_spurious_verdict_keeps_going_on_odometry():
     loc = Localizer(
         _ambiguous_tracker(true),
         judge,
-        FakeStore(places=[PLACE]),
+        FakeStore(),
         LocalizerConfig(decide_here=False, flip_patience=3),
     )
     drv = Driver(loc, true)
@@ -597,23 +591,3 @@ def test_a_centre_decision_too_imprecise_to_claim_starts_the_claim_chain() -> No
     claim = gate.check(np.array([8.5, 0.0, 0.0]), simulate_scan(room.world, moved, near, 1))
     assert claim.verdict is Verdict.CLAIM, claim.reason
     assert math.hypot(*(claim.pose[:2] - moved[:2])) < 0.1
-
-
-def test_no_drive_to_the_centre_when_no_place_can_decide_there():
-    # a symmetric scan, AMCL converged on one copy, nothing stored to match at the centre and
-    # mapping not allowed: Algorithm 2's visit could only end undetermined, so it is not
-    # started, and AMCL's convergence earns nothing while the scan stays symmetric
-    true = np.array([2.9, 0.1, 0.0])
-    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), FakeStore(), PAPER)
-    drv = Driver(loc, true)
-    for _ in range(PAPER.converged_updates + 3):
-        est = drv.step()
-        assert est.status is Status.LOST
-        assert est.request is None
-        assert "no place stored to decide at its centre" in est.reason
-    # the same with mapping allowed: the visit can map the place, so it starts
-    mapping = replace(PAPER, allow_mapping=True)
-    loc = Localizer(_ambiguous_tracker(true), SquareJudge(), FakeStore(), mapping)
-    first = Driver(loc, true).step()
-    assert first.status is Status.AMBIGUOUS
-    assert first.request is not None

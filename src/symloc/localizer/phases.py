@@ -117,13 +117,7 @@ class Lost:
     def step(self, ctx: Context, inp: Inputs) -> Step:
         result, verdict = inp.result, inp.verdict
         if verdict.symmetric and verdict.center is not None:
-            if centre_can_decide(ctx):
-                return start_ambiguity(ctx, inp, "scan symmetric, pose not earned")
-            # AMCL's convergence earns nothing while the scan is symmetric, here as at the centre
-            self.converged.miss()
-            why = "scan symmetric, pose not earned; no place stored to decide at its centre"
-            ctx.notes.note_once(why)
-            return lost(why, result), self
+            return start_ambiguity(ctx, inp, "scan symmetric, pose not earned")
         if result.confident:  # the tracker's verdict (symloc.mcl.confidence)
             found = copies_ambiguity(ctx, inp, self, result.estimate)
             if found is not None:
@@ -354,15 +348,6 @@ def copies_ambiguity(
 
 
 # --------------------------------------------------------------------------- Algorithm 2
-
-
-def centre_can_decide(ctx: Context) -> bool:
-    """Whether Algorithm 2's visit to a symmetric place's centre can decide anything: some
-    place is stored whose images the camera can match there (Algorithm 3), or mapping one is
-    allowed (Algorithm 5 step 11). Without either the visit ends undetermined after the drive
-    and the turns (a dev short corridor the mapping stage did not judge symmetric: 30 s of
-    its 60 s, every time), and the robot is better left to decide where it stands."""
-    return ctx.config.allow_mapping or bool(ctx.known_places) or bool(ctx.places.all_places())
 
 
 def start_ambiguity(ctx: Context, inp: Inputs, why: str) -> Step:
