@@ -263,11 +263,11 @@ def _shelf_against_the_wall(radius: float, width: float, depth: float) -> Occupa
         -radius - 1.0,
         radius + 1.0,
     )
-    xy = grid.cell_to_world(np.argwhere(grid.data == 100))
+    occupied = np.argwhere(grid.data == 100)
+    xy = grid.cell_to_world(occupied)
     hidden = (xy[:, 0] > back) & (np.abs(xy[:, 1]) < width / 2 - grid.resolution)
     data = grid.data.copy()
-    rc = np.argwhere(grid.data == 100)[hidden]
-    data[rc[:, 0], rc[:, 1]] = 0
+    data[occupied[hidden, 0], occupied[hidden, 1]] = 0
     return OccupancyGrid(data, grid.resolution, grid.origin)
 
 

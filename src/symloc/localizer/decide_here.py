@@ -362,15 +362,16 @@ def _hypotheses(poses: FloatArray) -> tuple[Hypothesis, ...]:
 class AxisVote:
     """One image's decided heading class along an axis: ``rotation`` [rad] the map-from-odometry
     rotation it implies (the camera's map heading minus the odometry heading, unchanged by
-    turns in place and by driving), ``odom`` (3,) the odometry pose the image was taken at."""
+    turns in place and by driving), ``heading`` [rad] the odometry heading the image was
+    taken at."""
 
     rotation: float
-    odom: FloatArray
+    heading: float
 
     def apart_from(self, other: AxisVote, turn: float) -> bool:
         """Whether the two images were taken at odometry headings at least ``turn`` [rad]
         apart (views of different keyframes, not the same view twice)."""
-        return abs(float(angle_diff(self.odom[2], other.odom[2]))) >= turn
+        return abs(float(angle_diff(self.heading, other.heading))) >= turn
 
 
 @dataclass
@@ -823,8 +824,8 @@ class DecideHere:
                 return self._look_elsewhere(
                     ctx, inp, f"image {self.views}: heading not decided: {vote.reason}"
                 )
-            odom = np.asarray(inp.odom_pose, dtype=np.float64).copy()
-            now = AxisVote(float(angle_diff(vote.heading, odom[2])), odom)
+            heading = float(inp.odom_pose[2])
+            now = AxisVote(float(angle_diff(vote.heading, heading)), heading)
             votes = self.axis_votes
             if any(
                 abs(float(wrap_angle(v.rotation - now.rotation))) > 0.5 * math.pi for v in votes

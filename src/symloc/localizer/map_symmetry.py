@@ -262,22 +262,27 @@ def _round_wall_share(
     """
     d = cells.world - centre
     r = np.hypot(d[:, 0], d[:, 1])
-    a = np.arctan2(d[:, 1], d[:, 0]) + math.pi  # [0, 2 pi]
+    a = np.arctan2(d[:, 1], d[:, 0])
     bins = max(WALL_SECTORS, math.ceil(2.0 * math.pi * float(r.max()) / grid.resolution))
-    b = np.minimum((a * (bins / (2.0 * math.pi))).astype(np.intp), bins - 1)
+    b = _angle_bins(a, bins)
     farthest = np.full(bins, -np.inf)
     np.maximum.at(farthest, b, r)
     wall = r >= farthest[b] - 1.5 * grid.resolution
-    round_cell = np.ones(int(np.count_nonzero(wall)), dtype=bool)
-    for n in ROUND_TURNS:
-        round_cell &= _landed_on_hits(grid, cells, cells.world[wall], n, centre)
-    sector = np.minimum(
-        (a[wall] * (WALL_SECTORS / (2.0 * math.pi))).astype(np.intp), WALL_SECTORS - 1
+    wall_xy = cells.world[wall]
+    round_cell = np.logical_and.reduce(
+        [_landed_on_hits(grid, cells, wall_xy, n, centre) for n in ROUND_TURNS]
     )
+    sector = _angle_bins(a[wall], WALL_SECTORS)
     total = np.bincount(sector, minlength=WALL_SECTORS)
     good = np.bincount(sector, weights=round_cell, minlength=WALL_SECTORS)
     share = np.divide(good, total, out=np.zeros(WALL_SECTORS), where=total > 0)
     return float(np.mean(share >= min_overlap))
+
+
+def _angle_bins(angles: FloatArray, bins: int) -> IntArray:
+    """The bin (N,) of each of ``angles`` (N,) [rad, in [-pi, pi]] among ``bins`` equal ones."""
+    scaled = (np.asarray(angles) + math.pi) * (bins / (2.0 * math.pi))
+    return np.minimum(scaled.astype(np.intp), bins - 1)
 
 
 def _rotation(k: int) -> FloatArray:
