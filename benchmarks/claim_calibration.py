@@ -41,6 +41,7 @@ trials run.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import math
@@ -146,14 +147,25 @@ def record(
     worlds: list[tuple[str, int, list[int]]],
     regime: str,
     profile: float | None = None,
+    walls: tuple[float, float] | None = None,
 ) -> None:
     """Run the trials of ``worlds`` and append every judged claim to ``out`` (JSON lines);
-    with ``profile`` [m], log the fit profile of claims that far from the truth."""
+    with ``profile`` [m], log the fit profile of claims that far from the truth; with
+    ``walls`` (m, deg), the claim gate's matcher counts the walls' shared error
+    (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig` ``wall_std``, ``wall_tilt_std``)."""
     pending: list[dict[str, Any]] = []
     scans: list[tuple[Any, np.ndarray, np.ndarray]] = []
     context: dict[str, Any] = {}
     judge = claim_module.ClaimGate._judge
     append = grading.ScanLog.append
+    init = claim_module.ClaimGate.__init__
+
+    def with_walls(self: Any, *args: Any, **kwargs: Any) -> None:
+        init(self, *args, **kwargs)
+        if walls is not None:
+            self.match_config = dataclasses.replace(
+                self.match_config, wall_std=walls[0], wall_tilt_std=math.radians(walls[1])
+            )
 
     def judged(self: Any, prior: Any, prior_cov: Any, match: Any, points: Any) -> Any:
         c = judge(self, prior, prior_cov, match, points)
@@ -193,6 +205,7 @@ def record(
             return append(self, t, truth, *args, **kwargs)
 
         claim_module.ClaimGate._judge = judged  # type: ignore[method-assign]
+        claim_module.ClaimGate.__init__ = with_walls  # type: ignore[method-assign]
         grading.ScanLog.append = logged  # type: ignore[method-assign]
         try:
             for family, seed, trials in worlds:
@@ -218,6 +231,7 @@ def record(
                     scen.close()
         finally:
             claim_module.ClaimGate._judge = judge  # type: ignore[method-assign]
+            claim_module.ClaimGate.__init__ = init  # type: ignore[method-assign]
             grading.ScanLog.append = append  # type: ignore[method-assign]
 
 
@@ -324,17 +338,25 @@ def main() -> None:
     parser.add_argument(
         "--profile", type=float, metavar="D", help="log the fit profile of claims D m off"
     )
+    parser.add_argument(
+        "--walls",
+        type=float,
+        nargs=2,
+        metavar=("STD", "TILT_DEG"),
+        help="give the claim gate's matcher the walls' shared error (ScanMatchConfig.wall_std "
+        "[m], wall_tilt_std [deg]); default: its information_scale alone",
+    )
     args = parser.parse_args()
     if args.analyse and not args.out.is_file():
         parser.error(f"--out {args.out}: --analyse reads an existing JSON-lines file; none there")
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     print(
         f"# claim_calibration: worlds {args.worlds}, regime {args.regime}, out {args.out}, "
-        f"profile {args.profile}"
+        f"profile {args.profile}, walls {args.walls}"
     )
     print("# robot and trial seeds: WorldRef.robot_seed and .trial_seed (the bench's)")
     if not args.analyse:
-        record(args.out, args.worlds, args.regime, args.profile)
+        record(args.out, args.worlds, args.regime, args.profile, args.walls)
     analyse(args.out)
     analyse_best_fit(args.out)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -188,3 +189,59 @@ def test_numpy_lookups_give_the_compiled_match_bit_for_bit(l_room) -> None:
         assert np.array_equal(a.information, b.information)
         assert np.array_equal(a.covariance, b.covariance)
         assert (a.inlier_fraction, a.iterations) == (b.inlier_fraction, b.iterations)
+
+
+WALLS = ScanMatchConfig(wall_std=0.01, wall_tilt_std=math.radians(1.0))
+
+
+def test_a_square_rooms_scan_is_four_walls() -> None:
+    from symloc.mcl.scan_to_map import _inliers, _walls
+    from symloc.sim.rooms import regular_polygon_room
+
+    room = regular_polygon_room(4, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    pose = np.array([*room.center, 0.3])
+    pts = _inliers(field, _points(room.world, pose)[::4], pose, WALLS)
+    walls = _walls(field, pts, pose, WALLS)
+    sizes = np.bincount(walls.label)
+    assert np.count_nonzero(sizes >= 5) == 4
+    assert sizes[sizes >= 5].sum() >= 0.9 * len(pts)  # corners aside, every point on a wall
+    # the big walls' normals are the square's: two pairs, a quarter turn apart
+    big = walls.normal[sizes >= 5]
+    angles = np.arctan2(big[:, 1], big[:, 0])
+    assert np.all(np.abs(np.angle(np.exp(4j * (angles - angles[0])))) < math.radians(20.0))
+
+
+def test_a_walls_shared_error_is_counted_once() -> None:
+    """Twice the beams on the same walls: the independent model's position std shrinks by
+    sqrt(2); with the walls' shared error it hardly moves (it is the walls' own), while a
+    corridor's few end-wall beams, which the independent model discounts tenfold, count
+    nearly in full."""
+    room = hallway(13.5, 2.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    pose = np.array([*room.center, 0.1]) + np.array([0.0, 0.2, 0.0])
+    pts = _points(room.world, pose)
+
+    def across_along(cfg: ScanMatchConfig) -> tuple[float, float]:
+        cov = match_scan_to_map(field, pts, pose, cfg).covariance
+        return math.sqrt(cov[1, 1]), math.sqrt(cov[0, 0])
+
+    few, many = across_along(ScanMatchConfig()), across_along(ScanMatchConfig(max_points=360))
+    assert many[0] < 0.8 * few[0]
+    few_w = across_along(WALLS)
+    many_w = across_along(dataclasses.replace(WALLS, max_points=360))
+    assert many_w[0] > 0.9 * few_w[0]
+    # two long walls, each known to about wall_std
+    assert 0.5 * WALLS.wall_std < few_w[0] < 2.0 * WALLS.wall_std
+    # along the corridor: the end walls' beams
+    assert few_w[1] < 0.6 * few[1]
+    assert few_w[1] < 0.05
+
+
+def test_wall_settings_are_validated() -> None:
+    with pytest.raises(ConfigurationError, match="wall_std"):
+        ScanMatchConfig(wall_std=-0.01)
+    with pytest.raises(ConfigurationError, match="wall_gap"):
+        ScanMatchConfig(wall_gap=0.0)
