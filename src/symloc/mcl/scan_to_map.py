@@ -51,7 +51,13 @@ What it returns, besides the pose:
   information_scale 0.1  0.36 / 0.76  0.47 / 0.54  4 of 6     4 of 4
   walls 1 cm, 1 deg      0.68 / 1.68  1.19 / 1.55  6 of 6     3 of 4, 1 confident wrong
   walls 2 cm, 2 deg      0.56 / 1.34  0.99 / 1.28  6 of 6     3 of 4, 1 confident wrong
+  walls 2 cm, 4 deg      0.56 / 1.34  1.00 / 1.32  6 of 6     3 of 4, 1 confident wrong
   ====================== ============ ============ ========== ===========================
+
+  At 2 cm / 4 deg dev corridor_short#1 (trials 0-5) was 1.00 / 0.94 and never claimed, and
+  u_shape#1 (0-3) 1.35 / 1.45: the heading's information comes mostly from the walls'
+  offsets at their lever arms, not their tilt (4 deg changed nothing), and a U-shaped room's
+  walls are off from each other by more than 2 cm.
 
   The wrong trial (regular#0 trial 0): the first claim after deciding here, 2.0 s in, was
   4.8 cm / 5.6 deg off with a heading std of 0.85 deg (0.76 at 1 cm); ``information_scale``
