@@ -59,7 +59,7 @@ from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
 from symloc.localizer import claim as claim_module
-from symloc.localizer.best_fit import best_offset, fit_profile, widest_axis
+from symloc.localizer.best_fit import best_offset, fit_profile, turn_profile, widest_axis
 from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
 from symloc.sim.generator import FAMILIES
@@ -111,6 +111,11 @@ def _fit(gate: Any, pose: np.ndarray, points: np.ndarray) -> float:
 
 #: Offsets [m] along a claim's widest axis at which ``axis_profile`` records the scan's fit.
 AXIS_OFFSETS = np.round(np.arange(-0.3, 0.3001, 0.025), 3)
+#: the turns [rad] at which each judged claim's whole-scan fit is recorded: the gate's turn
+#: check profiles +-8 deg; the rest lets a claim displaced by up to 6 deg be checked too
+TURN_OFFSETS = np.radians(np.round(np.arange(-14.0, 14.001, 0.5), 1))
+#: heading displacements [rad] of the turn check's power table
+TURN_DISPLACEMENTS = np.radians([0.0, 2.0, 3.0, 4.0, 6.0])
 
 
 def _axis_profile(gate: Any, pose: np.ndarray, cov: Any, points: np.ndarray) -> dict[str, Any]:
@@ -184,6 +189,9 @@ def record(
                 "match_cov": np.asarray(match.covariance).tolist(),
                 "scale_centre": [float(x) for x in self.scale_centre],
                 "axis_profile": _axis_profile(self, np.asarray(c.pose), c.covariance, points),
+                "turn_fit": turn_profile(
+                    self.field, np.asarray(points), np.asarray(c.pose), TURN_OFFSETS, 0.3
+                ).tolist(),
             }
         )
         return c
@@ -329,6 +337,45 @@ def analyse_best_fit(path: Path, config: ClaimConfig | None = None) -> None:
         print(f"{100 * d:7.1f}cm {cells[0]:>13s} " + " ".join(f"{c:>17s}" for c in cells[1:]))
 
 
+def analyse_best_turn(path: Path, config: ClaimConfig | None = None) -> None:
+    """The same for the turn check: the claims published (or withheld by the turn check alone)
+    within 5 cm and 1.5 deg of the truth, as they were and turned by each of
+    :data:`TURN_DISPLACEMENTS` either way (the recorded ``turn_fit`` read at shifted turns)."""
+    cfg = (config if config is not None else ClaimConfig()).best_fit
+    centre = len(TURN_OFFSETS) // 2
+    half = len(cfg.turns) // 2
+    step = float(TURN_OFFSETS[1] - TURN_OFFSETS[0])
+    rows = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        row = json.loads(line)
+        if "truth" not in row or "turn_fit" not in row:
+            continue
+        if row["verdict"] != "CLAIM" and "better turn" not in row["reason"]:
+            continue
+        e = np.array(row["pose"]) - np.array(row["truth"])
+        if math.hypot(e[0], e[1]) <= 0.05 and abs(float(wrap_angle(e[2]))) <= math.radians(1.5):
+            rows.append(row)
+    print(f"# turn check on {len(rows)} claims within 5 cm / 1.5 deg of the truth")
+    families = sorted({r["family"] for r in rows})
+    print(f"{'turned':>9s} {'all':>13s} " + " ".join(f"{f:>17s}" for f in families))
+    for d in TURN_DISPLACEMENTS:
+        k = round(float(d) / step)
+        fired: dict[str, list[bool]] = defaultdict(list)
+        for r in rows:
+            fits = np.array(r["turn_fit"])
+            std = math.sqrt(float(np.array(r["cov"])[2][2]))
+            for sign in (1, -1)[: 1 if k == 0 else 2]:
+                lo = centre + sign * k - half
+                window = fits[lo : lo + 2 * half + 1]
+                at, gain = best_offset(cfg.turns, window)
+                hit = cfg.turn_contradicts(at, gain, std)
+                fired[r["family"]].append(hit)
+                fired["all"].append(hit)
+        cells = [f"{sum(fired[f])}/{len(fired[f])}" for f in ["all", *families]]
+        line = f"{math.degrees(d):6.1f}deg {cells[0]:>13s} "
+        print(line + " ".join(f"{c:>17s}" for c in cells[1:]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("worlds", nargs="*", type=world_arg, help="FAMILY:WORLD_SEED:TRIALS")
@@ -359,6 +406,7 @@ def main() -> None:
         record(args.out, args.worlds, args.regime, args.profile, args.walls)
     analyse(args.out)
     analyse_best_fit(args.out)
+    analyse_best_turn(args.out)
 
 
 if __name__ == "__main__":

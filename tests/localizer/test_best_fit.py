@@ -11,7 +11,14 @@ import pytest
 
 from symloc.errors import ConfigurationError
 from symloc.grid.fields import surface_distance_field
-from symloc.localizer.best_fit import BestFitConfig, best_offset, fit_profile, off_best_fit
+from symloc.localizer.best_fit import (
+    BestFitConfig,
+    best_offset,
+    fit_profile,
+    off_best_fit,
+    off_best_turn,
+    turn_profile,
+)
 from symloc.localizer.claim import ClaimConfig, ClaimGate, Verdict
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
@@ -92,9 +99,56 @@ def test_the_gate_withholds_a_claim_off_the_best_fit(corridor) -> None:  # type:
     assert gate._judge(TRUTH, prior_cov, at_truth, pts).verdict is Verdict.CLAIM
 
 
+def test_a_claim_turned_short_of_the_scans_best_fit_is_found(corridor) -> None:  # type: ignore[no-untyped-def]
+    field, gate, scan = corridor
+    pts = gate.points(scan)
+    cfg = BestFitConfig()
+    narrow = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
+    profile = turn_profile(field, pts, TRUTH, cfg.turns, 0.3)
+    assert abs(cfg.turns[int(np.argmin(profile))]) <= cfg.turn_step  # the truth fits best
+    assert off_best_turn(field, pts, TRUTH, narrow, 0.3, cfg) is None
+    turned = TRUTH + np.array([0.0, 0.0, math.radians(4.0)])
+    found = off_best_turn(field, pts, turned, narrow, 0.3, cfg)
+    assert found is not None
+    turn, gain = found
+    assert math.degrees(turn) == pytest.approx(-4.0, abs=0.5)  # back to the truth
+    assert gain > 0.2
+    # a heading std that admits the turn (3 x 2 deg > 4 deg), or the check left out: None
+    wide = np.diag([0.01**2, 0.01**2, math.radians(2.0) ** 2])
+    assert off_best_turn(field, pts, turned, wide, 0.3, cfg) is None
+    assert off_best_turn(field, pts, turned, narrow, 0.3, BestFitConfig(turn_reach=0.0)) is None
+
+
+def test_the_gate_withholds_a_claim_turned_off_the_best_fit(corridor) -> None:  # type: ignore[no-untyped-def]
+    field, gate, scan = corridor
+    pts = gate.points(scan)
+    claim = gate.confirm(TRUTH, np.diag([0.05**2, 0.05**2, 0.02**2]), scan)
+    assert claim.match is not None
+    off = TRUTH + np.array([0.0, 0.0, math.radians(4.0)])
+    # the alignment "stopped" 4 deg short with a heading std of 0.5 deg
+    stopped = dataclasses.replace(
+        claim.match, pose=off, covariance=np.diag([0.005**2, 0.005**2, math.radians(0.5) ** 2])
+    )
+    prior_cov = np.diag([0.1**2, 0.1**2, 0.1**2])
+    judged = gate._judge(off, prior_cov, stopped, pts)
+    assert judged.verdict is Verdict.WITHHELD
+    assert "better turned" in judged.reason
+    lax = ClaimGate(field, ALPHAS, ClaimConfig(best_fit_turn_reach=0.0))
+    assert lax._judge(off, prior_cov, stopped, pts).verdict is Verdict.CLAIM
+
+
 @pytest.mark.parametrize(
     ("field", "bad"),
-    [("reach", -0.1), ("step", 0.0), ("step", 0.5), ("sigmas", math.nan), ("gain", 1.0)],
+    [
+        ("reach", -0.1),
+        ("step", 0.0),
+        ("step", 0.5),
+        ("sigmas", math.nan),
+        ("gain", 1.0),
+        ("turn_reach", -0.1),
+        ("turn_step", 0.0),
+        ("turn_floor", math.inf),
+    ],
 )
 def test_bad_best_fit_settings_name_the_field(field: str, bad: float) -> None:
     with pytest.raises(ConfigurationError, match=f"ClaimConfig.best_fit_{field}"):

@@ -81,7 +81,7 @@ from scipy.special import erfc
 from symloc.errors import ConfigurationError
 from symloc.geometry import transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
-from symloc.localizer.best_fit import BestFitConfig, off_best_fit
+from symloc.localizer.best_fit import BestFitConfig, off_best_fit, off_best_turn
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
@@ -240,11 +240,13 @@ class ClaimConfig:
         tolerance in seven other dev worlds whose maps include stops around the whole floor that
         share was at most 0.03 (p99 0.00). 1 to leave it out.
     best_fit_reach, best_fit_step, best_fit_sigmas, best_fit_floor, best_fit_gain : float
+    best_fit_turn_reach, best_fit_turn_step, best_fit_turn_floor : float
         The best-fit check (:mod:`symloc.localizer.best_fit`, the fields of
         :class:`~symloc.localizer.best_fit.BestFitConfig` without the prefix): a claim that
         would pass every other test is withheld when the whole scan fits the map clearly
         better a few of its stds along its widest axis (the alignment stopped short of the
-        scan's best fit). ``best_fit_reach`` 0 leaves it out.
+        scan's best fit), or when it fits clearly better turned by a few heading stds.
+        ``best_fit_reach`` (``best_fit_turn_reach``) 0 leaves the position (heading) part out.
     """
 
     tolerance_position: float = 0.1
@@ -278,6 +280,9 @@ class ClaimConfig:
     best_fit_sigmas: float = BestFitConfig.sigmas
     best_fit_floor: float = BestFitConfig.floor
     best_fit_gain: float = BestFitConfig.gain
+    best_fit_turn_reach: float = BestFitConfig.turn_reach
+    best_fit_turn_step: float = BestFitConfig.turn_step
+    best_fit_turn_floor: float = BestFitConfig.turn_floor
 
     def __post_init__(self) -> None:
         for name in (
@@ -382,6 +387,9 @@ class ClaimConfig:
             sigmas=self.best_fit_sigmas,
             floor=self.best_fit_floor,
             gain=self.best_fit_gain,
+            turn_reach=self.best_fit_turn_reach,
+            turn_step=self.best_fit_turn_step,
+            turn_floor=self.best_fit_turn_floor,
         )
 
     def precise(self, cov: FloatArray) -> bool:
@@ -1170,6 +1178,20 @@ class ClaimGate:
                 f"claim withheld: the whole scan fits the map {100 * gain:.0f} % better "
                 f"{100 * offset:+.0f} cm along the pose's least certain axis (std "
                 f"{100 * _std(cov)[0]:.1f} cm): the alignment stopped short of the scan's best fit",
+                match,
+            )
+        turned = off_best_turn(
+            self.field, points, pose, cov, self.match_config.outlier_distance, cfg.best_fit
+        )
+        if turned is not None:
+            turn, gain = turned
+            return Claim(
+                Verdict.WITHHELD,
+                pose,
+                cov,
+                f"claim withheld: the whole scan fits the map {100 * gain:.0f} % better turned "
+                f"{math.degrees(turn):+.1f} deg (heading std {math.degrees(_std(cov)[2]):.2f} "
+                "deg): the alignment stopped short of the scan's best fit",
                 match,
             )
         return Claim(Verdict.CLAIM, pose, cov, "confirmed by the laser", match)
