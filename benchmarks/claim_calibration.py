@@ -21,6 +21,16 @@ Each judged claim also records the whole scan's fit along its widest covariance 
 (:mod:`symloc.localizer.best_fit`) on the claims published within 5 cm of the truth: how many
 it would withhold as they are (false alarms) and displaced 5-20 cm along that axis (its power).
 
+Each judged claim also records the whole scan's fit with the scan turned about the robot
+(``turn_fit``, -14 to +14 deg), and a third table gives the gate's turn check (the heading
+part of the best-fit check) on the claims within 5 cm / 1.5 deg of the truth: false alarms as
+they are, power turned 2-6 deg either way.
+
+``--walls STD TILT_DEG``: the claim gate's matcher counts the walls' shared error
+(:class:`symloc.mcl.scan_to_map.ScanMatchConfig` ``wall_std``, ``wall_tilt_std``; its module
+docstring has the results), so that its calibration can be compared with
+``information_scale``'s on the same trials.
+
 ``--profile D``: for every judged claim more than ``D`` metres from the truth with the heading
 within 0.1 rad, log the whole scan's fit to the map (mean squared distance of every beam's end,
 clipped at 0.3 m) at offsets along the error's direction from the truth, at the claim, and
