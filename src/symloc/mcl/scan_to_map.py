@@ -321,14 +321,15 @@ def _secant_information(
 ) -> FloatArray:
     """The information (3, 3) at the scale of the declared tolerance.
 
-    Over the end points that agree with the map at ``pose`` (within ``inlier_distance``), the
-    quadratic cost's symmetric second difference ``C(p + u) + C(p - u) - 2 C(p)`` is measured
+    Over the end points ``pts`` (N, 2) (robot frame; those that agree with the map at
+    ``pose``, :func:`_inliers`), the quadratic cost's symmetric second difference ``C(p + u) + C(p - u) - 2 C(p)`` is measured
     for 13 steps ``u`` of the size of the tolerance (``secant_position``, ``secant_heading``)
     and a quadratic form ``u^T Q u`` fitted to them by least squares; negative curvature is
     clipped.
     A direction along which the scan fits as well a tolerance away (the rotation about a round
     room's centre, a corridor's axis) has no information, whatever ripples the cost has in
-    between.
+    between. With the walls' shared error (``wall_std``, ``wall_tilt_std``) each eigen-direction
+    then keeps the share of its information that :func:`_wall_discount` leaves.
     """
     scale = np.array([cfg.secant_position, cfg.secant_position, cfg.secant_heading])
     if pts.shape[0] == 0:
@@ -380,7 +381,7 @@ class _Walls:
     1, ... in beam order), ``normal`` (W, 2) each wall's unit normal in the map frame (towards
     the side the laser saw it from), ``along`` (N,) [m] each point's position along its wall
     from the wall's mean; ``offset`` (W,) and ``tilt`` (W,) the Woodbury weights of a wall's
-    shared offset and tilt (:func:`_wall_cost`)."""
+    shared offset and tilt (:func:`_wall_discount`)."""
 
     label: NDArray[np.intp]
     normal: FloatArray
@@ -408,9 +409,8 @@ def _walls(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMat
     strength = np.hypot(grad[:, 0], grad[:, 1])
     direction = np.arctan2(grad[:, 1], grad[:, 0])
     clear = strength > 0.5
-    # normals as undirected lines: their angles doubled
     # from each point to the next, the last to the first included (a full turn's scan starts
-    # anywhere along a wall)
+    # anywhere along a wall); normals compared as undirected lines (their angles doubled)
     after = np.roll(np.arange(len(pts)), -1)
     turn = np.abs(wrap_angle(2.0 * (direction[after] - direction))) / 2.0
     step = here[after] - here
