@@ -69,7 +69,13 @@ from symloc.bench.trial import TRIAL_KINDS, TrialConfig, TrialSpec, run_trial
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
 from symloc.localizer import claim as claim_module
-from symloc.localizer.best_fit import best_offset, fit_profile, turn_profile, widest_axis
+from symloc.localizer.best_fit import (
+    TURN_REACH,
+    best_offset,
+    fit_profile,
+    turn_profile,
+    widest_axis,
+)
 from symloc.localizer.claim import ClaimConfig, _floored
 from symloc.mcl.scan_to_map import match_scan_to_map
 from symloc.sim.generator import FAMILIES
@@ -352,6 +358,8 @@ def analyse_best_turn(path: Path, config: ClaimConfig | None = None) -> None:
     within 5 cm and 1.5 deg of the truth, as they were and turned by each of
     :data:`TURN_DISPLACEMENTS` either way (the recorded ``turn_fit`` read at shifted turns)."""
     cfg = (config if config is not None else ClaimConfig()).best_fit
+    if cfg.turn_reach <= 0.0:  # off in the gate: the calibrated reach
+        cfg = dataclasses.replace(cfg, turn_reach=TURN_REACH)
     centre = len(TURN_OFFSETS) // 2
     half = len(cfg.turns) // 2
     step = float(TURN_OFFSETS[1] - TURN_OFFSETS[0])

@@ -12,6 +12,7 @@ import pytest
 from symloc.errors import ConfigurationError
 from symloc.grid.fields import surface_distance_field
 from symloc.localizer.best_fit import (
+    TURN_REACH,
     BestFitConfig,
     best_offset,
     fit_profile,
@@ -102,7 +103,8 @@ def test_the_gate_withholds_a_claim_off_the_best_fit(corridor) -> None:  # type:
 def test_a_claim_turned_short_of_the_scans_best_fit_is_found(corridor) -> None:  # type: ignore[no-untyped-def]
     field, gate, scan = corridor
     pts = gate.points(scan)
-    cfg = BestFitConfig()
+    assert BestFitConfig().turns.size == 1  # off by default: no turn but 0
+    cfg = BestFitConfig(turn_reach=TURN_REACH)
     narrow = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
     profile = turn_profile(field, pts, TRUTH, cfg.turns, 0.3)
     assert abs(cfg.turns[int(np.argmin(profile))]) <= cfg.turn_step  # the truth fits best
@@ -130,11 +132,12 @@ def test_the_gate_withholds_a_claim_turned_off_the_best_fit(corridor) -> None:  
         claim.match, pose=off, covariance=np.diag([0.005**2, 0.005**2, math.radians(0.5) ** 2])
     )
     prior_cov = np.diag([0.1**2, 0.1**2, 0.1**2])
-    judged = gate._judge(off, prior_cov, stopped, pts)
+    strict = ClaimGate(field, ALPHAS, ClaimConfig(best_fit_turn_reach=TURN_REACH))
+    judged = strict._judge(off, prior_cov, stopped, pts)
     assert judged.verdict is Verdict.WITHHELD
     assert "better turned" in judged.reason
-    lax = ClaimGate(field, ALPHAS, ClaimConfig(best_fit_turn_reach=0.0))
-    assert lax._judge(off, prior_cov, stopped, pts).verdict is Verdict.CLAIM
+    # off by default
+    assert gate._judge(off, prior_cov, stopped, pts).verdict is Verdict.CLAIM
 
 
 @pytest.mark.parametrize(

@@ -46,10 +46,10 @@ scan goes through :meth:`ClaimGate.check`:
 6. **Best fit**: a claim that passed the gate is still *withheld* when the whole scan fits the
    map clearly better a few of its stds along its least certain axis
    (:mod:`symloc.localizer.best_fit`): the alignment's robust, sub-sampled cost stopped short
-   of the scan's best fit, which its covariance does not say; and likewise when it fits
-   clearly better turned about the robot by more than a few heading stds and 3 deg (an
-   alignment from an odometry-carried prior a few degrees off that converges over several
-   scans).
+   of the scan's best fit, which its covariance does not say; optionally
+   (``best_fit_turn_reach``, off by default) likewise when it fits clearly better turned
+   about the robot by more than a few heading stds and 3 deg (an alignment from an
+   odometry-carried prior a few degrees off that converges over several scans).
 
 The gate also keeps the claim's lifecycle (:meth:`ClaimGate.step`, once per scan while the
 localizer tracks): a withdrawn claim or a jump of the filter *suspends* claims; they *resume*
