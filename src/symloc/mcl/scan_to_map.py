@@ -350,7 +350,7 @@ def _secant_information(
     if cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0:
         # each direction keeps the share of its information that the walls' shared errors
         # leave (linearised at the pose; the secant says how much there is at all)
-        independent, shared = _wall_discount(field, pts, pose, cfg, _walls(field, pts, pose, cfg))
+        independent, shared = _wall_discount(_walls(field, pts, pose, cfg), cfg)
         v = vecs * scale[:, None]  # the secant's directions in pose units
         full = np.einsum("ik,ij,jk->k", v, independent, v)
         kept = np.einsum("ik,ij,jk->k", v, shared, v)
@@ -380,12 +380,14 @@ class _Walls:
     """End points grouped into walls (:func:`_walls`): ``label`` (N,) each point's wall (0,
     1, ... in beam order), ``normal`` (W, 2) each wall's unit normal in the map frame (towards
     the side the laser saw it from), ``along`` (N,) [m] each point's position along its wall
-    from the wall's mean; ``offset`` (W,) and ``tilt`` (W,) the Woodbury weights of a wall's
-    shared offset and tilt (:func:`_wall_discount`)."""
+    from the wall's mean; ``jac`` (N, 3) the Jacobian of each point's distance to the map,
+    signed by the side of its wall it ends on; ``offset`` (W,) and ``tilt`` (W,) the Woodbury
+    weights of a wall's shared offset and tilt (:func:`_wall_discount`)."""
 
     label: NDArray[np.intp]
     normal: FloatArray
     along: FloatArray
+    jac: FloatArray
     offset: FloatArray
     tilt: FloatArray
 
@@ -402,9 +404,9 @@ def _walls(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMat
     shared error once per piece.
     """
     c, s = math.cos(pose[2]), math.sin(pose[2])
-    here = np.column_stack(
-        [c * pts[:, 0] - s * pts[:, 1] + pose[0], s * pts[:, 0] + c * pts[:, 1] + pose[1]]
-    )
+    rx = c * pts[:, 0] - s * pts[:, 1]
+    ry = s * pts[:, 0] + c * pts[:, 1]
+    here = np.column_stack([rx + pose[0], ry + pose[1]])
     grad = _bilinear(field, here, cfg.compiled)[1]
     strength = np.hypot(grad[:, 0], grad[:, 1])
     direction = np.arctan2(grad[:, 1], grad[:, 0])
@@ -433,6 +435,10 @@ def _walls(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMat
     normal = np.column_stack([np.cos(half), np.sin(half)])
     side = np.bincount(label, np.einsum("ij,ij->i", grad, normal[label]), walls)
     normal[side < 0.0] *= -1.0
+    sign = np.where(np.einsum("ij,ij->i", grad, normal[label]) < 0.0, -1.0, 1.0)
+    jac = sign[:, None] * np.column_stack(
+        [grad[:, 0], grad[:, 1], -grad[:, 0] * ry + grad[:, 1] * rx]
+    )
     count = np.bincount(label, minlength=walls).astype(np.float64)
     mean = (
         np.column_stack(
@@ -447,13 +453,11 @@ def _walls(field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMat
     offset = count * 0.0 if cfg.wall_std <= 0.0 else 1.0 / (var / cfg.wall_std**2 + count)
     spread = np.bincount(label, along * along, walls).astype(np.float64)
     tilt = spread * 0.0 if cfg.wall_tilt_std <= 0.0 else 1.0 / (var / cfg.wall_tilt_std**2 + spread)
-    return _Walls(label, normal, along, offset, tilt)
+    return _Walls(label, normal, along, jac, offset, tilt)
 
 
-def _wall_discount(
-    field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatchConfig, walls: _Walls
-) -> tuple[FloatArray, FloatArray]:
-    """The Gauss-Newton information (3, 3) of end points ``pts`` (N, 2) at ``pose`` (3,):
+def _wall_discount(walls: _Walls, cfg: ScanMatchConfig) -> tuple[FloatArray, FloatArray]:
+    """The Gauss-Newton information (3, 3) of the end points grouped in ``walls``:
     independent, and with their walls' shared errors (``wall_std``, ``wall_tilt_std``).
 
     A wall's ``n`` points see residuals ``e = sigma z + wall_std a 1 + wall_tilt_std b l``
@@ -461,18 +465,9 @@ def _wall_discount(
     positions along it, centred). By the Woodbury identity their information is the
     independent one, ``J^T J / sigma^2``, less ``s s^T / (sigma^2 (sigma^2 / wall_std^2 + n))``
     (``s = sum J_i``) and less ``t t^T / (sigma^2 (sigma^2 / wall_tilt_std^2 + sum l^2))``
-    (``t = sum l_i J_i``; ``1`` and ``l`` are orthogonal). ``J_i`` is the gradient of the
-    point's distance signed by the side of its wall it ends on.
+    (``t = sum l_i J_i``; ``1`` and ``l`` are orthogonal), ``J`` being ``walls.jac``.
     """
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    rx = c * pts[:, 0] - s * pts[:, 1]
-    ry = s * pts[:, 0] + c * pts[:, 1]
-    grad = _bilinear(field, np.column_stack([rx + pose[0], ry + pose[1]]), cfg.compiled)[1]
-    label = walls.label
-    sign = np.where(np.einsum("ij,ij->i", grad, walls.normal[label]) < 0.0, -1.0, 1.0)
-    jac = sign[:, None] * np.column_stack(
-        [grad[:, 0], grad[:, 1], -grad[:, 0] * ry + grad[:, 1] * rx]
-    )
+    label, jac = walls.label, walls.jac
     n = walls.offset.size
     shared = np.column_stack([np.bincount(label, jac[:, k], n) for k in range(3)])
     turned = np.column_stack([np.bincount(label, walls.along * jac[:, k], n) for k in range(3)])
