@@ -15,7 +15,7 @@ from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
-from symloc.sim.rooms import hallway, l_shaped_room
+from symloc.sim.rooms import hallway, l_shaped_room, regular_polygon_room
 
 
 def _points(world, pose, preset=RPLIDAR_A2, seed=0):
@@ -238,6 +238,33 @@ def test_a_walls_shared_error_is_counted_once() -> None:
     # along the corridor: the end walls' beams
     assert few_w[1] < 0.6 * few[1]
     assert few_w[1] < 0.05
+
+
+def test_the_walls_model_keeps_information_scales_heading() -> None:
+    """The walls model sets the position's std; the heading is no surer than
+    ``information_scale`` makes it (on dev the walls' heading let an unconverged match
+    through), and the position block of the covariance is the walls model's own."""
+    from symloc.mcl.scan_to_map import _covariance, _heading_floored
+
+    room = regular_polygon_room(5, 3.0)
+    grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
+    field = surface_distance_field(grid)
+    pose = np.array([*room.center, 0.2]) + np.array([0.4, -0.3, 0.0])
+    pts = _points(room.world, pose)
+    plain = match_scan_to_map(field, pts, pose).covariance
+    walls = match_scan_to_map(field, pts, pose, WALLS).covariance
+    assert walls[2, 2] == pytest.approx(plain[2, 2], rel=1e-6)
+    assert walls[0, 0] + walls[1, 1] < plain[0, 0] + plain[1, 1]
+    # the floor itself: position block kept, heading variance raised, correlation kept
+    info = np.array([[400.0, 10.0, 30.0], [10.0, 300.0, -20.0], [30.0, -20.0, 9000.0]])
+    floored = _heading_floored(info, info / 4.0)
+    a, b = _covariance(info), _covariance(floored)
+    assert np.allclose(a[:2, :2], b[:2, :2])
+    assert b[2, 2] == pytest.approx(_covariance(info / 4.0)[2, 2])
+    corr = a[0, 2] / math.sqrt(a[0, 0] * a[2, 2])
+    assert b[0, 2] / math.sqrt(b[0, 0] * b[2, 2]) == pytest.approx(corr)
+    # a heading surer under information_scale than under the walls stays the walls'
+    assert np.array_equal(_heading_floored(info / 4.0, info), info / 4.0)
 
 
 def test_wall_settings_are_validated() -> None:

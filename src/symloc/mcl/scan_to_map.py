@@ -357,10 +357,30 @@ def _secant_information(
         share = np.clip(kept / np.where(full > 0.0, full, 1.0), 0.0, 1.0)
         # the walls' errors replace information_scale's discount (which still weighs the scan
         # against a prior while aligning)
-        w = w * np.where(full > 0.0, share, 1.0) / cfg.information_scale
-    m = (vecs * w) @ vecs.T
+        walls = (vecs * (w * np.where(full > 0.0, share, 1.0) / cfg.information_scale)) @ vecs.T
+        m = _heading_floored(walls, (vecs * w) @ vecs.T)
+    else:
+        m = (vecs * w) @ vecs.T
     inv = 1.0 / scale
     return np.asarray(m * np.outer(inv, inv), dtype=np.float64)
+
+
+def _heading_floored(walls: FloatArray, scaled: FloatArray) -> FloatArray:
+    """The walls model's information (3, 3) with its heading no surer than
+    ``information_scale``'s (``scaled``, (3, 3), the same units).
+
+    The walls' offsets at their lever arms give the heading most of its information, and on dev
+    that heading let a match that had not converged through (module docstring). The heading
+    row and column are divided by ``k = sqrt(var_scaled / var_walls)`` (when above 1): the
+    covariance's position block is unchanged, its heading variance becomes ``information_scale``'s
+    and the correlation between them is kept.
+    """
+    var_walls = _covariance(walls)[2, 2]
+    var_scaled = _covariance(scaled)[2, 2]
+    if not var_scaled > var_walls > 0.0:
+        return walls
+    d = np.array([1.0, 1.0, math.sqrt(var_walls / var_scaled)])
+    return walls * np.outer(d, d)
 
 
 def _inliers(
