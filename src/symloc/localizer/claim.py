@@ -95,11 +95,19 @@ from .precision_route import FreeRoute, clear_free_cells
 from .rules import Streak
 from .types import PoseProposer, Tracker, TrackerResult
 
-__all__ = ["Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
+__all__ = ["GATE_MATCH", "Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standing", "Verdict"]
 
 FloatArray = NDArray[np.float64]
 
 #: The heading axis of a pose (x, y, theta): a turn in place.
+#: The claim gate's alignment: each wall's offset (2 cm) and tilt (2 deg) in the map are errors
+#: its end points share (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig` ``wall_std``,
+#: ``wall_tilt_std``), so a wall counts once however many beams hit it and a far wall's few
+#: beams count nearly in full; the heading stays as sure as ``information_scale`` makes it.
+#: Calibrated with ``benchmarks/claim_calibration.py --walls 0.02 2`` on dev (the
+#: module docstring of :mod:`symloc.mcl.scan_to_map` has the table).
+GATE_MATCH = ScanMatchConfig(wall_std=0.02, wall_tilt_std=math.radians(2.0))
+
 _HEADING = np.array([0.0, 0.0, 1.0])
 _HEADING.setflags(write=False)
 
@@ -526,6 +534,7 @@ class ClaimGate:
         kidnapping can hide inside it.
     config : ClaimConfig, optional
     match_config : ScanMatchConfig, optional
+        The alignment's settings; default :data:`GATE_MATCH` (the walls' shared error counted).
     laser_pose : (3,) array
         The laser in the robot frame (``base_from_laser``).
     scale_centre : (2,) array, optional
@@ -574,7 +583,7 @@ class ClaimGate:
         self.config = config if config is not None else ClaimConfig()
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
-        self.match_config = match_config if match_config is not None else ScanMatchConfig()
+        self.match_config = match_config if match_config is not None else GATE_MATCH
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
         # the path and turning since a pose was held: a pose carried over many scans grows
         # its covariance with all the motion, not only with the net increment
