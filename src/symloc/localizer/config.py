@@ -127,6 +127,11 @@ class LocalizerConfig:
         across the axis in proportion to the segment's reach.
     axis_odometry : the segment lengthens at each end by this share of the distance travelled
         (odometry's error along the axis).
+    axis_pin_step, axis_pin_apart, axis_pin_gain : an axis family whose ends the scan sees is
+        one pose per heading class (:mod:`symloc.localizer.axis_pin`): the whole scan's fit is
+        profiled every ``axis_pin_step`` [m] along each class' line, and the class is pinned
+        where it fits best when that fit is at least ``axis_pin_gain`` (a share) lower than
+        anywhere farther than ``axis_pin_apart`` [m] from there.
     axis_recheck : scans on the axis between two tries of deciding here (the laser proposes
         again, the camera looks when an end, a door or a keyframe could pin the position).
     axis_patience : scans in a row at which the laser does not confirm the axis (the scan no
@@ -196,6 +201,9 @@ class LocalizerConfig:
     axis_theta_std: float = math.radians(1.0)
     axis_line_std: float = math.radians(0.3)
     axis_odometry: float = 0.05
+    axis_pin_step: float = 0.05
+    axis_pin_apart: float = 0.5
+    axis_pin_gain: float = 0.25
     axis_recheck: int = 30
     axis_patience: int = 30
     precision_drive: bool = True
@@ -238,6 +246,9 @@ class LocalizerConfig:
         check_in_range(self.decide_laser_margin, "LocalizerConfig.decide_laser_margin", 0.0, 1.0)
         check_in_range(self.axis_sweep_ratio, "LocalizerConfig.axis_sweep_ratio", 0.0, 1.0)
         check_in_range(self.axis_continuity, "LocalizerConfig.axis_continuity", 0.0, 1.0)
+        check_positive(self.axis_pin_step, "LocalizerConfig.axis_pin_step")
+        check_positive(self.axis_pin_apart, "LocalizerConfig.axis_pin_apart")
+        check_in_range(self.axis_pin_gain, "LocalizerConfig.axis_pin_gain", 0.0, 1.0)
         check_positive(self.axis_open_reach, "LocalizerConfig.axis_open_reach", allow_zero=True)
         check_positive(self.axis_odometry, "LocalizerConfig.axis_odometry", allow_zero=True)
         check_positive(self.copy_map_slack, "LocalizerConfig.copy_map_slack", allow_zero=True)

@@ -52,6 +52,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
 
+**A corridor whose ends the scan sees** (the survivors an axis family only because an end
+wall's few beams are less than the search's margin): :func:`~.axis_pin.pin_axis` profiles
+the scan's fit along each heading class' line and, where one stretch fits clearly best, the
+class is the one pose aligned there; the two poses go on as several survivors (step 3).
+
 **A corridor** (the survivors are an axis family, :mod:`symloc.localizer.axis`: one heading up
 to a half turn, along a line): no single pose can be verified, since the camera does not tell
 where along the corridor it stands. Hypotheses along both heading classes' segments are shown
@@ -81,6 +86,7 @@ from symloc.symmetry.order import SymmetryOrder
 
 from .axis_heading import vote_heading
 from .axis_phase import AxisClass, OnAxis, axis_classes, enter_axis
+from .axis_pin import pin_axis
 from .claim import Claim, Verdict
 from .config import LocalizerConfig
 from .context import Context, Inputs, cov_from_std, lost, reseed_tracker
@@ -504,7 +510,15 @@ class DecideHere:
             self.rest_after = max(1, cfg.decide_rest // 3)
             return lost(why, inp.result), restart(ctx)
         poses = hyp.poses[: hyp.survivors]
-        found = axis_classes(ctx, inp, poses)
+        fits = hyp.fits[: hyp.survivors]
+        pinned = pin_axis(ctx, inp, poses)
+        if pinned is not None:
+            ctx.notes.note_once(
+                f"deciding here: {len(poses)} poses along an axis explain the scan, and the "
+                "scan's ends pin one per heading class"
+            )
+            poses, fits = pinned
+        found = None if pinned is not None else axis_classes(ctx, inp, poses)
         if found is not None:
             return self._axis(ctx, inp, found[1], len(poses))
         going = self._to_round_centre(ctx, inp, poses)
@@ -526,12 +540,12 @@ class DecideHere:
         if turn is not None:
             return turn
         self.poses, self.odom0, self.waited = poses.copy(), inp.odom_pose.copy(), 0
-        self.fits = hyp.fits[: len(poses)].copy()
+        self.fits = fits.copy()
         self.views += 1
         self.seen.append(float(inp.odom_pose[2]))
         ctx.note(
             f"deciding here: {len(poses)} poses explain the scan "
-            f"({', '.join(f'{100 * f:.0f}' for f in hyp.fits[: len(poses)])} % of beams); "
+            f"({', '.join(f'{100 * f:.0f}' for f in fits)} % of beams); "
             f"image {self.views} of {cfg.decide_views} requested"
             + ("" if hyp.complete else f" (the search is incomplete: {hyp.reason})")
         )
