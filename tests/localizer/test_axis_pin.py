@@ -75,6 +75,22 @@ def test_a_long_corridors_axis_is_not_pinned() -> None:
     assert pin_axis(ctx, inp, poses) is None  # type: ignore[arg-type]
 
 
+def test_only_a_corridor_mapped_with_an_end_in_view_is_pinned() -> None:
+    """40 m long, the robot 9 m from one end: that end pins the scan, but a mapping trip along
+    this corridor drove a stretch with neither end in the lidar's 16 m (it is longer than
+    twice the reach), where SLAM's map is off along the axis by what odometry drifted: not
+    pinned. The same scan declared from a lidar that reaches 25 m is pinned, at the truth."""
+    probe = hallway(40.0, 2.0)
+    c = np.asarray(probe.center, dtype=np.float64)
+    truth = np.array([c[0] + 11.0, c[1] + 0.3, 0.05])
+    ctx, inp, poses, c = _setting(40.0, truth)
+    assert pin_axis(ctx, inp, poses) is None  # type: ignore[arg-type]
+    farther = SimpleNamespace(scan=dataclasses.replace(inp.scan, range_max=25.0))
+    found = pin_axis(ctx, farther, poses)  # type: ignore[arg-type]
+    assert found is not None
+    assert min(math.hypot(*(p[:2] - truth[:2])) for p in found[0]) < 0.05
+
+
 def test_the_pin_asks_for_a_clear_best_fit() -> None:
     """The same short corridor with the gain asked beyond what one end wall gives: not pinned;
     and poses that are no axis family are left alone."""

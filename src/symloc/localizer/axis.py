@@ -42,6 +42,7 @@ __all__ = [
     "axis_family",
     "line_reach",
     "map_corners",
+    "open_stretch",
     "runs_out",
     "sweep",
 ]
@@ -212,6 +213,22 @@ def _cells(grid: OccupancyGrid, xy: FloatArray) -> tuple[NDArray[np.bool_], NDAr
     known[inside] = occupied[inside] | grid.free_mask[rc[:, 0], rc[:, 1]]
     shape = np.asarray(xy).shape[:-1]
     return occupied.reshape(shape), known.reshape(shape)
+
+
+def open_stretch(segment: AxisSegment, grid: OccupancyGrid, s: float) -> float:
+    """The length [m] of the stretch of ``segment``'s line through ``s`` [m] that no occupied
+    cell of ``grid`` crosses: a corridor's length from end wall to end wall (the grid's edge
+    where no wall closes it)."""
+    step = float(grid.resolution)
+    lo, hi = line_reach(segment, map_corners(grid))
+    ts = np.arange(lo, hi + 0.5 * step, step)
+    occupied, _ = _cells(grid, segment.at(ts)[:, :2])
+    k = int(np.clip(np.searchsorted(ts, s), 0, ts.size - 1))
+    before = np.flatnonzero(occupied[:k])
+    after = np.flatnonzero(occupied[k:])
+    start = ts[before[-1]] if before.size else ts[0]
+    end = ts[k + after[0]] if after.size else ts[-1]
+    return float(end - start)
 
 
 def _free_reach(segment: AxisSegment, grid: OccupancyGrid, s: float, side: float) -> float:
