@@ -90,6 +90,7 @@ from symloc.mcl.motion_model import Odometer, carry_by_odometry
 from symloc.mcl.scan_to_map import ScanMatch, ScanMatchConfig, match_scan_to_map, scan_points
 from symloc.scan import LaserScan
 
+from .axis import AxisSegment, open_stretch
 from .elsewhere import Places, nearest_within, places_explaining
 from .precision_route import FreeRoute, clear_free_cells
 from .rules import Streak
@@ -1016,12 +1017,8 @@ class ClaimGate:
                 f"claim withheld: {pts.shape[0]} returning beams, {cfg.min_beams} needed to "
                 "confirm the pose",
             )
-        match = match_scan_to_map(
-            self.field,
-            pts,
-            carried if start is None else start,
-            self.match_config,
-            prior=(carried, c_cov),
+        match = self._match(
+            pts, carried if start is None else start, (carried, c_cov), scan.range_max
         )
         return self._judge(carried, c_cov, match, pts)
 
@@ -1055,8 +1052,47 @@ class ClaimGate:
         cov = np.asarray(covariance, dtype=np.float64)
         if pts.shape[0] < self.config.min_beams:
             return Claim(Verdict.WITHHELD, cand, cov, "too few returning beams to confirm the pose")
-        match = match_scan_to_map(self.field, pts, cand, self.match_config, prior=(cand, cov))
+        match = self._match(pts, cand, (cand, cov), scan.range_max)
         return self._judge(cand, cov, match, pts)
+
+    def _match(
+        self,
+        pts: FloatArray,
+        start: FloatArray,
+        prior: tuple[FloatArray, FloatArray],
+        range_max: float,
+    ) -> ScanMatch:
+        """``pts`` (N, 2) aligned from ``start`` (3,) with ``prior`` (mean (3,), covariance
+        (3, 3)) by :attr:`match_config`; where the pose's least-constrained direction runs along
+        a straight free stretch of the map longer than twice the lidar's ``range_max`` [m],
+        the information is ``information_scale``'s instead of the walls model's.
+
+        A mapping trip along such a stretch passed a part with no wall across it in range,
+        where laser SLAM took the motion along it from odometry alone: the map's features
+        there (a door, a corridor's ends) are off along it by what odometry drifted, more than
+        ``wall_std``. On dev corridor_long#1 (40-60 m) the walls model counted a few beams
+        there nearly in full and claimed poses 9-13 cm off along the axis with a std under
+        2 cm; ``information_scale`` discounts them tenfold (the map's error per region,
+        issue 29, would say how far off it is)."""
+        cfg = self.match_config
+        match = match_scan_to_map(self.field, pts, start, cfg, prior=prior)
+        walls = cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0
+        if walls and self._along_odometry(match, range_max):
+            plain = dataclasses.replace(cfg, wall_std=0.0, wall_tilt_std=0.0)
+            match = match_scan_to_map(self.field, pts, start, plain, prior=prior)
+        return match
+
+    def _along_odometry(self, match: ScanMatch, range_max: float) -> bool:
+        """Does the straight free stretch of the map through ``match``'s pose, along its
+        least-constrained direction (the weakest eigenvector of the position information),
+        run longer than twice ``range_max`` [m]?"""
+        if not math.isfinite(range_max) or range_max <= 0.0:
+            return False
+        w, v = np.linalg.eigh(np.asarray(match.information, dtype=np.float64)[:2, :2])
+        weakest = v[:, int(np.argmin(w))]
+        pose = np.asarray(match.pose, dtype=np.float64)
+        line = AxisSegment(pose[:2].copy(), weakest, float(pose[2]), 0.0, 0.0)
+        return open_stretch(line, self.field.grid, 0.0) > 2.0 * range_max
 
     def map_error(self, pose: FloatArray, *, scale: bool = True) -> FloatArray:
         """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction and
