@@ -105,6 +105,8 @@ FloatArray = NDArray[np.float64]
 #: its end points share (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig` ``wall_std``,
 #: ``wall_tilt_std``), so a wall counts once however many beams hit it and a far wall's few
 #: beams count nearly in full; the heading stays as sure as ``information_scale`` makes it.
+#: Along a straight free stretch longer than twice the lidar's range the gate falls back to
+#: ``information_scale`` (:meth:`ClaimGate._match`: SLAM mapped such a stretch on odometry).
 #: Calibrated with ``benchmarks/claim_calibration.py --walls 0.02 2`` on dev (the
 #: module docstring of :mod:`symloc.mcl.scan_to_map` has the table).
 GATE_MATCH = ScanMatchConfig(wall_std=0.02, wall_tilt_std=math.radians(2.0))
