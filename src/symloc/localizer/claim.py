@@ -587,6 +587,8 @@ class ClaimGate:
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
         self.match_config = match_config if match_config is not None else GATE_MATCH
+        # (cell x, cell y, range_max) -> a free stretch through it over twice the range
+        self._stretch_cache: dict[tuple[int, int, float], bool] = {}
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
         # the path and turning since a pose was held: a pose carried over many scans grows
         # its covariance with all the motion, not only with the net increment
@@ -1065,9 +1067,9 @@ class ClaimGate:
         range_max: float,
     ) -> ScanMatch:
         """``pts`` (N, 2) aligned from ``start`` (3,) with ``prior`` (mean (3,), covariance
-        (3, 3)) by :attr:`match_config`; where the pose's least-constrained direction runs along
-        a straight free stretch of the map longer than twice the lidar's ``range_max`` [m],
-        the information is ``information_scale``'s instead of the walls model's.
+        (3, 3)) by :attr:`match_config`; where a straight free stretch of the map through the
+        pose runs longer than twice the lidar's ``range_max`` [m], the information is
+        ``information_scale``'s instead of the walls model's.
 
         A mapping trip along such a stretch passed a part with no wall across it in range,
         where laser SLAM took the motion along it from odometry alone: the map's features
@@ -1085,16 +1087,24 @@ class ClaimGate:
         return match
 
     def _along_odometry(self, match: ScanMatch, range_max: float) -> bool:
-        """Does the straight free stretch of the map through ``match``'s pose, along its
-        least-constrained direction (the weakest eigenvector of the position information),
-        run longer than twice ``range_max`` [m]?"""
+        """Does a straight free stretch of the map through ``match``'s pose, in any direction
+        (every 2 deg), run longer than twice ``range_max`` [m]? (Cached per 0.5 m cell: a
+        corridor's axis, not the match's weakest direction, which a door turns off the axis
+        by a few degrees, and a few degrees off a 2 m corridor's axis the line meets a wall.)"""
         if not math.isfinite(range_max) or range_max <= 0.0:
             return False
-        w, v = np.linalg.eigh(np.asarray(match.information, dtype=np.float64)[:2, :2])
-        weakest = v[:, int(np.argmin(w))]
         pose = np.asarray(match.pose, dtype=np.float64)
-        line = AxisSegment(pose[:2].copy(), weakest, float(pose[2]), 0.0, 0.0)
-        return open_stretch(line, self.field.grid, 0.0) > 2.0 * range_max
+        key = (round(float(pose[0]) / 0.5), round(float(pose[1]) / 0.5), round(range_max, 1))
+        cached = self._stretch_cache.get(key)
+        if cached is None:
+            longest = 0.0
+            for a in np.radians(np.arange(0.0, 180.0, 2.0)):
+                unit = np.array([math.cos(a), math.sin(a)])
+                line = AxisSegment(pose[:2].copy(), unit, float(pose[2]), 0.0, 0.0)
+                longest = max(longest, open_stretch(line, self.field.grid, 0.0))
+            cached = longest > 2.0 * range_max
+            self._stretch_cache[key] = cached
+        return cached
 
     def map_error(self, pose: FloatArray, *, scale: bool = True) -> FloatArray:
         """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction and
