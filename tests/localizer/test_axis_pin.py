@@ -13,8 +13,8 @@ import pytest
 from symloc.geometry import wrap_angle
 from symloc.grid.fields import surface_distance_field
 from symloc.localizer import LocalizerConfig
-from symloc.localizer.axis_pin import pin_axis
-from symloc.localizer.claim import ClaimGate
+from symloc.localizer.axis_pin import PIN_GAIN, pin_axis
+from symloc.localizer.claim import WALLS_MATCH, ClaimGate
 from symloc.sim.lidar import RPLIDAR_A2, simulate_scan
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.rooms import hallway
@@ -29,7 +29,7 @@ def _setting(length: float, truth: np.ndarray, seed: int = 0):  # type: ignore[n
     the corridor's centre line)."""
     room = hallway(length, 2.0)
     grid = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
-    gate = ClaimGate(surface_distance_field(grid), ALPHAS)
+    gate = ClaimGate(surface_distance_field(grid), ALPHAS, match_config=WALLS_MATCH)
     scan = simulate_scan(room.world, truth, RPLIDAR_A2, seed)
     c = np.asarray(room.center, dtype=np.float64)
     xs = c[0] + np.linspace(-0.3, 0.3, 7) * length
@@ -39,7 +39,8 @@ def _setting(length: float, truth: np.ndarray, seed: int = 0):  # type: ignore[n
         [xs, np.full(7, mirrored), np.full(7, float(wrap_angle(truth[2] + math.pi)))]
     )
     poses = np.column_stack([forward, back]).reshape(-1, 3)
-    ctx = SimpleNamespace(config=LocalizerConfig(decide_here=True), gate=gate, grid=grid)
+    config = LocalizerConfig(decide_here=True, axis_pin_gain=PIN_GAIN)
+    ctx = SimpleNamespace(config=config, gate=gate, grid=grid)
     return ctx, SimpleNamespace(scan=scan), poses, c
 
 
@@ -134,3 +135,18 @@ def test_the_gates_walls_model_gives_way_along_a_stretch_mapped_on_odometry() ->
     farther = gate._match(pts, truth, prior, 25.0)
     assert farther.information[0, 0] > 2.0 * walls_off.information[0, 0]
     np.testing.assert_allclose(farther.pose, here.pose)
+
+
+def test_the_pin_and_the_walls_model_are_off_by_default() -> None:
+    """Both are measured and left off (README): the default config pins nothing even where the
+    ends are in view, and the default gate counts every end point independently."""
+    probe = hallway(15.0, 2.0)
+    c = np.asarray(probe.center, dtype=np.float64)
+    ctx, inp, poses, _ = _setting(15.0, np.array([c[0] + 3.2, c[1] + 0.3, 0.05]))
+    default = SimpleNamespace(
+        config=LocalizerConfig(decide_here=True), gate=ctx.gate, grid=ctx.grid
+    )
+    assert pin_axis(default, inp, poses) is None  # type: ignore[arg-type]
+    assert pin_axis(ctx, inp, poses) is not None  # type: ignore[arg-type]
+    plain = ClaimGate(ctx.gate.field, ALPHAS).match_config
+    assert (plain.wall_std, plain.wall_tilt_std) == (0.0, 0.0)

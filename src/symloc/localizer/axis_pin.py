@@ -40,7 +40,10 @@ from .axis import axis_family, line_reach, map_corners, open_stretch, runs_out
 from .best_fit import fit_profile
 from .context import Context, Inputs
 
-__all__ = ["pin_axis"]
+__all__ = ["PIN_GAIN", "pin_axis"]
+
+#: The pin's measured gain (``LocalizerConfig.axis_pin_gain``; the default 1 is off).
+PIN_GAIN = 0.25
 
 FloatArray = NDArray[np.float64]
 
@@ -57,7 +60,7 @@ def pin_axis(ctx: Context, inp: Inputs, poses: FloatArray) -> tuple[FloatArray, 
     """
     cfg = ctx.config
     gate, grid = ctx.gate, ctx.grid
-    if gate is None or grid is None:
+    if gate is None or grid is None or cfg.axis_pin_gain >= 1.0:
         return None
     family = axis_family(
         poses,
