@@ -55,7 +55,7 @@ What it returns, besides the pose:
   walls 2 cm, 2 deg      0.56 / 1.34  0.99 / 1.28  6 of 6     3 of 4, 1 confident wrong
   walls 2 cm, 4 deg      0.56 / 1.34  1.00 / 1.32  6 of 6     3 of 4, 1 confident wrong
   2 cm, 2 deg, heading   0.55 / 0.66  0.80 / 0.49  6 of 6     4 of 4
-  kept (the gate's)
+  kept (WALLS_MATCH)
   ====================== ============ ============ ========== ===========================
 
   At 2 cm / 4 deg dev corridor_short#1 (trials 0-5) was 1.00 / 0.94 and never claimed, and
