@@ -65,7 +65,7 @@ from .context import Context, Inputs, lost, reseed_tracker
 from .phases import Lost, Step, restart
 from .types import AxisPose, Estimate, Hypothesis, Request, Status
 
-__all__ = ["AxisClass", "OnAxis", "axis_classes", "enter_axis"]
+__all__ = ["AxisClass", "OnAxis", "axis_classes", "enter_axis", "two_class_family"]
 
 FloatArray = NDArray[np.float64]
 
@@ -88,13 +88,9 @@ class AxisClass:
     across_std: float
 
 
-def axis_classes(
-    ctx: Context, inp: Inputs, poses: FloatArray
-) -> tuple[AxisFamily, tuple[AxisClass, AxisClass]] | None:
-    """The axis family of the laser's hypotheses ``poses`` (K, 3) (best first) with both its
-    classes' extents, or None (not an axis family, or one class missing: the laser's list
-    then says nothing about the half-turned heading, and the camera has nothing to compare)."""
-    cfg = ctx.config
+def two_class_family(cfg: LocalizerConfig, poses: FloatArray) -> AxisFamily | None:
+    """The axis family of ``poses`` (K, 3) under ``cfg``'s ``axis_*`` bounds when both its
+    heading classes hold hypotheses; else None."""
     family = axis_family(
         poses,
         max_spread=cfg.axis_max_spread,
@@ -102,6 +98,19 @@ def axis_classes(
         min_length=cfg.axis_min_length,
     )
     if family is None or family.count(0) == 0 or family.count(1) == 0:
+        return None
+    return family
+
+
+def axis_classes(
+    ctx: Context, inp: Inputs, poses: FloatArray
+) -> tuple[AxisFamily, tuple[AxisClass, AxisClass]] | None:
+    """The axis family of the laser's hypotheses ``poses`` (K, 3) (best first) with both its
+    classes' extents, or None (not an axis family, or one class missing: the laser's list
+    then says nothing about the half-turned heading, and the camera has nothing to compare)."""
+    cfg = ctx.config
+    family = two_class_family(cfg, poses)
+    if family is None:
         return None
     scan = inp.scan
     scorer = ctx.scorer

@@ -36,7 +36,8 @@ from numpy.typing import NDArray
 
 from symloc.geometry import wrap_angle
 
-from .axis import axis_family, line_reach, map_corners, open_stretch, runs_out
+from .axis import line_reach, map_corners, open_stretch, runs_out
+from .axis_phase import two_class_family
 from .best_fit import fit_profile
 from .context import Context, Inputs
 
@@ -62,13 +63,8 @@ def pin_axis(ctx: Context, inp: Inputs, poses: FloatArray) -> tuple[FloatArray, 
     gate, grid = ctx.gate, ctx.grid
     if gate is None or grid is None or cfg.axis_pin_gain >= 1.0:
         return None
-    family = axis_family(
-        poses,
-        max_spread=cfg.axis_max_spread,
-        max_heading_spread=cfg.axis_heading_spread,
-        min_length=cfg.axis_min_length,
-    )
-    if family is None or family.count(0) == 0 or family.count(1) == 0:
+    family = two_class_family(cfg, poses)
+    if family is None:
         return None
     reach = float(getattr(inp.scan, "range_max", math.inf))
     points = gate.points(inp.scan)  # type: ignore[arg-type]

@@ -100,7 +100,6 @@ __all__ = ["WALLS_MATCH", "Claim", "ClaimConfig", "ClaimGate", "Ruling", "Standi
 
 FloatArray = NDArray[np.float64]
 
-#: The heading axis of a pose (x, y, theta): a turn in place.
 #: The claim gate's alignment with the walls model: each wall's offset (2 cm) and tilt (2 deg)
 #: in the map are errors its end points share (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig`
 #: ``wall_std``, ``wall_tilt_std``), so a wall counts once however many beams hit it and a far
@@ -114,6 +113,7 @@ FloatArray = NDArray[np.float64]
 #: shared error in the claim gate").
 WALLS_MATCH = ScanMatchConfig(wall_std=0.02, wall_tilt_std=math.radians(2.0))
 
+#: The heading axis of a pose (x, y, theta): a turn in place.
 _HEADING = np.array([0.0, 0.0, 1.0])
 _HEADING.setflags(write=False)
 
