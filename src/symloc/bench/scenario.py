@@ -32,6 +32,7 @@ from symloc.errors import ConfigurationError, SymlocError, WorldError
 from symloc.geometry import angle_diff
 from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
+from symloc.grid.map_error_field import MapErrorField
 from symloc.localizer.adapters import ReportJudge
 from symloc.localizer.build import build_localizer, grid_round_centre, grid_symmetries
 from symloc.localizer.centering import CenteringConfig
@@ -192,6 +193,12 @@ class Scenario:
     slam_local_error_p95: float = math.nan
     slam_scale_error: float = math.nan
     map_error_coverage: float = math.nan
+    #: the map's position error place by place as SLAM estimated it from its pose graph
+    #: (:mod:`symloc.slam.pose_marginals`; None: not estimated), given to the claim gate, and
+    #: (evaluation only) the share of the lap's poses whose rigidly aligned error lies inside
+    #: its 95 % ellipse there
+    map_error_field: MapErrorField | None = None
+    map_error_field_coverage: float = math.nan
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
     odom_alpha: float = ODOM_ALPHA
     #: the sensor regime of the robot (:mod:`symloc.sim.regimes`)
@@ -258,6 +265,7 @@ class Scenario:
             keyframes=self.store,
             map_std_xy=_larger(self.map_std_xy, position_std),
             map_rotation_std=rotation_std,
+            map_error_field=self.map_error_field,
         )
 
     def map_symmetries(self) -> list[Any]:
@@ -624,6 +632,7 @@ def _map_with_slam(
         scen.settings,
         claim=dataclasses.replace(scen.settings.claim, map_scale_std=scale_std),
     )
+    scen.map_error_field = slam.map_error_field
     if slam.map_error is not None:
         scen.map_std_xy = slam.map_error.std_xy
         scen.notes.append(
@@ -639,6 +648,7 @@ def _map_with_slam(
     in_map = np.asarray(_compose(scen.map_from_world, np.array(truths)), dtype=np.float64)
     trip_err = np.hypot(*(trip_poses[:, :2] - in_map[:, :2]).T)
     slam_err = trip_err[:lap_end]
+    _field_coverage(scen, trip_poses[:lap_end, :2] - in_map[:lap_end, :2], trip_poses[:lap_end])
     scen.slam_error_p95 = float(np.percentile(slam_err, 95))
     scen.notes.append(
         f"mapping trip: SLAM pose error in the map frame mean {100 * slam_err.mean():.1f} cm, "
@@ -781,6 +791,26 @@ class Outcome:
     copy_index: int | None
     confidence: float
     near_copy: int | None = None
+
+
+def _field_coverage(scen: Scenario, errors: FloatArray, poses: FloatArray) -> None:
+    """The share of the lap's SLAM position errors ``errors`` (N, 2) [m] (map frame, the
+    truth rigidly aligned) inside the map error field's 95 % ellipse at their ``poses``
+    (N, >= 2): set on ``scen`` and noted."""
+    field = scen.map_error_field
+    if field is None:
+        return
+    inside = [
+        float(e @ np.linalg.pinv(field.at(p[:2])) @ e) <= R95**2
+        for e, p in zip(errors, poses, strict=True)
+    ]
+    scen.map_error_field_coverage = float(np.mean(inside))
+    scen.notes.append(
+        f"mapping trip: the map error field (pose-graph marginals, {field.xy.shape[0]} places,"
+        f" std median {100 * np.median(field.major_std):.1f} cm, max "
+        f"{100 * field.major_std.max():.1f} cm) covers {100 * scen.map_error_field_coverage:.0f}"
+        " % of the lap's errors at its 95 % ellipse"
+    )
 
 
 def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> None:

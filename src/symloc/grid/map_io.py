@@ -64,7 +64,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from symloc.errors import DataFormatError, MapFileError
+from symloc.errors import ConfigurationError, DataFormatError, MapFileError
 from symloc.files.atomic import (
     STALE_SECONDS,
     atomic_write_bytes,
@@ -73,6 +73,7 @@ from symloc.files.atomic import (
     temporary_target,
 )
 from symloc.files.bounded import load_yaml_bounded, read_text_bounded
+from symloc.grid.map_error_field import MapErrorField
 from symloc.grid.occupancy_grid import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, OccupancyGrid
 from symloc.image_header import check_image_size, image_header
 
@@ -123,6 +124,10 @@ class MapMetadata:
         The map's own position error [m] (std) as the SLAM that built it estimated it
         (``symloc_slam: {map_error: {std_xy: ...}}``, written by ``symloc map build``; not a
         map_server key). None when the file does not say.
+    map_error_field : MapErrorField or None
+        The map's position error place by place (``symloc_slam: {map_error: {field: [[x, y,
+        cov_xx, cov_xy, cov_yy], ...]}}``, :mod:`symloc.grid.map_error_field`). None when the
+        file does not say.
     """
 
     image: Path
@@ -136,6 +141,7 @@ class MapMetadata:
     height: int | None = None
     write_id: str | None = None
     map_std_xy: float | None = None
+    map_error_field: MapErrorField | None = None
 
 
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -251,7 +257,7 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
     img = Path(image)
     if not img.is_absolute():
         img = p.parent / img
-    map_std_xy = _map_error(doc, p)
+    map_std_xy, field = _map_error(doc, p)
     return MapMetadata(
         image=img,
         resolution=resolution,
@@ -264,6 +270,7 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
         height=size["height"],
         write_id=write_id,
         map_std_xy=map_std_xy,
+        map_error_field=field,
     )
 
 
@@ -271,21 +278,37 @@ def read_map_yaml(path: str | Path) -> MapMetadata:
 _MAX_MAP_STD = 1.0
 
 
-def _map_error(doc: dict[str, Any], path: Path) -> float | None:
-    """``symloc_slam.map_error.std_xy`` [m] of a map YAML ``doc``, or None when absent."""
+def _map_error(doc: dict[str, Any], path: Path) -> tuple[float | None, MapErrorField | None]:
+    """``symloc_slam.map_error.std_xy`` [m] and ``.field`` of a map YAML ``doc`` (None each
+    when absent)."""
     slam = doc.get("symloc_slam")
     if slam is None:
-        return None
+        return None, None
     err = slam.get("map_error") if isinstance(slam, dict) else None
     if err is None:
-        return None
-    value = _as_number(err.get("std_xy")) if isinstance(err, dict) else None
+        return None, None
+    if not isinstance(err, dict):
+        raise MapFileError(
+            f"{path}: field 'symloc_slam.map_error' must be a mapping with 'std_xy' and/or"
+            f" 'field', got {err!r}"
+        )
+    field = None
+    if err.get("field") is not None:
+        try:
+            field = MapErrorField.from_rows(
+                err["field"], f"{path}: field 'symloc_slam.map_error.field'"
+            )
+        except ConfigurationError as exc:
+            raise MapFileError(str(exc)) from None
+    if err.get("std_xy") is None and field is not None:
+        return None, field
+    value = _as_number(err.get("std_xy"))
     if value is None or not math.isfinite(value) or not 0.0 <= value <= _MAX_MAP_STD:
         raise MapFileError(
             f"{path}: field 'symloc_slam.map_error.std_xy' must be a number of metres in"
-            f" 0..{_MAX_MAP_STD:g}, got {err!r}"
+            f" 0..{_MAX_MAP_STD:g}, got {err.get('std_xy')!r}"
         )
-    return float(value)
+    return float(value), field
 
 
 def image_to_grid(image: NDArray[Any], meta: MapMetadata) -> NDArray[np.int8]:

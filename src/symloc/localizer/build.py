@@ -23,6 +23,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from symloc.grid import OccupancyGrid
 from symloc.grid.fields import MapFields
+from symloc.grid.map_error_field import MapErrorField
 from symloc.localizer.adapters import (
     AmclTracker,
     GlobalSearchProposer,
@@ -78,6 +79,7 @@ def build_localizer(
     keyframes: KeyframeStore | None = None,
     map_std_xy: float | None = None,
     map_rotation_std: float | None = None,
+    map_error_field: MapErrorField | None = None,
 ) -> Localizer:
     """The localizer on ``grid`` configured by ``settings``; not initialised yet.
 
@@ -110,6 +112,10 @@ def build_localizer(
         built (a visual map's declaration,
         :func:`symloc.vision.gyro_drift.declared_rotation_std`); it replaces the assumed
         ``settings.claim.map_rotation_std``.
+    map_error_field : MapErrorField, optional
+        The map's position error place by place (:mod:`symloc.slam.pose_marginals`; a saved
+        map's ``symloc_slam.map_error.field``, :attr:`symloc.grid.map_io.MapMetadata.map_error_field`):
+        the claim gate reads it where it exceeds the other (``settings.claim.map_error_field``).
 
     The caller starts it: :meth:`Localizer.reset_global` (lost, AMCL over the whole map) or
     :meth:`Localizer.set_pose`. ``settings.laser_pose`` goes to every part that reads scans:
@@ -148,6 +154,7 @@ def build_localizer(
             scale_centre=fields.derived("enclosed_centroid", enclosed_centroid),
             rotation_centre=grid_round_centre(grid),
             proposer=proposer,
+            map_error_field=map_error_field,
         ),
         laser_pose=laser,
         proposer=proposer if decide else None,

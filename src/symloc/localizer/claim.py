@@ -84,6 +84,7 @@ from scipy.special import erfc
 from symloc.errors import ConfigurationError
 from symloc.geometry import transform_points, wrap_angle
 from symloc.grid.distance_field import DistanceField
+from symloc.grid.map_error_field import MapErrorField
 from symloc.localizer.best_fit import BestFitConfig, off_best_fit, off_best_turn
 from symloc.mcl.beams import select_beams
 from symloc.mcl.motion_model import Odometer, carry_by_odometry
@@ -170,6 +171,12 @@ class ClaimConfig:
         on 84 dev trials of seven families, 1 cm with the scale term claimed in 64 where 2 cm
         without it claimed in 61, both never wrong, coverage 1.00). A round room's rotation
         error is not in it: ``map_rotation_std`` below carries it.
+    map_error_field : bool
+        Read the map's position error place by place where its SLAM estimated one
+        (:class:`ClaimGate`'s ``map_error_field``, :mod:`symloc.slam.pose_marginals`): in
+        each direction where it is larger than ``map_std_xy`` it replaces it. Along a long
+        corridor mapped on odometry it is decimetres, and a claim that pins the position along
+        the axis is withheld there.
     map_scale_std : float
         The map's scale error (std, a fraction: 0.01 is 1 %), 0 to leave it out. A lidar whose
         ranges read a little long or short builds, by laser SLAM, a map that is a scaled copy
@@ -274,6 +281,7 @@ class ClaimConfig:
     max_pull: float = 16.27
     map_std_xy: float = 0.01
     map_std_theta: float = math.radians(0.25)
+    map_error_field: bool = True
     map_scale_std: float = 0.0
     map_rotation_std: float = math.radians(1.9)
     floor_xy: float = 0.01
@@ -557,6 +565,11 @@ class ClaimGate:
         The global scan-to-map search (:class:`~symloc.localizer.adapters.GlobalSearchProposer`)
         that must find a place explaining the scan before a suspended pose is given up
         (``config.elsewhere_margin``); None: poor fit alone gives it up.
+    map_error_field : MapErrorField, optional
+        The map's position error place by place as its SLAM estimated it
+        (:mod:`symloc.slam.pose_marginals`): where it is larger than ``config.map_std_xy`` in
+        some direction, it replaces it there (:meth:`map_error`). None: ``map_std_xy``
+        everywhere.
     """
 
     def __init__(
@@ -570,9 +583,11 @@ class ClaimGate:
         scale_centre: FloatArray | tuple[float, float] = (0.0, 0.0),
         rotation_centre: FloatArray | tuple[float, float] | None = None,
         proposer: PoseProposer | None = None,
+        map_error_field: MapErrorField | None = None,
     ) -> None:
         self.field = field
         self.proposer = proposer
+        self.map_error_field = map_error_field
         self.rotation_centre = (
             None
             if rotation_centre is None
@@ -1111,13 +1126,18 @@ class ClaimGate:
         return cached
 
     def map_error(self, pose: FloatArray, *, scale: bool = True) -> FloatArray:
-        """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction and
-        ``map_std_theta``, plus the scale error ``map_scale_std`` times the distance from
-        :attr:`scale_centre`, along that direction (``scale`` False: without it), plus on a
-        round map the rotation error ``map_rotation_std`` about :attr:`rotation_centre`
-        (heading and position together)."""
+        """The map's own error (3, 3) at ``pose`` (3,): ``map_std_xy`` in every direction (or
+        the :attr:`map_error_field`'s covariance nearest the pose, in each direction where it
+        is the larger) and ``map_std_theta``, plus the scale error ``map_scale_std`` times the
+        distance from :attr:`scale_centre`, along that direction (``scale`` False: without
+        it), plus on a round map the rotation error ``map_rotation_std`` about
+        :attr:`rotation_centre` (heading and position together)."""
         cfg = self.config
         out = np.diag([cfg.map_std_xy**2, cfg.map_std_xy**2, cfg.map_std_theta**2])
+        if self.map_error_field is not None and cfg.map_error_field:
+            values, vectors = np.linalg.eigh(self.map_error_field.at(pose[:2]))
+            values = np.maximum(values, cfg.map_std_xy**2)
+            out[:2, :2] = (vectors * values) @ vectors.T
         if scale and cfg.map_scale_std > 0.0:
             r = np.asarray(pose[:2], dtype=np.float64) - self.scale_centre
             out[:2, :2] += cfg.map_scale_std**2 * np.outer(r, r)

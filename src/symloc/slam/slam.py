@@ -68,9 +68,11 @@ from symloc.slam.loop_closure import LoopCandidate, LoopVerifier, LoopVerifierPa
 from symloc.slam.map_refinement import density_table, nodes_in_map
 from symloc.slam.odometry_model import OdometryModel, OdometryModelParams
 from symloc.slam.pose_graph import PoseGraph, PoseGraphParams
+from symloc.slam.pose_marginals import map_error_field
 from symloc.slam.submaps import ActiveSubmaps, Submap, SubmapParams
 
 if TYPE_CHECKING:  # imported where used: it brings the localizer's compiled kernels
+    from symloc.grid.map_error_field import MapErrorField
     from symloc.slam.map_error import MapError
 
 __all__ = [
@@ -213,7 +215,9 @@ class SlamParams:
         map) and move the map by the shift those alignments share, so that a scan aligned to
         the map lands where SLAM put it: the surface a localizer aligns to lies on a wall
         band's centre line, up to half a cell from the hits that drew it (2-3 cm at 5 cm
-        cells). Skipped on maps above ``refine_max_cells`` cells.
+        cells). Skipped on maps above ``refine_max_cells`` cells. Also the map's error place
+        by place from the pose graph's marginals (:mod:`symloc.slam.pose_marginals`,
+        :attr:`SlamResult.map_error_field`), on any map.
     table_cache_mb : float
         Memory budget [MiB] of the cached submap likelihood tables (least recently matched
         dropped first; a dropped table is rebuilt from the submap's occupied cells).
@@ -416,6 +420,9 @@ class SlamResult:
     map_error : MapError or None
         The map's own error estimated from its node scans (:mod:`symloc.slam.map_error`;
         None when not estimated); :attr:`grid` was already moved by its ``shift``.
+    map_error_field : MapErrorField or None
+        The map's position error place by place, from the pose graph's marginals
+        (:mod:`symloc.slam.pose_marginals`; in :attr:`grid`'s frame); None when not estimated.
     """
 
     poses: FloatArray
@@ -437,6 +444,7 @@ class SlamResult:
     match_poses: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     gated_scans: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
     map_error: MapError | None = None
+    map_error_field: MapErrorField | None = None
 
     @property
     def doubtful(self) -> bool:
@@ -450,8 +458,13 @@ class SlamResult:
         meta: dict[str, object] = {k: s[k] for k in keep}
         meta["doubtful"] = self.doubtful
         meta["warnings"] = list(self.warnings)
+        error: dict[str, object] = {}
         if self.map_error is not None:
-            meta["map_error"] = self.map_error.as_dict()
+            error.update(self.map_error.as_dict())
+        if self.map_error_field is not None:
+            error["field"] = self.map_error_field.rows()
+        if error:
+            meta["map_error"] = error
         return {"symloc_slam": meta}
 
     def summary(self) -> dict[str, object]:
@@ -1105,6 +1118,12 @@ def run_slam(
                 np.round(-map_error.shift, 4),
             )
         timings["map_error"] = time.perf_counter() - t4
+    field = None
+    if prm.map_error:
+        t5 = time.perf_counter()
+        shift = None if map_error is None else map_error.shift
+        field = map_error_field(graph, shift=shift)
+        timings["map_error_field"] = time.perf_counter() - t5
     timings["total"] = time.perf_counter() - t_start
     timings["total_cpu"] = time.process_time() - cpu_start
     rejected = [(c.submap, int(nodes[c.node]), c.reason) for c in run.verifier.rejected]
@@ -1129,4 +1148,5 @@ def run_slam(
         match_poses=run.match_pose,
         gated_scans=run.gated,
         map_error=map_error,
+        map_error_field=field,
     )
