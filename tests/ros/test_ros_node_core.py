@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -328,6 +329,30 @@ def test_a_map_file_s_own_error_reaches_the_claim_gate() -> None:
     assert core.set_map(OccupancyGrid(np.zeros((30, 30), np.int8), 0.1), map_std_xy=0.001)
     default = NodeParams().claim.map_std_xy
     assert stds == [pytest.approx(0.07), pytest.approx(default), pytest.approx(default)]
+
+
+def test_a_maps_error_field_reaches_the_claim_gate() -> None:
+    """The field a map file declares (``symloc_slam.map_error.field``) is given to the claim
+    gate of the localizer built on it, and to no other map's."""
+    from symloc.grid.map_error_field import MapErrorField
+    from symloc.localizer.build import build_localizer
+    from symloc.localizer.settings import LocalizerSettings
+
+    def factory(grid, params):  # type: ignore[no-untyped-def]
+        return build_localizer(grid, dataclasses.replace(LocalizerSettings(), claim=params.claim))
+
+    data = np.zeros((40, 40), np.int8)
+    data[[0, -1], :] = 100
+    data[:, [0, -1]] = 100
+    field = MapErrorField(np.array([[1.0, 1.0]]), np.eye(2)[None] * 0.05**2)
+    core = NodeCore(NodeParams(), factory=factory)
+    assert core.set_map(OccupancyGrid(data, 0.1), map_error_field=field)
+    assert core.localizer is not None
+    assert core.localizer.claim_gate is not None
+    assert core.localizer.claim_gate.map_error_field is field
+    assert core.set_map(OccupancyGrid(data[:, :30].copy(), 0.1))
+    assert core.localizer.claim_gate is not None
+    assert core.localizer.claim_gate.map_error_field is None
 
 
 def test_warnings_are_rate_limited() -> None:

@@ -58,6 +58,7 @@ from numpy.typing import NDArray
 from symloc.errors import SymlocError
 from symloc.geometry import compose, relative, wrap_angle
 from symloc.grid import OccupancyGrid
+from symloc.grid.map_error_field import MapErrorField
 from symloc.localizer import Estimate, Localizer, RequestKind, Status
 from symloc.msgs.fields import field as msg_field
 from symloc.msgs.grid import grid_from_msg
@@ -181,6 +182,7 @@ class NodeCore:
         self.received: Counter[str] = Counter()
         self.grid: OccupancyGrid | None = None
         self._map_std_xy: float | None = None  # the map's own error, as its file declares it
+        self._map_error_field: MapErrorField | None = None  # and place by place
         self.localizer: Localizer | None = None
         self.scans_used = 0
         self.last: Outputs | None = None
@@ -285,7 +287,13 @@ class NodeCore:
             return
         self.set_map(grid)
 
-    def set_map(self, grid: OccupancyGrid, *, map_std_xy: float | None = None) -> bool:
+    def set_map(
+        self,
+        grid: OccupancyGrid,
+        *,
+        map_std_xy: float | None = None,
+        map_error_field: MapErrorField | None = None,
+    ) -> bool:
         """Use ``grid`` as nav2_amcl does: the first usable map builds the localizer, and every
         new map after it rebuilds the localizer on it unless ``first_map_only``. A pose held
         at the update (a tracked pose, or an operator's pose not yet confirmed) is seeded on
@@ -296,7 +304,9 @@ class NodeCore:
 
         ``map_std_xy`` [m]: the map's own error as its file declares it
         (:attr:`symloc.grid.map_io.MapMetadata.map_std_xy`); the claim gate assumes the larger
-        of it and ``claim.map_std_xy``. A map from the topic declares none."""
+        of it and ``claim.map_std_xy``; ``map_error_field`` its error place by place
+        (:attr:`~symloc.grid.map_io.MapMetadata.map_error_field`), read by the claim gate where
+        it is larger (``claim.map_error_field``). A map from the topic declares neither."""
         old = self.grid
         if old is not None:
             same_geometry = (
@@ -309,10 +319,12 @@ class NodeCore:
             if self.params.first_map_only:
                 return False  # nav2's first_map_only: later maps are ignored
         previous_std, self._map_std_xy = self._map_std_xy, map_std_xy
+        previous_field, self._map_error_field = self._map_error_field, map_error_field
         try:
-            localizer = self.factory(grid, self._build_params())
+            localizer = self._build(grid)
         except SymlocError as err:
             self._map_std_xy = previous_std
+            self._map_error_field = previous_field
             detail = f"{grid.width}x{grid.height} cells: {err}"
             self.drop("map: unusable", detail)
             self._map_refused = "the last map was refused: " + detail
@@ -335,6 +347,15 @@ class NodeCore:
     def map_refused(self) -> str:
         """Why the last map offered was refused ("" when it was used)."""
         return self._map_refused
+
+    def _build(self, grid: OccupancyGrid) -> Localizer:
+        """The factory's localizer on ``grid`` with :meth:`_build_params`, its claim gate
+        given the map's error field (:meth:`set_map`)."""
+        localizer = self.factory(grid, self._build_params())
+        gate = getattr(localizer, "claim_gate", None)  # a scripted localizer has none
+        if gate is not None:
+            gate.map_error_field = self._map_error_field
+        return localizer
 
     def _build_params(self) -> NodeParams:
         """The parameters the localizer is built with: the laser pose is the mount's, and the
@@ -363,7 +384,7 @@ class NodeCore:
         if self.grid is None:
             return
         seed = self._pose_to_keep()
-        self.localizer = self.factory(self.grid, self._build_params())
+        self.localizer = self._build(self.grid)
         kept = self._reseed(seed)
         self.warn(f"localizer rebuilt: {why}" + (f"; pose kept at {kept}" if kept else ""))
 
@@ -899,7 +920,7 @@ class NodeCore:
         self._failures = 0
         try:
             # built for the laser mount in use, as every other build (not params.laser_pose)
-            self.localizer = self.factory(self.grid, self._build_params())
+            self.localizer = self._build(self.grid)
         except SymlocError as err:
             self.drop("localizer: cannot be rebuilt", str(err))
             return

@@ -317,9 +317,11 @@ class LocalizationNode(LifecycleNode):
         self._create_services()
         if params.map_yaml:
             try:
+                meta = read_map_yaml(params.map_yaml)
                 used = self.core.set_map(
                     load_map(params.map_yaml),
-                    map_std_xy=read_map_yaml(params.map_yaml).map_std_xy,
+                    map_std_xy=meta.map_std_xy,
+                    map_error_field=meta.map_error_field,
                 )
             except SymlocError as err:
                 log.error(f"configure failed: map_yaml: {err}")

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from symloc.errors import DataFormatError
 from symloc.geometry import compose
 from symloc.grid import OccupancyGrid
+from symloc.grid.map_error_field import MapErrorField
 from symloc.io.bag_clocks import ClockOffsets, clock_offsets, stream_lags
 from symloc.io.rosbag import BagMessage, BagTopics, bag_topics, read_bag
 from symloc.io.tum import TrajectoryPoint
@@ -165,13 +166,15 @@ def replay_bag(
     *,
     grid: OccupancyGrid | None = None,
     map_std_xy: float | None = None,
+    map_error_field: MapErrorField | None = None,
     topics: BagTopics | None = None,
     factory: LocalizerFactory | None = None,
     warn: Callable[[str], object] | None = None,
     progress: bool = False,
 ) -> ReplayResult:
     """Replay ``path`` through the node logic; ``grid`` overrides the bag's map topic, with
-    ``map_std_xy`` [m] its own error when its file declares one (:meth:`NodeCore.set_map`).
+    ``map_std_xy`` [m] its own error and ``map_error_field`` its error place by place when its
+    file declares them (:meth:`NodeCore.set_map`).
 
     Malformed messages are skipped and counted (``dropped["<topic>: malformed in bag"]``).
     Scans still waiting for their odometry when the bag ends are dropped and counted.
@@ -186,7 +189,7 @@ def replay_bag(
         check_files(params)  # a bad visual map or vocabulary: one clear error, not 0 poses
     core = NodeCore(params, factory=factory, warn=warn)
     if grid is not None:
-        core.set_map(grid, map_std_xy=map_std_xy)
+        core.set_map(grid, map_std_xy=map_std_xy, map_error_field=map_error_field)
     bag_dropped: Counter[str] = Counter()
     truth: list[list[float]] = []
     trajectory: list[TrajectoryPoint] = []

@@ -86,6 +86,7 @@ def _run(args: argparse.Namespace) -> int:
     params = dataclasses.replace(params, **changes)
     grid = None
     map_std_xy = None
+    map_error_field = None
     if args.map is not None:
         try:
             from symloc.grid.map_io import load_map, read_map_yaml
@@ -94,7 +95,8 @@ def _run(args: argparse.Namespace) -> int:
 
             raise ConfigurationError("--map: map_server file support is missing") from err
         grid = load_map(args.map)
-        map_std_xy = read_map_yaml(args.map).map_std_xy
+        meta = read_map_yaml(args.map)
+        map_std_xy, map_error_field = meta.map_std_xy, meta.map_error_field
     out = Path(args.out)
     options.refuse_overwriting_inputs(
         {"bag": args.bag, "--map": args.map, "--params": args.params},
@@ -116,6 +118,7 @@ def _run(args: argparse.Namespace) -> int:
         params,
         grid=grid,
         map_std_xy=map_std_xy,
+        map_error_field=map_error_field,
         topics=topics,
         warn=lambda text: print(f"warning: {text}", file=sys.stderr),
         progress=True,
