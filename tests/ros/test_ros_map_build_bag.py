@@ -68,6 +68,7 @@ def test_your_own_robot_walkthrough(tmp_path: Path, capsys: pytest.CaptureFixtur
     n_scans = mapping.counts["/scan"]
     assert f"scans: {n_scans} of {n_scans} paired with odometry from topic /odom" in text
     assert "map's own error: std" in text
+    assert "map's error place by place: std median" in text
     assert "ATE against ground_truth: RMSE" in text
     for name in ("map.yaml", "map_trajectory.tum", "map_trajectory.png", "map_visual.db"):
         assert (out / name).is_file(), name
@@ -75,6 +76,9 @@ def test_your_own_robot_walkthrough(tmp_path: Path, capsys: pytest.CaptureFixtur
     # the map: its walls where the room's walls are (the odometry started at the true start
     # pose, so the map frame is the world frame up to SLAM's error)
     built = load_map(out / "map.yaml")
+    field = read_map_yaml(out / "map.yaml").map_error_field
+    assert field is not None  # saved with the map, for the claim gate
+    assert field.xy.shape[0] >= 3
     occ = built.cell_to_world(np.argwhere(built.data >= 65))
     assert occ.shape[0] > 200
     # (a low-cost lidar's noise thickens the walls outwards: the median and the 90th

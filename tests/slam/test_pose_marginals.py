@@ -68,20 +68,28 @@ def test_a_corridor_is_unsure_along_its_axis_and_most_at_its_ends() -> None:
     assert noisier.major_std.max() > 2 * field.major_std.max()
 
 
-def test_the_final_refinements_priors_are_left_out() -> None:
+def test_the_refinements_priors_count_only_where_the_front_end_trusts_them() -> None:
     g = _corridor(21, 1.0, 0.02, 0.02)
     before = map_error_field(g)
     assert before is not None
-    # the refinement measures every node against the map the nodes drew: tight priors
-    # (1 cm in every direction) would make the corridor look known to a few millimetres
+    # the refinement measures every node against the map the nodes drew: counted as
+    # optimised, tight priors (1 cm in every direction) make the corridor look known to a
+    # few millimetres along its axis
+    tight = np.diag([0.01**2, 0.01**2, 0.002**2])
+    trusted = np.diag([LOOSE**2, 0.01**2, 0.002**2])  # the front end: x is unconstrained
     for i in range(21):
-        g.add_map_prior(i, g.node_pose(i), np.diag([0.01**2, 0.01**2, 0.002**2]))
-    after = map_error_field(g)
-    assert after is not None
-    assert np.allclose(after.covariance, before.covariance)
-    with_priors, _ = g.node_information(map_priors=True)
-    without, _ = g.node_information()
-    assert with_priors.sum() > without.sum()
+        g.add_map_prior(i, g.node_pose(i), tight, marginal_covariance=trusted)
+    g.add_map_prior(20, g.node_pose(20), tight)  # no marginal covariance: left out
+    marginal = map_error_field(g)
+    assert marginal is not None
+    along = np.sqrt(marginal.covariance[:, 0, 0])
+    assert np.allclose(along, np.sqrt(before.covariance[:, 0, 0]), rtol=1e-3)
+    info_all, _ = g.node_information(map_priors="all")
+    info_none, _ = g.node_information(map_priors="none")
+    info_marginal, _ = g.node_information()
+    assert info_all.sum() > info_marginal.sum() > info_none.sum()
+    with pytest.raises(ConfigurationError, match="map_priors"):
+        g.node_information(map_priors="some")
 
 
 def test_positions_follow_the_maps_shift_and_few_nodes_give_none() -> None:

@@ -148,7 +148,8 @@ class PoseGraph:
         self._loop_base = np.diag(np.array(self.params.loop_sigmas) ** 2)
         self.n_nodes = 0
         self.n_submaps = 0
-        self._map_priors: set[int] = set()
+        # map prior index -> the same prior with its covariance for node_information, or None
+        self._map_priors: dict[int, gtsam.PriorFactorPose2 | None] = {}
 
     @property
     def loops(self) -> list[tuple[int, int]]:
@@ -222,23 +223,36 @@ class PoseGraph:
         check = 0.5 * (cov + cov.T) + np.diag(np.array(self.params.loop_check_sigmas) ** 2)
         self._loops.append(_Loop(int(j), int(i), z, np.linalg.inv(check), self.graph.size() - 1))
 
-    def add_map_prior(self, i: int, pose: ArrayLike, covariance: ArrayLike) -> int:
+    def add_map_prior(
+        self,
+        i: int,
+        pose: ArrayLike,
+        covariance: ArrayLike,
+        *,
+        marginal_covariance: ArrayLike | None = None,
+    ) -> int:
         """Node ``i`` matched at ``pose`` (3,) in the global map (the final refinement's
         scan-to-map match), with ``covariance`` (3, 3) in the node's frame and a Huber loss;
-        returns the factor's index (for :meth:`remove_factors`)."""
+        returns the factor's index (for :meth:`remove_factors`). ``marginal_covariance``
+        (3, 3) replaces ``covariance`` in :meth:`node_information` (None: the prior is left
+        out there)."""
         noise = gtsam.noiseModel.Robust.Create(
             gtsam.noiseModel.mEstimator.Huber.Create(self.params.huber_k), _gaussian(covariance)
         )
         self.graph.add(gtsam.PriorFactorPose2(_node(i), _pose2(pose), noise))
         index = int(self.graph.size() - 1)
-        self._map_priors.add(index)
+        self._map_priors[index] = (
+            None
+            if marginal_covariance is None
+            else gtsam.PriorFactorPose2(_node(i), _pose2(pose), _gaussian(marginal_covariance))
+        )
         return index
 
     def remove_factors(self, indices: list[int]) -> None:
         """Remove the factors at ``indices`` (from :meth:`add_map_prior`)."""
         for k in indices:
             self.graph.remove(int(k))
-            self._map_priors.discard(int(k))
+            self._map_priors.pop(int(k), None)
 
     def loop_chi2(self) -> FloatArray:
         """Squared Mahalanobis residual ``(L,)`` of every loop closure at the current values
@@ -290,30 +304,42 @@ class PoseGraph:
         """``(n_nodes, 3)`` current node estimates in node order."""
         return np.array([self.node_pose(i) for i in range(self.n_nodes)]).reshape(-1, 3)
 
-    def node_information(self, *, map_priors: bool = False) -> tuple[sp.csc_matrix, list[int]]:
+    def node_information(self, *, map_priors: str = "marginal") -> tuple[sp.csc_matrix, list[int]]:
         """The graph's information matrix at the current values, and where each node is in it.
 
         The factors are linearised at the current estimates (robust losses at their current
         weights) and ``H = J^T J`` is formed from the sparse whitened Jacobian. Its rows and
         columns are ``(dx, dy, dtheta)`` of every variable in GTSAM's key order, each in the
         variable's own frame (``Pose2``'s retraction); ``columns[i]`` is the first column of
-        node ``i``. ``map_priors`` False leaves out the final refinement's scan-to-map priors
-        (:meth:`add_map_prior`): they measure every node against one map drawn from the nodes
-        themselves, so counted as independent they would claim the map knows itself far
-        better than its trip does (a 40-60 m corridor's along-axis drift then looked like a
-        centimetre). The first node's prior fixes the gauge.
+        node ``i``. The first node's prior fixes the gauge.
+
+        ``map_priors`` says how the final refinement's scan-to-map priors
+        (:meth:`add_map_prior`) count: ``"marginal"`` with their ``marginal_covariance`` (the
+        directions the front end would trust; a prior without one is left out), ``"none"``
+        not at all, ``"all"`` as optimised. They measure every node against one map the nodes
+        drew: a direction each scan fixes only weakly (a corridor's far end wall) looks, summed
+        over hundreds of nodes, as sure as a wall beside the robot, and a 40-60 m corridor's
+        along-axis drift then looked like a centimetre.
 
         Returns
         -------
         H : scipy.sparse.csc_matrix of shape (3 V, 3 V)
         columns : list of int, length n_nodes
         """
+        if map_priors not in ("marginal", "none", "all"):
+            raise ConfigurationError(
+                f"map_priors: expected 'marginal', 'none' or 'all', got {map_priors!r}"
+            )
         graph = self.graph
-        if not map_priors and self._map_priors:
+        if map_priors != "all" and self._map_priors:
             graph = gtsam.NonlinearFactorGraph()
             for k in range(self.graph.size()):
-                if k not in self._map_priors and self.graph.exists(k):
+                if not self.graph.exists(k):
+                    continue
+                if k not in self._map_priors:
                     graph.add(self.graph.at(k))
+                elif map_priors == "marginal" and self._map_priors[k] is not None:
+                    graph.add(self._map_priors[k])
         triplets = graph.linearize(self.values).sparseJacobian_()
         keys = sorted(int(k) for k in self.values.keys())  # noqa: SIM118 (gtsam.Values)
         n = 3 * len(keys)

@@ -892,7 +892,21 @@ class _Run:
                 )
                 if mc.n_degenerate == 3:
                     continue
-                priors.append(graph.add_map_prior(k, refined, mc.covariance))
+                # for the map's error estimate the prior counts only in the directions the
+                # front end would trust: a far end wall seen by hundreds of nodes is one wall
+                marginal = analyse_match(
+                    info,
+                    pts,
+                    st,
+                    sigma_rot=sr,
+                    threshold=prm.degeneracy_threshold,
+                    min_strength=prm.min_surface_fraction,
+                )
+                priors.append(
+                    graph.add_map_prior(
+                        k, refined, mc.covariance, marginal_covariance=marginal.covariance
+                    )
+                )
             graph.optimize()
             self.n_opt += 1
             moved = graph.node_poses() - poses

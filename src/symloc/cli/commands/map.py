@@ -325,17 +325,29 @@ DOUBTFUL_HELP = (
     "    the trajectory figure (walls drawn twice or bent show where); record that part again\n"
     "    more slowly, returning to where you started so that the loop can close; check the\n"
     "    odometry source and the laser mount. The claim gate withholds poses by the map's own\n"
-    "    error (below), which sees walls that disagree with the scans, not a drift all of\n"
-    "    them share."
+    "    error (below), which sees walls that disagree with the scans, and by its error\n"
+    "    place by place from the pose graph, which sees a drift only odometry measured."
 )
 
 
 def _print_doubts(res: Any) -> None:
     """What may be wrong with a SLAM result: its warnings and the map's own error."""
+    import numpy as np
+
     for w in res.warnings:
         print(f"  warning: {w}")
     if res.doubtful:
         print(DOUBTFUL_HELP)
+    field = res.map_error_field
+    if field is not None:
+        worst = int(field.major_std.argmax())
+        print(
+            f"map's error place by place: std median {100 * float(np.median(field.major_std)):.1f}"
+            f" cm, worst {100 * field.major_std[worst]:.1f} cm near"
+            f" ({field.xy[worst, 0]:.1f}, {field.xy[worst, 1]:.1f}) m over {field.xy.shape[0]}"
+            " places, the pose graph's marginals (symloc_slam.map_error.field in the YAML; the"
+            " claim gate reads it)"
+        )
     me = res.map_error
     if me is None:
         print("map's own error: not estimated (too few usable scans, or a map too large)")
