@@ -338,8 +338,10 @@ class PoseGraph:
                     continue
                 if k not in self._map_priors:
                     graph.add(self.graph.at(k))
-                elif map_priors == "marginal" and self._map_priors[k] is not None:
-                    graph.add(self._map_priors[k])
+                    continue
+                marginal = self._map_priors[k]
+                if map_priors == "marginal" and marginal is not None:
+                    graph.add(marginal)
         triplets = graph.linearize(self.values).sparseJacobian_()
         keys = sorted(int(k) for k in self.values.keys())  # noqa: SIM118 (gtsam.Values)
         n = 3 * len(keys)
