@@ -195,8 +195,8 @@ class Scenario:
     map_error_coverage: float = math.nan
     #: the map's position error place by place as SLAM estimated it from its pose graph
     #: (:mod:`symloc.slam.pose_marginals`; None: not estimated), given to the claim gate, and
-    #: (evaluation only) the share of the lap's poses whose rigidly aligned error lies inside
-    #: its 95 % ellipse there
+    #: (evaluation only) the share of the lap's poses whose error (the truth aligned with the
+    #: map's scale fitted) lies inside its 95 % ellipse there
     map_error_field: MapErrorField | None = None
     map_error_field_coverage: float = math.nan
     #: odometry noise alpha1..4 of the kidnapped robot (both methods), matched by both AMCLs
