@@ -24,7 +24,9 @@ end in range, where laser SLAM takes the motion along the axis from odometry alo
 map is off along the axis there by more than the claim gate's map error assumes (dev
 corridor_long#1: pinned near the corridor's middle, 20 m from either end, then claimed 7-9 cm
 off with a std of 1.8 cm, every claim inside the 10 cm tolerance but 4-5 stds off). The
-map's own error per region (issue 29) would let such a pin through where SLAM knows it.
+claim gate now reads the map's error place by place (:mod:`symloc.slam.pose_marginals`),
+which says decimetres there; whether that alone suffices, without this rule, is not
+measured yet.
 """
 
 from __future__ import annotations

@@ -107,11 +107,11 @@ FloatArray = NDArray[np.float64]
 #: wall's few beams count nearly in full; the heading stays as sure as ``information_scale``
 #: makes it. Along a straight free stretch longer than twice the lidar's range the gate falls
 #: back to ``information_scale`` (:meth:`ClaimGate._match`: SLAM mapped such a stretch on
-#: odometry). **Not the default** (pass it as ``match_config``): on dev it decided 239 of 280
-#: trials against 235 and 1.9 s median first claim on test, but in a 40-60 m dev corridor whose
-#: SLAM map is off along its axis it claimed poses 7-13 cm off with stds under 3 cm (one
-#: confident wrong); the map's error per region (issue 29) must come first (README, "The walls'
-#: shared error in the claim gate").
+#: odometry). The gate's default since the map's error place by place reaches it
+#: (``map_error_field``, :mod:`symloc.slam.pose_marginals`): before it, a 40-60 m dev corridor
+#: whose SLAM map is off along its axis was claimed 7-13 cm off with stds under 3 cm (one
+#: confident wrong); with it, withheld there (std 8-51 cm along the axis). With the axis pin,
+#: dev 249 of 280, test in the README ("The walls' shared error in the claim gate").
 WALLS_MATCH = ScanMatchConfig(wall_std=0.02, wall_tilt_std=math.radians(2.0))
 
 #: The heading axis of a pose (x, y, theta): a turn in place.
@@ -548,8 +548,8 @@ class ClaimGate:
         kidnapping can hide inside it.
     config : ClaimConfig, optional
     match_config : ScanMatchConfig, optional
-        The alignment's settings; default ``ScanMatchConfig()`` (:data:`WALLS_MATCH`: the walls'
-        shared error counted, measured and off).
+        The alignment's settings; default :data:`WALLS_MATCH` (the walls' shared error counted;
+        ``ScanMatchConfig()``: every beam independent, ``information_scale`` alone).
     laser_pose : (3,) array
         The laser in the robot frame (``base_from_laser``).
     scale_centre : (2,) array, optional
@@ -605,7 +605,7 @@ class ClaimGate:
         self.config = config if config is not None else ClaimConfig()
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
-        self.match_config = match_config if match_config is not None else ScanMatchConfig()
+        self.match_config = match_config if match_config is not None else WALLS_MATCH
         # (cell x, cell y, range_max) -> a free stretch through it over twice the range
         self._stretch_cache: dict[tuple[int, int, float], bool] = {}
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)
