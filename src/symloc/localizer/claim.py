@@ -1095,8 +1095,9 @@ class ClaimGate:
         there (a door, a corridor's ends) are off along it by what odometry drifted, more than
         ``wall_std``. On dev corridor_long#1 (40-60 m) the walls model counted a few beams
         there nearly in full and claimed poses 9-13 cm off along the axis with a std under
-        2 cm; ``information_scale`` discounts them tenfold (the map's error per region,
-        issue 29, would say how far off it is)."""
+        2 cm; ``information_scale`` discounts them tenfold. The map's error place by place
+        (:attr:`map_error_field`) now says how far off such a stretch is; whether it alone
+        suffices, without this rule, is not measured yet."""
         cfg = self.match_config
         match = match_scan_to_map(self.field, pts, start, cfg, prior=prior)
         walls = cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0
