@@ -96,11 +96,11 @@ def map_error_field(
         rhs[part, np.arange(part.size)] = 1.0
         joint[:, lo : lo + part.size] = lu.solve(rhs)[cols]
     k = pick.size
-    turn = np.zeros((2 * k, 2 * k))
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    for a in range(k):
-        turn[2 * a : 2 * a + 2, 2 * a : 2 * a + 2] = [[c[a], -s[a]], [s[a], c[a]]]
-    joint = turn @ joint @ turn.T
+    turn = np.stack([np.stack([c, -s], axis=-1), np.stack([s, c], axis=-1)], axis=1)  # (K, 2, 2)
+    # into the map frame: R_a J_ab R_b^T for every pair of nodes
+    joint4 = np.einsum("aij,ajbl,bml->aibm", turn, joint.reshape(k, 2, k, 2), turn)
+    joint = joint4.reshape(2 * k, 2 * k)
     centred = poses[:, :2] - poses[:, :2].mean(axis=0)
     rigid = np.zeros((2 * k, 3))
     rigid[0::2, 0] = 1.0
@@ -109,7 +109,8 @@ def map_error_field(
     rigid[1::2, 2] = centred[:, 0]
     keep = np.eye(2 * k) - rigid @ np.linalg.solve(rigid.T @ rigid, rigid.T)
     joint = keep @ joint @ keep.T
-    blocks = np.stack([joint[2 * a : 2 * a + 2, 2 * a : 2 * a + 2] for a in range(k)])
+    every = np.arange(k)
+    blocks = joint.reshape(k, 2, k, 2)[every, :, every, :]  # (K, 2, 2): each node's own
     blocks = 0.5 * (blocks + blocks.transpose(0, 2, 1))
     xy = poses[:, :2] - (0.0 if shift is None else np.asarray(shift, dtype=np.float64))
     field = MapErrorField(xy, blocks)
