@@ -605,7 +605,7 @@ class ClaimGate:
         self.config = config if config is not None else ClaimConfig()
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
-        self.match_config = match_config if match_config is not None else WALLS_MATCH
+        self.match_config = match_config if match_config is not None else ScanMatchConfig()
         # (cell x, cell y, range_max) -> a free stretch through it over twice the range
         self._stretch_cache: dict[tuple[int, int, float], bool] = {}
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)

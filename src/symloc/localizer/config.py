@@ -206,7 +206,7 @@ class LocalizerConfig:
     axis_odometry: float = 0.05
     axis_pin_step: float = 0.05
     axis_pin_apart: float = 0.5
-    axis_pin_gain: float = 0.25  # axis_pin.PIN_GAIN
+    axis_pin_gain: float = 1.0  # off; axis_pin.PIN_GAIN turns it on
     axis_recheck: int = 30
     axis_patience: int = 30
     precision_drive: bool = True
