@@ -107,11 +107,12 @@ FloatArray = NDArray[np.float64]
 #: wall's few beams count nearly in full; the heading stays as sure as ``information_scale``
 #: makes it. Along a straight free stretch longer than twice the lidar's range the gate falls
 #: back to ``information_scale`` (:meth:`ClaimGate._match`: SLAM mapped such a stretch on
-#: odometry). The gate's default since the map's error place by place reaches it
-#: (``map_error_field``, :mod:`symloc.slam.pose_marginals`): before it, a 40-60 m dev corridor
-#: whose SLAM map is off along its axis was claimed 7-13 cm off with stds under 3 cm (one
-#: confident wrong); with it, withheld there (std 8-51 cm along the axis). With the axis pin,
-#: dev 249 of 280, test in the README ("The walls' shared error in the claim gate").
+#: odometry). **Not the default** (pass it as ``match_config``). With the map's error place by
+#: place (``map_error_field``) and the axis pin: dev 249 of 280, test 229 of 280, 0 confident
+#: wrong (realistic sensors; the long dev corridor claimed 7-13 cm off without the field is
+#: withheld at 8-51 cm along the axis), but under heavy sensors four short-corridor trials
+#: on test (a lidar 3.8 % short) were claimed 10.1-11.0 cm off (README, "The walls' shared
+#: error in the claim gate").
 WALLS_MATCH = ScanMatchConfig(wall_std=0.02, wall_tilt_std=math.radians(2.0))
 
 #: The heading axis of a pose (x, y, theta): a turn in place.
@@ -548,8 +549,8 @@ class ClaimGate:
         kidnapping can hide inside it.
     config : ClaimConfig, optional
     match_config : ScanMatchConfig, optional
-        The alignment's settings; default :data:`WALLS_MATCH` (the walls' shared error counted;
-        ``ScanMatchConfig()``: every beam independent, ``information_scale`` alone).
+        The alignment's settings; default ``ScanMatchConfig()`` (:data:`WALLS_MATCH`: the walls'
+        shared error counted, measured and off).
     laser_pose : (3,) array
         The laser in the robot frame (``base_from_laser``).
     scale_centre : (2,) array, optional

@@ -131,10 +131,10 @@ class LocalizerConfig:
         one pose per heading class (:mod:`symloc.localizer.axis_pin`): the whole scan's fit is
         profiled every ``axis_pin_step`` [m] along each class' line, and the class is pinned
         where it fits best when that fit is at least ``axis_pin_gain`` (a share) lower than
-        anywhere farther than ``axis_pin_apart`` [m] from there; 1 turns it off. The default
-        is :data:`symloc.localizer.axis_pin.PIN_GAIN` (0.25), on since the claim gate reads
-        SLAM's map error place by place (README, "The walls' shared error in the claim
-        gate").
+        anywhere farther than ``axis_pin_apart`` [m] from there. 1 (the default) turns it off;
+        :data:`symloc.localizer.axis_pin.PIN_GAIN` (0.25) is the measured setting, off since
+        heavy sensors made it claim a short corridor 10-11 cm off (README, "The walls' shared
+        error in the claim gate").
     axis_recheck : scans on the axis between two tries of deciding here (the laser proposes
         again, the camera looks when an end, a door or a keyframe could pin the position).
     axis_patience : scans in a row at which the laser does not confirm the axis (the scan no
