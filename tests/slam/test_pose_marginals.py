@@ -109,6 +109,9 @@ def test_the_field_answers_with_the_nearest_place_and_round_trips_its_rows() -> 
     assert np.allclose(field.at((1.0, 1.0)), cov[0])
     assert np.allclose(field.at((4.0, -1.0)), cov[1])
     assert np.allclose(field.major_std, [0.02, 0.03])
+    many = field.at(np.array([[1.0, 1.0], [4.0, -1.0], [6.0, 0.0]]))  # (N, 2) at once
+    assert many.shape == (3, 2, 2)
+    assert np.allclose(many, cov[[0, 1, 1]])
     again = MapErrorField.from_rows(field.rows(), "here")
     assert np.allclose(again.xy, field.xy)
     assert np.allclose(again.covariance, field.covariance)

@@ -653,8 +653,8 @@ def _map_with_slam(
         f"mapping trip: SLAM pose error in the map frame mean {100 * slam_err.mean():.1f} cm, "
         f"p95 {100 * scen.slam_error_p95:.1f} cm, max {100 * slam_err.max():.1f} cm"
     )
-    _local_error(scen, lap_truths[:, :2], trip_poses[:lap_end, :2])
-    _field_coverage(scen, lap_truths[:, :2], trip_poses[:lap_end, :2])
+    local = _local_error(scen, lap_truths[:, :2], trip_poses[:lap_end, :2])
+    _field_coverage(scen, local, trip_poses[:lap_end, :2])
     if lap_end < len(truths):
         looks = trip_err[lap_end:]
         scen.notes.append(
@@ -793,22 +793,16 @@ class Outcome:
     near_copy: int | None = None
 
 
-def _field_coverage(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> None:
-    """The share of the lap's SLAM positions ``slam_xy`` (N, 2) [m] whose error from
-    ``truth_xy`` (N, 2), the truth aligned by the similarity that fits them best (the map's
-    scale is the claim gate's ``map_scale_std``, not the field's), lies inside the map error
-    field's 95 % ellipse there: set on ``scen`` and noted."""
+def _field_coverage(scen: Scenario, errors: FloatArray, slam_xy: FloatArray) -> None:
+    """The share of the lap's SLAM errors ``errors`` (N, 2) [m] at its positions ``slam_xy``
+    (N, 2) [m], the truth aligned with the map's scale fitted (:func:`_local_error`: the scale
+    is the claim gate's ``map_scale_std``, not the field's), inside the map error field's 95 %
+    ellipse there: set on ``scen`` and noted."""
     field = scen.map_error_field
     if field is None:
         return
-    pose, scale = umeyama_sim2(truth_xy, slam_xy)
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    errors = slam_xy - (scale * truth_xy @ np.array([[c, -s], [s, c]]).T + pose[:2])
-    inside = [
-        float(e @ np.linalg.pinv(field.at(p)) @ e) <= R95**2
-        for e, p in zip(errors, slam_xy, strict=True)
-    ]
-    scen.map_error_field_coverage = float(np.mean(inside))
+    mahalanobis = np.einsum("ni,nij,nj->n", errors, np.linalg.pinv(field.at(slam_xy)), errors)
+    scen.map_error_field_coverage = float(np.mean(mahalanobis <= R95**2))
     scen.notes.append(
         f"mapping trip: the map error field (pose-graph marginals, {field.xy.shape[0]} places,"
         f" std median {100 * np.median(field.major_std):.1f} cm, max "
@@ -817,14 +811,14 @@ def _field_coverage(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -
     )
 
 
-def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> None:
+def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> FloatArray:
     """The lap's SLAM error (N, 2 true and SLAM positions [m]) once the map's scale is fitted
     as well (:func:`~symloc.bench.slam_metrics.umeyama_sim2`), and how much of it the map's
-    own error estimate covers: set on ``scen`` and noted."""
+    own error estimate covers: set on ``scen`` and noted; returns the errors (N, 2) [m]."""
     pose, scale = umeyama_sim2(truth_xy, slam_xy)
     c, s = math.cos(pose[2]), math.sin(pose[2])
-    fitted = scale * truth_xy @ np.array([[c, -s], [s, c]]).T + pose[:2]
-    local = np.hypot(*(slam_xy - fitted).T)
+    errors: FloatArray = slam_xy - (scale * truth_xy @ np.array([[c, -s], [s, c]]).T + pose[:2])
+    local = np.hypot(*errors.T)
     scen.slam_local_error_p95 = float(np.percentile(local, 95))
     scen.slam_scale_error = scale - 1.0
     covered = ""
@@ -839,6 +833,7 @@ def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> N
         f"SLAM pose error mean {100 * local.mean():.1f} cm, p95 "
         f"{100 * scen.slam_local_error_p95:.1f} cm{covered}"
     )
+    return errors
 
 
 def classify(

@@ -59,9 +59,9 @@ class MapErrorField:
         object.__setattr__(self, "_tree", cKDTree(xy))
 
     def at(self, xy: ArrayLike) -> FloatArray:
-        """The covariance (2, 2) [m^2] of the place nearest ``xy`` (2,) [m]."""
-        _, k = self._tree.query(np.asarray(xy, dtype=np.float64).reshape(2))
-        return np.array(self.covariance[int(k)])
+        """The covariance (..., 2, 2) [m^2] of the place nearest each of ``xy`` (..., 2) [m]."""
+        _, k = self._tree.query(np.asarray(xy, dtype=np.float64))
+        return np.array(self.covariance[k])
 
     @cached_property
     def major_std(self) -> FloatArray:
