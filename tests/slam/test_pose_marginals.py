@@ -153,6 +153,9 @@ def test_a_saved_map_carries_its_field(tmp_path: Path) -> None:
     bad = {"symloc_slam": {"map_error": {"field": [[1.0, 2.0]]}}}
     with pytest.raises(MapFileError, match=r"bad\.yaml: field 'symloc_slam\.map_error\.field'"):
         read_map_yaml(save_map(_box(), tmp_path / "bad", extra=bad))
+    scalar = {"symloc_slam": {"map_error": 0.02}}
+    with pytest.raises(MapFileError, match=r"scalar\.yaml: field 'symloc_slam\.map_error'"):
+        read_map_yaml(save_map(_box(), tmp_path / "scalar", extra=scalar))
 
 
 def test_the_claim_gate_takes_the_field_where_it_is_larger() -> None:
