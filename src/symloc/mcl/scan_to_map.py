@@ -516,6 +516,59 @@ def _covariance(information: FloatArray) -> FloatArray:
     return np.asarray((vecs * inv) @ vecs.T, dtype=np.float64)
 
 
+def _linearised(
+    field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatchConfig
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The end points ``pts`` (N, 2) (robot frame) seen from ``pose`` (3,): their distances
+    to the map (N,) [m], the Jacobian of those distances with respect to the pose (N, 3) and
+    their Huber weights (N,) (0 beyond ``outlier_distance``)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    rx = c * pts[:, 0] - s * pts[:, 1]
+    ry = s * pts[:, 0] + c * pts[:, 1]
+    d, grad = _bilinear(field, np.column_stack([rx + pose[0], ry + pose[1]]), cfg.compiled)
+    absd = np.abs(d)
+    huber = np.minimum(1.0, cfg.huber / np.maximum(absd, 1e-12))
+    w = np.where(absd < cfg.outlier_distance, huber, 0.0)
+    jac = np.column_stack([grad[:, 0], grad[:, 1], -grad[:, 0] * ry + grad[:, 1] * rx])
+    return d, jac, w
+
+
+def _fused_with_prior(
+    field: DistanceField,
+    pts: FloatArray,
+    pose: FloatArray,
+    cfg: ScanMatchConfig,
+    info: FloatArray,
+    prior_mean: FloatArray,
+    prior_info: FloatArray,
+) -> FloatArray:
+    """The pose (3,) that weighs the scan by ``info`` (3, 3), the information the match
+    reports, against the prior (mean (3,), information (3, 3)).
+
+    The alignment weighs the scan by ``information_scale`` against the prior; the walls model
+    reports more information than that in some directions (a far wall's few beams count nearly
+    in full), and a pose weighed one way with a covariance computed the other is pulled
+    towards the prior by more than its covariance admits. The scan's own optimum is one Newton
+    step from ``pose`` (the discount cancels in it) and the prior is fused with it by the
+    reported information: the pose and the covariance then say the same thing.
+    """
+    d, jac, w = _linearised(field, pts, pose, cfg)
+    jw = jac * w[:, None]
+    h = jw.T @ jac
+    g = jw.T @ d
+    # the scan's optimum: a Newton step in the directions the scan constrains at all
+    vals, vecs = np.linalg.eigh(0.5 * (h + h.T))
+    keep = vals > 1e-9 * max(float(vals.max()), 1e-12)
+    step = -(vecs[:, keep] / vals[keep]) @ (vecs[:, keep].T @ g)
+    scale = max(1.0, float(np.hypot(step[0], step[1])) / 0.1, abs(float(step[2])) / 0.05)
+    scan_pose = pose + step / scale
+    e = prior_mean - scan_pose
+    e[2] = float(wrap_angle(e[2]))
+    fused = scan_pose + np.linalg.lstsq(info + prior_info, prior_info @ e, rcond=None)[0]
+    fused[2] = float(wrap_angle(fused[2]))
+    return np.asarray(fused, dtype=np.float64)
+
+
 def match_scan_to_map(
     field: DistanceField,
     points: ArrayLike,
@@ -561,14 +614,8 @@ def match_scan_to_map(
     iterations = 0
     for _ in range(cfg.iterations):
         iterations += 1
-        c, s = math.cos(p[2]), math.sin(p[2])
-        rx = c * pts[:, 0] - s * pts[:, 1]
-        ry = s * pts[:, 0] + c * pts[:, 1]
-        d, grad = _bilinear(field, np.column_stack([rx + p[0], ry + p[1]]), cfg.compiled)
-        absd = np.abs(d)
-        use = absd < cfg.outlier_distance
-        w = np.where(use, np.minimum(1.0, cfg.huber / np.maximum(absd, 1e-12)), 0.0)
-        jac = np.column_stack([grad[:, 0], grad[:, 1], -grad[:, 0] * ry + grad[:, 1] * rx])
+        d, jac, w = _linearised(field, pts, p, cfg)
+        use = w > 0.0
         jw = jac * w[:, None]
         h_scan = inv_var * (jw.T @ jac)
         g = inv_var * (jw.T @ d)
@@ -592,6 +639,9 @@ def match_scan_to_map(
     else:
         agree = _inliers(field, pts, p, cfg)
         info = _secant_information(field, agree, p, cfg)
+    walls = cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0
+    if walls and prior_info is not None and prior_mean is not None and pts.shape[0] > 0:
+        p = _fused_with_prior(field, pts, p, cfg, info, prior_mean, np.asarray(prior_info))
     cov_info = info + (prior_info if prior_info is not None else 0.0)
     c, s = math.cos(p[2]), math.sin(p[2])
     wx = c * pts_all[:, 0] - s * pts_all[:, 1] + p[0]
