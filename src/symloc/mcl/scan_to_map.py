@@ -590,7 +590,9 @@ def match_scan_to_map(
         Start pose x [m], y [m], theta [rad] in the map frame.
     config : ScanMatchConfig, optional
     prior : (mean (3,), covariance (3, 3)), optional
-        A Gaussian prior on the pose (e.g. the filter's estimate carried by odometry).
+        A Gaussian prior on the pose (e.g. the filter's estimate carried by odometry). Under
+        the walls model the final pose is the scan's own optimum fused with it by the
+        information the match reports (:func:`_fused_with_prior`).
     """
     cfg = config if config is not None else ScanMatchConfig()
     if cfg.outlier_distance >= field.max_dist:
