@@ -1128,8 +1128,7 @@ class ClaimGate:
         worst, so the rule stays."""
         cfg = self.match_config
         match = match_scan_to_map(self.field, pts, start, cfg, prior=prior)
-        walls = cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0
-        if walls and self._along_odometry(match, range_max):
+        if cfg.models_walls and self._along_odometry(match, range_max):
             plain = dataclasses.replace(cfg, wall_std=0.0, wall_tilt_std=0.0)
             match = match_scan_to_map(self.field, pts, start, plain, prior=prior)
         return match

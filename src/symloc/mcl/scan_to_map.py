@@ -163,6 +163,12 @@ class ScanMatchConfig:
     wall_turn: float = math.radians(30.0)
     compiled: bool = True
 
+    @property
+    def models_walls(self) -> bool:
+        """Are end points grouped into walls whose shared error counts once
+        (``wall_std`` or ``wall_tilt_std`` above 0)?"""
+        return self.wall_std > 0.0 or self.wall_tilt_std > 0.0
+
     def __post_init__(self) -> None:
         for name in (
             "sigma",
@@ -357,7 +363,7 @@ def _secant_information(
     m = np.array([[q[0], q[3], q[4]], [q[3], q[1], q[5]], [q[4], q[5], q[2]]])
     w, vecs = np.linalg.eigh(m)
     w = np.maximum(w, 0.0)
-    if cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0:
+    if cfg.models_walls:
         # each direction keeps the share of its information that the walls' shared errors
         # leave (linearised at the pose; the secant says how much there is at all)
         independent, shared = _wall_discount(_walls(field, pts, pose, cfg), cfg)
@@ -516,6 +522,14 @@ def _covariance(information: FloatArray) -> FloatArray:
     return np.asarray((vecs * inv) @ vecs.T, dtype=np.float64)
 
 
+def _held(step: ArrayLike) -> FloatArray:
+    """A Gauss-Newton ``step`` (3,) scaled down to at most 10 cm and 0.05 rad: inside the
+    sampled field's resolution scale, where its linearisation holds."""
+    u = np.asarray(step, dtype=np.float64)
+    scale = max(1.0, float(np.hypot(u[0], u[1])) / 0.1, abs(float(u[2])) / 0.05)
+    return u / scale
+
+
 def _linearised(
     field: DistanceField, pts: FloatArray, pose: FloatArray, cfg: ScanMatchConfig
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -560,8 +574,7 @@ def _fused_with_prior(
     vals, vecs = np.linalg.eigh(0.5 * (h + h.T))
     keep = vals > 1e-9 * max(float(vals.max()), 1e-12)
     step = -(vecs[:, keep] / vals[keep]) @ (vecs[:, keep].T @ g)
-    scale = max(1.0, float(np.hypot(step[0], step[1])) / 0.1, abs(float(step[2])) / 0.05)
-    scan_pose = pose + step / scale
+    scan_pose = pose + _held(step)
     e = prior_mean - scan_pose
     e[2] = float(wrap_angle(e[2]))
     fused = scan_pose + np.linalg.lstsq(info + prior_info, prior_info @ e, rcond=None)[0]
@@ -630,9 +643,7 @@ def match_scan_to_map(
         if not np.any(use) and prior_info is None:
             break
         delta = -np.linalg.lstsq(h + 1e-9 * np.eye(3), g, rcond=None)[0]
-        # keep each step inside the field's resolution scale (Gauss-Newton on a sampled field)
-        scale = max(1.0, float(np.hypot(delta[0], delta[1])) / 0.1, abs(float(delta[2])) / 0.05)
-        p = p + delta / scale
+        p = p + _held(delta)
         p[2] = float(wrap_angle(p[2]))
         if abs(delta[0]) < 1e-4 and abs(delta[1]) < 1e-4 and abs(delta[2]) < 1e-4:
             break
@@ -641,8 +652,7 @@ def match_scan_to_map(
     else:
         agree = _inliers(field, pts, p, cfg)
         info = _secant_information(field, agree, p, cfg)
-    walls = cfg.wall_std > 0.0 or cfg.wall_tilt_std > 0.0
-    if walls and prior_info is not None and prior_mean is not None and pts.shape[0] > 0:
+    if cfg.models_walls and prior_info is not None and prior_mean is not None and pts.shape[0] > 0:
         p = _fused_with_prior(field, pts, p, cfg, info, prior_mean, np.asarray(prior_info))
     cov_info = info + (prior_info if prior_info is not None else 0.0)
     c, s = math.cos(p[2]), math.sin(p[2])
