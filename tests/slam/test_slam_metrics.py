@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from symloc.bench.slam_metrics import ate, rpe, umeyama_se2, umeyama_sim2
+from symloc.bench.slam_metrics import ate, rpe, umeyama_se2, umeyama_se2_at, umeyama_sim2
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 
@@ -93,3 +93,30 @@ def test_umeyama_sim2_recovers_a_scaled_rigid_motion() -> None:
     cr, sr = np.cos(rigid[2]), np.sin(rigid[2])
     left = dst - (src @ np.array([[cr, -sr], [sr, cr]]).T + rigid[:2])
     assert np.max(np.hypot(*left.T)) > 0.01
+
+
+def test_umeyama_se2_at_is_right_at_its_anchor_and_off_by_the_scale_elsewhere() -> None:
+    rng = np.random.default_rng(4)
+    # a lap on one side of the room: its centroid is not the room's middle
+    src = rng.uniform(0.5, 4.0, size=(60, 2))
+    pose = np.array([0.3, 0.2, -0.6])
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    rot = np.array([[c, -s], [s, c]])
+    dst = 0.95 * src @ rot.T + pose[:2]  # a map 5 % short
+    middle_src = np.array([-1.0, 0.5])
+    middle = 0.95 * rot @ middle_src + pose[:2]
+    got = umeyama_se2_at(src, dst, middle)
+    assert got[2] == pytest.approx(pose[2], abs=1e-12)
+    np.testing.assert_allclose(compose(got, np.array([*middle_src, 0.0]))[:2], middle, atol=1e-12)
+    # 2 m from the middle the truth frame is off by the scale error times 2 m
+    far = np.array([middle_src[0] + 2.0, middle_src[1], 0.0])
+    off = compose(got, far)[:2] - (0.95 * rot @ far[:2] + pose[:2])
+    assert np.hypot(*off) == pytest.approx(0.05 * 2.0, abs=1e-9)
+    # the plain rigid fit is right at the lap's centroid instead, not at the middle
+    plain = umeyama_se2(src, dst)
+    assert np.hypot(*(compose(plain, np.array([*middle_src, 0.0]))[:2] - middle)) > 0.1
+    # without a scale error both are the same frame
+    exact = src @ rot.T + pose[:2]
+    np.testing.assert_allclose(
+        umeyama_se2_at(src, exact, middle), umeyama_se2(src, exact), atol=1e-9
+    )

@@ -34,7 +34,12 @@ from symloc.geometry import compose as _compose
 from symloc.geometry import inverse as _inverse
 from symloc.grid.map_error_field import MapErrorField
 from symloc.localizer.adapters import ReportJudge
-from symloc.localizer.build import build_localizer, grid_round_centre, grid_symmetries
+from symloc.localizer.build import (
+    build_localizer,
+    enclosed_centroid,
+    grid_round_centre,
+    grid_symmetries,
+)
 from symloc.localizer.centering import CenteringConfig
 from symloc.localizer.localizer import Localizer, LocalizerConfig, rotated_copies
 from symloc.localizer.settings import LocalizerSettings
@@ -69,7 +74,7 @@ from .exploration import coverage_stops, exploration_path, free_route
 from .explore import ExploreDrive
 from .mapping_trip import KeyframeRecorder, MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
-from .slam_metrics import umeyama_se2, umeyama_sim2
+from .slam_metrics import umeyama_se2, umeyama_se2_at, umeyama_sim2
 
 __all__ = [
     "DEFAULT_GV",
@@ -628,10 +633,17 @@ def _map_with_slam(
     # error, which SLAM cannot see: the claim gate is told its data-sheet spread
     # (ClaimConfig.map_scale_std), as a user sets it for their lidar
     scale_std = scen.hardware.regime.lidar_faults.range_scale_std if scen.hardware else 0.0
-    scen.settings = dataclasses.replace(
-        scen.settings,
-        claim=dataclasses.replace(scen.settings.claim, map_scale_std=scale_std),
-    )
+    claim = dataclasses.replace(scen.settings.claim, map_scale_std=scale_std)
+    if scen.hardware is not None:
+        # and its wheels' error, as a user who measured them sets it (never below the
+        # gate's default margin): a heavy regime's slip loses up to 30 % of a turn
+        a1, a2, a3, a4 = np.maximum(
+            claim.odometry_alphas, scen.hardware.regime.odometry.error_alphas()
+        )
+        claim = dataclasses.replace(
+            claim, odometry_alphas=(float(a1), float(a2), float(a3), float(a4))
+        )
+    scen.settings = dataclasses.replace(scen.settings, claim=claim)
     scen.map_error_field = slam.map_error_field
     if slam.map_error is not None:
         scen.map_std_xy = slam.map_error.std_xy
@@ -639,12 +651,25 @@ def _map_with_slam(
             f"mapping trip: the map's own error (SLAM's estimate) {100 * slam.map_error.std_xy:.1f}"
             f" cm std, p95 {100 * slam.map_error.p95_xy:.1f} cm over {slam.map_error.nodes} nodes"
         )
-    # The truth is expressed in the SLAM map frame by the rigid transform that best fits the
-    # trip SLAM mapped (least squares over its positions, as ATE aligns trajectories), not by
-    # the first pose alone: anchoring at the first pose would put all the drift SLAM left at
-    # the far side of the room. Whatever distortion remains is error the localizer inherits.
+    # The truth is expressed in the SLAM map frame by a rigid transform fitted to the trip
+    # SLAM mapped (least squares over its positions, as ATE aligns trajectories), not by the
+    # first pose alone: anchoring at the first pose would put all the drift SLAM left at the
+    # far side of the room. Whatever distortion remains is error the localizer inherits.
+    # A map drawn with a lidar whose ranges are off by a factor is the room scaled, which no
+    # rigid frame fits everywhere: the truth frame is right at the middle of the mapped room,
+    # the point the claim gate's map_scale_std grows from (build.enclosed_centroid), not at
+    # the lap's centroid (plain umeyama_se2), which a lap that cannot reach a cross's arms put
+    # 0.85 m off it (dev cross#0, heavy: a -5.2 % map; claims 12.6 cm off in that frame).
     lap_truths = np.asarray(truths[:lap_end], dtype=np.float64)
-    scen.map_from_world = umeyama_se2(lap_truths[:, :2], trip_poses[:lap_end, :2])
+    rigid = umeyama_se2(lap_truths[:, :2], trip_poses[:lap_end, :2])
+    middle = enclosed_centroid(scen.grid)
+    scen.map_from_world = umeyama_se2_at(lap_truths[:, :2], trip_poses[:lap_end, :2], middle)
+    # the same rotation: the two frames differ by one translation
+    shift = float(np.hypot(*(scen.map_from_world[:2] - rigid[:2])))
+    scen.notes.append(
+        "mapping trip: the truth frame is right at the mapped room's middle (the map's scale"
+        f" error grows from there), {100 * shift:.1f} cm from the frame right at the lap's centroid"
+    )
     in_map = np.asarray(_compose(scen.map_from_world, np.array(truths)), dtype=np.float64)
     trip_err = np.hypot(*(trip_poses[:, :2] - in_map[:, :2]).T)
     slam_err = trip_err[:lap_end]

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,6 +32,7 @@ __all__ = [
     "map_agreement",
     "rpe",
     "umeyama_se2",
+    "umeyama_se2_at",
     "umeyama_sim2",
 ]
 
@@ -116,6 +118,25 @@ def umeyama_sim2(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, floa
     pose ``(3,)`` and scale ``c`` minimising ``sum ||target_i - c R source_i - t||^2``
     (Umeyama 1991, with the reflection guard; evo's ``--correct_scale``)."""
     return _umeyama(source, target, scaled=True)
+
+
+def umeyama_se2_at(source: ArrayLike, target: ArrayLike, anchor: ArrayLike) -> FloatArray:
+    """The rigid alignment ``target_from_source`` (3,) of points ``source`` (N, 2) onto
+    ``target`` (N, 2) that agrees with their similarity alignment (:func:`umeyama_sim2`) at
+    ``anchor`` (2,), a point of the target frame.
+
+    When the target is a scaled copy of the source (a map drawn by a lidar whose ranges are
+    off by a factor), no rigid frame fits it everywhere: every one is right at one point and
+    off by the scale error times the distance from it. :func:`umeyama_se2` puts that point at
+    the source's centroid; this puts it at ``anchor``, with the same rotation.
+    """
+    sim, scale = umeyama_sim2(source, target)
+    c, s = math.cos(sim[2]), math.sin(sim[2])
+    rot = np.array([[c, -s], [s, c]])
+    at = np.asarray(anchor, dtype=np.float64).reshape(2)
+    at_source = rot.T @ (at - sim[:2]) / scale
+    t = at - rot @ at_source
+    return np.array([t[0], t[1], sim[2]])
 
 
 def ate(reference: ArrayLike, estimate: ArrayLike, *, align: bool = True) -> AteResult:

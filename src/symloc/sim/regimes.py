@@ -112,6 +112,40 @@ class OdometrySpec:
             wheel_base=self.wheel_base,
         )  # validates the rest
 
+    def error_alphas(self) -> tuple[float, float, float, float]:
+        """The whole odometry error of a robot of this spec as Table 5.6 alphas.
+
+        What a user who measured such a robot (UMBmark runs on its floor) would declare to a
+        localizer: each alpha is the zero-mean noise's plus the *mean square* of the
+        systematic errors it would see, so a bias counts as much as a spread of its size.
+
+        - alpha1 (rotation from rotation): the noise, the largest rotation calibration error
+          squared, and slip while turning on the spot: the share of turning time spent in an
+          episode (``rate * duration / (1 + rate * duration)``, a renewal process) times the
+          mean square of the lost fraction (uniform in ``[fraction_min, fraction_max]``).
+        - alpha2 (rotation from translation): the noise and the heading drift per metre squared.
+        - alpha3 (translation from translation): the noise and the largest distance calibration
+          error squared (slip under hard acceleration lasts a fraction of a second and is left
+          out).
+        - alpha4: the noise.
+
+        Returns
+        -------
+        (4,) floats: alpha1 [rad^2/rad^2], alpha2 [rad^2/m^2], alpha3 [m^2/m^2], alpha4
+        [m^2/rad^2]. The realistic regime gives about (0.0024, 0.0001, 0.0008, 0.0001), the heavy
+        one (0.022, 0.0005, 0.0041, 0.0004).
+        """
+        n, s = self.noise, self.slip
+        busy = s.rate * s.duration / (1.0 + s.rate * s.duration)
+        lo, hi = s.fraction_min, s.fraction_max
+        lost_sq = (lo * lo + lo * hi + hi * hi) / 3.0
+        return (
+            n.alpha1 + self.rotation_error[1] ** 2 + busy * lost_sq,
+            n.alpha2 + self.heading_drift_std**2,
+            n.alpha3 + self.scale_error[1] ** 2,
+            n.alpha4,
+        )
+
 
 @dataclass(frozen=True)
 class CameraSpec:
