@@ -138,16 +138,23 @@ def test_the_gates_walls_model_gives_way_along_a_stretch_mapped_on_odometry() ->
     np.testing.assert_allclose(farther.pose, here.pose, atol=1e-3)
 
 
-def test_the_pin_and_the_walls_model_are_off_by_default() -> None:
-    """Both are measured and left off (README): the default config pins nothing even where the
-    ends are in view, PIN_GAIN pins; the default gate counts every end point independently."""
+def test_the_pin_and_the_walls_model_are_on_by_default() -> None:
+    """Both are the defaults (README, "The heavy dev lies, traced"): the default config pins
+    where the ends are in view and a gain of 1 pins nothing; the default gate counts a wall's
+    end points as sharing its error."""
     probe = hallway(15.0, 2.0)
     c = np.asarray(probe.center, dtype=np.float64)
     ctx, inp, poses, _ = _setting(15.0, np.array([c[0] + 3.2, c[1] + 0.3, 0.05]))
     default = SimpleNamespace(
         config=LocalizerConfig(decide_here=True), gate=ctx.gate, grid=ctx.grid
     )
-    assert pin_axis(default, inp, poses) is None  # type: ignore[arg-type]
-    assert pin_axis(ctx, inp, poses) is not None  # type: ignore[arg-type]
+    off = SimpleNamespace(
+        config=LocalizerConfig(decide_here=True, axis_pin_gain=1.0), gate=ctx.gate, grid=ctx.grid
+    )
+    assert LocalizerConfig().axis_pin_gain == PIN_GAIN
+    assert pin_axis(default, inp, poses) is not None  # type: ignore[arg-type]
+    assert pin_axis(off, inp, poses) is None  # type: ignore[arg-type]
     plain = ClaimGate(ctx.gate.field, ALPHAS).match_config
-    assert (plain.wall_std, plain.wall_tilt_std) == (0.0, 0.0)
+    assert plain is WALLS_MATCH
+    assert plain.wall_std > 0.0
+    assert plain.wall_tilt_std > 0.0

@@ -771,7 +771,7 @@ def test_the_gates_alignment_runs_longer_than_the_default(l_room) -> None:
     from symloc.mcl.scan_to_map import ScanMatchConfig
 
     gate = ClaimGate(surface_distance_field(l_room[1]), ALPHAS)
-    assert gate.match_config is GATE_MATCH
+    assert gate.match_config is WALLS_MATCH
     assert GATE_MATCH.iterations == 3 * ScanMatchConfig().iterations
     assert WALLS_MATCH.iterations == GATE_MATCH.iterations
     assert WALLS_MATCH.wall_std > 0.0

@@ -10,7 +10,11 @@ faults, light (exposure, white balance) and blur from that hardware:
 
 The localizer's filter is tuned the same way in every regime (odometry alphas
 :data:`FILTER_ALPHA`, chosen on the ``ideal`` regime before the others existed); the ``ideal``
-robot's own odometry noise equals them, as ``symloc experiment amcl-symmetric`` has it.
+robot's own odometry noise equals them, as ``symloc experiment amcl-symmetric`` has it. The
+claim gate, which carries a confirmed pose by odometry alone, is told the robot's own wheel
+error as a user who measured their robot would set it (``ClaimConfig.odometry_alphas`` from
+:meth:`~symloc.sim.regimes.OdometrySpec.error_alphas`, never below the gate's default; the
+scenario sets it with the lidar's scale spread).
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ from .context import Context, Inputs
 
 __all__ = ["PIN_GAIN", "pin_axis"]
 
-#: The pin's measured gain (``LocalizerConfig.axis_pin_gain``; the default 1 is off).
+#: The pin's measured gain (``LocalizerConfig.axis_pin_gain``'s default; 1 turns it off).
 PIN_GAIN = 0.25
 
 FloatArray = NDArray[np.float64]

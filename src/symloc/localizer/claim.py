@@ -122,23 +122,25 @@ FloatArray = NDArray[np.float64]
 #: (median 9); with 12 at most a quarter of them had used all 12.
 GATE_MATCH = ScanMatchConfig(iterations=36)
 
-#: The claim gate's alignment with the walls model: each wall's offset (2 cm) and tilt (2 deg)
-#: in the map are errors its end points share (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig`
-#: ``wall_std``, ``wall_tilt_std``), so a wall counts once however many beams hit it and a far
-#: wall's few beams count nearly in full; the heading stays as sure as ``information_scale``
-#: makes it. Along a straight free stretch longer than twice the lidar's range the gate falls
-#: back to ``information_scale`` (:meth:`ClaimGate._match`: SLAM mapped such a stretch on
-#: odometry). **Not the default** (pass it as ``match_config``). With the map's error place by
-#: place (``map_error_field``) and the axis pin: dev 249 of 280, test 229 of 280, 0 confident
-#: wrong (realistic sensors; the long dev corridor claimed 7-13 cm off without the field is
-#: withheld at 8-51 cm along the axis), but under heavy sensors four short-corridor trials
-#: on test (a lidar 3.8 % short) were claimed 10.1-11.0 cm off (README, "The walls' shared
-#: error in the claim gate"). Two faults of the alignment were behind them, both fixed
-#: (:func:`~symloc.mcl.scan_to_map.match_scan_to_map` now fuses the prior by the information
-#: it reports; :data:`GATE_MATCH`), but the heavy dev split with this and the pin on then
-#: still gave 2 confident wrong of 280 (a nine-sided room's heading drifting with the claim
-#: chain, a kidnapping decided here 12.6 cm off) and coverage 0.59 in convex rooms (README,
-#: "The heavy short-corridor lie, analysed").
+#: The claim gate's alignment with the walls model, **the gate's default**: each wall's
+#: offset (2 cm) and tilt (2 deg) in the map are errors its end points share
+#: (:class:`~symloc.mcl.scan_to_map.ScanMatchConfig` ``wall_std``, ``wall_tilt_std``), so a
+#: wall counts once however many beams hit it and a far wall's few beams count nearly in full;
+#: the heading stays as sure as ``information_scale`` makes it. Along a straight free stretch
+#: longer than twice the lidar's range the gate falls back to ``information_scale``
+#: (:meth:`ClaimGate._match`: SLAM mapped such a stretch on odometry). With the map's error
+#: place by place (``map_error_field``) and the axis pin: dev 249 of 280, test 229 of 280, 0
+#: confident wrong (realistic sensors). It was off from 37b875e to 08b4924 because heavy
+#: sensors made it lie: four short-corridor trials on test (a lidar 3.8 % short) claimed
+#: 10.1-11.0 cm off, from two faults of the alignment (both fixed: the prior fused by the
+#: information the match reports, :func:`~symloc.mcl.scan_to_map.match_scan_to_map`; 36
+#: iterations, :data:`GATE_MATCH`), then on the heavy dev split a nine-sided room's heading
+#: drifting with the claim chain (the bench now tells the gate the wheels' error,
+#: ``ClaimConfig.odometry_alphas``) and a kidnapping claimed 12.6 cm off (the bench's truth
+#: frame was right at the lap's centroid, not at the room's middle the gate's scale error grows
+#: from). After those the heavy dev split with this and the pin on: 221 of 280, 0 confident
+#: wrong, coverage 1.00 (README, "The heavy dev lies, traced"). :data:`GATE_MATCH` is the same
+#: without the walls.
 WALLS_MATCH = dataclasses.replace(GATE_MATCH, wall_std=0.02, wall_tilt_std=math.radians(2.0))
 
 #: The heading axis of a pose (x, y, theta): a turn in place.
@@ -276,7 +278,11 @@ class ClaimConfig:
         Default odometry error model (alpha1..alpha4, variances of Thrun et al. Table 5.6) that
         grows a carried pose's covariance: 5 % of each rotation and translation and 0.02 rad
         of heading per metre, two to five times what a calibrated differential drive shows
-        (UMBmark, Borenstein and Feng 1996: 1-2 % after calibration).
+        (UMBmark, Borenstein and Feng 1996: 1-2 % after calibration). Set the robot's own when
+        it is worse: on a slippery floor that loses 10-30 % of a turn for half a second at a
+        time (the bench's heavy regime, alpha1 0.022) a chain of claims carried with the
+        default drifted 5.8 deg in a 9-gon whose scans fix the heading to 1.4 deg, and was
+        published (dev regular#0, both the walls model and the axis pin on).
     min_beams : int
         Fewer returning beams than this cannot confirm anything (the claim is withheld).
     max_unmapped_share : float
@@ -575,8 +581,8 @@ class ClaimGate:
         kidnapping can hide inside it.
     config : ClaimConfig, optional
     match_config : ScanMatchConfig, optional
-        The alignment's settings; default :data:`GATE_MATCH` (:data:`WALLS_MATCH`: the walls'
-        shared error counted, measured and off).
+        The alignment's settings; default :data:`WALLS_MATCH` (:data:`GATE_MATCH`: the same
+        without the walls' shared error).
     laser_pose : (3,) array
         The laser in the robot frame (``base_from_laser``).
     scale_centre : (2,) array, optional
@@ -632,7 +638,7 @@ class ClaimGate:
         self.config = config if config is not None else ClaimConfig()
         a1, a2, a3, a4 = (float(a) for a in (alphas or self.config.odometry_alphas))
         self.alphas = (a1, a2, a3, a4)
-        self.match_config = match_config if match_config is not None else GATE_MATCH
+        self.match_config = match_config if match_config is not None else WALLS_MATCH
         # (cell x, cell y, range_max) -> a free stretch through it over twice the range
         self._stretch_cache: dict[tuple[int, int, float], bool] = {}
         self.laser_pose = np.asarray(laser_pose, dtype=np.float64).reshape(3)

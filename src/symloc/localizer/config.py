@@ -131,10 +131,10 @@ class LocalizerConfig:
         one pose per heading class (:mod:`symloc.localizer.axis_pin`): the whole scan's fit is
         profiled every ``axis_pin_step`` [m] along each class' line, and the class is pinned
         where it fits best when that fit is at least ``axis_pin_gain`` (a share) lower than
-        anywhere farther than ``axis_pin_apart`` [m] from there. 1 (the default) turns it off;
-        :data:`symloc.localizer.axis_pin.PIN_GAIN` (0.25) is the measured setting, off since
-        heavy sensors made it claim a short corridor 10-11 cm off (README, "The walls' shared
-        error in the claim gate").
+        anywhere farther than ``axis_pin_apart`` [m] from there; the default is the measured
+        :data:`symloc.localizer.axis_pin.PIN_GAIN` (0.25), 1 turns it off (it was off from
+        37b875e to 08b4924, after heavy sensors made it claim a short corridor 10-11 cm off:
+        README, "The walls' shared error in the claim gate" and "The heavy dev lies, traced").
     axis_recheck : scans on the axis between two tries of deciding here (the laser proposes
         again, the camera looks when an end, a door or a keyframe could pin the position).
     axis_patience : scans in a row at which the laser does not confirm the axis (the scan no
@@ -206,7 +206,7 @@ class LocalizerConfig:
     axis_odometry: float = 0.05
     axis_pin_step: float = 0.05
     axis_pin_apart: float = 0.5
-    axis_pin_gain: float = 1.0  # off; axis_pin.PIN_GAIN turns it on
+    axis_pin_gain: float = 0.25  # axis_pin.PIN_GAIN; 1 turns it off
     axis_recheck: int = 30
     axis_patience: int = 30
     precision_drive: bool = True

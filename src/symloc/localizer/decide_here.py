@@ -56,7 +56,7 @@ copies open) the localizer first tries to decide without driving anywhere:
 wall's few beams are less than the search's margin): :func:`~.axis_pin.pin_axis` profiles
 the scan's fit along each heading class' line and, where one stretch fits clearly best, the
 class is the one pose aligned there; the two poses go on as several survivors (step 3).
-Off by default (``LocalizerConfig.axis_pin_gain`` 1; :data:`~.axis_pin.PIN_GAIN` turns it on).
+On by default (``LocalizerConfig.axis_pin_gain`` = :data:`~.axis_pin.PIN_GAIN`; 1 turns it off).
 
 **A corridor** (the survivors are an axis family, :mod:`symloc.localizer.axis`: one heading up
 to a half turn, along a line): no single pose can be verified, since the camera does not tell

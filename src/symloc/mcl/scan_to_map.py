@@ -41,8 +41,9 @@ What it returns, besides the pose:
   saturates at ``1 / wall_std^2`` however many beams hit it, and a far wall's few beams count
   nearly in full; it no longer depends on ``max_points``. The heading is kept no surer than
   ``information_scale`` makes it (:func:`_heading_floored`): the walls' own heading let a
-  wrong one through on dev (below). Off by default, here and in the claim gate
-  (:data:`symloc.localizer.claim.WALLS_MATCH`, 2 cm / 2 deg, measured and left off). With
+  wrong one through on dev (below). Off by default here; on in the claim gate
+  (:data:`symloc.localizer.claim.WALLS_MATCH`, 2 cm / 2 deg, its default since the heavy
+  dev split's lies were traced elsewhere). With
   ``benchmarks/claim_calibration.py --walls`` on dev corridor_short#0 (trials 0-5) and
   regular#0 (0-3), realistic sensors (error along the widest axis / heading error, in stds;
   trials correct):
