@@ -658,3 +658,56 @@ def test_axis_estimates_carry_an_axis_and_nothing_else_does() -> None:
 def test_bad_decide_settings_are_refused_by_name(field: str, value: object) -> None:
     with pytest.raises(ConfigurationError, match=f"LocalizerConfig.{field}"):
         LocalizerConfig(**{field: value})
+
+
+def test_an_axis_heading_carried_through_an_unconfirmed_turn_is_held_back() -> None:
+    """The heading's std grows with the turning the laser has not confirmed, by the robot's
+    rotation error (the gate's alpha1); past the gate's bound nothing is reported (deciding
+    here keeps its request), and a confirmation reports the axis again."""
+    from types import SimpleNamespace
+
+    from symloc.localizer.axis import AxisSegment
+    from symloc.localizer.axis_phase import OnAxis
+    from symloc.localizer.claim import ClaimConfig
+    from symloc.localizer.phases import Lost
+    from symloc.localizer.types import Request
+
+    cfg = LocalizerConfig(decide_here=True)
+    claim = ClaimConfig()
+    heavy = SimpleNamespace(alphas=(0.022, 0.0005, 0.004, 0.0004), config=claim)
+    ctx = SimpleNamespace(config=cfg, gate=heavy)
+    inp = SimpleNamespace(result=_result([TRUTH], [1.0]))
+    segment = AxisSegment(np.array([2.0, 0.3]), np.array([1.0, 0.0]), 0.0, 0.0, 16.0)
+    axis = OnAxis(
+        segment, TRUTH.copy(), np.zeros(3), 0, 0.05, Lost.fresh(cfg), "heading class 1 verified"
+    )
+    est = axis.report(ctx, inp, axis.headline())  # type: ignore[arg-type]
+    assert est.status is Status.AXIS
+    assert est.axis is not None
+    assert math.sqrt(est.axis.covariance[2, 2]) == pytest.approx(cfg.axis_theta_std)
+    # odometry turns 3 deg: std sqrt(1 + 0.022 * 3^2) deg, still inside 1.25 deg, and reported so
+    axis.carry(ctx, np.array([0.0, 0.0, math.radians(3.0)]))  # type: ignore[arg-type]
+    est = axis.report(ctx, inp, axis.headline())  # type: ignore[arg-type]
+    assert est.status is Status.AXIS
+    assert est.axis is not None
+    grown = math.hypot(cfg.axis_theta_std, math.sqrt(0.022) * math.radians(3.0))
+    assert math.sqrt(est.axis.covariance[2, 2]) == pytest.approx(grown)
+    assert grown < claim.max_std_theta
+    # 60 deg more (deciding here turning to look elsewhere): 9 deg std, held back
+    axis.carry(ctx, np.array([0.0, 0.0, math.radians(63.0)]))  # type: ignore[arg-type]
+    turn = Request(RequestKind.ROTATE, angle=math.radians(60.0))
+    est = axis.report(ctx, inp, "deciding here: turning", turn)  # type: ignore[arg-type]
+    assert est.status is Status.DECIDING
+    assert est.axis is None
+    assert est.request is turn
+    assert "axis held" in est.reason
+    # the robot's default rotation error (5 % of a turn) holds it back only past 15 deg
+    calm = SimpleNamespace(alphas=claim.odometry_alphas, config=claim)
+    axis.turned = math.radians(14.0)
+    assert axis.report(SimpleNamespace(config=cfg, gate=calm), inp, "").status is Status.AXIS  # type: ignore[arg-type]
+    axis.turned = math.radians(16.0)
+    assert axis.report(SimpleNamespace(config=cfg, gate=calm), inp, "").status is Status.LOST  # type: ignore[arg-type]
+    # the laser proposing the axis again confirms it
+    chosen = SimpleNamespace(segment=segment, reference=TRUTH.copy(), open_ends=0, across_std=0.05)
+    axis.renew(chosen, np.zeros(3))  # type: ignore[arg-type]
+    assert axis.report(ctx, inp, "").status is Status.AXIS  # type: ignore[arg-type]

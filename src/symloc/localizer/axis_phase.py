@@ -23,7 +23,11 @@ Each scan :class:`OnAxis`
    earned, the drive to a symmetric place's centre) it takes over at once, so the axis never
    blocks it;
 2. carries the segment by odometry (every pose on it has the same heading, so all move alike)
-   and lengthens it by ``axis_odometry`` of the distance travelled at each end;
+   and lengthens it by ``axis_odometry`` of the distance travelled at each end; the heading's
+   std grows with the turning since the laser last confirmed it, by the robot's rotation error
+   (the claim gate's ``alphas``), and past the gate's heading bound nothing is reported until a
+   scan confirms it (:meth:`OnAxis.report`: on the heavy sensors, whose slip loses up to 30 %
+   of a turn, deciding here's turns to look elsewhere published headings 5-8 deg off);
 3. lets the laser check the heading: the class' reference pose (where the scan fitted),
    carried by odometry, is aligned to the map; fitting with the decided heading it becomes the
    new reference (its heading and its place across the corridor; along the corridor the laser
@@ -187,7 +191,8 @@ class OnAxis:
     pose on the class' line where the scan last fitted (carried with the segment);
     ``open_ends`` ends lengthened into unmapped space; ``across_std`` [m] the spread across
     the line; ``lost`` the normal path's counters (its step runs first); ``misses`` scans in a
-    row at which the laser did not confirm the axis; ``why`` how the heading was decided.
+    row at which the laser did not confirm the axis; ``why`` how the heading was decided;
+    ``turned`` [rad] the odometry's turning since the laser last confirmed the heading.
     """
 
     name: ClassVar[str] = "axis"
@@ -199,11 +204,19 @@ class OnAxis:
     lost: Lost
     why: str
     misses: int = 0
+    turned: float = 0.0
 
     @property
     def heading(self) -> float:
         """The decided heading [rad] (map frame)."""
         return self.segment.heading
+
+    def heading_std(self, ctx: Context) -> float:
+        """The heading's std [rad]: ``axis_theta_std``, grown by the robot's rotation error
+        (the claim gate's ``alphas[0]``, as :func:`~symloc.mcl.motion_model.carry_by_odometry`
+        grows a carried pose's) over the turning the laser has not confirmed."""
+        a1 = ctx.gate.alphas[0] if ctx.gate is not None else 0.0
+        return math.sqrt(ctx.config.axis_theta_std**2 + a1 * self.turned**2)
 
     def step(self, ctx: Context, inp: Inputs) -> Step:
         estimate, after = self.lost.step(ctx, inp)
@@ -215,7 +228,7 @@ class OnAxis:
         if trouble is not None:
             ctx.note(f"axis given up: {trouble}")
             return lost(f"axis given up: {trouble}", inp.result), restart(ctx)
-        return self.estimate(ctx.config, self.headline()), self
+        return self.report(ctx, inp, self.headline()), self
 
     # ------------------------------------------------------------------ odometry, laser
 
@@ -236,6 +249,7 @@ class OnAxis:
         )
         self.reference = np.asarray(compose(self.reference, delta), dtype=np.float64)
         self.odom = odom.copy()
+        self.turned += abs(float(delta[2]))
 
     def check(self, ctx: Context, inp: Inputs) -> str | None:
         """The laser's check of the heading (see the module docstring, step 3): None while
@@ -261,6 +275,7 @@ class OnAxis:
                 "axis' heading and line (carried off?)"
             )
         self.misses = 0
+        self.turned = 0.0
         across = moved * self.segment.normal
         self.reference = np.array(
             [self.reference[0] + across[0], self.reference[1] + across[1], aligned[2]]
@@ -278,6 +293,7 @@ class OnAxis:
         self.across_std = chosen.across_std
         self.odom = np.asarray(odom_pose, dtype=np.float64).copy()
         self.misses = 0
+        self.turned = 0.0
 
     def class_of(self, classes: tuple[AxisClass, AxisClass], tolerance: float) -> int | None:
         """Which of ``classes`` has this axis' heading (within ``tolerance`` [rad]), if any."""
@@ -288,9 +304,11 @@ class OnAxis:
 
     # ------------------------------------------------------------------ output
 
-    def covariance(self, cfg: LocalizerConfig) -> FloatArray:
-        """The covariance (3, 3) of the axis estimate (:func:`axis_covariance`)."""
-        return axis_covariance(self.segment, self.across_std, cfg.axis_theta_std)
+    def covariance(self, cfg: LocalizerConfig, theta_std: float | None = None) -> FloatArray:
+        """The covariance (3, 3) of the axis estimate (:func:`axis_covariance`), its heading
+        std ``theta_std`` [rad] (default ``axis_theta_std``)."""
+        theta = cfg.axis_theta_std if theta_std is None else theta_std
+        return axis_covariance(self.segment, self.across_std, theta)
 
     def headline(self) -> str:
         """The estimate's reason, before the segment's description."""
@@ -305,16 +323,45 @@ class OnAxis:
         )
         return f"segment {self.segment.length:.1f} m long{opened}"
 
-    def estimate(
-        self, cfg: LocalizerConfig, reason: str, request: Request | None = None
+    def report(
+        self, ctx: Context, inp: Inputs, reason: str, request: Request | None = None
     ) -> Estimate:
-        """Status ``axis``: the segment's middle with the decided heading, its covariance,
-        the segment's ends as the hypotheses (for display)."""
+        """The axis estimate (:meth:`estimate`, its heading std :meth:`heading_std`) while
+        the heading is known to the claim gate's bound; past it (a turn the laser has not
+        followed: deciding here turns to look elsewhere, or a fast turn skews the scans) the
+        heading is odometry's alone, and nothing is reported (status ``deciding`` with
+        ``request``, else ``lost``) until a scan confirms it: heavy slip loses up to 30 % of a
+        turn."""
+        std = self.heading_std(ctx)
+        bound = ctx.gate.config.max_std_theta if ctx.gate is not None else math.inf
+        if std <= bound:
+            return self.estimate(ctx.config, reason, request, theta_std=std)
+        return Estimate(
+            status=Status.LOST if request is None else Status.DECIDING,
+            hypotheses=inp.result.hypotheses,
+            request=request,
+            reason=(
+                f"{reason}; axis held: the heading carried {math.degrees(self.turned):.0f} deg"
+                f" through a turn the laser has not confirmed (std {math.degrees(std):.2f} deg,"
+                f" at most {math.degrees(bound):.2f}): reported again once a scan confirms it"
+            ),
+        )
+
+    def estimate(
+        self,
+        cfg: LocalizerConfig,
+        reason: str,
+        request: Request | None = None,
+        theta_std: float | None = None,
+    ) -> Estimate:
+        """Status ``axis``: the segment's middle with the decided heading, its covariance
+        (heading std ``theta_std``, default ``axis_theta_std``), the segment's ends as the
+        hypotheses (for display)."""
         seg = self.segment
         ends = seg.at(np.array([seg.lo, seg.hi]))
         axis = AxisPose(
             pose=seg.middle(),
-            covariance=self.covariance(cfg),
+            covariance=self.covariance(cfg, theta_std),
             ends=seg.ends,
             open_ends=self.open_ends,
         )

@@ -1073,7 +1073,7 @@ class DecideHere:
         back = self.back
         assert back is not None
         back.carry(ctx, inp.odom_pose)
-        return back.estimate(ctx.config, f"{back.headline()}; {reason}", request)
+        return back.report(ctx, inp, f"{back.headline()}; {reason}", request)
 
     def _give_up(self, ctx: Context, inp: Inputs, why: str) -> Step:
         ctx.record.decide.gave_up += 1
@@ -1083,7 +1083,7 @@ class DecideHere:
             self.rest_after = ctx.config.axis_recheck
             back = self.back
             back.carry(ctx, inp.odom_pose)
-            return back.estimate(ctx.config, f"{back.headline()}; {reason}"), back
+            return back.report(ctx, inp, f"{back.headline()}; {reason}"), back
         self.rest_after = ctx.config.decide_rest
         return lost(reason, inp.result), restart(ctx)
 
