@@ -27,7 +27,7 @@ Each scan :class:`OnAxis`
    std grows with the turning since the laser last confirmed it, by the robot's rotation error
    (the claim gate's ``alphas``), and past the gate's heading bound nothing is reported until a
    scan confirms it (:meth:`OnAxis.report`: on the heavy sensors, whose slip loses up to 30 %
-   of a turn, deciding here's turns to look elsewhere published headings 5-8 deg off);
+   of a turn, axis headings carried through turns were published 5.5-7.6 deg off);
 3. lets the laser check the heading: the class' reference pose (where the scan fitted),
    carried by odometry, is aligned to the map; fitting with the decided heading it becomes the
    new reference (its heading and its place across the corridor; along the corridor the laser
