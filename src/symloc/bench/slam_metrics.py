@@ -12,7 +12,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,7 +21,7 @@ from scipy import ndimage
 
 from symloc._checks import check_array
 from symloc.errors import ConfigurationError
-from symloc.geometry import compose, inverse, relative, wrap_angle
+from symloc.geometry import compose, inverse, relative, rotation_matrix, wrap_angle
 
 __all__ = [
     "AteResult",
@@ -131,8 +130,7 @@ def umeyama_se2_at(source: ArrayLike, target: ArrayLike, anchor: ArrayLike) -> F
     the source's centroid; this puts it at ``anchor``, with the same rotation.
     """
     sim, scale = umeyama_sim2(source, target)
-    c, s = math.cos(sim[2]), math.sin(sim[2])
-    rot = np.array([[c, -s], [s, c]])
+    rot = rotation_matrix(sim[2])
     at = np.asarray(anchor, dtype=np.float64).reshape(2)
     at_source = rot.T @ (at - sim[:2]) / scale
     t = at - rot @ at_source

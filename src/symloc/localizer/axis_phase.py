@@ -213,8 +213,10 @@ class OnAxis:
 
     def heading_std(self, ctx: Context) -> float:
         """The heading's std [rad]: ``axis_theta_std``, grown by the robot's rotation error
-        (the claim gate's ``alphas[0]``, as :func:`~symloc.mcl.motion_model.carry_by_odometry`
-        grows a carried pose's) over the turning the laser has not confirmed."""
+        (the claim gate's ``alphas[0]``) times the turning the laser has not confirmed, the
+        whole turn's error counted together as a slip episode loses it (at least what
+        :func:`~symloc.mcl.motion_model.carry_by_odometry` gives for that turning, which
+        splits it in two rotations; the heading drift per metre, ``alphas[1]``, is left out)."""
         a1 = ctx.gate.alphas[0] if ctx.gate is not None else 0.0
         return math.sqrt(ctx.config.axis_theta_std**2 + a1 * self.turned**2)
 
