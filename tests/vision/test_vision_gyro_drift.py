@@ -175,3 +175,39 @@ def test_a_visual_maps_declared_error_is_read_back_and_checked(tmp_path, which: 
             vm.set_meta(key, bad)
             with pytest.raises(ConfigurationError, match=f"map.sqlite: meta '{key}'"):
                 read(vm)
+
+
+def test_the_data_sheet_prior_keeps_a_short_trips_few_pairs_from_freeing_the_scale() -> None:
+    # a small room's one lap after a half turn in place: a minute, few pairs, all along the
+    # lap, which turns steadily (the angle turned grows with the time: the pairs see bias and
+    # scale only together); the turn in place needs the scale alone, and the prior (the
+    # gyro's data sheet) holds it
+    rng = np.random.default_rng(7)
+    n, seconds = 35, 60.0
+    t = np.linspace(0.0, seconds, n)
+    lap = (t - 5.0) / 55.0
+    lap = lap + 0.03 * np.sin(2.0 * math.pi * lap)  # the speed varies a little
+    turned = np.where(t < 5.0, math.pi * t / 5.0, math.pi + 2.0 * math.pi * lap)
+    bias, scale = math.radians(0.05), 0.002
+    true = turned + 0.3
+    odom = true + bias * t + scale * turned
+    slam = true + rng.normal(0.0, math.radians(0.9), n)
+    i = rng.integers(4, n - 4, 16)
+    j = i + rng.integers(1, 4, 16)
+    meas = PairMeasurements(
+        pairs=np.column_stack([i, j]).astype(np.int64),
+        yaws=np.asarray(wrap_angle(true[j] - true[i] + rng.normal(0, math.radians(0.4), 16))),
+        sigmas=np.full(16, math.radians(0.6)),
+        inliers=np.full(16, 100, np.int64),
+    )
+    free = fit_drift(odom, t, slam, meas, DriftSettings(bias_std=0.0, scale_std=0.0))
+    held = fit_drift(odom, t, slam, meas)
+    assert free is not None
+    assert held is not None
+    # the pairs alone know the bias-and-scale mix, not each: a wide heading std
+    assert held.heading_std < 0.5 * free.heading_std
+    assert abs(held.scale) < 3.0 * DriftSettings().scale_std
+    err = np.abs(np.asarray(wrap_angle(held.headings - true)))
+    assert err.max() < 3.0 * held.heading_std
+    with pytest.raises(ConfigurationError, match=r"DriftSettings\.bias_std"):
+        DriftSettings(bias_std=-1.0)

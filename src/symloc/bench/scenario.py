@@ -49,7 +49,7 @@ from symloc.mcl import Amcl, AmclParams, Confidence, ConfidenceJudge
 from symloc.odometry import OdometryReading, twist_between
 from symloc.scan import deskew
 from symloc.sim.camera import Camera
-from symloc.sim.gyro import L3G4200D, GyroOdometryBody, SimulatedGyro
+from symloc.sim.gyro import L3G4200D, GyroOdometryBody, GyroSpec, SimulatedGyro
 from symloc.sim.lidar import RPLIDAR_A2
 from symloc.sim.rasterize import world_to_grid
 from symloc.sim.robot import DiffDriveRobot, OdometryNoise, RobotConfig
@@ -64,7 +64,11 @@ from symloc.vision import OrbExtractor, VisualMap, Vocabulary
 from symloc.vision.default_vocabulary import default_vocabulary
 from symloc.vision.gyro_drift import META_KEY as ROTATION_STD_META
 from symloc.vision.gyro_drift import POSITION_META_KEY as POSITION_STD_META
-from symloc.vision.gyro_drift import declared_round_map_error, round_room_keyframes
+from symloc.vision.gyro_drift import (
+    DriftSettings,
+    declared_round_map_error,
+    round_room_keyframes,
+)
 from symloc.vision.keyframes import KeyframeSettings
 from symloc.vision.rotation_averaging import HeadingAlignmentSettings
 from symloc.vision.rotation_averaging import align_headings as align_keyframe_headings
@@ -483,6 +487,16 @@ def build_scenario(
     return scen
 
 
+def _drift_settings(gyro: GyroSpec) -> DriftSettings:
+    """The drift fit's settings for the mapping robot's gyro: its data sheet's noise density,
+    residual bias and scale (the fit's prior), as its user would declare them."""
+    return DriftSettings(
+        rate_noise_density=math.radians(gyro.noise_density),
+        bias_std=math.radians(gyro.bias_std),
+        scale_std=gyro.scale_std,
+    )
+
+
 def _map_with_slam(
     scen: Scenario,
     start: FloatArray,
@@ -721,6 +735,7 @@ def _map_with_slam(
                 odom_turn[recorder.indices],
                 centre,
                 scen.hardware.calibration,
+                settings=_drift_settings(gyro),
                 anchor=np.asarray(recorder.indices) < lap_end,
             )
             if drift is None:
@@ -729,8 +744,7 @@ def _map_with_slam(
                     "keyframe headings from SLAM"
                 )
             elif drift.heading_std >= scen.settings.claim.map_rotation_std:
-                # too few pairs to trust (test circle#1000000, 10 m^2 and no stops: 16 pairs,
-                # a 1.9 % scale where the gyro's is 0.2 %, std 4.3 deg): SLAM's stay
+                # too few pairs to trust: SLAM's stay
                 scen.notes.append(
                     "mapping trip: round-room keyframe headings: the gyro's drift fitted to the "
                     f"images no surer ({math.degrees(drift.heading_std):.2f} deg) than the "
