@@ -12,7 +12,11 @@ from test_localizer_state_machine import FakeStore, FakeTracker, SquareJudge, _r
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose, relative
 from symloc.localizer import Localizer, LocalizerConfig, RequestKind, Status
-from symloc.localizer.decide_here import checked_by, contradicted_before
+from symloc.localizer.decide_here import (
+    UNEXPLAINED_PATIENCE,
+    checked_by,
+    contradicted_before,
+)
 from symloc.localizer.settings import LocalizerSettings, leaf_paths
 from symloc.localizer.types import HypothesisVerdict, Proposal, Verification
 from symloc.localizer.vision_store import single_verified
@@ -321,6 +325,36 @@ def test_turns_then_gives_up_and_rests() -> None:
     _step(loc, pose=[0, 0, heading])
     assert loc.phase == "lost"
     assert loc.decide_counts.entered == 1
+
+
+def test_a_scan_no_pose_explains_is_waited_out_holding_still() -> None:
+    room = {(1.0, 0.5): 1.0, (3.0, 1.5): 1.0}
+    fits = dict(room)
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(), fits)
+    fits.clear()  # a scan swept while turning fast: it fits nowhere
+    for k in range(1, UNEXPLAINED_PATIENCE + 1):
+        est = _step(loc)
+        assert est.status is Status.DECIDING
+        assert est.pose is None
+        assert est.request is not None
+        assert est.request.kind is RequestKind.ROTATE
+        assert est.request.angle == 0.0
+        assert f"no pose explains the scan ({k} of {UNEXPLAINED_PATIENCE}" in est.reason
+    assert loc.decide_counts.gave_up == 0
+    fits.update(room)  # the next, still, is the room's: the episode goes on
+    est = _step(loc)
+    assert est.request is not None
+    assert est.request.kind is RequestKind.CAPTURE_IMAGE
+    assert loc.decide_counts.gave_up == 0
+    # scans that go on fitting nowhere give the episode up
+    fits.clear()
+    loc, _ = _localizer(FakeProposer([TRUE, COPY]), FakeKeyframes(), fits)
+    for _ in range(UNEXPLAINED_PATIENCE):
+        assert _step(loc).status is Status.DECIDING
+    est = _step(loc)
+    assert est.status is Status.LOST
+    assert est.reason == "not decided here: no pose explains the scan"
+    assert loc.decide_counts.gave_up == 1
 
 
 @dataclass
