@@ -10,9 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from symloc.errors import WorldError
+from symloc.lidar_spec import RPLIDAR_A2
+from symloc.sim.lidar import simulate_scan
 from symloc.sim.people import Person, people_world
 from symloc.sim.rooms import build_room
-from symloc.sim.world import MATERIAL_PERSON
+from symloc.sim.world import MATERIAL_PERSON, World
 from symloc.sim.world_file import WorldSpec
 
 
@@ -31,6 +33,27 @@ def test_person_walks_there_and_back() -> None:
     assert set(np.asarray(w.circle_materials).tolist()) == {MATERIAL_PERSON}
     assert np.allclose(w.circle_heights, 1.7)
     assert people_world([], 0.0).n_circles == 0
+
+
+def test_a_person_whose_path_crosses_the_robot_steps_aside() -> None:
+    p = Person(np.array([[-2.0, 0.0], [2.0, 0.0]]), speed=1.0, radius=0.25)
+    robot = np.array([0.1, 0.05, 0.0])  # the person walks through here at t = 2.1 s
+    plain = people_world([p], 2.1).circles[0]
+    assert math.hypot(*(plain[:2] - robot[:2])) < 0.1
+    aside = people_world([p], 2.1, (robot, 0.18)).circles[0]
+    # just touching the robot, straight away from its centre; a person clear of it is left
+    assert math.hypot(*(aside[:2] - robot[:2])) == pytest.approx(0.43)
+    far = people_world([p], 0.0, (robot, 0.18)).circles[0]
+    assert np.allclose(far, people_world([p], 0.0).circles[0])
+    # in a 4 m square the lidar sees the walls past the person, not the person all round
+    b = np.array([[-2.0, -2.0], [2.0, -2.0], [2.0, 2.0], [-2.0, 2.0]])
+    walls = World(np.column_stack([b, np.roll(b, -1, axis=0)]))
+    inside = simulate_scan(walls + people_world([p], 2.1), robot, RPLIDAR_A2, noise=False)
+    beside = simulate_scan(
+        walls + people_world([p], 2.1, (robot, 0.18)), robot, RPLIDAR_A2, noise=False
+    )
+    assert np.mean(np.asarray(inside.ranges) > 1.0) < 0.05
+    assert np.mean(np.asarray(beside.ranges) > 1.0) > 0.6
 
 
 @settings(max_examples=30, deadline=None)

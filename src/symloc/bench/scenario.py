@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from symloc._checks import as_rng
 from symloc.errors import ConfigurationError, SymlocError, WorldError
@@ -244,10 +244,11 @@ class Scenario:
         cfg = RobotConfig(noise=OdometryNoise(a, a, a, a))
         return RobotBody(DiffDriveRobot(start, cfg, rng, world=self.room.world))
 
-    def world_at(self, t: float) -> World:
-        """What the sensors see at time ``t`` [s]: the static world plus anything moving."""
+    def world_at(self, t: float, robot: ArrayLike | None = None) -> World:
+        """What the sensors see at time ``t`` [s]: the static world plus anything moving
+        (people step aside for a robot at ``robot``, a position (2,) or pose (3,) [m])."""
         moving = getattr(self.room, "world_at", None)
-        world: World = self.room.world if moving is None else moving(t)
+        world: World = self.room.world if moving is None else moving(t, robot)
         return world
 
     @property

@@ -267,7 +267,7 @@ def _run_method(
             claim_window_start = t
             claimed_after_start = False
             deadline = t + cfg.claim_timeout
-        world = scen.world_at(t)
+        world = scen.world_at(t, body.pose)
         scan = setup.scan(world, body.pose, twist, t)
         status, pose, cov, reason, request, axis = runner.update(body.odom, scan, image)
         image = None

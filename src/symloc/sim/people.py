@@ -124,14 +124,48 @@ class Person:
         return np.asarray(self.positions([t])[0], dtype=np.float64)
 
 
-def people_world(people: Sequence[Person], t: float) -> World:
-    """The people at time ``t`` [s] as circles (material ``MATERIAL_PERSON``)."""
+def people_world(
+    people: Sequence[Person],
+    t: float,
+    clear_of: tuple[ArrayLike, float] | None = None,
+) -> World:
+    """The people at time ``t`` [s] as circles (material ``MATERIAL_PERSON``).
+
+    ``clear_of`` = (centre (2,) [m], radius [m]) of a round robot: a person whose path crosses
+    it steps aside, to stand just touching it (moved straight away from its centre), as people
+    do; their paths are scripted and know nothing of the robot, and a lidar inside a person
+    would see only the person, all round it at a few centimetres (a robot that cannot exist:
+    on the bench such scans fitted no pose of the map, and a small round room with three
+    people walking its middle was never decided)."""
     if not people:
         return World()
     centres = np.array([p.position(t) for p in people])
     radii = np.array([p.radius for p in people])
+    if clear_of is not None:
+        centres = _stepped_aside(centres, radii, clear_of)
     return World(
         circles=np.column_stack([centres, radii]),
         circle_heights=np.array([p.height for p in people]),
         circle_materials=MATERIAL_PERSON,
     )
+
+
+def _stepped_aside(
+    centres: FloatArray, radii: FloatArray, clear_of: tuple[ArrayLike, float]
+) -> FloatArray:
+    """``centres`` (K, 2) [m] of people of ``radii`` (K,), those overlapping the round robot
+    ``clear_of`` moved straight away from its centre to touch it (along +x from the exact
+    centre)."""
+    centre = np.asarray(clear_of[0], dtype=np.float64).reshape(-1)[:2]
+    reach = radii + float(clear_of[1])
+    away = centres - centre
+    dist = np.hypot(away[:, 0], away[:, 1])
+    inside = dist < reach
+    if not inside.any():
+        return centres
+    unit = np.where(
+        dist[:, None] > 1e-9, away / np.maximum(dist, 1e-9)[:, None], np.array([1.0, 0.0])
+    )
+    out = centres.copy()
+    out[inside] = centre + unit[inside] * reach[inside, None]
+    return out

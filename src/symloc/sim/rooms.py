@@ -162,11 +162,14 @@ class Room:
             )
         return self._truths[glass_visible]
 
-    def world_at(self, t: float) -> World:
-        """The static world plus the people where they are at time ``t`` [s]."""
+    def world_at(self, t: float, robot: ArrayLike | None = None) -> World:
+        """The static world plus the people where they are at time ``t`` [s]; with the
+        ``robot``'s position (2,) or pose (3,) [m], those whose path crosses it (radius
+        :data:`ROBOT_RADIUS`) stepped aside (:func:`~symloc.sim.people.people_world`)."""
         if not self.people:
             return self.world
-        return self.world + people_world(self.people, float(t))
+        clear = None if robot is None else (robot, ROBOT_RADIUS)
+        return self.world + people_world(self.people, float(t), clear)
 
     def is_free(self, points: ArrayLike, clearance: float = ROBOT_RADIUS) -> NDArray[np.bool_]:
         """``(N,)`` True where a round robot of radius ``clearance`` [m] fits at points ``(N, 2)``.
