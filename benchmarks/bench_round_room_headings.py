@@ -9,12 +9,15 @@ the fit's own heading std (what the claim gate is told, ``ClaimConfig.map_rotati
 the share of keyframes whose heading error lies within 1.96 of it.
 
 Run: ``python benchmarks/bench_round_room_headings.py [--worlds circle:0 circle:1 ...]
-[--json PATH]`` (each world maps for 1-6 minutes).
+[--json PATH] [--no-prior]`` (each world maps for 1-6 minutes). ``--no-prior`` fits the drift
+without the gyro data sheet's prior on its bias and scale (``DriftSettings.bias_std``,
+``scale_std`` 0), as before 9e70c91, to compare the two on the same trips.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -25,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from symloc.bench import scenario
 from symloc.bench.localization import bench_scenario
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import wrap_angle
@@ -88,9 +92,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--worlds", nargs="+", default=list(WORLDS), help="family:seed ...")
     parser.add_argument("--json", type=Path, default=None, help="write the rows here")
+    parser.add_argument(
+        "--no-prior", action="store_true", help="fit the drift without the data sheet's prior"
+    )
     args = parser.parse_args()
+    if args.no_prior:
+        plain = scenario._drift_settings
+        scenario._drift_settings = lambda gyro: dataclasses.replace(
+            plain(gyro), bias_std=0.0, scale_std=0.0
+        )
     print("# bench_round_room_headings")
     print("#   worlds:", " ".join(args.worlds))
+    print("#   drift fit:", "without the prior" if args.no_prior else "with the data sheet's prior")
     print("#   scenario: symloc.bench.localization.bench_scenario(regime='realistic')")
     rows = []
     print(
