@@ -26,10 +26,10 @@ without the truth; each is one linear equation in ``b`` and ``s``:
 ``outlier_threshold``. Without the prior a short trip's few pairs could leave the scale all
 but free: test circle#1000000 (10 m^2, one lap, 16 pairs) fitted a 1.9 % scale where the
 gyro's is 0.2 %, with a 4.3 deg heading std. Pairs far apart along the trip fix the bias;
-pairs either side of a turn in place fix the scale. The gauge ``g`` (the map frame's rotation, which
-the images cannot see) is set so that the new headings agree on average with SLAM's of the
-keyframes that define the map (the trip SLAM drew it from), weighed by their squared distance
-from the centre (:func:`round_room_keyframes`): the map keeps SLAM's frame.
+pairs either side of a turn in place fix the scale. The gauge ``g`` (the map frame's
+rotation, which the images cannot see) is set so that the new headings agree on average with
+SLAM's of the keyframes that define the map (the trip SLAM drew it from), weighed by their
+squared distance from the centre (:func:`round_room_keyframes`): the map keeps SLAM's frame.
 
 :func:`round_room_keyframes` gives the keyframes with these headings, each position turned
 about the room's centre by its change of heading (a round room's SLAM pose error is such a
