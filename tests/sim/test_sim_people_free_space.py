@@ -54,6 +54,9 @@ def test_a_person_whose_path_crosses_the_robot_steps_aside() -> None:
     )
     assert np.mean(np.asarray(inside.ranges) > 1.0) < 0.05
     assert np.mean(np.asarray(beside.ranges) > 1.0) > 0.6
+    for bad in ((np.array([1.0]), 0.18), (np.array([np.nan, 0.0]), 0.18), (robot, -0.1)):
+        with pytest.raises(WorldError, match="clear_of"):
+            people_world([p], 2.1, bad)
 
 
 @settings(max_examples=30, deadline=None)

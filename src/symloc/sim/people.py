@@ -156,8 +156,16 @@ def _stepped_aside(
     """``centres`` (K, 2) [m] of people of ``radii`` (K,), those overlapping the round robot
     ``clear_of`` moved straight away from its centre to touch it (along +x from the exact
     centre)."""
-    centre = np.asarray(clear_of[0], dtype=np.float64).reshape(-1)[:2]
-    reach = radii + float(clear_of[1])
+    centre = np.asarray(clear_of[0], dtype=np.float64).reshape(-1)
+    radius = float(clear_of[1])
+    if centre.size not in (2, 3) or not np.all(np.isfinite(centre)):
+        raise WorldError(
+            f"people_world clear_of: expected a robot position (2,) or pose (3,), got {centre!r}"
+        )
+    if not (math.isfinite(radius) and radius >= 0.0):
+        raise WorldError(f"people_world clear_of: expected a robot radius >= 0 m, got {radius!r}")
+    centre = centre[:2]
+    reach = radii + radius
     away = centres - centre
     dist = np.hypot(away[:, 0], away[:, 1])
     inside = dist < reach
