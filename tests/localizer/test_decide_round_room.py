@@ -34,7 +34,6 @@ class _Keyframes:
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         return Verification(None, None, "no hypothesis verified", {})
 
@@ -86,7 +85,6 @@ class _MeasuringKeyframes(_Keyframes):
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         self.calls.append(refine)
         p = np.asarray(poses, float).reshape(-1, 3)

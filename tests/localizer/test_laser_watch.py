@@ -120,7 +120,6 @@ class _KeyframesOutOfView:
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         raise AssertionError("no image is asked for: no keyframe is in view")
 

@@ -296,7 +296,6 @@ class CorridorKeyframes:
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         poses = np.asarray(poses, float)
         self.shown.append(poses.copy())
@@ -442,12 +441,10 @@ class OnceKeyframes(CorridorKeyframes):
     seen: tuple[int, ...] = ()
     calls: int = 0
 
-    def verify(self, poses, image, reach=0.0, *, refine=False, round_centre=None, walls=None):  # type: ignore[no-untyped-def]
+    def verify(self, poses, image, reach=0.0, *, refine=False, round_centre=None):  # type: ignore[no-untyped-def]
         self.facing = TRUTH[2] if self.calls in self.seen else TRUTH[2] + 0.5 * math.pi
         self.calls += 1
-        return super().verify(
-            poses, image, reach, refine=refine, round_centre=round_centre, walls=walls
-        )
+        return super().verify(poses, image, reach, refine=refine, round_centre=round_centre)
 
 
 def _drive(loc: Localizer, est: Estimate, heading: float, until, limit: int = 80):  # type: ignore[no-untyped-def]

@@ -61,7 +61,6 @@ class FakeKeyframes:
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         i = self.answer.pop(0) if self.answer else None
@@ -171,7 +170,6 @@ class UncheckedKeyframes(FakeKeyframes):
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))
@@ -227,7 +225,6 @@ class TwoViewKeyframes(FakeKeyframes):
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         self.shown.append(np.asarray(poses, float).copy())
         copy = int(np.argmin(np.hypot(*(np.asarray(poses)[:, :2] - COPY[:2]).T)))

@@ -41,7 +41,6 @@ class TruthCamera:
         *,
         refine: bool = False,
         round_centre: object = None,
-        walls: object = None,
     ) -> Verification:
         p = np.asarray(poses, float).reshape(-1, 3)
         self.shown.append(p.copy())

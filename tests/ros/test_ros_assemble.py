@@ -33,7 +33,6 @@ class _KeyframePlaces(MemoryPlaces):
         *,
         refine: bool = False,
         round_centre: Any = None,
-        walls: Any = None,
     ) -> Any:
         raise AssertionError("not called while building")
 

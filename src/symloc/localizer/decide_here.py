@@ -968,14 +968,10 @@ class DecideHere:
         gate = ctx.gate
         if centre is not None:
             # a round map: the laser cannot set the heading, so the camera's own measurement
-            # of it (bearings to the features of the keyframes the decided member should be
-            # seeing, placed on the map's walls) is what the claim's heading rests on
+            # of it (planar motion against the keyframes the decided member should be
+            # seeing) is what the claim's heading rests on
             again = ctx.keyframes.verify(
-                pose.reshape(1, 3),
-                image,
-                refine=True,
-                round_centre=centre,
-                walls=None if gate is None else gate.field,
+                pose.reshape(1, 3), image, refine=True, round_centre=centre
             )
             if again.index != 0 or not math.isfinite(again.heading_std):
                 # the coarse heading (decide_theta_std) can never be claimed in a round room,

@@ -21,7 +21,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc.errors import ConfigurationError
-from symloc.grid.distance_field import DistanceField
 from symloc.hypothesis import Hypothesis
 from symloc.symmetry.order import SymmetryOrder
 from symloc.vision.place import Place
@@ -465,12 +464,10 @@ class KeyframeStore(Protocol):
         *,
         refine: bool = False,
         round_centre: FloatArray | None = None,
-        walls: DistanceField | None = None,
     ) -> Verification:
         """Check each hypothesis of ``poses`` (K, 3) (map frame, at the moment ``image`` was
         taken) against the keyframes it predicts the camera sees; name the single one verified
         with margin, or none. ``reach`` [m] as in :meth:`expected_counts`. ``refine``: also
         measure the verified one's heading again (:attr:`Verification.refined_heading`; about
         a second of CPU, so only where the laser cannot set the heading), on a round map
-        with its position turning about ``round_centre`` (2,) [m] with the heading, against
-        keyframe features placed on the map's ``walls`` (its distance field) when given."""
+        with its position turning about ``round_centre`` (2,) [m] with the heading."""

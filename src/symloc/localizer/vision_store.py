@@ -23,17 +23,9 @@ from numpy.typing import NDArray
 from symloc._checks import check_positive
 from symloc.errors import ConfigurationError
 from symloc.geometry import turn_about
-from symloc.grid.distance_field import DistanceField
 from symloc.symmetry.order import SymmetryOrder
-from symloc.vision.heading_refinement import (
-    RefinedHeading,
-    RefinementSettings,
-    combine_fits,
-    refine_heading,
-)
-from symloc.vision.landmark_heading import LandmarkSettings, landmark_heading
+from symloc.vision.heading_refinement import RefinedHeading, RefinementSettings, refine_heading
 from symloc.vision.orb import OrbFeatures
-from symloc.vision.orientation import intrinsics_matrix
 from symloc.vision.place import UNANCHORED_LABEL
 from symloc.vision.verification import (
     HypothesisCheck,
@@ -157,17 +149,6 @@ class VisionPlaceStore:
         #: how :meth:`verify` measures a verified heading again
         #: (:class:`symloc.vision.heading_refinement.RefinementSettings`)
         self.refinement = RefinementSettings()
-        #: how a heading is measured against keyframe features placed on the map's walls
-        #: (:mod:`symloc.vision.landmark_heading`), when :meth:`verify` is given the walls
-        self.landmarks = LandmarkSettings()
-        #: keyframes whose landmark measurements must agree, and within what [rad] (two of
-        #: them measured 0.1-0.5 deg apart at a round room's centre, 1-1.5 deg along its
-        #: wall). One alone is not enough: features on walls the map does not have (above a
-        #: low wall the lidar sees, behind it) are placed on the wrong wall, and one keyframe
-        #: 0.15 m from the query measured a turn 4.3 deg off with 36 of 52 inliers that way
-        #: (dev circle#26)
-        self.landmark_min_fits = 2
-        self.landmark_agreement = math.radians(1.0)
         self._kf_poses: FloatArray | None = None
 
     def _vplace(self, place_id: int) -> Place:
@@ -254,13 +235,12 @@ class VisionPlaceStore:
         *,
         refine: bool = False,
         round_centre: FloatArray | None = None,
-        walls: DistanceField | None = None,
     ) -> Verification:
         """:func:`symloc.vision.verification.verify_hypotheses` of ``poses`` (K, 3) against
         ``image`` with this store's vocabulary, camera and :attr:`verification` settings (the
         expected keyframes up to ``reach`` [m] further away); with ``refine`` the verified
         hypothesis' heading measured again (:meth:`refine`), on a round map about its
-        ``round_centre`` (2,) [m], against the map's ``walls`` when given."""
+        ``round_centre`` (2,) [m]."""
         query = self.extractor.extract(image)
         dec = verify_hypotheses(
             np.asarray(poses, dtype=np.float64).reshape(-1, 3),
@@ -279,7 +259,7 @@ class VisionPlaceStore:
         refined = (
             None
             if not refine or pose is None or index is None
-            else self.refine(pose, query, dec.checks[index], round_centre, walls)
+            else self.refine(pose, query, dec.checks[index], round_centre)
         )
         checks = tuple(
             HypothesisVerdict(c.status, c.inliers, c.heading_offset, c.keyframe_id, c.expected)
@@ -303,20 +283,12 @@ class VisionPlaceStore:
         query: OrbFeatures,
         check: HypothesisCheck,
         round_centre: FloatArray | None = None,
-        walls: DistanceField | None = None,
     ) -> RefinedHeading | None:
-        """The heading of a verified ``pose`` (3,) measured again against the keyframes
-        ``check`` expected, the one that verified it first (None: no measurement counts, or
-        they disagree). On a round map (``round_centre`` (2,) [m]) the pose is first turned
-        about the centre to the check's heading, and its position follows the heading there.
-
-        With the map's ``walls`` the keyframes' features are placed on them and the query's
-        bearings to them measure the heading (:func:`symloc.vision.landmark_heading.
-        landmark_heading`; :attr:`landmark_min_fits` keyframes must agree within
-        :attr:`landmark_agreement`); otherwise, or when no keyframe gives a measurement there,
-        by planar motion (:func:`symloc.vision.heading_refinement.refine_heading`), whose yaw
-        trades against a sideways direction of travel where the walls are near (1-9 deg off
-        0.5 m from a small round room's centre keyframes)."""
+        """The heading of a verified ``pose`` (3,) measured again by planar motion
+        (:func:`symloc.vision.heading_refinement.refine_heading`) against the keyframes
+        ``check`` expected, the one that verified it first (None: no fit counts, or they
+        disagree). On a round map (``round_centre`` (2,) [m]) the pose is first turned about
+        the centre to the check's heading, and its position follows the heading there."""
         if round_centre is not None:
             pose = turn_about(check.pose, round_centre, check.heading_offset)
         ids = list(check.expected)
@@ -324,32 +296,6 @@ class VisionPlaceStore:
             ids = [check.keyframe_id] + [i for i in ids if i != check.keyframe_id]
         cfg = self.refinement
         kfs = [self.visual_map.keyframe(i) for i in ids[: cfg.max_keyframes]]
-        if walls is not None:
-            measured = [
-                landmark_heading(
-                    pose,
-                    query,
-                    kf,
-                    intrinsics_matrix(self.intrinsics),
-                    walls,
-                    round_centre,
-                    self.landmarks,
-                    dist_coeffs=self.dist_coeffs,
-                )
-                for kf in kfs
-            ]
-            fits = [
-                (m.heading, m.sigma, m.keyframe_id, m.inliers) for m in measured if m is not None
-            ]
-            rule = replace(
-                cfg,
-                min_fits=self.landmark_min_fits,
-                floor=self.landmarks.floor,
-                agreement=self.landmark_agreement,
-            )
-            combined = combine_fits(fits, rule) if fits else None
-            if combined is not None:
-                return combined
         return refine_heading(
             pose,
             query,

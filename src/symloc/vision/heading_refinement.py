@@ -45,7 +45,7 @@ from symloc.vision.orientation import dist_coeffs_of, intrinsics_matrix
 from symloc.vision.planar_motion import planar_yaw, travel_prior
 from symloc.vision.two_view import ratio_matches, undistorted
 
-__all__ = ["RefinedHeading", "RefinementSettings", "combine_fits", "refine_heading"]
+__all__ = ["RefinedHeading", "RefinementSettings", "refine_heading"]
 
 FloatArray = NDArray[np.float64]
 
@@ -186,7 +186,7 @@ def refine_heading(
     for _ in range(1 if c is None else s.round_attempts):
         fits = [_fit(p, q, kf, K, dist, s) for kf in kfs]
         counted = [f for f in fits if f is not None]
-        result = combine_fits(counted, s)
+        result = _combined(counted, s)
         if c is None or not counted:
             return result
         median = float(np.median([f[0] for f in counted]))
@@ -234,11 +234,10 @@ def _fit(
     return float(kf.pose[2]) + float(fit.yaw), float(fit.sigma), int(kf.keyframe_id), fit.inliers
 
 
-def combine_fits(
+def _combined(
     fits: Sequence[tuple[float, float, int, int]], s: RefinementSettings
 ) -> RefinedHeading | None:
-    """The heading and std of ``fits`` (heading [rad], its std [rad] without the floor,
-    keyframe id, inliers) that agree within ``agreement``: all of them, or else
+    """The heading and std of the fits that agree within ``agreement``: all of them, or else
     the one largest group of at least ``min_fits`` that is a strict majority of them (one
     fit of three off by 1.5-3 deg, as a single planar fit often is, does not void the other
     two; two groups that agree as well do)."""
