@@ -56,6 +56,8 @@ class DecideCounts:
     ``entered`` times it started; ``proposals`` sets of hypotheses the laser proposed;
     ``laser_single`` times one hypothesis alone survived the laser; ``laser_claimed`` of those,
     poses the laser claimed at once (the others handed to AMCL to be earned);
+    ``laser_seeded`` times one hypothesis survived a search that could not be complete (an
+    open map, a list cut short) and, without a camera, AMCL was reseeded there to earn it;
     ``images`` images verified; ``verified`` images that verified one hypothesis with margin;
     ``rejected`` of those, poses the laser then refused; ``withheld`` poses the laser fitted
     but not precisely enough to claim at once (AMCL reseeded, the claim chain started there);
@@ -70,6 +72,7 @@ class DecideCounts:
     proposals: int = 0
     laser_single: int = 0
     laser_claimed: int = 0
+    laser_seeded: int = 0
     images: int = 0
     verified: int = 0
     rejected: int = 0
