@@ -163,10 +163,6 @@ class _Relocalizing(_Tracker):
     def initialize_pose(self, pose, covariance) -> None:  # type: ignore[no-untyped-def]
         self.reseeded.append(np.asarray(pose, dtype=np.float64))
 
-    def initialize_mixture(self, poses, covariances, global_share, keep_share) -> None:  # type: ignore[no-untyped-def]
-        self.relocalized += 1
-        self.mixture = (np.asarray(poses), np.asarray(covariances), global_share, keep_share)
-
 
 def _tracking_gate(room, grid, truth, proposer=None):  # type: ignore[no-untyped-def]
     """A gate with a confirmed chain at ``truth`` (the localizer published it)."""
@@ -250,12 +246,6 @@ def test_a_kidnapping_needs_a_place_that_explains_the_scan(l_room) -> None:
     assert steps[-1].standing is Standing.RELOCALIZE, steps[-1].reason
     assert "kidnapped" in steps[-1].reason
     assert tracker.relocalized == 1
-    # the filter is reseeded at the places found and keeps a place's share of its own cloud
-    # (the places may be look-alikes of where the robot still is), a share over the whole map
-    poses, covs, share, keep = tracker.mixture
-    assert share == cfg.relocalize_global_share
-    assert covs.shape == (len(poses), 3, 3) and len(poses) >= 1
-    assert keep == pytest.approx((1 - share) / (len(poses) + 1))
 
 
 def test_on_an_open_map_the_place_elsewhere_must_hold_while_the_robot_moves(l_room) -> None:

@@ -121,9 +121,6 @@ class _Tracker:
     def initialize_pose(self, pose, covariance) -> None:
         pass
 
-    def initialize_mixture(self, poses, covariances, global_share, keep_share) -> None:
-        pass
-
     def force_update(self) -> None:
         pass
 

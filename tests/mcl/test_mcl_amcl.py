@@ -5,7 +5,7 @@ import pytest
 from mcl_fixtures import asymmetric_room, synthetic_scan
 
 from symloc.errors import ConfigurationError, DataFormatError
-from symloc.geometry import angle_diff, compose, wrap_angle
+from symloc.geometry import angle_diff, compose
 from symloc.grid import OccupancyGrid
 from symloc.mcl import Amcl, AmclParams, NotInitializedError
 from symloc.odometry import OdometryReading
@@ -181,39 +181,6 @@ def test_initialize_pose_samples_the_covariance():
     np.testing.assert_allclose(np.cov(p[:, :2].T), cov[:2, :2], atol=0.005)
     st = amcl.cluster_stats()
     assert st.weights[0] > 0.95  # one cluster across the +-pi seam
-
-
-def test_initialize_mixture_splits_the_particles_among_the_hypotheses():
-    grid = asymmetric_room()
-    amcl = Amcl(grid, AmclParams(max_particles=10001, min_particles=100), rng=3)
-    means = np.array([[2.0, 2.0, 0.5], [6.0, 3.0, -2.0]])
-    covs = np.array([np.diag([0.01, 0.01, 0.001]), np.diag([0.04, 0.0025, 0.01])])
-    amcl.initialize_mixture(means, covs, global_share=0.2)
-    p = amcl.particles
-    assert p.shape == (10001, 3)
-    first = np.hypot(*(p[:, :2] - means[0, :2]).T) < 0.5
-    second = np.hypot(*(p[:, :2] - means[1, :2]).T) < 1.0
-    # 80 % evenly between the two; the global fifth lands near them only by chance
-    assert 0.40 < first.mean() < 0.43 and 0.40 < second.mean() < 0.43
-    near = p[second][np.abs(wrap_angle(p[second, 2] - means[1, 2])) < 0.5]
-    np.testing.assert_allclose(np.cov(near[:, :2].T), covs[1][:2, :2], atol=0.004)
-    cells = grid.world_to_cell(p[~(first | second), :2])
-    assert np.all(grid.free_mask[cells[:, 0], cells[:, 1]])  # the global share: free cells
-    # half kept from the current cloud (by weight), the rest at one new place
-    amcl.initialize_mixture(means[1:], covs[1:], keep_share=0.5)
-    q = amcl.particles
-    assert np.mean(np.hypot(*(q[:, :2] - means[1, :2]).T) < 1.0) > 0.5 + 0.41 / 2 - 0.02
-    assert 0.5 * 0.41 - 0.02 < np.mean(np.hypot(*(q[:, :2] - means[0, :2]).T) < 0.5) < 0.5 * 0.41 + 0.02
-    amcl.initialize_mixture(np.zeros((0, 3)), np.zeros((0, 3, 3)), global_share=0.0)
-    assert amcl.particles.shape == (10001, 3)  # no hypothesis: all spread (initialize_global)
-    with pytest.raises(ConfigurationError, match="global_share"):
-        amcl.initialize_mixture(means, covs, global_share=1.5)
-    with pytest.raises(ConfigurationError, match="keep_share"):
-        amcl.initialize_mixture(means, covs, global_share=0.6, keep_share=0.6)
-    with pytest.raises(ConfigurationError, match="2 poses but 1 covariances"):
-        amcl.initialize_mixture(means, covs[:1], global_share=0.1)
-    with pytest.raises(ConfigurationError, match=r"covariances\[1\]"):
-        amcl.initialize_mixture(means, np.array([covs[0], -np.eye(3)]), global_share=0.1)
 
 
 def test_global_init_is_uniform_over_free_cells():

@@ -93,14 +93,6 @@ class AmclTracker:
         self.amcl.initialize_pose(pose, covariance)
         self.judge.reset()
 
-    def initialize_mixture(
-        self, poses: FloatArray, covariances: FloatArray, global_share: float, keep_share: float
-    ) -> None:
-        self.amcl.initialize_mixture(
-            poses, covariances, global_share=global_share, keep_share=keep_share
-        )
-        self.judge.reset()
-
     def force_update(self) -> None:
         """Integrate the next scan whatever the robot moved (a claim was withdrawn)."""
         self.amcl.request_nomotion_update()

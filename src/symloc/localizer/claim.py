@@ -260,15 +260,6 @@ class ClaimConfig:
         odometry and aligned, before the pose is given up: on freiburg-079 six places of the
         building explained one cluttered scan at 80 % (a stretch of wall) while the robot stood
         where it was tracked.
-    relocalize_global_share : float
-        When the pose is given up because places elsewhere went on explaining the scans, the
-        filter is reseeded around each of those places (``min_carried_xy`` /
-        ``min_carried_theta`` wide), keeps as much of its own cloud as one place gets, and
-        spreads this share of its particles over the whole free space: the places may be look-alikes of where the robot still is (freiburg-079 at
-        seed 2: one place 18 m off explained four cluttered scans better than the truth, where
-        the scan fitted 16-50 % of beams), and a tracking filter's particles spread over a
-        large map never converge again (freiburg-079's 70 x 100 m: lost for 3,600 scans).
-        1 spreads them all (nav2's global relocalization).
     elsewhere_motion : (float, float)
         When the search's list was incomplete (an open map: the robot may stand in its
         unmapped part, where a place like one of the map's would explain every scan there),
@@ -338,7 +329,6 @@ class ClaimConfig:
     elsewhere_margin: float = 0.2
     local_window: tuple[float, float] = (1.0, math.radians(45.0))
     elsewhere_scans: int = 3
-    relocalize_global_share: float = 0.25
     elsewhere_motion: tuple[float, float] = (1.0, math.radians(90.0))
     operator_reach: tuple[float, float] = (1.0, math.radians(90.0))
     min_beams: int = 20
@@ -374,11 +364,6 @@ class ClaimConfig:
         if not (isinstance(m, (int, float)) and 0.0 <= m < 1.0):
             raise ConfigurationError(
                 f"ClaimConfig.elsewhere_margin: expected a share in [0, 1), got {m!r}"
-            )
-        v = self.relocalize_global_share
-        if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
-            raise ConfigurationError(
-                f"ClaimConfig.relocalize_global_share: expected a share in [0, 1], got {v!r}"
             )
         v = self.map_rotation_std
         if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 <= v <= math.pi):
@@ -958,19 +943,11 @@ class ClaimGate:
                 f"claims suspended; {claim.reason}; following {kept} place(s) elsewhere",
             )
         self._elsewhere = None
-        floor = np.diag([cfg.min_carried_xy, cfg.min_carried_xy, cfg.min_carried_theta]) ** 2
-        share = cfg.relocalize_global_share
-        keep = (1.0 - share) / (kept + 1)  # the filter's own cloud: one hypothesis among them
-        tracker.initialize_mixture(now.poses, np.repeat(floor[None], kept, axis=0), share, keep)
-        self.reset()
-        self.restart()
-        return Ruling(
-            Standing.RELOCALIZE,
+        return self._relocalize(
             claim,
+            tracker,
             f"the scan has contradicted the tracked pose and {kept} place(s) elsewhere "
-            f"explain the last {cfg.elsewhere_scans + 1} scans: kidnapped? the filter is "
-            f"reseeded there, {100 * keep:.0f} % of its particles kept and {100 * share:.0f} %"
-            " over the whole map; the pose must be earned again",
+            f"explain the last {cfg.elsewhere_scans + 1} scans: kidnapped",
         )
 
     def _at_operator_pose(self, pose: FloatArray | None, odom: FloatArray) -> bool:

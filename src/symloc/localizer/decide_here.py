@@ -52,7 +52,8 @@ copies open) the localizer first tries to decide without driving anywhere:
    robot may stand where the map does not reach) is not claimed by the laser, but AMCL is
    reseeded there and the pose earned as any convergence of AMCL is: a tracking filter's
    particles spread over a large map never converge (freiburg-079, 70 x 100 m, at seed 2:
-   lost for 3,600 scans while 27 of 36 such episodes left the one true pose).
+   lost for the last 3,600 scans, while the one pose these episodes left was within 6 cm and
+   1 deg of the log's corrected pose in each of the nine traced up to scan 2,600).
 4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).

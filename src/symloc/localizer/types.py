@@ -254,13 +254,6 @@ class Tracker(Protocol):
     def initialize_pose(self, pose: FloatArray, covariance: FloatArray) -> None:
         """Reseed the particles around ``pose`` (3,) with ``covariance`` (3, 3)."""
 
-    def initialize_mixture(
-        self, poses: FloatArray, covariances: FloatArray, global_share: float, keep_share: float
-    ) -> None:
-        """Reseed the particles: a share ``keep_share`` (0..1) kept from the current ones (by
-        weight), a share ``global_share`` over the free space, the rest evenly around each of
-        ``poses`` (K, 3) with ``covariances`` (K, 3, 3)."""
-
     def update(self, odom: object, scan: object) -> TrackerResult:
         """One filter step with an odometry reading and a scan."""
 

@@ -251,89 +251,32 @@ class Amcl:
         covariance : array of shape (3, 3), optional
             Symmetric positive semi-definite; default nav2's diag(0.25, 0.25, (pi/12)^2).
         """
-        cov = DEFAULT_INITIAL_COVARIANCE if covariance is None else covariance
-        self._set(self._gaussian(pose, cov, self.params.max_particles, "pose", "covariance"))
-        self._reset_after_init()
-
-    def initialize_mixture(
-        self,
-        poses: ArrayLike,
-        covariances: ArrayLike,
-        *,
-        global_share: float = 0.0,
-        keep_share: float = 0.0,
-    ) -> None:
-        """Draw ``max_particles`` particles from several hypotheses at once: a share
-        ``keep_share`` (0..1) resampled from the current particles by their weights (the
-        filter's own belief kept as one hypothesis; none before a first initialization), a
-        share ``global_share`` spread uniformly over the free cells as by
-        :meth:`initialize_global`, the rest split evenly among Gaussians around ``poses``
-        (K, 3) [m, m, rad] with ``covariances`` (K, 3, 3).
-
-        For a filter that must choose among a few places the laser found (a robot that lost
-        its track: where the filter still thinks it is and the places elsewhere that explained
-        the scans), without betting on one of them or spreading a tracking filter's few
-        particles over a large map, where they may never converge."""
-        try:
-            means = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
-            covs = np.asarray(covariances, dtype=np.float64).reshape(-1, 3, 3)
-        except (TypeError, ValueError) as err:
-            raise ConfigurationError(
-                "initialize_mixture: expected poses (K, 3) and covariances (K, 3, 3)"
-            ) from err
-        if means.shape[0] != covs.shape[0]:
-            raise ConfigurationError(
-                f"initialize_mixture: {means.shape[0]} poses but {covs.shape[0]} covariances"
-            )
-        share, keep = float(global_share), float(keep_share)
-        if not (0.0 <= share <= 1.0 and 0.0 <= keep <= 1.0 and share + keep <= 1.0):
-            raise ConfigurationError(
-                "initialize_mixture.global_share, keep_share: expected shares in [0, 1] "
-                f"summing to at most 1, got {share} and {keep}"
-            )
-        n = self.params.max_particles
-        k = means.shape[0]
-        n_keep = int(round(keep * n)) if self._particles is not None else 0
-        n_global = n - n_keep if k == 0 else min(int(round(share * n)), n - n_keep)
-        rest = n - n_keep - n_global
-        counts = np.full(k, rest // k if k else 0)
-        counts[: rest - int(counts.sum())] += 1
-        parts = [self.free_space.sample(n_global, self.rng)]
-        if n_keep:
-            assert self._particles is not None and self._weights is not None
-            parts.append(self._particles[low_variance_resample(self._weights, n_keep, self.rng)])
-        for i in range(k):
-            name = f"initialize_mixture: poses[{i}]"
-            parts.append(self._gaussian(means[i], covs[i], int(counts[i]), name, f"covariances[{i}]"))
-        self._set(np.concatenate(parts, axis=0))
-        self._reset_after_init()
-
-    def _gaussian(self, pose: ArrayLike, cov: ArrayLike, n: int, what: str, cov_what: str) -> FloatArray:
-        """``n`` poses (n, 3) drawn from a Gaussian around ``pose`` (3,) with ``cov`` (3, 3),
-        both checked (``what`` / ``cov_what`` name them in the error)."""
         try:
             mean = np.asarray(pose, dtype=np.float64)
         except (TypeError, ValueError) as err:
-            raise ConfigurationError(f"{what}: expected three numbers x, y, theta") from err
+            raise ConfigurationError("pose: expected three numbers x, y, theta") from err
         if mean.shape != (3,) or not np.all(np.isfinite(mean)):
-            raise ConfigurationError(f"{what}: expected finite shape (3,) x, y, theta, got {mean}")
+            raise ConfigurationError(f"pose: expected finite shape (3,) x, y, theta, got {mean}")
+        cov = DEFAULT_INITIAL_COVARIANCE if covariance is None else covariance
         try:
             c = np.asarray(cov, dtype=np.float64)
         except (TypeError, ValueError) as err:
-            raise ConfigurationError(f"{cov_what}: expected a 3 x 3 array") from err
+            raise ConfigurationError("covariance: expected a 3 x 3 array") from err
         if c.shape != (3, 3) or not np.all(np.isfinite(c)):
-            raise ConfigurationError(f"{cov_what}: expected a finite (3, 3) array, got {c.shape}")
+            raise ConfigurationError(f"covariance: expected a finite (3, 3) array, got {c.shape}")
         if not np.allclose(c, c.T, atol=1e-12):
-            raise ConfigurationError(f"{cov_what}: expected a symmetric matrix")
+            raise ConfigurationError("covariance: expected a symmetric matrix")
         evals, evecs = np.linalg.eigh(c)
         if evals.min() < -1e-12 * max(1.0, float(np.abs(evals).max())):
             raise ConfigurationError(
-                f"{cov_what}: expected positive semi-definite, eigenvalues {evals}"
+                f"covariance: expected positive semi-definite, eigenvalues {evals}"
             )
+        n = self.params.max_particles
         z = self.rng.standard_normal((n, 3)) * np.sqrt(np.clip(evals, 0.0, None))
         parts = mean + z @ evecs.T
         parts[:, 2] = wrap_angle(parts[:, 2])
-        return parts
+        self._set(parts)
+        self._reset_after_init()
 
     def request_nomotion_update(self) -> None:
         """Integrate the next scan even if the robot has not moved (nav2's service of the same
