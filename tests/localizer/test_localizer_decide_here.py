@@ -145,13 +145,17 @@ def test_without_a_camera_one_pose_of_an_incomplete_search_goes_to_amcl() -> Non
     assert est.status is Status.LOST
     assert "no camera: AMCL reseeded there" in est.reason, est.reason
     np.testing.assert_allclose(tracker.seeded[-1], TRUE)
-    assert loc.decide_counts.laser_seeded == 1 and loc.decide_counts.laser_claimed == 0
+    assert loc.decide_counts.laser_seeded == 1
+    assert loc.decide_counts.laser_claimed == 0
     # several poses: nothing to seed
     loc, tracker = _localizer(
-        FakeProposer([TRUE, COPY], complete=False), FakeKeyframes(count=0), {**fits, (3.0, 1.5): 1.0}
+        FakeProposer([TRUE, COPY], complete=False),
+        FakeKeyframes(count=0),
+        {**fits, (3.0, 1.5): 1.0},
     )
     est = _step(loc)
-    assert "not decided here" in est.reason and not tracker.seeded
+    assert "not decided here" in est.reason
+    assert not tracker.seeded
 
 
 def test_the_camera_picks_one_of_several() -> None:

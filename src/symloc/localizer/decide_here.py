@@ -531,7 +531,9 @@ class DecideHere:
             claimed = self._laser_claim(ctx, inp, hyp.poses[0], cov, single)
             if claimed is not None:
                 return claimed
-            return self._reseed(ctx, inp, hyp.poses[0], f"the laser alone leaves one pose ({single})")
+            return self._reseed(
+                ctx, inp, hyp.poses[0], f"the laser alone leaves one pose ({single})"
+            )
         poses = hyp.poses[: hyp.survivors]
         fits = hyp.fits[: hyp.survivors]
         pinned = pin_axis(ctx, inp, poses)
