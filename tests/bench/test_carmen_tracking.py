@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from symloc.bench.carmen_tracking import noise_windows, noisy_odometry
+from symloc.bench.carmen_tracking import (
+    STREAM_ORDER,
+    log_stream_index,
+    noise_windows,
+    noisy_odometry,
+    tracking_stream,
+)
 from symloc.odometry import rot_trans_rot, rot_trans_rot_to_pose
 
 ALPHAS = (0.01, 0.01, 0.01, 0.01)
@@ -68,3 +74,18 @@ def test_the_noise_per_metre_does_not_depend_on_the_sampling() -> None:
     per_scan = spread(_line(0.05, 0.01), (0.0, 0.0))
     assert 0.5 < fine / coarse < 2.0
     assert per_scan > 2.0 * coarse
+
+
+def test_a_logs_streams_depend_on_its_name_alone() -> None:
+    """Before, a log outside the first three was numbered by its place in ``--logs``, so
+    ``--logs orebro fhw`` and ``--logs fhw orebro`` drew different starts for the same log."""
+    # the README's runs listed the five other logs in this order: their numbers are kept
+    assert [log_stream_index(n) for n in STREAM_ORDER] == list(range(len(STREAM_ORDER)))
+    assert log_stream_index("seattle") == log_stream_index("seattle")
+    assert log_stream_index("seattle") >= len(STREAM_ORDER)
+    assert log_stream_index("seattle") != log_stream_index("mit-killian")
+    a = tracking_stream("fhw", 1).standard_normal(4)
+    b = tracking_stream("fhw", 1).standard_normal(4)
+    c = tracking_stream("csail", 1).standard_normal(4)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)

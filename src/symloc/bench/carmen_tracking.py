@@ -9,6 +9,8 @@ so the experiment corrupts the corrected trajectory with a differential drive's 
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -16,6 +18,7 @@ from symloc.bench.shared_data import CARMEN_LOGS
 
 __all__ = [
     "NOISE_WINDOW",
+    "log_stream_index",
     "noise_windows",
     "noisy_odometry",
     "tracking_odometry",
@@ -122,13 +125,25 @@ def noisy_odometry(
     return out
 
 
-def tracking_stream(name: str, seed: int, position: int = 0) -> np.random.Generator:
+#: The shared logs in the order that numbers their random streams. The first three are
+#: :data:`CARMEN_LOGS`; the other five follow in the order the README's runs listed them.
+STREAM_ORDER = (*CARMEN_LOGS, "orebro", "edmonton", "fhw", "csail", "acapulco")
+
+
+def log_stream_index(name: str) -> int:
+    """The number of log ``name``'s random streams: its place in :data:`STREAM_ORDER`, or for
+    any other log ``len(STREAM_ORDER)`` plus the CRC-32 of its name. It depends on the name alone,
+    never on which other logs are run or in what order."""
+    if name in STREAM_ORDER:
+        return STREAM_ORDER.index(name)
+    return len(STREAM_ORDER) + zlib.crc32(name.encode())
+
+
+def tracking_stream(name: str, seed: int) -> np.random.Generator:
     """The random stream of log ``name``'s tracking run in ``symloc experiment amcl-carmen
-    --seed seed``: independent per log and task, so one log's numbers do not depend on the
-    others. A log outside :data:`CARMEN_LOGS` is numbered after them by its ``position`` in
-    ``--logs`` (0 when it is run alone)."""
-    idx = CARMEN_LOGS.index(name) if name in CARMEN_LOGS else len(CARMEN_LOGS) + position
-    return np.random.default_rng([seed, idx, 0])
+    --seed seed``: independent per log and task (:func:`log_stream_index`), so one log's
+    numbers do not depend on the others or on their order in ``--logs``."""
+    return np.random.default_rng([seed, log_stream_index(name), 0])
 
 
 def tracking_odometry(name: str, truth: FloatArray, alpha: float, seed: int) -> FloatArray:

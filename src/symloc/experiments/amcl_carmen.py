@@ -46,7 +46,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from symloc._checks import as_rng
-from symloc.bench.carmen_tracking import noisy_odometry, tracking_odometry, tracking_stream
+from symloc.bench.carmen_tracking import (
+    log_stream_index,
+    noisy_odometry,
+    tracking_odometry,
+    tracking_stream,
+)
 from symloc.bench.shared_data import CARMEN_LOGS as LOG_NAMES
 from symloc.bench.shared_data import carmen_log_paths, find_carmen_dir
 from symloc.cli import options
@@ -370,19 +375,18 @@ def amcl_tracking_error(
     data: _LogData,
     seed: int,
     alpha: float = 0.01,
-    position: int = 0,
     **overrides: Any,
 ) -> dict[str, float]:
     """AMCL alone tracking ``data``'s log as this experiment's tracking does with ``--seed
     seed --odom-alpha alpha`` (the same odometry draw and random stream,
-    :func:`tracking_stream`, ``position`` as there; the same AMCL parameters,
+    :func:`tracking_stream`; the same AMCL parameters,
     :func:`tracking_params` with its default laser model and particles), with ``overrides`` of those parameters (e.g. ``update_min_d=0``,
     ``alpha1=0.04``): the mean, median and largest position error [m] over the scans. Without
     overrides the mean is the experiment's ``mean_error_m``; the confidence verdict and
     symloc's claims are not run."""
     from symloc.mcl import Amcl
 
-    gen = tracking_stream(data.name, seed, position)
+    gen = tracking_stream(data.name, seed)
     odom = noisy_odometry(data.truth, (alpha,) * 4, gen)
     amcl = Amcl(data.grid, tracking_params(alpha).replace(**overrides), gen)
     amcl.initialize_pose(data.truth[0])
@@ -628,9 +632,8 @@ def run(args: argparse.Namespace) -> int:
     global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others
-        rng_track = tracking_stream(name, args.seed, len(results))
-        idx = LOG_NAMES.index(name) if name in LOG_NAMES else len(LOG_NAMES) + len(results)
-        rng_global = np.random.default_rng([args.seed, idx, 1])
+        rng_track = tracking_stream(name, args.seed)
+        rng_global = np.random.default_rng([args.seed, log_stream_index(name), 1])
         data = log_data(name, paths[name], cache=args.out / f"amcl_carmen_map_{name}.npz")
         log, grid, truth = data.log, data.grid, data.truth
         tr = tracking(data, track_p, alphas, rng_track)
