@@ -121,6 +121,49 @@ def test_amcl_carmen_writes_the_tracking_figures(tmp_path: Path) -> None:
     assert doc["settings"]["logs"] == "aces"
 
 
+@pytest.mark.skipif(
+    not HAS_ACES,
+    reason="shared CARMEN data not found (../shared/data/carmen or $SYMLOC_SHARED_DATA)",
+)
+def test_amcl_carmen_keeps_the_logs_it_finished_when_a_later_one_fails(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+
+    from symloc.experiments import amcl_carmen
+
+    real = amcl_carmen.log_data
+
+    def fail_on_intel(name: str, *args: object, **kwargs: object) -> object:
+        if name == "intel":
+            raise RuntimeError("stopped while running intel")
+        return real(name, *args, **kwargs)
+
+    def quick_tracking(data: object, *args: object) -> dict:
+        # the tracking itself is tested above; here only what is written when a log fails
+        symloc = dict.fromkeys(
+            ("claimed_scans", "scans", "mean_error_m", "p95_error_m", "p95_heading_error_deg"), 1
+        )
+        symloc |= dict.fromkeys(("outside_tolerance_scans", "confident_wrong_scans"), 0)
+        symloc["outside_tolerance_reference_fits_worse"] = 0
+        errors = dict.fromkeys(
+            ("mean_error_m", "median_error_m", "p95_error_m", "max_error_m"), 0.05
+        )
+        errors |= {"mean_heading_error_deg": 1.0, "odometry_only_mean_error_m": 2.0}
+        return {"_estimate": None, "symloc": symloc, **errors}
+
+    monkeypatch.setattr(amcl_carmen, "log_data", fail_on_intel)
+    monkeypatch.setattr(amcl_carmen, "tracking", quick_tracking)
+    out = tmp_path / "partial.json"
+    argv = ["experiment", "amcl-carmen", "--data", str(CARMEN), "--logs", "aces", "intel"]
+    with pytest.raises(RuntimeError, match="intel"):
+        main([*argv, "--skip-global", "--out", str(tmp_path / "out"), "--json", str(out)])
+    doc = json.loads(out.read_text())
+    assert doc["complete"] is False
+    assert [e["log"] for e in doc["logs"]] == ["aces"]
+    assert doc["logs"][0]["tracking"]["symloc"]["claimed_scans"] == 1
+
+
 def _bench(name: str, date: str, wall_s: float | None) -> BenchFigures:
     doc = {
         "command": f"python benchmarks/{name}.py",

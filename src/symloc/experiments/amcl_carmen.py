@@ -690,6 +690,8 @@ def run(args: argparse.Namespace) -> int:
                 " fits the scan worse than the claim)"
             )
         results.append(entry)
+        # a run of the eight logs takes about an hour: what is done survives a stop
+        write_json(args.json, {"seed": args.seed, "logs": results, "complete": False})
         fig_logs.append(
             {"name": name, "grid": grid, "truth": truth, "estimate": est, "stamps": log.stamps}
         )
@@ -702,6 +704,6 @@ def run(args: argparse.Namespace) -> int:
 
         fig = amcl_global_confidence_figure(global_traces, args.out / "amcl_carmen_global.png")
         print(f"wrote {fig}")
-    write_json(args.json, {"seed": args.seed, "logs": results})
+    write_json(args.json, {"seed": args.seed, "logs": results, "complete": True})
     write_results_file(args, clock, config, {"logs": results})
     return 0
