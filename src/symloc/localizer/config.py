@@ -93,6 +93,11 @@ class LocalizerConfig:
     decide_max_hypotheses : most hypotheses aligned and shown to the camera (best first).
     decide_rest : scans left to the other phases (AMCL's convergence, the drive to the centre)
         after deciding here handed over or gave up, before it is tried again.
+    decide_rest_no_camera : the same without keyframes (a laser-only robot): AMCL converging
+        is then the only other phase and it runs at every scan anyway, so a fresh scan's
+        proposal is worth a global search sooner (on aces, an open map, a pair of survivors
+        the laser watched often both stopped explaining the scans within ten scans, and the
+        100 scans of ``decide_rest`` left the robot lost to the end of the window).
     decide_watch_evidence : without keyframes, the laser watches several surviving hypotheses
         as the robot moves (:mod:`symloc.localizer.laser_watch`); a rival is ruled out when
         its deficit of beams explained against the leader, summed over new views (less 1 %
@@ -188,6 +193,7 @@ class LocalizerConfig:
     decide_max_hypotheses: int = 16
     decide_round_reach: float = 0.5
     decide_rest: int = 100
+    decide_rest_no_camera: int = 20
     decide_watch_evidence: float = 0.5
     decide_watch_views: int = 40
     axis_max_spread: float = 0.2
@@ -268,6 +274,7 @@ class LocalizerConfig:
             "decide_views",
             "decide_max_hypotheses",
             "decide_rest",
+            "decide_rest_no_camera",
             "decide_watch_views",
             "axis_max_hypotheses",
             "axis_min_inliers",

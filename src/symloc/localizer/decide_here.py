@@ -39,9 +39,9 @@ copies open) the localizer first tries to decide without driving anywhere:
    taken. Along an axis each sampled hypothesis stands for the stretch around it: its
    expected keyframes reach half the spacing further (``KeyframeStore.verify``'s ``reach``).
    **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
-   hypothesis, or its ``decide_views`` used up; the search complete, the scan not judged
-   symmetric, no known place where the robot stands), the laser watches the survivors as the
-   robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
+   hypothesis, or its ``decide_views`` used up; the search complete or no camera at all,
+   the scan not judged symmetric, no known place where the robot stands), the laser watches
+   the survivors as the robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
    every scan, the beams each explains summed over new views. When every rival's deficit
    against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
    of furniture), the laser confirms the leader and tracking starts there, as after a visual
@@ -53,7 +53,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    reseeded there and the pose earned as any convergence of AMCL is: a tracking filter's
    particles spread over a large map never converge (freiburg-079, 70 x 100 m, at seed 2:
    lost for the last 3,600 scans, while the one pose these episodes left was within 6 cm and
-   1 deg of the log's corrected pose in each of the nine traced up to scan 2,600).
+   1 deg of the log's corrected pose in each of the nine traced up to scan 2,600). Several
+   survivors of such a search are watched as above, and the leader the watch singles out is
+   reseeded the same way, never claimed (the truth may be none of them). Without a camera
+   deciding here rests ``decide_rest_no_camera`` scans, not ``decide_rest``: AMCL, the only
+   other phase, runs at every scan anyway.
 4. **Nothing decided**: the pose stays lost (or ambiguous, with the hypotheses) with a reason,
    and for ``decide_rest`` scans the other phases run as without this path: AMCL converging,
    or the paper's drive to the centre of a symmetric place (Algorithms 2 and 3).
@@ -436,6 +440,9 @@ class DecideHere:
     #: the survivors watched by the laser as the robot moves (no keyframes to show them to,
     #: or the camera decided nothing)
     watch: LaserWatch | None = None
+    #: the watched survivors came from a complete search (the truth is among them): the
+    #: leader is claimed; else (no camera, an open map) AMCL is reseeded at it to earn it
+    watch_complete: bool = True
     #: what the images of this episode said about each hypothesis they checked
     checked: list[Checked] = field(default_factory=list)
     #: every hypothesis an image of this episode verified, whatever else it verified
@@ -558,8 +565,6 @@ class DecideHere:
             turn = self._choose_view(ctx, inp, poses, keyframes)
         if self.camera_done:
             # the camera cannot decide here: the laser watches the survivors as the robot moves
-            if self._can_watch(ctx, inp, hyp):
-                return self._watch(ctx, inp, poses, hyp)
             if len(poses) == 1 and not has_keyframes:
                 counts.laser_seeded += 1
                 return self._reseed(
@@ -569,6 +574,8 @@ class DecideHere:
                     f"one pose explains the scan ({100 * fits[0]:.0f} % of beams), the search "
                     f"incomplete ({hyp.reason}) and no camera",
                 )
+            if self._can_watch(ctx, inp, hyp, has_keyframes):
+                return self._watch(ctx, inp, poses, hyp)
             return self._give_up(
                 ctx, inp, f"{len(poses)} poses explain the scan and {self.camera_done}"
             )
@@ -765,16 +772,18 @@ class DecideHere:
     # ------------------------------------------------------------------ the laser, moving
 
     @staticmethod
-    def _can_watch(ctx: Context, inp: Inputs, hyp: Hypotheses) -> bool:
+    def _can_watch(ctx: Context, inp: Inputs, hyp: Hypotheses, has_keyframes: bool) -> bool:
         """The laser may watch the survivors: the search is complete (the truth is among
-        them), a claim gate aligns them, the scan is not judged symmetric and the best
-        hypothesis is not in a known symmetric place (both the paper's case: the drive to the
-        place's centre, where the camera decides against the visual map's places, has its
+        them) or there is no camera (an open map: the leader will only reseed AMCL,
+        :meth:`_watched`), a claim gate aligns them, the scan is not judged symmetric and the
+        best hypothesis is not in a known symmetric place (both the paper's case: the drive to
+        the place's centre, where the camera decides against the visual map's places, has its
         turn after this path gives up)."""
         symmetric = bool(inp.verdict.symmetric) and inp.verdict.center is not None
         usable = ctx.gate is not None and isinstance(inp.scan, LaserScan)
         place = known_place_at(hyp.poses[0], ctx.known_places, ctx.config.place_radius_factor)
-        return hyp.complete and usable and not symmetric and place is None
+        searched = hyp.complete or not has_keyframes
+        return searched and usable and not symmetric and place is None
 
     def _watch(self, ctx: Context, inp: Inputs, poses: FloatArray, hyp: Hypotheses) -> Step:
         """Several survivors and the camera cannot decide (no keyframes, none in view, or its
@@ -782,6 +791,7 @@ class DecideHere:
         (:mod:`symloc.localizer.laser_watch`), from this scan on."""
         cfg = ctx.config
         ctx.record.decide.watched += 1
+        self.watch_complete = hyp.complete
         self.watch = LaserWatch(
             poses=poses.copy(),
             odom=inp.odom_pose.copy(),
@@ -839,7 +849,9 @@ class DecideHere:
 
     def _watched(self, ctx: Context, inp: Inputs, watch: LaserWatch, verdict: WatchVerdict) -> Step:
         """The laser's watch ruled every rival out: the laser confirms the leader and tracking
-        starts there (the choice among the copies is made, as after a visual decision)."""
+        starts there (the choice among the copies is made, as after a visual decision). After
+        a search that could not be complete the truth may be none of them: AMCL is reseeded
+        at the leader instead, and the pose earned as any convergence of AMCL is."""
         assert verdict.leader is not None
         cfg = ctx.config
         gate = ctx.gate
@@ -847,6 +859,16 @@ class DecideHere:
         self.watch = None
         pose = watch.poses[verdict.leader]
         count = len(watch.poses)
+        if not self.watch_complete:
+            ctx.record.decide.laser_seeded += 1
+            return self._reseed(
+                ctx,
+                inp,
+                pose,
+                f"hypothesis {verdict.leader + 1} of {count} led the laser's watch over "
+                f"{verdict.views} views (least evidence against a rival {verdict.evidence:.2f}),"
+                " the search incomplete and no camera",
+            )
         cov = cov_from_std(cfg.decision_xy_std, cfg.decide_theta_std)
         claim = gate.confirm(pose, cov, cast(LaserScan, inp.scan))
         what = (
@@ -1131,7 +1153,9 @@ class DecideHere:
             back = self.back
             back.carry(ctx, inp.odom_pose)
             return back.report(ctx, inp, f"{back.headline()}; {reason}"), back
-        self.rest_after = ctx.config.decide_rest
+        keyframes = ctx.keyframes
+        camera = keyframes is not None and keyframes.keyframe_count() > 0
+        self.rest_after = ctx.config.decide_rest if camera else ctx.config.decide_rest_no_camera
         return lost(reason, inp.result), restart(ctx)
 
 
