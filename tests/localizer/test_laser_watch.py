@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 
 from symloc.geometry import compose, wrap_angle
 from symloc.lidar_spec import LDS01
 from symloc.localizer import Status
 from symloc.localizer.build import build_localizer
+from symloc.localizer.config import LocalizerConfig
 from symloc.localizer.laser_watch import (
     MIN_VIEWS,
     STILL_SCANS,
@@ -125,11 +128,14 @@ class _KeyframesOutOfView:
 
 
 def _drive(
-    boxes: int, scans: int, keyframes: KeyframeStore | None = None
+    boxes: int,
+    scans: int,
+    keyframes: KeyframeStore | None = None,
+    truths: list[np.ndarray] | None = None,
 ) -> list[tuple[Status, float, str]]:
     """A TurtleBot3-like robot (laser 3.2 cm behind the base) on a 1 m circle in a 5 m x 3.6 m
     room, no initial pose and no keyframes (or ``keyframes``): (status, position error [m],
-    reason) per scan."""
+    reason) per scan; each scan's true pose (3,) appended to ``truths`` as it is taken."""
     room = rectangle_room(5.0, 3.6)
     world = add_furniture(room, boxes=boxes, rng=3).world if boxes else room.world
     grid = world_to_grid(world, 0.05, free_seeds=[[0.0, -0.4]])
@@ -149,6 +155,8 @@ def _drive(
 
     for i in range(scans):
         truth, odom = step(truth, v, w), step(odom, v * 1.02, w + 0.01)
+        if truths is not None:
+            truths.append(truth)
         scan = simulate_scan(world, compose(truth, laser), LDS01, rng, stamp=0.2 * i)
         est = loc.update(OdometryReading(odom.copy(), 0.2 * i), scan)
         err = math.inf if est.pose is None else float(np.hypot(*(est.pose[:2] - truth[:2])))
@@ -195,3 +203,67 @@ def test_the_watch_says_when_moving_teaches_nothing() -> None:
     for _ in range(STILL_SCANS + 1):
         v = still.step(FakeGate(0.95, 0.5), SCAN, np.zeros(3))  # type: ignore[arg-type]
     assert "has not moved" in still.learning(v)
+
+
+def _open_map(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every global search incomplete, as on a map whose free space meets unmapped space."""
+    from symloc.localizer import decide_here
+
+    real = decide_here.propose
+
+    def incomplete(ctx: object, inp: object) -> decide_here.Hypotheses:
+        hyp = real(ctx, inp)  # type: ignore[arg-type]
+        return dataclasses.replace(hyp, complete=False, reason="an open map")
+
+    monkeypatch.setattr(decide_here, "propose", incomplete)
+
+
+def test_without_a_camera_the_leader_of_an_incomplete_search_is_earned_through_amcl(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the truth may be none of the survivors: the one the watch singles out reseeds AMCL, and
+    # nothing is published until AMCL's convergence earns it (here never: the room's 180-deg
+    # copy stays AMCL's rival place, which only the watch's views had told apart)
+    from symloc.localizer.decide_here import DecideHere
+
+    _open_map(monkeypatch)
+    truths: list[np.ndarray] = []
+    seeded: list[tuple[int, np.ndarray]] = []
+    real = DecideHere._reseed
+
+    def record(self: DecideHere, ctx: object, inp: object, pose: np.ndarray, why: str) -> object:
+        seeded.append((len(truths) - 1, np.asarray(pose, float).copy()))
+        return real(self, ctx, inp, pose, why)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(DecideHere, "_reseed", record)
+    out = _drive(boxes=1, scans=50, truths=truths)
+    assert out[0][0] is Status.AMBIGUOUS, out[0][2]
+    led = [i for i, (_, _, why) in enumerate(out) if "led the laser's watch" in why]
+    assert led, out[-1][2]
+    assert out[led[0]][0] is Status.LOST
+    assert "AMCL reseeded there, pose to be earned" in out[led[0]][2]
+    (at, pose), *_ = seeded
+    assert at == led[0]
+    assert np.hypot(*(pose[:2] - truths[at][:2])) < 0.1
+    assert abs(wrap_angle(pose[2] - truths[at][2])) < math.radians(3.0)
+    assert not any(st is Status.TRACKING for st, _, _ in out)
+    assert not any("singled out by the laser" in why for _, _, why in out)
+
+
+def test_without_a_camera_deciding_here_is_tried_again_soon(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # a perfectly symmetric room: each watch gives up; without keyframes the next is tried
+    # decide_rest_no_camera scans later, not decide_rest
+    _open_map(monkeypatch)
+    out = _drive(boxes=0, scans=90)
+    assert not any(st is Status.TRACKING for st, _, _ in out)
+    starts = [
+        i
+        for i, (st, _, _) in enumerate(out)
+        if st is Status.AMBIGUOUS and (i == 0 or out[i - 1][0] is not Status.AMBIGUOUS)
+    ]
+    assert len(starts) >= 2, [why for _, _, why in out]
+    gave_up = next(i for i in range(starts[0], len(out)) if out[i][0] is not Status.AMBIGUOUS)
+    assert starts[1] - gave_up <= LocalizerConfig().decide_rest_no_camera + 1
+    assert LocalizerConfig().decide_rest_no_camera < LocalizerConfig().decide_rest
