@@ -41,8 +41,8 @@ copies open) the localizer first tries to decide without driving anywhere:
    **Without keyframes, or when the camera decides nothing** (no keyframe in view of any
    hypothesis, or its ``decide_views`` used up; the search complete or no camera at all,
    the scan not judged symmetric, no known place where the robot stands), the laser watches
-   the survivors as the robot moves (:mod:`symloc.localizer.laser_watch`): each carried by odometry and aligned at
-   every scan, the beams each explains summed over new views. When every rival's deficit
+   the survivors as the robot moves (:mod:`symloc.localizer.laser_watch`): each carried by
+   odometry and aligned at every scan, the beams each explains summed over new views. When every rival's deficit
    against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
    of furniture), the laser confirms the leader and tracking starts there, as after a visual
    decision; the status is ``ambiguous`` meanwhile, with the hypotheses. After
