@@ -653,6 +653,9 @@ def test_axis_estimates_carry_an_axis_and_nothing_else_does() -> None:
         ("decide_turn", -1.0),
         ("decide_watch_evidence", 0.0),
         ("decide_watch_views", 0),
+        ("decide_rest_no_camera", 0),
+        ("decide_rest_no_camera", "20"),
+        ("decide_rest_no_camera", 2.5),
     ],
 )
 def test_bad_decide_settings_are_refused_by_name(field: str, value: object) -> None:

@@ -42,10 +42,11 @@ copies open) the localizer first tries to decide without driving anywhere:
    hypothesis, or its ``decide_views`` used up; the search complete or no camera at all,
    the scan not judged symmetric, no known place where the robot stands), the laser watches
    the survivors as the robot moves (:mod:`symloc.localizer.laser_watch`): each carried by
-   odometry and aligned at every scan, the beams each explains summed over new views. When every rival's deficit
-   against the leader adds up to ``decide_watch_evidence`` (a room symmetric but for a piece
-   of furniture), the laser confirms the leader and tracking starts there, as after a visual
-   decision; the status is ``ambiguous`` meanwhile, with the hypotheses. After
+   odometry and aligned at every scan, the beams each explains summed over new views. When
+   every rival's deficit against the leader adds up to ``decide_watch_evidence`` (a room
+   symmetric but for a piece of furniture), the laser confirms the leader and tracking starts
+   there, as after a visual decision; the status is ``ambiguous`` meanwhile, with the
+   hypotheses. After
    ``decide_watch_views`` views without a decision, or when moving teaches nothing (a
    perfectly symmetric room, a robot standing still), the path gives up as in step 4.
    **Without a camera, one survivor of a search that cannot be complete** (an open map: the
@@ -293,6 +294,11 @@ def _listed(numbers: list[int]) -> str:
     if len(numbers) == 1:
         return f"hypothesis {numbers[0]}"
     return "hypotheses " + ", ".join(map(str, numbers[:-1])) + f" and {numbers[-1]}"
+
+
+def _has_keyframes(ctx: Context) -> bool:
+    """The visual map holds keyframes: the camera can check hypotheses (else a laser-only robot)."""
+    return ctx.keyframes is not None and ctx.keyframes.keyframe_count() > 0
 
 
 def _spacing(samples: FloatArray) -> float:
@@ -557,7 +563,7 @@ class DecideHere:
         if going is not None:
             return going
         keyframes = ctx.keyframes
-        has_keyframes = keyframes is not None and keyframes.keyframe_count() > 0
+        has_keyframes = _has_keyframes(ctx)
         if not has_keyframes:
             self.camera_done = "no keyframes to tell them apart"
         turn = None
@@ -1153,9 +1159,8 @@ class DecideHere:
             back = self.back
             back.carry(ctx, inp.odom_pose)
             return back.report(ctx, inp, f"{back.headline()}; {reason}"), back
-        keyframes = ctx.keyframes
-        camera = keyframes is not None and keyframes.keyframe_count() > 0
-        self.rest_after = ctx.config.decide_rest if camera else ctx.config.decide_rest_no_camera
+        cfg = ctx.config
+        self.rest_after = cfg.decide_rest if _has_keyframes(ctx) else cfg.decide_rest_no_camera
         return lost(reason, inp.result), restart(ctx)
 
 
