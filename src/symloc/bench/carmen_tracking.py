@@ -18,6 +18,7 @@ from symloc.bench.shared_data import CARMEN_LOGS
 
 __all__ = [
     "NOISE_WINDOW",
+    "log_stream",
     "log_stream_index",
     "noise_windows",
     "noisy_odometry",
@@ -139,11 +140,24 @@ def log_stream_index(name: str) -> int:
     return len(STREAM_ORDER) + zlib.crc32(name.encode())
 
 
+#: The tasks of ``symloc experiment amcl-carmen`` that draw a random stream of their own per log.
+STREAM_TASKS = ("tracking", "global")
+
+
+def log_stream(name: str, seed: int, task: str) -> np.random.Generator:
+    """The random stream of ``task`` (one of :data:`STREAM_TASKS`) on log ``name`` in ``symloc
+    experiment amcl-carmen --seed seed``: independent per log and task
+    (:func:`log_stream_index`), so one log's numbers do not depend on the others or on their
+    order in ``--logs``, nor one task's on the other's."""
+    if task not in STREAM_TASKS:
+        raise ValueError(f"log_stream: task {task!r} is not one of {', '.join(STREAM_TASKS)}")
+    return np.random.default_rng([seed, log_stream_index(name), STREAM_TASKS.index(task)])
+
+
 def tracking_stream(name: str, seed: int) -> np.random.Generator:
-    """The random stream of log ``name``'s tracking run in ``symloc experiment amcl-carmen
-    --seed seed``: independent per log and task (:func:`log_stream_index`), so one log's
-    numbers do not depend on the others or on their order in ``--logs``."""
-    return np.random.default_rng([seed, log_stream_index(name), 0])
+    """The random stream of log ``name``'s tracking run (:func:`log_stream`, task
+    ``"tracking"``)."""
+    return log_stream(name, seed, "tracking")
 
 
 def tracking_odometry(name: str, truth: FloatArray, alpha: float, seed: int) -> FloatArray:

@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from symloc._checks import as_rng
 from symloc.bench.carmen_tracking import (
-    log_stream_index,
+    log_stream,
     noisy_odometry,
     tracking_odometry,
     tracking_stream,
@@ -632,8 +632,8 @@ def run(args: argparse.Namespace) -> int:
     global_traces: list[dict[str, Any]] = []
     for name in args.logs:
         # independent streams per log and task, so one log's numbers do not depend on the others
-        rng_track = tracking_stream(name, args.seed)
-        rng_global = np.random.default_rng([args.seed, log_stream_index(name), 1])
+        rng_track = log_stream(name, args.seed, "tracking")
+        rng_global = log_stream(name, args.seed, "global")
         data = log_data(name, paths[name], cache=args.out / f"amcl_carmen_map_{name}.npz")
         log, grid, truth = data.log, data.grid, data.truth
         tr = tracking(data, track_p, alphas, rng_track)
