@@ -20,7 +20,10 @@ not change the map, so they are off unless ``--keyframes``). Printed per world:
   aligned again to the finished map), std and p95 [cm], beside the truth it should cover: at the
   end, how many worlds' shape p95 (the map's distortion, scale removed) lies within the 95 %
   radius (2.45 std) of the error the claim gate then assumes (the larger of the estimate and
-  its 2 cm default).
+  its 1 cm default, ``ClaimConfig.map_std_xy``); and place by place, the share of the trip's
+  scans whose distortion lies inside the 95 % ellipse of SLAM's map error field there
+  (``field cov``: the field alone; ``gate``: its eigenvalues raised to that assumed std, as the
+  claim gate reads it).
 
 Per family the worst world is printed at the end. Each world's row is appended to
 ``<out>/bench_mapping_trip.partial.jsonl`` as soon as it is done.
@@ -51,9 +54,10 @@ from scipy.spatial import cKDTree
 
 import symloc.bench.scenario as scenario_module
 from symloc.bench.scenario import build_scenario
-from symloc.bench.slam_metrics import umeyama_se2
+from symloc.bench.slam_metrics import field_coverage, similarity_residuals, umeyama_se2
 from symloc.bench.world_sources import WorldRef, build_world
 from symloc.geometry import compose, inverse
+from symloc.localizer.claim import ClaimConfig
 from symloc.sim.generator import FAMILIES
 from symloc.sim.lidar import LIDAR_MOUNT_HEIGHT
 from symloc.sim.rasterize import world_to_grid
@@ -181,20 +185,20 @@ def _pose_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarr
 
 
 def similarity_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per-scan position errors (N,) [m] after a similarity fit (rotation, translation and
-    scale: Umeyama 1991), and the scale. A lidar whose ranges are ``(1 + s)`` times too long
-    draws the whole room ``(1 + s)`` times too large, consistently (with odometry whose own
-    scale is off by 1-2 %, nothing on the robot can tell), and the rigid fit leaves
-    ``s`` times the distance from the trip's centroid as error: this fit removes that part and
-    leaves the map's distortion."""
-    src = truth_xy - truth_xy.mean(axis=0)
-    dst = slam_poses[:, :2] - slam_poses[:, :2].mean(axis=0)
-    u, d, vt = np.linalg.svd(dst.T @ src)
-    sign = np.sign(np.linalg.det(u @ vt))
-    rot = u @ np.diag([1.0, sign]) @ vt
-    scale = float((d * [1.0, sign]).sum() / (src**2).sum())
-    pred = scale * src @ rot.T
-    return np.hypot(*(dst - pred).T), scale
+    """Per-scan position errors (N,) [m] after a similarity fit, and the scale
+    (:func:`symloc.bench.slam_metrics.similarity_residuals`)."""
+    res, scale = similarity_residuals(truth_xy, slam_poses[:, :2])
+    return np.hypot(*res.T), scale
+
+
+#: The claim gate's own map error [m] (``ClaimConfig.map_std_xy``), which a declared estimate
+#: only raises: the floor of every place's covariance where the gate reads the field.
+GATE_MAP_STD = ClaimConfig().map_std_xy
+
+
+def _coverage_of(field: Any, xy: np.ndarray, residuals: np.ndarray, floor: float) -> float:
+    """:func:`symloc.bench.slam_metrics.field_coverage`; NaN without a field."""
+    return math.nan if field is None else field_coverage(field, xy, residuals, floor)
 
 
 def _row(
@@ -205,8 +209,11 @@ def _row(
     room: Any,
     seconds: float,
 ) -> dict[str, Any]:
-    err, m_from_w = _pose_errors(np.asarray(slam.poses), truth_xy)
-    sim_err, sim_scale = similarity_errors(np.asarray(slam.poses), truth_xy)
+    poses = np.asarray(slam.poses)
+    err, m_from_w = _pose_errors(poses, truth_xy)
+    residuals, sim_scale = similarity_residuals(truth_xy, poses[:, :2])
+    sim_err = np.hypot(*residuals.T)
+    field = slam.map_error_field
     walls = wall_error(slam.grid, room.world, m_from_w)
     raster = world_to_grid(room.world, 0.05, free_seeds=room.center[None, :])
     floor = wall_error(raster, room.world, np.zeros(3))
@@ -240,6 +247,17 @@ def _row(
         "warnings": list(slam.warnings),
         "est_std": math.nan if slam.map_error is None else float(slam.map_error.std_xy),
         "est_p95": math.nan if slam.map_error is None else float(slam.map_error.p95_xy),
+        # the map's error as SLAM estimates it place by place, against the map's distortion
+        "field_coverage": _coverage_of(field, poses[:, :2], residuals, 0.0),
+        "field_coverage_gate": _coverage_of(
+            field,
+            poses[:, :2],
+            residuals,
+            max(GATE_MAP_STD, 0.0 if slam.map_error is None else float(slam.map_error.std_xy)),
+        ),
+        "field_major_std_median": (
+            math.nan if field is None else float(np.median(field.major_std))
+        ),
     }
 
 
@@ -293,6 +311,7 @@ HEADER = (
     f"  {'face p95/p99/max [cm]':>22}"
     f"  {'cells p95/p99/max [cm]':>22}  {'raster face/cells p95':>21}  {'loops':>5}"
     f"  {'slam s':>6}  {'cpu s':>6}  {'lidar/map scale':>15}  {'est std/p95':>11}"
+    f"  {'field cov/gate':>14}"
 )
 
 
@@ -306,6 +325,7 @@ def _fmt(r: dict[str, Any]) -> str:
         f"{100 * r['raster_face_p95']:>10.1f}{100 * r['raster_p95']:>11.1f}  {r['loops']:>5}  "
         f"{r['slam_s']:>6.1f}  {r['slam_cpu_s']:>6.1f}  {100 * r['lidar_scale']:>+7.2f}/{100 * (r['map_scale'] - 1):+.2f}%"
         f"  {100 * r.get('est_std', math.nan):>5.1f}/{100 * r.get('est_p95', math.nan):<5.1f}"
+        f"  {r.get('field_coverage', math.nan):>7.2f}/{r.get('field_coverage_gate', math.nan):<5.2f}"
     )
 
 
@@ -323,7 +343,13 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("bench_mapping_trip_out"))
     parser.add_argument("--save-trips", type=Path, default=None, help="store each trip here")
     parser.add_argument("--replay", type=Path, default=None, help="re-run SLAM on stored trips")
+    parser.add_argument(
+        "--results", type=Path, default=None, help="write a results file (docs/results format)"
+    )
     args = parser.parse_args()
+    from symloc.bench.provenance import RunClock
+
+    clock = RunClock()
     worlds = [(f, s) for f in args.families for s in args.seeds]
     print("# bench_mapping_trip")
     print(f"#   families: {' '.join(args.families)}")
@@ -374,10 +400,60 @@ def main() -> int:
             f"total {sum(r['slam_s'] for r in rows):.0f}"
         )
         _coverage(rows)
+        families = per_family(rows)
+        print(
+            "\n# per family (worst world): pose p95 [cm] (rigid fit), shape p95 [cm] (scale fitted),"
+            " |lidar scale| [%], field coverage (min over worlds)"
+        )
+        for fam in families:
+            print(
+                f"{fam['family']:<18}{fam['worlds']:>3}  {100 * fam['pose_p95']:>6.1f}"
+                f"  {100 * fam['shape_p95']:>6.1f}  {100 * fam['lidar_scale_abs']:>6.2f}"
+                f"  {fam['field_coverage_min']:>6.2f}"
+            )
+        if args.results is not None:
+            from symloc.bench.results_file import write_bench_results
+
+            written = write_bench_results(
+                args.results,
+                clock=clock,
+                settings={
+                    "families": args.families,
+                    "seeds": args.seeds,
+                    "regime": args.regime,
+                    "explore_laps": args.explore_laps,
+                    "keyframes": bool(args.keyframes),
+                    "replay": None if args.replay is None else str(args.replay),
+                    "gate_map_std_m": GATE_MAP_STD,
+                },
+                figures={"worlds": rows, "families": families},
+            )
+            print(f"# results file: {written}")
     return 0
 
 
-def _coverage(rows: list[dict[str, Any]], default_std: float = 0.02) -> None:
+def per_family(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per family, in the order met: the number of worlds and the worst of each figure (pose
+    and shape p95 [m], the lidar's absolute range scale error, the lowest field coverage)."""
+    out: list[dict[str, Any]] = []
+    for family in dict.fromkeys(r["family"] for r in rows):
+        fam = [r for r in rows if r["family"] == family]
+        out.append(
+            {
+                "family": family,
+                "worlds": len(fam),
+                "pose_p95": max(r["pose_p95"] for r in fam),
+                "shape_p95": max(r["shape_p95"] for r in fam),
+                "lidar_scale_abs": max(abs(r["lidar_scale"]) for r in fam),
+                "field_coverage_min": float(np.nanmin([r["field_coverage"] for r in fam]))
+                if any(math.isfinite(r["field_coverage"]) for r in fam)
+                else math.nan,
+            }
+        )
+    return out
+
+
+def _coverage(rows: list[dict[str, Any]], default_std: float = GATE_MAP_STD) -> None:
     """How often the error the claim gate assumes covers the map's distortion (shape p95)."""
     est = np.array([r.get("est_std", math.nan) for r in rows])
     shape = np.array([r["shape_p95"] for r in rows])

@@ -7,7 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from symloc.bench.slam_metrics import ate, rpe, umeyama_se2, umeyama_se2_at, umeyama_sim2
+from symloc.bench.slam_metrics import (
+    ate,
+    field_coverage,
+    rpe,
+    similarity_residuals,
+    umeyama_se2,
+    umeyama_se2_at,
+    umeyama_sim2,
+)
+from symloc.grid.map_error_field import MapErrorField
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
 
@@ -120,3 +129,35 @@ def test_umeyama_se2_at_is_right_at_its_anchor_and_off_by_the_scale_elsewhere() 
     np.testing.assert_allclose(
         umeyama_se2_at(src, exact, middle), umeyama_se2(src, exact), atol=1e-9
     )
+
+
+def test_similarity_residuals_leave_the_distortion_and_not_the_scale() -> None:
+    """A trip drawn 1 % too large, turned and moved, leaves nothing once its scale is fitted;
+    one point bent by 5 cm leaves (nearly) that point's bend."""
+    truth = _traj(40)[:, :2]
+    c, s = np.cos(0.4), np.sin(0.4)
+    slam = 1.01 * truth @ np.array([[c, -s], [s, c]]).T + [2.0, -1.0]
+    res, scale = similarity_residuals(truth, slam)
+    assert res.shape == (40, 2)
+    assert scale == pytest.approx(1.01, abs=1e-9)
+    assert np.abs(res).max() < 1e-9
+    bent = slam.copy()
+    bent[7] += [0.05, 0.0]
+    res, _ = similarity_residuals(truth, bent)
+    assert int(np.argmax(np.hypot(*res.T))) == 7
+    assert np.hypot(*res[7]) == pytest.approx(0.05, abs=0.005)
+
+
+def test_field_coverage_counts_errors_inside_each_places_95_percent_ellipse() -> None:
+    """Two places, 1 cm and 10 cm std along x (1 cm along y): an error of 2 std along x is
+    inside (2.45 std is the 95 % radius), 3 std is not; raising the floor to 10 cm takes in the
+    first place's large error too."""
+    field = MapErrorField(
+        np.array([[0.0, 0.0], [10.0, 0.0]]),
+        np.array([np.diag([1e-4, 1e-4]), np.diag([1e-2, 1e-4])]),
+    )
+    xy = np.array([[0.1, 0.0], [0.2, 0.0], [9.9, 0.0], [10.1, 0.0]])
+    errors = np.array([[0.02, 0.0], [0.03, 0.0], [0.2, 0.0], [0.3, 0.0]])
+    assert field_coverage(field, xy, errors) == pytest.approx(0.5)
+    assert field_coverage(field, xy, errors, floor_std=0.1) == pytest.approx(0.75)
+    assert np.isnan(field_coverage(field, np.zeros((0, 2)), np.zeros((0, 2))))

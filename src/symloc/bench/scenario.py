@@ -78,7 +78,7 @@ from .exploration import coverage_stops, exploration_path, free_route
 from .explore import ExploreDrive
 from .mapping_trip import KeyframeRecorder, MappedPlace, map_place
 from .sensors import ODOM_ALPHA, RobotHardware, SensorSetup, robot_hardware
-from .slam_metrics import umeyama_se2, umeyama_se2_at, umeyama_sim2
+from .slam_metrics import field_coverage, similarity_residuals, umeyama_se2, umeyama_se2_at
 
 __all__ = [
     "DEFAULT_GV",
@@ -841,8 +841,7 @@ def _field_coverage(scen: Scenario, errors: FloatArray, slam_xy: FloatArray) -> 
     field = scen.map_error_field
     if field is None:
         return
-    mahalanobis = np.einsum("ni,nij,nj->n", errors, np.linalg.pinv(field.at(slam_xy)), errors)
-    scen.map_error_field_coverage = float(np.mean(mahalanobis <= R95**2))
+    scen.map_error_field_coverage = field_coverage(field, slam_xy, errors)
     scen.notes.append(
         f"mapping trip: the map error field (pose-graph marginals, {field.xy.shape[0]} places,"
         f" std median {100 * np.median(field.major_std):.1f} cm, max "
@@ -853,11 +852,9 @@ def _field_coverage(scen: Scenario, errors: FloatArray, slam_xy: FloatArray) -> 
 
 def _local_error(scen: Scenario, truth_xy: FloatArray, slam_xy: FloatArray) -> FloatArray:
     """The lap's SLAM error (N, 2 true and SLAM positions [m]) once the map's scale is fitted
-    as well (:func:`~symloc.bench.slam_metrics.umeyama_sim2`), and how much of it the map's
+    as well (:func:`~symloc.bench.slam_metrics.similarity_residuals`), and how much of it the map's
     own error estimate covers: set on ``scen`` and noted; returns the errors (N, 2) [m]."""
-    pose, scale = umeyama_sim2(truth_xy, slam_xy)
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    errors: FloatArray = slam_xy - (scale * truth_xy @ np.array([[c, -s], [s, c]]).T + pose[:2])
+    errors, scale = similarity_residuals(truth_xy, slam_xy)
     local = np.hypot(*errors.T)
     scen.slam_local_error_p95 = float(np.percentile(local, 95))
     scen.slam_scale_error = scale - 1.0

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,8 +29,10 @@ __all__ = [
     "MapAgreement",
     "RpeResult",
     "ate",
+    "field_coverage",
     "map_agreement",
     "rpe",
+    "similarity_residuals",
     "umeyama_se2",
     "umeyama_se2_at",
     "umeyama_sim2",
@@ -117,6 +120,42 @@ def umeyama_sim2(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, floa
     pose ``(3,)`` and scale ``c`` minimising ``sum ||target_i - c R source_i - t||^2``
     (Umeyama 1991, with the reflection guard; evo's ``--correct_scale``)."""
     return _umeyama(source, target, scaled=True)
+
+
+def similarity_residuals(truth_xy: ArrayLike, slam_xy: ArrayLike) -> tuple[FloatArray, float]:
+    """What remains of a trip's SLAM positions ``slam_xy`` (N, 2) [m] once the true positions
+    ``truth_xy`` (N, 2) are aligned onto them by a similarity (:func:`umeyama_sim2`): the
+    error vectors (N, 2) [m] in the map frame, and the scale. A lidar whose ranges are
+    ``(1 + s)`` times too long draws the whole room ``(1 + s)`` times too large, consistently
+    (with odometry whose own scale is off by 1-2 %, nothing on the robot can tell it); a rigid
+    fit would leave ``s`` times the distance from its centre as error: this one leaves the
+    map's distortion."""
+    slam = check_array(slam_xy, "slam_xy", shape=(None, 2))
+    pose, scale = umeyama_sim2(truth_xy, slam)
+    truth = np.asarray(truth_xy, dtype=np.float64)
+    errors: FloatArray = slam - (scale * truth @ rotation_matrix(pose[2]).T + pose[:2])
+    return errors, scale
+
+
+#: chi2.ppf(0.95, 2): a 2-D error inside its covariance's 95 % ellipse has a squared
+#: Mahalanobis distance at most this (the square of ``symloc.slam.map_error.R95``).
+CHI2_2DOF_95 = -2.0 * math.log(0.05)
+
+
+def field_coverage(field: Any, xy: ArrayLike, errors: ArrayLike, floor_std: float = 0.0) -> float:
+    """The share of the errors ``errors`` (N, 2) [m] at positions ``xy`` (N, 2) [m] (map frame)
+    that lie inside the 95 % ellipse of the map's error field
+    (:class:`~symloc.grid.map_error_field.MapErrorField`: the covariance of the place nearest
+    each position), its eigenvalues raised to ``floor_std`` [m] squared (the claim gate's
+    ``map_std_xy``, :meth:`symloc.localizer.claim.ClaimGate.map_error`); NaN for no errors."""
+    err = check_array(errors, "errors", shape=(None, 2))
+    if err.shape[0] == 0:
+        return math.nan
+    values, vectors = np.linalg.eigh(field.at(np.asarray(xy, dtype=np.float64)))
+    # a place the graph pins exactly has a zero eigenvalue: any error there is outside
+    values = np.maximum(values, max(floor_std**2, 1e-12))
+    along = np.einsum("nij,ni->nj", vectors, err)
+    return float(np.mean(np.sum(along**2 / values, axis=1) <= CHI2_2DOF_95))
 
 
 def umeyama_se2_at(source: ArrayLike, target: ArrayLike, anchor: ArrayLike) -> FloatArray:
