@@ -16,9 +16,9 @@ from symloc.bench.slam_metrics import (
     umeyama_se2_at,
     umeyama_sim2,
 )
-from symloc.grid.map_error_field import MapErrorField
 from symloc.errors import ConfigurationError
 from symloc.geometry import compose
+from symloc.grid.map_error_field import MapErrorField
 
 
 def _traj(n: int = 30) -> np.ndarray:
