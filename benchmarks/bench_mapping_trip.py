@@ -426,7 +426,7 @@ def main() -> int:
                     "replay": None if args.replay is None else str(args.replay),
                     "gate_map_std_m": GATE_MAP_STD,
                 },
-                figures={"worlds": rows, "families": families},
+                figures={"rows": rows, "families": families},
             )
             print(f"# results file: {written}")
     return 0
