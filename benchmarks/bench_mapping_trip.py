@@ -184,13 +184,6 @@ def _pose_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarr
     return np.hypot(*(slam_poses[:, :2] - in_map[:, :2]).T), m_from_w
 
 
-def similarity_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per-scan position errors (N,) [m] after a similarity fit, and the scale
-    (:func:`symloc.bench.slam_metrics.similarity_residuals`)."""
-    res, scale = similarity_residuals(truth_xy, slam_poses[:, :2])
-    return np.hypot(*res.T), scale
-
-
 #: The claim gate's own map error [m] (``ClaimConfig.map_std_xy``), which a declared estimate
 #: only raises: the floor of every place's covariance where the gate reads the field.
 GATE_MAP_STD = ClaimConfig().map_std_xy
