@@ -186,7 +186,8 @@ def _pose_errors(slam_poses: np.ndarray, truth_xy: np.ndarray) -> tuple[np.ndarr
 
 #: The claim gate's own map error [m] (``ClaimConfig.map_std_xy``), which a declared estimate
 #: only raises: the floor of every place's covariance where the gate reads the field.
-GATE_MAP_STD = ClaimConfig().map_std_xy
+_GATE = ClaimConfig()
+GATE_MAP_STD = _GATE.map_std_xy
 
 
 def _coverage_of(field: Any, xy: np.ndarray, residuals: np.ndarray, floor: float) -> float:
@@ -246,7 +247,9 @@ def _row(
             field,
             poses[:, :2],
             residuals,
-            max(GATE_MAP_STD, 0.0 if slam.map_error is None else float(slam.map_error.std_xy)),
+            _GATE.with_map_error(
+                None if slam.map_error is None else slam.map_error.std_xy
+            ).map_std_xy,
         ),
         "field_major_std_median": (
             math.nan if field is None else float(np.median(field.major_std))

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,6 +37,9 @@ __all__ = [
     "umeyama_se2_at",
     "umeyama_sim2",
 ]
+
+if TYPE_CHECKING:
+    from symloc.grid.map_error_field import MapErrorField
 
 FloatArray = NDArray[np.float64]
 
@@ -142,7 +145,9 @@ def similarity_residuals(truth_xy: ArrayLike, slam_xy: ArrayLike) -> tuple[Float
 CHI2_2DOF_95 = -2.0 * math.log(0.05)
 
 
-def field_coverage(field: Any, xy: ArrayLike, errors: ArrayLike, floor_std: float = 0.0) -> float:
+def field_coverage(
+    field: MapErrorField, xy: ArrayLike, errors: ArrayLike, floor_std: float = 0.0
+) -> float:
     """The share of the errors ``errors`` (N, 2) [m] at positions ``xy`` (N, 2) [m] (map frame)
     that lie inside the 95 % ellipse of the map's error field
     (:class:`~symloc.grid.map_error_field.MapErrorField`: the covariance of the place nearest
