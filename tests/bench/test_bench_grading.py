@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from symloc.bench.grading import CHI2_3DOF_95, TOLERANCE, ScanLog, grade_trial, nees
+from symloc.bench.grading import (
+    CHI2_3DOF_95,
+    TOLERANCE,
+    ScanLog,
+    coverage_at_scale,
+    grade_trial,
+    nees,
+)
 from symloc.bench.stats import json_safe, wilson_interval
 
 COV = np.diag([0.05**2, 0.05**2, math.radians(2.0) ** 2])
@@ -72,6 +79,23 @@ def test_nees_and_coverage() -> None:
     assert g.coverage == pytest.approx(0.5)
     assert g.grade == "confident_wrong"  # 0.125 m and 0.15 m exceed 0.1 m
     assert pytest.approx(7.8147, abs=1e-4) == CHI2_3DOF_95
+
+
+def test_each_claims_nees_is_kept_and_rescaled_coverage_pools_them() -> None:
+    # claims 1, 2.5 and 3 sigma off in x (NEES 1, 6.25, 9), one scan without a claim
+    g = grade_trial(_log([(0.05, 0.0), None, (0.125, 0.0), (0.15, 0.0)]))
+    assert g.nees_values == pytest.approx((1.0, 6.25, 9.0))
+    assert g.as_dict()["nees_values"] == g.nees_values
+    assert coverage_at_scale(list(g.nees_values), 1.0) == pytest.approx(g.coverage)
+    # half the variance doubles every NEES: only the first (2) stays inside 7.81
+    assert coverage_at_scale(list(g.nees_values), 0.5) == pytest.approx(1 / 3)
+    # twice the variance: 9 / 2 = 4.5 inside too
+    assert coverage_at_scale(list(g.nees_values), 2.0) == pytest.approx(1.0)
+    # a singular covariance never covers; no claims is NaN; a scale must be positive
+    assert coverage_at_scale([None, 1.0], 1.0) == pytest.approx(0.5)
+    assert math.isnan(coverage_at_scale([], 1.0))
+    with pytest.raises(ValueError, match="scale > 0"):
+        coverage_at_scale([1.0], 0.0)
 
 
 def test_wilson_interval_known_values() -> None:

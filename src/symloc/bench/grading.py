@@ -48,6 +48,7 @@ __all__ = [
     "ScanLog",
     "Tolerance",
     "TrialGrade",
+    "coverage_at_scale",
     "grade_trial",
     "nees",
 ]
@@ -137,7 +138,11 @@ class TrialGrade:
     ``axis_heading_wrong`` axis estimates whose heading was off; ``time_to_heading`` to the
     first heading output (axis or tracking) since the start, ``first_heading_ok`` whether it
     was right (None without one); ``heading_wrong`` whether any heading output, at any scan,
-    was off by more than the tolerance."""
+    was off by more than the tolerance.
+
+    ``nees_values``: each claim's NEES in scan order, to four significant digits (None where
+    the covariance is singular), so that a calibration of the published covariance
+    (:func:`coverage_at_scale`) can pool the claims of many trials."""
 
     grade: str
     claims: int
@@ -165,6 +170,7 @@ class TrialGrade:
     time_to_heading: float = math.nan
     first_heading_ok: bool | None = None
     heading_wrong: bool = False
+    nees_values: tuple[float | None, ...] = ()
 
     def as_dict(self) -> dict[str, float | int | str | bool | None]:
         """Plain values for JSON."""
@@ -240,6 +246,7 @@ def grade_trial(
         worst_heading_error=float(np.max(he)) if claimed else math.nan,
         first_wrong_t=log.t[wrong[0]] if wrong else math.nan,
         first_wrong_reason=log.reason[wrong[0]] if wrong else "",
+        nees_values=tuple(float(f"{v:.4g}") if math.isfinite(v) else None for v in nees_vals),
     )
     return replace(grade, **_heading_grade(log, tolerance, start, head_err))
 
@@ -281,3 +288,18 @@ def _heading_grade(
         "first_heading_ok": bool(heading_err[first] <= tol) if first is not None else None,
         "heading_wrong": bool(np.any(np.nan_to_num(heading_err, nan=0.0) > tol)),
     }
+
+
+def coverage_at_scale(nees_values: list[float | None], scale: float) -> float:
+    """The share of claims whose error lies inside the 95 % ellipsoid of their published
+    covariance multiplied by ``scale`` (a variance factor): ``NEES / scale <= 7.81``.
+
+    ``nees_values`` are :attr:`TrialGrade.nees_values` pooled over trials (None: a singular
+    covariance, never covering). NaN for no claims.
+    """
+    if not scale > 0.0:
+        raise ValueError(f"coverage_at_scale: expected a scale > 0, got {scale!r}")
+    if not nees_values:
+        return math.nan
+    v = np.array([math.inf if x is None else x for x in nees_values], dtype=np.float64)
+    return float(np.mean(v <= CHI2_3DOF_95 * scale))
